@@ -1,0 +1,116 @@
+"""The error tree of hetros.
+
+Every failure hetros reports derives from :class:`Error`, so a caller can catch
+one root and still tell the kinds apart::
+
+    Error
+    ├── MessageError           .msg/.srv/.action definitions and types
+    │   ├── DefinitionError    a malformed definition file (file:line)
+    │   ├── UnknownTypeError   a type name nobody defines
+    │   ├── SerializationError bytes that do not decode as the type says (offset)
+    │   └── ReadOnlyMessageError  writing to a message that was handed over
+    ├── ProjectError           the project file (YAML path)
+    │   └── CheckError         `hetros check` found problems (carries all of them)
+    ├── PlanError              a mapping hetros cannot carry out (yet)
+    ├── TransportError         moving messages
+    │   ├── PublishTimeoutError   back-pressure outlasted the timeout
+    │   └── TopicTypeError        a message of the wrong type for the topic
+    ├── NodeError              the node API used wrongly
+    │   ├── UndeclaredEndpointError  an endpoint the project file does not declare
+    │   ├── ParameterError     a parameter missing or of the wrong type
+    │   ├── TakeTimeoutError   sub.take(timeout=) saw no message in time
+    │   └── ServiceTimeoutError   a service call got no reply in time
+    ├── ShutdownError          a blocking call interrupted by graph shutdown
+    └── LaunchError            starting or supervising the graph
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+
+class Error(Exception):
+    """Root of every error hetros raises."""
+
+
+class MessageError(Error):
+    """A message type or definition is wrong."""
+
+
+class DefinitionError(MessageError):
+    """A .msg/.srv/.action file is malformed; the message names file:line."""
+
+    def __init__(self, path: str, line: int, reason: str) -> None:
+        self.path = path
+        self.line = line
+        self.reason = reason
+        super().__init__(f"{path}:{line}: {reason}")
+
+
+class UnknownTypeError(MessageError):
+    """A type name that no loaded package defines."""
+
+
+class SerializationError(MessageError):
+    """Bytes that cannot be decoded as the declared type."""
+
+
+class ReadOnlyMessageError(MessageError, AttributeError):
+    """A delivered (or published) message was written to."""
+
+
+class ProjectError(Error):
+    """The project file is invalid; the message names the YAML path."""
+
+
+class CheckError(ProjectError):
+    """`hetros check` found one or more problems."""
+
+    def __init__(self, problems: Sequence[str]) -> None:
+        self.problems = list(problems)
+        lines = "\n".join(f"  - {p}" for p in self.problems)
+        super().__init__(f"{len(self.problems)} problem(s) in the project:\n{lines}")
+
+
+class PlanError(Error):
+    """The project maps something onto a target hetros cannot (yet) run."""
+
+
+class TransportError(Error):
+    """A transport failed to move a message."""
+
+
+class PublishTimeoutError(TransportError):
+    """A reliable publisher stayed blocked by a full subscriber FIFO too long."""
+
+
+class TopicTypeError(TransportError, TypeError):
+    """A message of the wrong type was published on a topic."""
+
+
+class NodeError(Error):
+    """The node API was used in a way the project does not allow."""
+
+
+class UndeclaredEndpointError(NodeError):
+    """A node created an endpoint that its project entry does not declare."""
+
+
+class ParameterError(NodeError):
+    """A parameter is missing or has the wrong type."""
+
+
+class TakeTimeoutError(NodeError, TimeoutError):
+    """``sub.take(timeout=...)`` saw no message in time."""
+
+
+class ServiceTimeoutError(NodeError, TimeoutError):
+    """A service call got no reply within its timeout."""
+
+
+class ShutdownError(Error):
+    """A blocking call was interrupted because the graph is shutting down."""
+
+
+class LaunchError(Error):
+    """The launcher could not start or keep the graph running."""

@@ -1,0 +1,18 @@
+"""Message layer: types from .msg/.srv/.action files, CDR codecs, read-only delivery."""
+
+from ._definitions import find_packages, read_package
+from ._message import FrozenMessage, Message, freeze
+from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
+
+__all__ = [
+    "ActionType",
+    "FrozenMessage",
+    "Message",
+    "ServiceType",
+    "TypeRegistry",
+    "find_packages",
+    "freeze",
+    "normalize_typename",
+    "read_package",
+    "registry",
+]

@@ -1,0 +1,113 @@
+"""The base class of every generated message type.
+
+A message handed to subscribers is *frozen*: its class is swapped for a
+read-only twin and its numpy arrays are made non-writeable. Swapping the class
+costs nothing at construction time (plain messages keep the fast generated
+``__init__``) and makes accidental writes fail loudly instead of silently
+changing what another subscriber sees.
+"""
+
+from __future__ import annotations
+
+import copy as _copy
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .._errors import ReadOnlyMessageError
+
+
+class Message:
+    """Base of all message classes; concrete classes are generated per type."""
+
+    __slots__ = ()
+    __msgtype__: ClassVar[str] = ""
+    __fieldnames__: ClassVar[tuple[str, ...]] = ()
+    _frozen_class: ClassVar[type[Message]]
+    _thawed_class: ClassVar[type[Message]]
+
+    def copy(self) -> Any:
+        """Return a deep, writable copy (use it to keep a delivered message)."""
+        cls = self._thawed_class
+        values = [_thaw_value(getattr(self, name)) for name in self.__fieldnames__]
+        return cls(*values)
+
+    @property
+    def is_frozen(self) -> bool:
+        return type(self) is self._frozen_class
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Message) or other.__msgtype__ != self.__msgtype__:
+            return NotImplemented
+        for name in self.__fieldnames__:
+            mine, theirs = getattr(self, name), getattr(other, name)
+            if isinstance(mine, np.ndarray) or isinstance(theirs, np.ndarray):
+                if not np.array_equal(np.asarray(mine), np.asarray(theirs)):
+                    return False
+            elif mine != theirs:
+                return False
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        fields = ", ".join(f"{n}={_short_repr(getattr(self, n))}" for n in self.__fieldnames__)
+        return f"{self.__msgtype__.rsplit('/', 1)[-1]}({fields})"
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Any:
+        return self.copy()
+
+
+class FrozenMessage(Message):
+    """Mixin for the read-only twin of a message class."""
+
+    __slots__ = ()
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise ReadOnlyMessageError(
+            f"{self.__msgtype__}.{name} cannot be set: this message was handed over "
+            "without a copy (published, or delivered to a subscriber); "
+            "call msg.copy() to get a writable one"
+        )
+
+    def __delattr__(self, name: str) -> None:
+        self.__setattr__(name, None)
+
+
+def freeze(message: Message) -> Message:
+    """Make ``message`` read-only in place, including nested messages and arrays."""
+    cls = type(message)
+    if cls is cls._frozen_class:
+        return message
+    for name in cls.__fieldnames__:
+        _freeze_value(getattr(message, name))
+    object.__setattr__(message, "__class__", cls._frozen_class)
+    return message
+
+
+def _freeze_value(value: object) -> None:
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif isinstance(value, Message):
+        freeze(value)
+    elif isinstance(value, list):
+        for item in value:
+            if isinstance(item, Message):
+                freeze(item)
+
+
+def _thaw_value(value: object) -> object:
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if isinstance(value, Message):
+        return value.copy()
+    if isinstance(value, list):
+        return [_thaw_value(v) for v in value]
+    return _copy.copy(value)
+
+
+def _short_repr(value: object) -> str:
+    if isinstance(value, np.ndarray) and value.size > 8:
+        return f"array(shape={value.shape}, dtype={value.dtype})"
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."

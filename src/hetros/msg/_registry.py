@@ -1,0 +1,314 @@
+"""The type registry: rosbags' typestore plus hetros' own message classes.
+
+rosbags supplies the standard ROS 2 definitions and the CDR / ROS 1 codecs.
+hetros generates the classes users construct (with defaults, so ``String()``
+works) and registers them in the typestore, so rosbags' deserializers build
+hetros classes directly.
+"""
+
+from __future__ import annotations
+
+import functools
+import keyword
+import threading
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rosbags.interfaces import Nodetype
+from rosbags.serde import SerdeError
+from rosbags.typesys import Stores, TypesysError, get_typestore
+from rosbags.typesys.store import Typestore
+
+from .._errors import DefinitionError, SerializationError, UnknownTypeError
+from ._definitions import FieldUse, PackageDefinitions, Typesdict, find_packages, read_package
+from ._message import FrozenMessage, Message
+
+_NUMPY_DTYPES = {
+    "bool": "bool_", "byte": "uint8", "char": "uint8", "int8": "int8", "uint8": "uint8",
+    "int16": "int16", "uint16": "uint16", "int32": "int32", "uint32": "uint32",
+    "int64": "int64", "uint64": "uint64", "float32": "float32", "float64": "float64",
+}
+_SCALAR_DEFAULTS = {"bool": "False", "string": "''", "float32": "0.0", "float64": "0.0"}
+
+
+@dataclass(frozen=True)
+class ServiceType:
+    """A service type: ``.Request`` and ``.Response`` message classes."""
+
+    name: str
+    Request: type[Any]
+    Response: type[Any]
+
+    def __repr__(self) -> str:
+        return f"<service type {self.name}>"
+
+
+@dataclass(frozen=True)
+class ActionType:
+    """An action type with its goal/result/feedback and the types ROS 2 derives."""
+
+    name: str
+    Goal: type[Any]
+    Result: type[Any]
+    Feedback: type[Any]
+    SendGoal: ServiceType
+    GetResult: ServiceType
+    FeedbackMessage: type[Any]
+
+    def __repr__(self) -> str:
+        return f"<action type {self.name}>"
+
+
+def normalize_typename(name: str, kind: str = "msg") -> str:
+    """Accept ``pkg/Name``, ``pkg/msg/Name`` and ``pkg.msg.Name``; return ``pkg/kind/Name``."""
+    parts = name.replace(".", "/").replace("::", "/").split("/")
+    if len(parts) == 2:
+        return f"{parts[0]}/{kind}/{parts[1]}"
+    if len(parts) == 3:
+        return "/".join(parts)
+    raise UnknownTypeError(
+        f"type name must look like 'pkg/{kind}/Name' or 'pkg/Name', not {name!r}"
+    )
+
+
+class TypeRegistry:
+    """All message, service and action types known to one process."""
+
+    def __init__(self) -> None:
+        self._lock = threading.RLock()
+        self.store: Typestore = get_typestore(Stores.ROS2_JAZZY)
+        self.store.types = dict(self.store.types)
+        self.store.fielddefs = dict(self.store.fielddefs)
+        self._classes: dict[str, type[Message]] = {}
+        self.services: dict[str, ServiceType] = {}
+        self.actions: dict[str, ActionType] = {}
+        self.sources: dict[str, str] = {}
+        self._loaded_folders: set[Path] = set()
+        for name in list(self.store.fielddefs):
+            self.sources[name] = "rosbags ROS 2 jazzy store"
+        shipped = resources.files("hetros.msg") / "packages"
+        with resources.as_file(shipped) as folder:
+            self.load_folder(Path(folder))
+
+    # -- loading ---------------------------------------------------------------------------
+
+    def load_folder(self, folder: Path) -> list[str]:
+        """Load one package folder, or every package folder inside ``folder``."""
+        loaded: list[str] = []
+        for package in find_packages(Path(folder)):
+            resolved = package.resolve()
+            if resolved in self._loaded_folders:
+                continue
+            self._register_package(read_package(package))
+            self._loaded_folders.add(resolved)
+            loaded.append(package.name)
+        return loaded
+
+    def _register_package(self, pkg: PackageDefinitions) -> None:
+        with self._lock:
+            typedefs: Typesdict = {}
+            uses: list[FieldUse] = []
+            for parsed in pkg.messages:
+                typedefs.update(parsed.typedefs)
+                uses.extend(parsed.uses)
+                if parsed.uses:
+                    self.sources[parsed.name] = parsed.uses[0].path
+            known = set(self.store.fielddefs) | set(typedefs)
+            for use in uses:
+                if use.typename not in known:
+                    raise DefinitionError(
+                        use.path,
+                        use.line,
+                        f"unknown field type {use.typename!r}: define it in a loaded package "
+                        "or fix the name (e.g. 'std_msgs/Header', 'geometry_msgs/Point')",
+                    )
+            try:
+                self.store.register(typedefs)
+            except TypesysError as exc:
+                raise DefinitionError(pkg.package, 0, str(exc)) from exc
+            for service in pkg.services:
+                self.services[service] = ServiceType(
+                    service, self.get(f"{service}_Request"), self.get(f"{service}_Response")
+                )
+            for action in pkg.actions:
+                self.actions[action] = ActionType(
+                    action,
+                    self.get(f"{action}_Goal"),
+                    self.get(f"{action}_Result"),
+                    self.get(f"{action}_Feedback"),
+                    ServiceType(f"{action}_SendGoal", self.get(f"{action}_SendGoal_Request"),
+                                self.get(f"{action}_SendGoal_Response")),
+                    ServiceType(f"{action}_GetResult", self.get(f"{action}_GetResult_Request"),
+                                self.get(f"{action}_GetResult_Response")),
+                    self.get(f"{action}_FeedbackMessage"),
+                )
+
+    # -- lookup ----------------------------------------------------------------------------
+
+    def has(self, name: str) -> bool:
+        try:
+            return normalize_typename(name) in self.store.fielddefs
+        except UnknownTypeError:
+            return False
+
+    def get(self, name: str) -> type[Message]:
+        """The message class for ``name``; generated on first use."""
+        full = normalize_typename(name)
+        cls = self._classes.get(full)
+        if cls is not None:
+            return cls
+        with self._lock:
+            if full not in self.store.fielddefs:
+                raise UnknownTypeError(
+                    f"unknown message type {name!r}: add the package folder that defines it to "
+                    "'messages:' in the project file (see `hetros msg show` for known types)"
+                )
+            return self._generate(full)
+
+    def get_service(self, name: str) -> ServiceType:
+        full = normalize_typename(name, "srv")
+        if full not in self.services:
+            raise UnknownTypeError(
+                f"unknown service type {name!r}: ship its .srv in a package listed under 'messages:'"
+            )
+        return self.services[full]
+
+    def get_action(self, name: str) -> ActionType:
+        full = normalize_typename(name, "action")
+        if full not in self.actions:
+            raise UnknownTypeError(
+                f"unknown action type {name!r}: ship its .action in a package listed under 'messages:'"
+            )
+        return self.actions[full]
+
+    def kind_of(self, name: str) -> str:
+        """'msg', 'srv' or 'action' for a full type name, else raise UnknownTypeError."""
+        for kind, table in (("srv", self.services), ("action", self.actions)):
+            if normalize_typename(name, kind) in table:
+                return kind
+        self.get(name)
+        return "msg"
+
+    def names(self) -> list[str]:
+        return sorted(self.store.fielddefs)
+
+    # -- codecs ----------------------------------------------------------------------------
+
+    def serialize(self, message: Message) -> memoryview:
+        """CDR (little endian, with encapsulation header) as ROS 2 puts on the wire."""
+        try:
+            return self.store.serialize_cdr(message, message.__msgtype__)
+        except (SerdeError, AttributeError, TypeError, ValueError, OverflowError) as exc:
+            raise SerializationError(f"cannot serialize {message.__msgtype__}: {exc}") from exc
+
+    def deserialize(self, data: bytes | memoryview, typename: str) -> Message:
+        try:
+            message = self.store.deserialize_cdr(data, typename)
+        except (SerdeError, IndexError, ValueError, TypesysError) as exc:
+            raise SerializationError(
+                f"{len(data)} bytes do not decode as {typename}: {exc}"
+            ) from exc
+        assert isinstance(message, Message)
+        return message
+
+    def definition_text(self, name: str) -> str:
+        """The full definition with nested types, as `hetros msg show` prints it."""
+        full = normalize_typename(name)
+        self.get(full)
+        text, _ = self.store.generate_msgdef(full, ros_version=2)
+        return text
+
+    # -- class generation ------------------------------------------------------------------
+
+    def _generate(self, full: str) -> type[Message]:
+        if full in self._classes:
+            return self._classes[full]
+        consts, fields = self.store.fielddefs[full]
+        namespace: dict[str, Any] = {"np": np, "Message": Message, "FrozenMessage": FrozenMessage,
+                                     "_as_array": _as_array}
+        params: list[str] = []
+        body: list[str] = []
+        fieldnames: list[str] = []
+        for index, (name, desc) in enumerate(fields):
+            attr = _attr_name(name)
+            fieldnames.append(attr)
+            default_expr, coerce = self._default_for(desc, namespace, index)
+            params.append(f"{attr}=None")
+            value = f"{coerce}({attr})" if coerce else attr
+            body.append(f"        self.{attr} = {default_expr} if {attr} is None else {value}")
+        short = full.rsplit("/", 1)[-1]
+        lines = [f"class {short}(Message):", f"    __slots__ = {tuple(fieldnames)!r}"]
+        lines.append(f"    __msgtype__ = {full!r}")
+        lines.append(f"    __fieldnames__ = {tuple(fieldnames)!r}")
+        for cname, _ctype, cvalue in consts:
+            lines.append(f"    {cname} = {cvalue!r}")
+        lines.append(f"    def __init__(self, {', '.join(params)}):" if params else "    def __init__(self):")
+        lines.extend(body or ["        pass"])
+        lines.append(f"class Frozen{short}(FrozenMessage, {short}):")
+        lines.append("    __slots__ = ()")
+        exec(compile("\n".join(lines), f"<hetros message {full}>", "exec"), namespace)  # noqa: S102
+        cls: type[Message] = namespace[short]
+        frozen: type[Message] = namespace[f"Frozen{short}"]
+        package, kind, _ = full.split("/")
+        cls.__module__ = frozen.__module__ = f"hetros.interfaces.{package}.{kind}"
+        cls.__qualname__ = short
+        cls._frozen_class = frozen
+        cls._thawed_class = cls
+        self._classes[full] = cls
+        self.store.types[full] = cls  # type: ignore[assignment]
+        self.store.cache.pop(full, None)
+        return cls
+
+    def _default_for(self, desc: Any, namespace: dict[str, Any], index: int) -> tuple[str, str]:
+        """A Python expression for the default value, and a coercion function name (or '')."""
+        kind, arg = desc
+        if kind == Nodetype.BASE:
+            base = arg[0]
+            return _SCALAR_DEFAULTS.get(base, "0"), ""
+        if kind == Nodetype.NAME:
+            sub = self._generate(arg)
+            namespace[f"_T{index}"] = sub
+            return f"_T{index}()", ""
+        subdesc, length = arg
+        if subdesc[0] == Nodetype.BASE and subdesc[1][0] != "string":
+            dtype = _NUMPY_DTYPES[subdesc[1][0]]
+            namespace[f"_dt{index}"] = np.dtype(dtype)
+            namespace[f"_co{index}"] = functools.partial(_as_array, dtype=np.dtype(dtype))
+            size = length if kind == Nodetype.ARRAY else 0
+            return f"np.zeros({size}, _dt{index})", f"_co{index}"
+        if subdesc[0] == Nodetype.BASE:
+            return (f"[''] * {length}" if kind == Nodetype.ARRAY else "[]"), "list"
+        sub = self._generate(subdesc[1])
+        namespace[f"_T{index}"] = sub
+        if kind == Nodetype.ARRAY:
+            return f"[_T{index}() for _ in range({length})]", "list"
+        return "[]", "list"
+
+
+def _as_array(value: Any, dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
+    if type(value) is np.ndarray and value.dtype == dtype:
+        return value
+    if isinstance(value, (bytes, bytearray, memoryview)) and dtype.itemsize == 1:
+        return np.frombuffer(value, dtype)
+    return np.asarray(value, dtype=dtype)
+
+
+def _attr_name(name: str) -> str:
+    return name + "_" if keyword.iskeyword(name) and not name.endswith("_") else name
+
+
+_registry: TypeRegistry | None = None
+_registry_lock = threading.Lock()
+
+
+def registry() -> TypeRegistry:
+    """The process-wide registry (created on first use)."""
+    global _registry
+    if _registry is None:
+        with _registry_lock:
+            if _registry is None:
+                _registry = TypeRegistry()
+    return _registry

@@ -1,0 +1,185 @@
+"""One process' share of the graph: the transports its nodes' endpoints use.
+
+For each endpoint the plan says which peers live in this process (served by
+the inproc transport, the object itself) and which live in other processes on
+this host (served by shm). A writer feeds both; a reader drains both.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+from .._errors import UndeclaredEndpointError
+from ..msg import Message, TypeRegistry, freeze, registry
+from ..transport import (
+    DEFAULT_QOS,
+    Codec,
+    EnvelopeCodec,
+    InprocTopic,
+    MessageCodec,
+    QoS,
+    Reader,
+    ShmDomain,
+    Wake,
+    Writer,
+)
+from ._plan import ChannelPlan, Plan
+
+
+def _freeze_payload(item: Any) -> Any:
+    if isinstance(item, Message):
+        freeze(item)
+    elif isinstance(item, tuple) and item and isinstance(item[-1], Message):
+        freeze(item[-1])
+    return item
+
+
+class _FanoutWriter(Writer):
+    def __init__(self, parts: list[Writer]) -> None:
+        self._parts = parts
+
+    def write(self, message: Any) -> None:
+        _freeze_payload(message)
+        for part in self._parts:
+            part.write(message)
+
+    def close(self) -> None:
+        for part in self._parts:
+            part.close()
+
+
+class _MergedReader(Reader):
+    def __init__(self, parts: list[Reader]) -> None:
+        self._parts = parts
+
+    def try_take(self) -> Any | None:
+        for part in self._parts:
+            item = part.try_take()
+            if item is not None:
+                return _freeze_payload(item)
+        return None
+
+    def close(self) -> None:
+        for part in self._parts:
+            part.close()
+
+
+class Graph:
+    """Endpoints of the nodes hosted by this process, wired as the plan says."""
+
+    def __init__(
+        self,
+        plan: Plan | None,
+        process: str = "launcher",
+        session: str = "",
+        stop: threading.Event | None = None,
+        types: TypeRegistry | None = None,
+    ) -> None:
+        self.plan = plan
+        self.process = process
+        self.session = session
+        self.stop = stop or threading.Event()
+        self.types = types or registry()
+        self._lock = threading.Lock()
+        self._inproc: dict[str, InprocTopic] = {}
+        self._adhoc_qos: dict[str, QoS] = {}
+        self._shm: ShmDomain | None = None
+        self._codecs: dict[tuple[str, bool], Codec] = {}
+
+    @classmethod
+    def standalone(cls) -> Graph:
+        """A graph with no project: every endpoint allowed, everything in-process."""
+        return cls(None)
+
+    # -- declarations ----------------------------------------------------------------------
+
+    def channel(self, name: str, node: str, role: str) -> ChannelPlan | None:
+        if self.plan is None:
+            return None
+        channel = self.plan.channels.get(name)
+        members = () if channel is None else (channel.publishers if role == "publish" else channel.subscribers)
+        if channel is None or node not in members:
+            yaml_key = {"publish": "publish", "subscribe": "subscribe"}.get(role, role)
+            raise UndeclaredEndpointError(
+                f"node {node!r} creates a {role} endpoint on {name!r} that the project file does "
+                f"not declare: add it under nodes.{node}.{yaml_key} (static plan: no endpoint "
+                "appears at run time that the plan has not wired)"
+            )
+        return channel
+
+    def qos_of(self, name: str, requested: QoS | None) -> QoS:
+        if self.plan is not None and name in self.plan.channels:
+            return self.plan.channels[name].qos
+        with self._lock:
+            return self._adhoc_qos.setdefault(name, requested or DEFAULT_QOS)
+
+    # -- transports ------------------------------------------------------------------------
+
+    def _inproc_topic(self, name: str, qos: QoS) -> InprocTopic:
+        with self._lock:
+            topic = self._inproc.get(name)
+            if topic is None:
+                topic = InprocTopic(name, qos, self.stop)
+                self._inproc[name] = topic
+            return topic
+
+    def _domain(self) -> ShmDomain:
+        with self._lock:
+            if self._shm is None:
+                self._shm = ShmDomain(self.session, self.process)
+            return self._shm
+
+    def _codec(self, typename: str, envelope: bool) -> Codec:
+        key = (typename, envelope)
+        codec = self._codecs.get(key)
+        if codec is None:
+            inner = MessageCodec(self.types, typename)
+            codec = EnvelopeCodec(inner) if envelope else inner
+            self._codecs[key] = codec
+        return codec
+
+    def _split(self, nodes: tuple[str, ...]) -> tuple[bool, list[str]]:
+        """Whether any of ``nodes`` is in this process, and the other processes hosting some."""
+        assert self.plan is not None
+        local = any(self.plan.process_of(n) == self.process for n in nodes)
+        remote = sorted({self.plan.process_of(n) for n in nodes} - {self.process})
+        return local, remote
+
+    def open_writer(self, name: str, node: str, typename: str, *, qos: QoS | None = None,
+                    envelope: bool = False) -> Writer:
+        channel = self.channel(name, node, "publish")
+        effective = self.qos_of(name, qos)
+        if channel is None:
+            return _FanoutWriter([self._inproc_topic(name, effective).open_writer()])
+        local, remote = self._split(channel.subscribers)
+        parts: list[Writer] = []
+        if local:
+            parts.append(self._inproc_topic(name, effective).open_writer())
+        if remote:
+            parts.append(self._domain().open_writer(name, self.process, effective,
+                                                    self._codec(typename, envelope)))
+        return _FanoutWriter(parts)
+
+    def open_reader(self, name: str, node: str, typename: str, wake: Wake, *,
+                    qos: QoS | None = None, envelope: bool = False) -> Reader:
+        channel = self.channel(name, node, "subscribe")
+        effective = self.qos_of(name, qos)
+        if channel is None:
+            return _MergedReader([self._inproc_topic(name, effective).open_reader(node, wake)])
+        local, remote = self._split(channel.publishers)
+        parts: list[Reader] = []
+        if local:
+            parts.append(self._inproc_topic(name, effective).open_reader(node, wake))
+        if remote:
+            slot = channel.subscribers.index(node)
+            parts.append(self._domain().open_reader(name, remote, effective,
+                                                    self._codec(typename, envelope), slot, wake))
+        return _MergedReader(parts)
+
+    def close(self) -> None:
+        self.stop.set()
+        with self._lock:
+            domain, self._shm = self._shm, None
+        if domain is not None:
+            domain.close()

@@ -1,0 +1,389 @@
+"""The node API: rclpy's shape, one meaning on every mapping.
+
+A node is written once and runs unchanged as a thread, as a process pinned to
+a core, or (later) beside hardware: it never names a transport. Messages it
+receives are read-only and may be the publisher's very object (zero copies in
+a process); ``msg.copy()`` keeps a writable one.
+"""
+
+from __future__ import annotations
+
+import itertools
+import threading
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future
+from concurrent.futures import TimeoutError as FutureTimeout
+from typing import Any, Generic, TypeVar
+
+from .._errors import (
+    NodeError,
+    ParameterError,
+    ServiceTimeoutError,
+    ShutdownError,
+    TakeTimeoutError,
+    TopicTypeError,
+)
+from ..msg import Message, ServiceType
+from ..transport import QoS, Reader, Writer
+from ._executor import Executor
+from ._graph import Graph
+from ._log import node_logger
+from ._plan import reply_channel, request_channel
+
+M = TypeVar("M", bound=Message)
+_MISSING: Any = object()
+
+
+def _typename(msg_type: type[Message]) -> str:
+    name = getattr(msg_type, "__msgtype__", "")
+    if not name:
+        raise TopicTypeError(f"message type must be a hetros message class, not {msg_type!r}")
+    return str(name)
+
+
+def _check_type(value: object, expected: str, where: str) -> None:
+    actual = getattr(value, "__msgtype__", None)
+    if actual != expected:
+        raise TopicTypeError(
+            f"{where} carries {expected}, not {actual or type(value).__name__}; "
+            f"construct a {expected.rsplit('/', 1)[-1]} (or fix the type in the project file)"
+        )
+
+
+class Publisher(Generic[M]):
+    """Publishes on one topic. ``publish`` hands the message over (it becomes read-only)."""
+
+    def __init__(self, node: Node, msg_type: type[M], topic: str, writer: Writer) -> None:
+        self.node = node
+        self.msg_type = msg_type
+        self.topic = topic
+        self.typename = _typename(msg_type)
+        self._writer = writer
+
+    def publish(self, message: M) -> None:
+        _check_type(message, self.typename, f"topic {self.topic}")
+        self._writer.write(message)
+
+    def loan(self) -> M:
+        """A fresh message to fill and publish; the shared-memory transport may back it."""
+        return self.msg_type()
+
+    def close(self) -> None:
+        self._writer.close()
+
+
+class Subscription(Generic[M]):
+    """Receives from one topic: by callback (run by the node's executor) or by ``take``."""
+
+    def __init__(self, node: Node, msg_type: type[M], topic: str,
+                 callback: Callable[[M], object] | None) -> None:
+        self.node = node
+        self.msg_type = msg_type
+        self.topic = topic
+        self.typename = _typename(msg_type)
+        self.callback = callback
+        self._cond = threading.Condition()
+        self._reader: Reader | None = None
+
+    def _attach(self, reader: Reader) -> None:
+        self._reader = reader
+
+    def _on_wake(self) -> None:
+        with self._cond:
+            self._cond.notify_all()
+        if self.callback is not None:
+            self.node.executor.notify(self)
+
+    def dispatch(self) -> bool:
+        message = self.try_take()
+        if message is None:
+            return False
+        assert self.callback is not None
+        self.callback(message)
+        return True
+
+    def try_take(self) -> M | None:
+        """The next message, or None when the FIFO is empty (never blocks)."""
+        if self._reader is None:
+            return None
+        message: M | None = self._reader.try_take()
+        return message
+
+    def take(self, timeout: float | None = None) -> M:
+        """Block for the next message; raise TakeTimeoutError, or ShutdownError on shutdown."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        stop = self.node.graph.stop
+        while True:
+            message = self.try_take()
+            if message is not None:
+                return message
+            if stop.is_set():
+                raise ShutdownError(f"take on {self.topic} interrupted: the graph is shutting down")
+            with self._cond:
+                wait = None if deadline is None else deadline - time.monotonic()
+                if wait is not None and wait <= 0:
+                    raise TakeTimeoutError(f"no message on {self.topic} within {timeout:g} s")
+                self._cond.wait(0.5 if wait is None else min(wait, 0.5))
+
+    def __iter__(self) -> Iterator[M]:
+        """Messages until shutdown (the iterator form of a subscription)."""
+        while True:
+            try:
+                yield self.take()
+            except ShutdownError:
+                return
+
+    def close(self) -> None:
+        if self._reader is not None:
+            self._reader.close()
+
+
+class Timer:
+    def __init__(self, node: Node, period: float, callback: Callable[[], object]) -> None:
+        if not period > 0:
+            raise NodeError(f"timer period must be positive seconds, not {period!r}")
+        self.period = period
+        self.callback = callback
+        self.cancelled = False
+        self._due = time.monotonic() + period
+        node.executor.add_timer(self._due, self._fire)
+
+    def _fire(self) -> float | None:
+        if self.cancelled:
+            return None
+        self.callback()
+        now = time.monotonic()
+        self._due += self.period
+        if self._due < now:
+            self._due = now + self.period
+        return None if self.cancelled else self._due
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+
+class Service:
+    """Serves one service: the handler takes a request and returns the response."""
+
+    def __init__(self, node: Node, srv_type: ServiceType, name: str,
+                 handler: Callable[[Any], Any]) -> None:
+        self.node = node
+        self.srv_type = srv_type
+        self.name = name
+        self.handler = handler
+        self._request_type = _typename(srv_type.Request)
+        self._response_type = _typename(srv_type.Response)
+        self._replies: dict[str, Writer] = {}
+        self._reader = node.graph.open_reader(
+            request_channel(name), node.name, self._request_type,
+            lambda: node.executor.notify(self), envelope=True,
+        )
+
+    def dispatch(self) -> bool:
+        envelope = self._reader.try_take()
+        if envelope is None:
+            return False
+        request_id, client, request = envelope
+        response = self.handler(request)
+        _check_type(response, self._response_type, f"the response of service {self.name}")
+        writer = self._replies.get(client)
+        if writer is None:
+            writer = self.node.graph.open_writer(
+                reply_channel(self.name, client), self.node.name, self._response_type, envelope=True
+            )
+            self._replies[client] = writer
+        writer.write((request_id, client, response))
+        return True
+
+    def close(self) -> None:
+        self._reader.close()
+
+
+class Client:
+    """Calls one service. Replies bypass the node's callback queue, so ``call`` is safe in callbacks."""
+
+    def __init__(self, node: Node, srv_type: ServiceType, name: str) -> None:
+        self.node = node
+        self.srv_type = srv_type
+        self.name = name
+        self._request_type = _typename(srv_type.Request)
+        self._response_type = _typename(srv_type.Response)
+        self._ids = itertools.count(1)
+        self._pending: dict[int, Future[Any]] = {}
+        self._lock = threading.Lock()
+        self._writer = node.graph.open_writer(
+            request_channel(name), node.name, self._request_type, envelope=True
+        )
+        self._reader = node.graph.open_reader(
+            reply_channel(name, node.name), node.name, self._response_type, self._on_reply, envelope=True
+        )
+
+    def _on_reply(self) -> None:
+        while True:
+            with self._lock:
+                envelope = self._reader.try_take()
+                if envelope is None:
+                    return
+                future = self._pending.pop(envelope[0], None)
+            if future is not None and not future.done():
+                future.set_result(envelope[2])
+
+    def call_async(self, request: Any) -> Future[Any]:
+        _check_type(request, self._request_type, f"a request of service {self.name}")
+        future: Future[Any] = Future()
+        with self._lock:
+            request_id = next(self._ids)
+            self._pending[request_id] = future
+        self._writer.write((request_id, self.node.name, request))
+        return future
+
+    def call(self, request: Any, timeout: float = 5.0) -> Any:
+        future = self.call_async(request)
+        deadline = time.monotonic() + timeout
+        while True:
+            if self.node.graph.stop.is_set():
+                raise ShutdownError(f"call to {self.name} interrupted: the graph is shutting down")
+            try:
+                return future.result(min(0.5, max(deadline - time.monotonic(), 0.0)))
+            except FutureTimeout:
+                if time.monotonic() >= deadline:
+                    with self._lock:
+                        self._pending = {k: v for k, v in self._pending.items() if v is not future}
+                    raise ServiceTimeoutError(
+                        f"service {self.name} did not reply within {timeout:g} s; is its server "
+                        "node running (see `hetros graph`)?"
+                    ) from None
+
+    def close(self) -> None:
+        self._reader.close()
+
+
+class Node:
+    """What a node function receives: endpoints, timers, parameters, a logger."""
+
+    def __init__(self, name: str, graph: Graph | None = None,
+                 parameters: dict[str, Any] | None = None) -> None:
+        self.name = name
+        self.graph = graph or Graph.standalone()
+        self.log = node_logger(name)
+        self.executor = Executor(self.graph.stop)
+        self._parameters = dict(parameters or {})
+        if self.graph.plan is not None and name in self.graph.plan.nodes and parameters is None:
+            self._parameters = dict(self.graph.plan.nodes[name].parameters)
+        self._closables: list[Publisher[Any] | Subscription[Any] | Service | Client] = []
+        self.clients: dict[str, Client] = {}
+
+    # -- endpoints -------------------------------------------------------------------------
+
+    def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None) -> Publisher[M]:
+        typename = _typename(msg_type)
+        self._check_declared_type(topic, typename)
+        writer = self.graph.open_writer(topic, self.name, typename, qos=qos)
+        publisher = Publisher(self, msg_type, topic, writer)
+        self._closables.append(publisher)
+        return publisher
+
+    def create_subscription(self, msg_type: type[M], topic: str,
+                            callback: Callable[[M], object] | None = None, *,
+                            qos: QoS | None = None) -> Subscription[M]:
+        typename = _typename(msg_type)
+        self._check_declared_type(topic, typename)
+        subscription = Subscription(self, msg_type, topic, callback)
+        if callback is not None:
+            self.executor.entities += 1
+        subscription._attach(self.graph.open_reader(topic, self.name, typename, subscription._on_wake, qos=qos))
+        self._closables.append(subscription)
+        return subscription
+
+    def create_service(self, srv_type: ServiceType, name: str, handler: Callable[[Any], Any]) -> Service:
+        self._check_declared_type(request_channel(name), _typename(srv_type.Request))
+        service = Service(self, srv_type, name, handler)
+        self.executor.entities += 1
+        self._closables.append(service)
+        return service
+
+    def create_client(self, srv_type: ServiceType, name: str) -> Client:
+        if name in self.clients:
+            raise NodeError(f"node {self.name!r} already has a client of {name}; reuse it")
+        self._check_declared_type(request_channel(name), _typename(srv_type.Request))
+        client = Client(self, srv_type, name)
+        self.clients[name] = client
+        self._closables.append(client)
+        return client
+
+    def create_timer(self, period: float, callback: Callable[[], object]) -> Timer:
+        self.executor.entities += 1
+        return Timer(self, period, callback)
+
+    def _check_declared_type(self, channel: str, typename: str) -> None:
+        plan = self.graph.plan
+        if plan is None or channel not in plan.channels:
+            return
+        declared = plan.channels[channel].type
+        if declared != typename:
+            raise TopicTypeError(
+                f"node {self.name!r} uses {channel} with type {typename}, but the project declares "
+                f"{declared}; make the code and nodes.{self.name} agree"
+            )
+
+    # -- time and spinning -----------------------------------------------------------------
+
+    def ok(self) -> bool:
+        return not self.graph.stop.is_set()
+
+    def sleep(self, seconds: float) -> bool:
+        """Sleep, waking early on shutdown; return whether the graph is still running."""
+        return not self.graph.stop.wait(seconds)
+
+    def rate(self, hz: float) -> Iterator[int]:
+        """Yield 0, 1, 2, ... at ``hz`` until shutdown (ends cleanly, no exception)."""
+        if not hz > 0:
+            raise NodeError(f"rate must be positive Hz, not {hz!r}")
+        period = 1.0 / hz
+        due = time.monotonic()
+        for tick in itertools.count():
+            if self.graph.stop.is_set():
+                return
+            yield tick
+            due += period
+            delay = due - time.monotonic()
+            if delay < -period:
+                due = time.monotonic()
+                delay = 0.0
+            if delay > 0 and self.graph.stop.wait(delay):
+                return
+
+    def spin(self, timeout: float | None = None) -> None:
+        """Run this node's callbacks, one at a time, until shutdown (or ``timeout``)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while not self.graph.stop.is_set():
+            left = None if deadline is None else deadline - time.monotonic()
+            if left is not None and left <= 0:
+                return
+            self.executor.spin_once(left)
+
+    def spin_once(self, timeout: float | None = None) -> bool:
+        return self.executor.spin_once(timeout)
+
+    # -- parameters ------------------------------------------------------------------------
+
+    def get_parameter(self, name: str, default: Any = _MISSING) -> Any:
+        if name in self._parameters:
+            return self._parameters[name]
+        if default is not _MISSING:
+            return default
+        raise ParameterError(
+            f"node {self.name!r} has no parameter {name!r}: declare it under "
+            f"nodes.{self.name}.parameters.{name} in the project file, or pass a default"
+        )
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        return dict(self._parameters)
+
+    def close(self) -> None:
+        for endpoint in reversed(self._closables):
+            endpoint.close()
+        self._closables.clear()
+        self.executor.wake()

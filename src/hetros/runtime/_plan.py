@@ -1,0 +1,116 @@
+"""The architecture graph the runtime executes: computed once, before anything runs.
+
+The planner (``hetros.project``) produces a :class:`Plan`; the launcher and every
+worker process read the same plan (as JSON: no pickle crosses a process), so
+every process opens exactly the transports the plan names. There is no master
+and no discovery: this is ROS-lite's masterless static initialisation.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+from ..transport import QoS
+
+TransportKind = Literal["inproc", "shm"]
+ChannelKind = Literal["topic", "request", "reply"]
+
+
+@dataclass(frozen=True)
+class TargetPlan:
+    name: str
+    kind: str
+    cpus: tuple[int, ...] = ()
+
+
+@dataclass(frozen=True)
+class NodePlan:
+    name: str
+    run: str
+    target: str
+    parameters: dict[str, Any] = field(default_factory=dict)
+    restart: str = "never"
+    max_restarts: int = 3
+    publish: dict[str, str] = field(default_factory=dict)
+    subscribe: dict[str, str] = field(default_factory=dict)
+    services: dict[str, str] = field(default_factory=dict)
+    clients: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ChannelPlan:
+    """One topic, or one direction of one service, with its endpoints."""
+
+    name: str
+    type: str
+    kind: ChannelKind
+    qos: QoS
+    publishers: tuple[str, ...]
+    subscribers: tuple[str, ...]
+    service: str = ""
+
+
+@dataclass(frozen=True)
+class EdgePlan:
+    channel: str
+    publisher: str
+    subscriber: str
+    transport: TransportKind
+
+
+@dataclass(frozen=True)
+class Plan:
+    name: str
+    root: str
+    message_paths: tuple[str, ...]
+    targets: dict[str, TargetPlan]
+    nodes: dict[str, NodePlan]
+    channels: dict[str, ChannelPlan]
+    edges: tuple[EdgePlan, ...]
+
+    def target_of(self, node: str) -> str:
+        return self.nodes[node].target
+
+    def process_of(self, node: str) -> str:
+        """Threads share the launcher's process (called 'launcher'); others run alone."""
+        target = self.targets[self.nodes[node].target]
+        return "launcher" if target.kind == "thread" else target.name
+
+    def nodes_in(self, process: str) -> list[str]:
+        return [n for n in self.nodes if self.process_of(n) == process]
+
+    def processes(self) -> list[str]:
+        return sorted({self.process_of(n) for n in self.nodes} - {"launcher"})
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), indent=1, sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> Plan:
+        raw = json.loads(text)
+        return cls(
+            name=raw["name"],
+            root=raw["root"],
+            message_paths=tuple(raw["message_paths"]),
+            targets={k: TargetPlan(v["name"], v["kind"], tuple(v["cpus"])) for k, v in raw["targets"].items()},
+            nodes={k: NodePlan(**v) for k, v in raw["nodes"].items()},
+            channels={
+                k: ChannelPlan(
+                    name=v["name"], type=v["type"], kind=v["kind"], qos=QoS(**v["qos"]),
+                    publishers=tuple(v["publishers"]), subscribers=tuple(v["subscribers"]),
+                    service=v["service"],
+                )
+                for k, v in raw["channels"].items()
+            },
+            edges=tuple(EdgePlan(**e) for e in raw["edges"]),
+        )
+
+
+def request_channel(service: str) -> str:
+    return f"{service}/_request"
+
+
+def reply_channel(service: str, client: str) -> str:
+    return f"{service}/_reply/{client}"

@@ -1,0 +1,23 @@
+"""Transports: inproc (the object itself), shm (iceoryx2 shared memory)."""
+
+from ._base import Codec, Reader, Wake, Writer
+from ._codec import EnvelopeCodec, MessageCodec
+from ._inproc import InprocTopic, Mailbox
+from ._qos import DEFAULT_QOS, QoS
+from ._shm import ShmDomain, cleanup_stale, remove_session_segments
+
+__all__ = [
+    "DEFAULT_QOS",
+    "Codec",
+    "EnvelopeCodec",
+    "InprocTopic",
+    "Mailbox",
+    "MessageCodec",
+    "QoS",
+    "Reader",
+    "ShmDomain",
+    "Wake",
+    "Writer",
+    "cleanup_stale",
+    "remove_session_segments",
+]

@@ -1,0 +1,49 @@
+"""What every transport provides: writers that deliver, readers that take.
+
+A reader never calls user code. When data may be available it calls the
+``wake`` function it was given (from any thread); the runtime then takes
+messages in the node's own thread. That keeps the executor the only place
+where callbacks run, whatever the transport.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import Any
+
+Wake = Callable[[], None]
+
+
+class Writer(ABC):
+    """Publishing end of one topic (or service channel) for one endpoint."""
+
+    @abstractmethod
+    def write(self, message: Any) -> None:
+        """Deliver ``message`` to every subscriber; may block per QoS, then raise."""
+
+    @abstractmethod
+    def close(self) -> None: ...
+
+
+class Reader(ABC):
+    """Subscribing end; ``try_take`` returns the next message or None when empty."""
+
+    @abstractmethod
+    def try_take(self) -> Any | None: ...
+
+    @abstractmethod
+    def close(self) -> None: ...
+
+
+class Codec(ABC):
+    """Turns messages into bytes for transports that cross a process boundary."""
+
+    @abstractmethod
+    def size(self, message: Any) -> int: ...
+
+    @abstractmethod
+    def encode_into(self, message: Any, buffer: memoryview) -> None: ...
+
+    @abstractmethod
+    def decode(self, data: memoryview) -> Any: ...

@@ -1,0 +1,64 @@
+"""Codecs that turn messages (and service envelopes) into bytes for shared memory."""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+from .._errors import SerializationError
+from ..msg import Message, TypeRegistry
+from ._base import Codec
+
+_CDR_LE = b"\x00\x01\x00\x00"
+
+
+class MessageCodec(Codec):
+    """CDR, little endian with the 4-byte encapsulation header: the ROS 2 wire format."""
+
+    def __init__(self, registry: TypeRegistry, typename: str) -> None:
+        self.typename = typename
+        self._registry = registry
+        registry.get(typename)
+        self._msgdef = registry.store.get_msgdef(typename)
+
+    def size(self, message: Any) -> int:
+        return 4 + int(self._msgdef.getsize_cdr(0, message, self._registry.store))
+
+    def encode_into(self, message: Any, buffer: memoryview) -> None:
+        buffer[:4] = _CDR_LE
+        self._msgdef.serialize_cdr_le(buffer[4:], 0, message, self._registry.store)
+
+    def decode(self, data: memoryview) -> Message:
+        return self._registry.deserialize(data, self.typename)
+
+
+_ENVELOPE = struct.Struct("<QH")
+
+
+class EnvelopeCodec(Codec):
+    """A service request or reply: (request id, client name, message)."""
+
+    def __init__(self, inner: MessageCodec) -> None:
+        self._inner = inner
+
+    def size(self, envelope: Any) -> int:
+        request_id, client, message = envelope
+        return _ENVELOPE.size + len(client.encode()) + self._inner.size(message)
+
+    def encode_into(self, envelope: Any, buffer: memoryview) -> None:
+        request_id, client, message = envelope
+        name = client.encode()
+        _ENVELOPE.pack_into(buffer, 0, request_id, len(name))
+        start = _ENVELOPE.size
+        buffer[start:start + len(name)] = name
+        self._inner.encode_into(message, buffer[start + len(name):])
+
+    def decode(self, data: memoryview) -> tuple[int, str, Message]:
+        if len(data) < _ENVELOPE.size:
+            raise SerializationError(
+                f"service envelope of {len(data)} bytes is shorter than its {_ENVELOPE.size}-byte header"
+            )
+        request_id, length = _ENVELOPE.unpack_from(data, 0)
+        start = _ENVELOPE.size
+        client = bytes(data[start:start + length]).decode()
+        return request_id, client, self._inner.decode(data[start + length:])

@@ -1,0 +1,74 @@
+"""Quality of service, with one meaning on every transport.
+
+* reliable + keep_all: a bounded FIFO of ``depth`` per subscriber; a full FIFO
+  blocks the publisher, for at most ``publish_timeout`` seconds, then
+  :class:`~hetros.PublishTimeoutError` (fpgaDDS's Reliable/Keep-All default).
+* keep_last (or best_effort): the FIFO keeps the newest ``depth`` messages,
+  dropping the oldest; the publisher never blocks.
+* transient_local: a subscriber that joins late first gets the last ``depth``
+  messages each publisher sent.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Literal
+
+Reliability = Literal["reliable", "best_effort"]
+History = Literal["keep_all", "keep_last"]
+Durability = Literal["volatile", "transient_local"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class QoS:
+    """Per-topic quality of service. Construct with keywords or use a preset."""
+
+    reliability: Reliability = "reliable"
+    history: History = "keep_all"
+    depth: int = 10
+    durability: Durability = "volatile"
+    publish_timeout: float = 5.0
+
+    def __post_init__(self) -> None:
+        if self.reliability not in ("reliable", "best_effort"):
+            raise ValueError(f"reliability must be 'reliable' or 'best_effort', not {self.reliability!r}")
+        if self.history not in ("keep_all", "keep_last"):
+            raise ValueError(f"history must be 'keep_all' or 'keep_last', not {self.history!r}")
+        if self.durability not in ("volatile", "transient_local"):
+            raise ValueError(f"durability must be 'volatile' or 'transient_local', not {self.durability!r}")
+        if not isinstance(self.depth, int) or self.depth < 1:
+            raise ValueError(f"depth must be a positive integer, not {self.depth!r}")
+        if not self.publish_timeout > 0:
+            raise ValueError(f"publish_timeout must be positive seconds, not {self.publish_timeout!r}")
+
+    @property
+    def blocks_publisher(self) -> bool:
+        """Whether a full subscriber FIFO makes the publisher wait (else the oldest is dropped)."""
+        return self.reliability == "reliable" and self.history == "keep_all"
+
+    @property
+    def keeps_history(self) -> bool:
+        return self.durability == "transient_local"
+
+    def with_(self, **changes: object) -> QoS:
+        return replace(self, **changes)  # type: ignore[arg-type]
+
+    # Presets, named after what they are for.
+    @classmethod
+    def reliable(cls, depth: int = 10) -> QoS:
+        return cls(depth=depth)
+
+    @classmethod
+    def sensor_data(cls, depth: int = 5) -> QoS:
+        return cls(reliability="best_effort", history="keep_last", depth=depth)
+
+    @classmethod
+    def latest(cls, depth: int = 1) -> QoS:
+        return cls(history="keep_last", depth=depth)
+
+    @classmethod
+    def latched(cls, depth: int = 1) -> QoS:
+        return cls(history="keep_last", depth=depth, durability="transient_local")
+
+
+DEFAULT_QOS = QoS()

@@ -410,20 +410,23 @@ def cleanup_stale() -> list[str]:
     """Remove what crashed launches left: dead iceoryx2 nodes and orphaned credits files."""
     removed: list[str] = []
     try:
-        for state in iox2.Node.list(iox2.ServiceType.Ipc, iox2.config.global_config()):
+        states = iox2.Node.list(iox2.ServiceType.Ipc, iox2.config.global_config())
+    except Exception:  # noqa: BLE001 - listing is best effort; a fresh machine has nothing
+        states = []
+    for state in states:
+        dead = getattr(state, "Dead", None)
+        view = dead if dead is not None and not callable(dead) else None
+        if view is None and type(state).__name__.endswith("Dead"):
+            view = state
+        if view is not None and hasattr(view, "try_remove_stale_resources"):
             try:
-                dead = getattr(state, "dead", None) or getattr(state, "remove_stale_resources", None)
-                if dead is None:
-                    continue
+                view.try_remove_stale_resources()
+                removed.append("iceoryx2 node")
             except Exception:  # noqa: BLE001
-                continue
-    except Exception:  # noqa: BLE001 - listing is best effort
-        pass
+                pass
     for path in SHM_DIR.glob("hetros-*"):
-        parts = path.name.split("-")
-        if len(parts) < 3 or not parts[1].isdigit():
-            continue
-        if not _pid_alive(int(parts[1])):
+        owner = path.name.split("-")[1].split("x")[0] if path.name.count("-") >= 2 else ""
+        if owner.isdigit() and not _pid_alive(int(owner)):
             try:
                 path.unlink()
                 removed.append(path.name)

@@ -1,0 +1,173 @@
+"""The ``hetros`` command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import yaml
+
+from .._errors import CheckError, Error
+from ..msg import registry
+
+EXIT_ERROR = 1
+
+
+def _write_yaml(data: object, out: str | None) -> None:
+    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=False)
+    if out:
+        Path(out).write_text(text, encoding="utf-8")
+        print(f"wrote {out}")
+    else:
+        sys.stdout.write(text)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from ..project import check, load_project
+
+    project = load_project(args.project)
+    report = check(project)
+    for warning in report.warnings:
+        print(f"warning: {warning}")
+    if report.errors:
+        print(CheckError(report.errors), file=sys.stderr)
+        return EXIT_ERROR
+    print(f"{args.project}: OK ({len(project.model.nodes)} nodes)")
+    return 0
+
+
+def cmd_graph(args: argparse.Namespace) -> int:
+    from ..project import plan_file
+    from ..project._graph import describe, write_graph
+
+    plan = plan_file(args.project)
+    print(describe(plan))
+    if args.out:
+        for path in write_graph(plan, Path(args.out)):
+            print(f"wrote {path}")
+    return 0
+
+
+def cmd_launch(args: argparse.Namespace) -> int:
+    from ..project import plan_file
+    from ..runtime import launch
+
+    plan = plan_file(args.project)
+    result = launch(plan, duration=args.duration)
+    if result.exit_code:
+        print(f"[launch] graph stopped: {result.reason} (failed: {', '.join(result.failures) or '-'})",
+              file=sys.stderr)
+    return result.exit_code
+
+
+def cmd_init(args: argparse.Namespace) -> int:
+    from ..project import template_from_sources
+
+    files = [Path(f) for f in args.files]
+    root = Path(args.root) if args.root else (files[0].parent if files else Path.cwd())
+    data = template_from_sources(files, root, args.name or root.resolve().name)
+    if not data["nodes"]:
+        print("no create_* calls found in the given files", file=sys.stderr)
+        return EXIT_ERROR
+    _write_yaml(data, args.output)
+    return 0
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    from ..project import import_reconros, import_roslite
+
+    converter = import_roslite if args.format == "roslite" else import_reconros
+    _write_yaml(converter(Path(args.file), module=args.module), args.output)
+    return 0
+
+
+def _load_types(args: argparse.Namespace) -> None:
+    for folder in args.messages or []:
+        registry().load_folder(Path(folder))
+
+
+def cmd_msg_show(args: argparse.Namespace) -> int:
+    _load_types(args)
+    types = registry()
+    name = args.type
+    for kind, table in (("srv", types.services), ("action", types.actions)):
+        try:
+            from ..msg import normalize_typename
+
+            full = normalize_typename(name, kind)
+        except Error:
+            continue
+        if full in table:
+            parts = ("Request", "Response") if kind == "srv" else ("Goal", "Result", "Feedback")
+            print("\n---\n".join(types.definition_text(f"{full}_{p}").rstrip() for p in parts))
+            return 0
+    print(types.definition_text(name).rstrip())
+    return 0
+
+
+def cmd_msg_list(args: argparse.Namespace) -> int:
+    _load_types(args)
+    for name in registry().names():
+        print(name)
+    return 0
+
+
+def cmd_msg_build(args: argparse.Namespace) -> int:
+    from ..msg._codegen import build_package_modules
+
+    for path in build_package_modules(Path(args.folder), Path(args.output)):
+        print(f"wrote {path}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="hetros", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("check", help="validate a project file")
+    p.add_argument("project")
+    p.set_defaults(func=cmd_check)
+    p = sub.add_parser("graph", help="print the computation and architecture graphs")
+    p.add_argument("project")
+    p.add_argument("--out", help="write <out>.dot and <out>.svg")
+    p.set_defaults(func=cmd_graph)
+    p = sub.add_parser("launch", help="run a project")
+    p.add_argument("project")
+    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.set_defaults(func=cmd_launch)
+    p = sub.add_parser("init", help="write a template project from node sources")
+    p.add_argument("files", nargs="+")
+    p.add_argument("-o", "--output")
+    p.add_argument("--name")
+    p.add_argument("--root", help="folder the modules are relative to (default: the first file's)")
+    p.set_defaults(func=cmd_init)
+    p = sub.add_parser("import", help="convert a ROS-lite .map or a ReconROS build.cfg")
+    p.add_argument("format", choices=["roslite", "reconros"])
+    p.add_argument("file")
+    p.add_argument("-o", "--output")
+    p.add_argument("--module", default="nodes", help="module holding the node functions")
+    p.set_defaults(func=cmd_import)
+    msg = sub.add_parser("msg", help="message types").add_subparsers(dest="msg_command", required=True)
+    p = msg.add_parser("show", help="print a type's full definition")
+    p.add_argument("type")
+    p.add_argument("--messages", action="append", help="extra package folder(s)")
+    p.set_defaults(func=cmd_msg_show)
+    p = msg.add_parser("list", help="list known message types")
+    p.add_argument("--messages", action="append")
+    p.set_defaults(func=cmd_msg_list)
+    p = msg.add_parser("build", help="write importable, typed modules for a package")
+    p.add_argument("folder")
+    p.add_argument("-o", "--output", required=True)
+    p.set_defaults(func=cmd_msg_build)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        code: int = args.func(args)
+        return code
+    except Error as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_ERROR

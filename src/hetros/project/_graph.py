@@ -1,0 +1,82 @@
+"""``hetros graph``: the computation graph and the architecture graph of a plan."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from .._errors import Error
+from ..runtime._plan import Plan
+
+
+def describe(plan: Plan) -> str:
+    lines = [f"project {plan.name}", "", "computation graph (nodes and topics):"]
+    for channel in plan.channels.values():
+        if channel.kind == "topic":
+            lines.append(f"  {channel.name} [{channel.type}]  {', '.join(channel.publishers)} -> "
+                         f"{', '.join(channel.subscribers) or '(no subscriber)'}")
+        elif channel.kind == "request":
+            lines.append(f"  service {channel.service} [{channel.type.removesuffix('_Request')}]  "
+                         f"{', '.join(channel.publishers) or '(no client)'} -> {', '.join(channel.subscribers)}")
+    lines += ["", "architecture graph (targets and transports):"]
+    for target in plan.targets.values():
+        members = [n for n, spec in plan.nodes.items() if spec.target == target.name]
+        if not members:
+            continue
+        where = "threads of the launcher" if target.kind == "thread" else (
+            f"own process, cpus {list(target.cpus)}" if target.cpus else "own process")
+        lines.append(f"  target {target.name} ({target.kind}: {where}): {', '.join(members)}")
+    for edge in plan.edges:
+        q = plan.channels[edge.channel].qos
+        lines.append(f"  {edge.publisher} -> {edge.subscriber}  {edge.channel}  via {edge.transport}"
+                     f"  ({q.reliability}, {q.history}, depth {q.depth})")
+    return "\n".join(lines)
+
+
+def to_dot(plan: Plan) -> str:
+    out = ["digraph hetros {", "  rankdir=LR;", '  node [fontname="Helvetica"];']
+    for target in plan.targets.values():
+        members = [n for n, spec in plan.nodes.items() if spec.target == target.name]
+        if not members:
+            continue
+        out.append(f'  subgraph "cluster_{target.name}" {{')
+        out.append(f'    label="{target.name} ({target.kind})"; style=rounded;')
+        for node in members:
+            out.append(f'    "{node}" [shape=box];')
+        out.append("  }")
+    for channel in plan.channels.values():
+        if channel.kind == "topic":
+            out.append(f'  "{channel.name}" [shape=ellipse, label="{channel.name}\\n{channel.type}"];')
+    for edge in plan.edges:
+        channel = plan.channels[edge.channel]
+        style = "solid" if edge.transport == "inproc" else "bold"
+        if channel.kind == "topic":
+            out.append(f'  "{edge.publisher}" -> "{channel.name}" [label="{edge.transport}", style={style}];')
+            out.append(f'  "{channel.name}" -> "{edge.subscriber}" [label="{edge.transport}", style={style}];')
+        elif channel.kind == "request":
+            out.append(f'  "{edge.publisher}" -> "{edge.subscriber}" [label="{channel.service} '
+                       f'({edge.transport})", style=dashed];')
+    out.append("}")
+    seen: set[str] = set()
+    unique = [line for line in out if not (line in seen or seen.add(line))]  # type: ignore[func-returns-value]
+    return "\n".join(unique) + "\n"
+
+
+def write_graph(plan: Plan, out: Path) -> list[Path]:
+    """Write ``<out>.dot`` and render ``<out>.svg`` with Graphviz."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    dot_path = out.with_suffix(".dot")
+    dot_path.write_text(to_dot(plan), encoding="utf-8")
+    svg_path = out.with_suffix(".svg")
+    beside = Path(sys.executable).parent / "graphviz-pure"
+    renderer = shutil.which("dot") or shutil.which("graphviz-pure") or (str(beside) if beside.exists() else None)
+    if renderer is None:
+        raise Error(f"wrote {dot_path}, but found no Graphviz 'dot' to render SVG: "
+                    "install graphviz (apt) or graphviz-pure (pip)")
+    result = subprocess.run([renderer, "-Tsvg", str(dot_path), "-o", str(svg_path)],
+                            capture_output=True, text=True, check=False)
+    if result.returncode != 0:
+        raise Error(f"Graphviz failed to render {dot_path}: {result.stderr.strip()}")
+    return [dot_path, svg_path]

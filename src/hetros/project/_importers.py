@@ -1,0 +1,134 @@
+"""Importers for the two configuration formats hetros replaces.
+
+* ROS-lite's map file: YAML entries with name, cluster, publish, publish_type,
+  subscribe, subscribe_type; each cluster becomes a process target.
+* ReconROS' configuration file: ``[ResourceGroup@Name]`` sections whose
+  rosnode/roscpp, rosmsg, rossrvmsg, rossub, rospub, rossrvs and rossrv entries
+  declare nodes and endpoints; each resource group becomes a process target.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .._errors import ProjectError
+
+
+def _as_list(value: Any) -> list[str]:
+    if value is None:
+        return []
+    if isinstance(value, (list, tuple)):
+        return [str(v) for v in value]
+    return [str(value)]
+
+
+def _topic(name: str) -> str:
+    return name if name.startswith("/") else "/" + name
+
+
+def import_roslite(path: Path, module: str = "nodes") -> dict[str, Any]:
+    """A project dict from a ROS-lite .map file."""
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise ProjectError(f"{path}: not a valid ROS-lite map file (YAML): {exc}") from exc
+    entries = data.get("nodes", data) if isinstance(data, dict) else data
+    if not isinstance(entries, list):
+        raise ProjectError(f"{path}: a ROS-lite map file is a list of nodes (name, cluster, publish, ...)")
+    targets: dict[str, Any] = {}
+    nodes: dict[str, Any] = {}
+    for index, entry in enumerate(entries):
+        if not isinstance(entry, dict) or "name" not in entry:
+            raise ProjectError(f"{path}: entry {index} needs at least 'name' and 'cluster'")
+        name = str(entry["name"])
+        if "cluster" not in entry:
+            raise ProjectError(f"{path}: node {name!r} (entry {index}) has no 'cluster'; assign one")
+        cluster = f"cluster{entry['cluster']}"
+        targets.setdefault(cluster, {"kind": "process"})
+        node: dict[str, Any] = {"run": f"{module}:{name}", "target": cluster}
+        for field in ("publish", "subscribe"):
+            topics = _as_list(entry.get(field))
+            kinds = _as_list(entry.get(f"{field}_type"))
+            if len(kinds) != len(topics):
+                raise ProjectError(
+                    f"{path}: node {name!r}: {field} lists {len(topics)} topic(s) but {field}_type "
+                    f"lists {len(kinds)} type(s); give one type per topic"
+                )
+            if topics:
+                node[field] = {_topic(t): k for t, k in zip(topics, kinds, strict=True)}
+        nodes[name] = node
+    return {"name": path.stem, "targets": targets, "nodes": nodes}
+
+
+_SECTION = re.compile(r"^\[ResourceGroup(?:@|\(at\))(?P<name>[^\]]+)\]$")
+
+
+def _fields(value: str) -> list[str]:
+    return [v.strip().strip('"') for v in value.split(",")]
+
+
+def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
+    """A project dict from the ROS part of a ReconROS build.cfg (Listing 1 of the paper)."""
+    targets: dict[str, Any] = {}
+    nodes: dict[str, Any] = {}
+    group = ""
+    variables: dict[str, str] = {}
+    messages: dict[str, str] = {}
+    for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        line = re.sub(r"^\d+\s+", "", raw.split("#", 1)[0].strip())
+        if not line:
+            continue
+        section = _SECTION.match(line)
+        if section:
+            group = section.group("name")
+            continue
+        if line.startswith("["):
+            group = ""
+            continue
+        if not group or "=" not in line:
+            continue
+        var, _, value = (p.strip() for p in line.partition("="))
+        fields = _fields(value)
+        kind = fields[0]
+
+        def need(count: int) -> None:
+            if len(fields) < count:
+                raise ProjectError(f"{path}:{lineno}: {kind} needs {count - 1} arguments, got {len(fields) - 1}")
+
+        def node_of(ref: str) -> dict[str, Any]:
+            if ref not in variables:
+                raise ProjectError(f"{path}:{lineno}: {ref!r} is not a node defined earlier in this group")
+            return nodes[variables[ref]]
+
+        def message_of(ref: str) -> str:
+            if ref not in messages:
+                raise ProjectError(f"{path}:{lineno}: {ref!r} is not a message defined earlier in this group")
+            return messages[ref]
+
+        if kind in ("rosnode", "roscpp"):
+            need(2)
+            name = fields[1].lower()
+            variables[var] = name
+            target = group.lower()
+            targets.setdefault(target, {"kind": "process"})
+            nodes[name] = {"run": f"{module}:{name}", "target": target}
+        elif kind in ("rosmsg", "rosmg", "rossrvmsg"):
+            need(4)
+            messages[var] = f"{fields[1]}/{fields[2]}/{fields[3]}"
+        elif kind in ("rossub", "rospub"):
+            need(4)
+            section_name = "subscribe" if kind == "rossub" else "publish"
+            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
+        elif kind in ("rossrvs", "rossrv"):
+            need(4)
+            section_name = "services" if kind == "rossrvs" else "clients"
+            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
+        else:
+            continue
+    if not nodes:
+        raise ProjectError(f"{path}: no [ResourceGroup@...] section with a rosnode/roscpp entry found")
+    return {"name": path.stem, "targets": targets, "nodes": nodes}

@@ -1,0 +1,246 @@
+"""From a validated project to the plan: every check first, then one transport per edge."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .._errors import CheckError, DefinitionError, MessageError, PlanError
+from ..msg import TypeRegistry, normalize_typename, registry
+from ..runtime._plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan, reply_channel, request_channel
+from ..transport import QoS
+from ._model import LoadedProject, load_project
+from ._scan import scan_file
+
+SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
+_NOT_YET = {
+    "fpga": "hardware (fpga) targets are not implemented yet; map the node to a thread or process target",
+    "host": "remote host targets are not implemented yet; map the node to a thread or process target",
+}
+
+
+@dataclass
+class CheckReport:
+    errors: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+
+def load_messages(project: LoadedProject, types: TypeRegistry, report: CheckReport) -> None:
+    for index, folder in enumerate(project.model.messages):
+        path = (project.root / folder).resolve()
+        try:
+            types.load_folder(path)
+        except DefinitionError as exc:
+            report.errors.append(f"{project.where('messages', index)}: {exc}")
+
+
+def _module_findable(project: LoadedProject, module: str) -> bool:
+    candidate = project.root.joinpath(*module.split("."))
+    if candidate.with_suffix(".py").is_file() or (candidate / "__init__.py").is_file():
+        return True
+    try:
+        return importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckReport:
+    """Every check ``hetros check`` promises; errors name file:line and the YAML path."""
+    types = types or registry()
+    report = CheckReport()
+    model = project.model
+    load_messages(project, types, report)
+    where = project.where
+
+    for tname, target in model.targets.items():
+        if target.kind in _NOT_YET:
+            used = [n for n, spec in model.nodes.items() if spec.target == tname]
+            if used:
+                report.errors.append(f"{where('targets', tname, 'kind')}: {_NOT_YET[target.kind]} "
+                                     f"(used by {', '.join(used)})")
+        for index, cpu in enumerate(target.cpus):
+            if cpu >= (os.cpu_count() or 1):
+                report.errors.append(
+                    f"{where('targets', tname, 'cpus', index)}: cpu {cpu} does not exist on this "
+                    f"machine ({os.cpu_count()} CPUs: 0..{(os.cpu_count() or 1) - 1})"
+                )
+    if model.external is not None:
+        report.errors.append(f"{where('external')}: bridges to external ROS graphs are not implemented "
+                             "yet; remove the 'external' section")
+
+    publishers: dict[str, list[tuple[str, str]]] = {}
+    subscribers: dict[str, list[tuple[str, str]]] = {}
+    servers: dict[str, list[tuple[str, str]]] = {}
+    clients: dict[str, list[tuple[str, str]]] = {}
+    for nname, spec in model.nodes.items():
+        if spec.target not in model.targets:
+            report.errors.append(
+                f"{where('nodes', nname, 'target')}: unknown target {spec.target!r}; "
+                f"define it under targets (known: {', '.join(model.targets) or 'none'})"
+            )
+        module = spec.run.partition(":")[0]
+        if not _module_findable(project, module):
+            report.errors.append(
+                f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the "
+                "project file nor in the environment"
+            )
+        for section, table, kind in (("publish", publishers, "msg"), ("subscribe", subscribers, "msg"),
+                                     ("services", servers, "srv"), ("clients", clients, "srv")):
+            for endpoint, typename in getattr(spec, section).items():
+                if not endpoint.startswith("/"):
+                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: names must be "
+                                         f"absolute, like '/{endpoint}'")
+                try:
+                    full = normalize_typename(typename, kind)
+                    if kind == "msg":
+                        types.get(full)
+                    else:
+                        types.get_service(full)
+                except MessageError as exc:
+                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: {exc}")
+                    full = typename
+                table.setdefault(endpoint, []).append((nname, full))
+
+    for topic, subs in subscribers.items():
+        if topic not in publishers:
+            for nname, _ in subs:
+                report.errors.append(
+                    f"{where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}; "
+                    "add a publisher under some node's 'publish' or remove this subscription"
+                )
+    for topic in set(publishers) | set(subscribers):
+        declared = {t for _, t in publishers.get(topic, []) + subscribers.get(topic, [])}
+        if len(declared) > 1:
+            users = ", ".join(f"{n}: {t}" for n, t in publishers.get(topic, []) + subscribers.get(topic, []))
+            report.errors.append(f"{where('nodes')}: topic {topic} is declared with different types "
+                                 f"({users}); one topic carries one type")
+    for service, users in clients.items():
+        if service not in servers:
+            for nname, _ in users:
+                report.errors.append(f"{where('nodes', nname, 'clients', service)}: no node serves "
+                                     f"{service}; add it under some node's 'services'")
+    for service, users in servers.items():
+        if len(users) > 1:
+            report.errors.append(f"{where('nodes', users[1][0], 'services', service)}: {service} is "
+                                 f"already served by {users[0][0]}; a service has one server")
+        declared = {t for _, t in users + clients.get(service, [])}
+        if len(declared) > 1:
+            report.errors.append(f"{where('nodes')}: service {service} is declared with different types")
+    for topic, spec in model.topics.items():
+        if topic not in publishers and topic not in subscribers:
+            report.errors.append(f"{where('topics', topic)}: no node publishes or subscribes {topic}")
+        if spec.reliability == "best_effort" and spec.history == "keep_all":
+            report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
+                                   "behaves like keep_last with this depth")
+    _check_sources(project, report)
+    return report
+
+
+def _check_sources(project: LoadedProject, report: CheckReport) -> None:
+    """Endpoints a node's code creates that its project entry does not declare."""
+    for nname, spec in project.model.nodes.items():
+        module, _, attr = spec.run.partition(":")
+        path = project.root.joinpath(*module.split(".")).with_suffix(".py")
+        if not path.is_file():
+            continue
+        try:
+            scanned = {s.name: s for s in scan_file(path, module)}
+        except SyntaxError as exc:
+            report.errors.append(f"{project.where('nodes', nname, 'run')}: {path}:{exc.lineno}: "
+                                 f"syntax error: {exc.msg}")
+            continue
+        found = scanned.get(attr)
+        if found is None:
+            continue
+        for section, endpoints in found.endpoints.items():
+            declared = getattr(spec, section)
+            for endpoint in endpoints:
+                if endpoint not in declared:
+                    report.errors.append(
+                        f"{project.where('nodes', nname, section)}: the code of {nname} "
+                        f"({found.source}) creates {section} endpoint {endpoint} that the project does "
+                        f"not declare; add '{endpoint}: {endpoints[endpoint]}' here"
+                    )
+
+
+def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
+    """Check, then compute the architecture graph. Raises CheckError with every problem."""
+    types = types or registry()
+    report = check(project, types)
+    if report.errors:
+        raise CheckError(report.errors)
+    model = project.model
+    process_of = {
+        n: ("launcher" if model.targets[s.target].kind == "thread" else s.target) for n, s in model.nodes.items()
+    }
+    channels: dict[str, ChannelPlan] = {}
+    for nname, spec in model.nodes.items():
+        for topic, typename in spec.publish.items():
+            _add(channels, topic, normalize_typename(typename), "topic", project, pub=nname)
+        for topic, typename in spec.subscribe.items():
+            _add(channels, topic, normalize_typename(typename), "topic", project, sub=nname)
+    for nname, spec in model.nodes.items():
+        for service, typename in spec.services.items():
+            srv = normalize_typename(typename, "srv")
+            _add(channels, request_channel(service), f"{srv}_Request", "request", project, sub=nname,
+                 service=service)
+        for service, typename in spec.clients.items():
+            srv = normalize_typename(typename, "srv")
+            _add(channels, request_channel(service), f"{srv}_Request", "request", project, pub=nname,
+                 service=service)
+    for nname, spec in model.nodes.items():
+        for service, typename in spec.clients.items():
+            srv = normalize_typename(typename, "srv")
+            server = channels[request_channel(service)].subscribers[0]
+            name = reply_channel(service, nname)
+            _add(channels, name, f"{srv}_Response", "reply", project, pub=server, service=service)
+            _add(channels, name, f"{srv}_Response", "reply", project, sub=nname, service=service)
+    edges = tuple(
+        EdgePlan(c.name, p, s, "inproc" if process_of[p] == process_of[s] else "shm")
+        for c in channels.values() for p in c.publishers for s in c.subscribers
+    )
+    return Plan(
+        name=model.name,
+        root=str(project.root.resolve()),
+        message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
+        targets={n: TargetPlan(n, t.kind, tuple(t.cpus)) for n, t in model.targets.items()},
+        nodes={
+            n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts,
+                        dict(s.publish), dict(s.subscribe), dict(s.services), dict(s.clients))
+            for n, s in model.nodes.items()
+        },
+        channels=channels,
+        edges=edges,
+    )
+
+
+def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, project: LoadedProject,
+         pub: str | None = None, sub: str | None = None, service: str = "") -> None:
+    existing = channels.get(name)
+    if existing is None:
+        if kind == "topic":
+            spec = project.model.topics.get(name)
+            qos = QoS(**spec.model_dump()) if spec is not None else QoS()
+        else:
+            qos = SERVICE_QOS
+        existing = ChannelPlan(name, typename, kind, qos, (), (), service)  # type: ignore[arg-type]
+    publishers = existing.publishers + ((pub,) if pub and pub not in existing.publishers else ())
+    subscribers = existing.subscribers + ((sub,) if sub and sub not in existing.subscribers else ())
+    channels[name] = ChannelPlan(existing.name, existing.type, existing.kind, existing.qos,
+                                 publishers, subscribers, existing.service)
+
+
+def plan_file(path: str | Path, types: TypeRegistry | None = None) -> Plan:
+    return plan(load_project(path), types)
+
+
+def ensure_importable(plan_: Plan) -> None:
+    """Node modules resolve next to the project file first, then in the environment."""
+    if plan_.root not in sys.path:
+        sys.path.insert(0, plan_.root)
+
+
+__all__ = ["CheckReport", "PlanError", "check", "ensure_importable", "load_messages", "plan", "plan_file"]

@@ -1,0 +1,142 @@
+"""Runs the nodes of one process, one thread per node, and reports their failures."""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import sys
+import threading
+import traceback
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .._errors import LaunchError, ShutdownError
+from ..msg import registry
+from ._graph import Graph
+from ._log import node_logger
+from ._node import Node
+from ._plan import NodePlan, Plan
+
+FailureReport = Callable[[str, str, bool], None]
+
+
+def resolve(run: str, root: str) -> Callable[..., Any]:
+    """``module:object``, looked up next to the project file first, then in the environment."""
+    module_name, _, attr = run.partition(":")
+    if root and root not in sys.path:
+        sys.path.insert(0, root)
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise LaunchError(f"cannot import {module_name!r} for run: {run!r}: {exc}") from exc
+    try:
+        target: Callable[..., Any] = getattr(module, attr)
+    except AttributeError:
+        raise LaunchError(f"module {module_name!r} has no {attr!r} (run: {run!r})") from None
+    return target
+
+
+def run_node_body(factory: Callable[..., Any], node: Node) -> None:
+    """Call a node function or construct a node class; spin when it left callbacks behind."""
+    result = factory(node)
+    if inspect.isclass(factory) and hasattr(result, "run"):
+        result.run()
+    if node.executor.entities and node.ok():
+        node.spin()
+
+
+class NodeThread:
+    """One node in its own thread, restarted per its ``restart`` policy."""
+
+    def __init__(self, spec: NodePlan, graph: Graph, on_failure: FailureReport,
+                 on_exit: Callable[[], None]) -> None:
+        self.on_exit = on_exit
+        self.spec = spec
+        self.graph = graph
+        self.on_failure = on_failure
+        self.failed = False
+        self.thread = threading.Thread(target=self._main, name=f"node:{spec.name}", daemon=True)
+
+    def start(self) -> None:
+        self.thread.start()
+
+    def _main(self) -> None:
+        try:
+            self._run()
+        finally:
+            self.on_exit()
+
+    def _run(self) -> None:
+        restarts = 0
+        plan = self.graph.plan
+        root = plan.root if plan else ""
+        while not self.graph.stop.is_set():
+            node = Node(self.spec.name, self.graph)
+            try:
+                run_node_body(resolve(self.spec.run, root), node)
+                return
+            except ShutdownError:
+                return
+            except BaseException:  # noqa: BLE001 - any failure of user code is reported, not lost
+                if self.graph.stop.is_set():
+                    return
+                restart = self.spec.restart == "on-failure" and restarts < self.spec.max_restarts
+                self.on_failure(self.spec.name, traceback.format_exc(), restart)
+                if not restart:
+                    self.failed = True
+                    return
+                restarts += 1
+                node_logger(self.spec.name).warning(
+                    "restarting (restart: on-failure, %d of %d)", restarts, self.spec.max_restarts
+                )
+                self.graph.stop.wait(min(0.2 * 2**restarts, 2.0))
+            finally:
+                node.close()
+
+
+class Host:
+    """All nodes the plan puts in one process."""
+
+    def __init__(self, plan: Plan, process: str, session: str, on_failure: FailureReport,
+                 stop: threading.Event | None = None,
+                 on_all_exited: Callable[[], None] = lambda: None) -> None:
+        self._running = 0
+        self._count_lock = threading.Lock()
+        self._on_all_exited = on_all_exited
+        types = registry()
+        for folder in plan.message_paths:
+            types.load_folder(Path(folder))
+        self.graph = Graph(plan, process, session, stop, types)
+        self.threads = [NodeThread(plan.nodes[n], self.graph, on_failure, self._exited)
+                        for n in plan.nodes_in(process)]
+        for nthread in self.threads:
+            resolve(nthread.spec.run, plan.root)
+
+    def _exited(self) -> None:
+        with self._count_lock:
+            self._running -= 1
+            done = self._running == 0
+        if done:
+            self._on_all_exited()
+
+    def start(self) -> None:
+        self._running = len(self.threads)
+        for nthread in self.threads:
+            nthread.start()
+        if not self.threads:
+            self._on_all_exited()
+
+    def alive(self) -> bool:
+        return any(t.thread.is_alive() for t in self.threads)
+
+    def stop(self, timeout: float = 5.0) -> list[str]:
+        """Stop every node; return the names of nodes that did not finish in time."""
+        self.graph.stop.set()
+        stuck = []
+        for nthread in self.threads:
+            nthread.thread.join(timeout)
+            if nthread.thread.is_alive():
+                stuck.append(nthread.spec.name)
+        self.graph.close()
+        return stuck

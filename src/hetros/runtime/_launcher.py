@@ -1,0 +1,232 @@
+"""Starts a plan's targets, supervises them, and shuts the graph down in order.
+
+Threads run in this process; each process target is a fresh interpreter
+(``subprocess``, the spawn model: nothing inherited but the plan file), pinned
+to its cpus. Start-up has a barrier: every process first imports its nodes
+and opens its transports, then all nodes start together. Shutdown is the
+reverse: stop every node, wait, then remove the shared memory of the session.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import queue
+import secrets
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+from .._errors import LaunchError
+from ..transport import cleanup_stale, remove_session_segments
+from ._host import Host
+from ._log import setup_logging
+from ._plan import Plan
+
+log = logging.getLogger("hetros.launch")
+
+
+@dataclass
+class LaunchResult:
+    exit_code: int
+    failures: list[str] = field(default_factory=list)
+    reason: str = ""
+
+
+@dataclass
+class _Child:
+    target: str
+    proc: subprocess.Popen[str]
+    status: IO[str]
+    ready: bool = False
+    stopping: bool = False
+
+
+class Launcher:
+    def __init__(self, plan: Plan, *, duration: float | None = None) -> None:
+        self.plan = plan
+        self.duration = duration
+        self.session = f"{os.getpid()}x{secrets.token_hex(3)}"
+        self.events: queue.Queue[dict[str, Any]] = queue.Queue()
+        self.children: dict[str, _Child] = {}
+        self.failures: list[str] = []
+        self.stop = threading.Event()
+        self.host: Host | None = None
+        self._plan_file: Path | None = None
+
+    # -- start -----------------------------------------------------------------------------
+
+    def _spawn(self, target: str) -> _Child:
+        assert self._plan_file is not None
+        read_fd, write_fd = os.pipe()
+        cmd = [sys.executable, "-m", "hetros.runtime._worker", "--plan", str(self._plan_file),
+               "--target", target, "--session", self.session, "--status-fd", str(write_fd)]
+        env = dict(os.environ)
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [self.plan.root, env.get("PYTHONPATH", "")]))
+        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, pass_fds=(write_fd,), text=True, env=env,
+                                start_new_session=True)
+        os.close(write_fd)
+        child = _Child(target, proc, os.fdopen(read_fd, "r"))
+        threading.Thread(target=self._read_status, args=(child,), daemon=True).start()
+        threading.Thread(target=self._watch_exit, args=(child,), daemon=True).start()
+        return child
+
+    def _read_status(self, child: _Child) -> None:
+        for line in child.status:
+            try:
+                event = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(event, dict):
+                self.events.put(event)
+
+    def _watch_exit(self, child: _Child) -> None:
+        code = child.proc.wait()
+        self.events.put({"event": "exited", "target": child.target, "code": code})
+
+    def _local_failure(self, node: str, tb: str, restarting: bool) -> None:
+        self.events.put({"event": "node_failed", "target": "launcher", "node": node, "traceback": tb,
+                         "restarting": restarting})
+
+    def run(self) -> LaunchResult:
+        setup_logging()
+        cleanup_stale()
+        fd, name = tempfile.mkstemp(prefix="hetros-plan-", suffix=".json")
+        with os.fdopen(fd, "w") as handle:
+            handle.write(self.plan.to_json())
+        self._plan_file = Path(name)
+        previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+        in_main = threading.current_thread() is threading.main_thread()
+        if in_main:
+            for sig in previous:
+                signal.signal(sig, lambda *_: self.events.put({"event": "signal"}))
+        try:
+            return self._supervise()
+        finally:
+            self._shutdown()
+            if in_main:
+                for sig, handler in previous.items():
+                    signal.signal(sig, handler)
+            self._plan_file.unlink(missing_ok=True)
+
+    def _supervise(self) -> LaunchResult:
+        for target in self.plan.processes():
+            self.children[target] = self._spawn(target)
+        local_nodes = self.plan.nodes_in("launcher")
+        if local_nodes:
+            self.host = Host(self.plan, "launcher", self.session, self._local_failure, self.stop,
+                             lambda: self.events.put({"event": "local_done"}))
+        waiting = set(self.children)
+        deadline = time.monotonic() + 60.0
+        while waiting:
+            event = self._next_event(deadline - time.monotonic())
+            if event is None:
+                raise LaunchError(f"targets {sorted(waiting)} did not start within 60 s")
+            if event["event"] == "ready":
+                waiting.discard(event["target"])
+                log.info("target %s ready (pid %s, cpus %s)", event["target"], event["pid"], event["cpus"])
+            elif event["event"] == "start_failed":
+                self.failures.append(event["target"])
+                sys.stderr.write(f"[ERROR] [launch]: target {event['target']} failed to start: "
+                                 f"{event['error']}\n{event['traceback']}")
+                return LaunchResult(1, self.failures, "start failed")
+            elif event["event"] == "exited":
+                self.failures.append(event["target"])
+                return LaunchResult(1, self.failures, f"target {event['target']} exited during start-up")
+            elif event["event"] == "signal":
+                return LaunchResult(130, [], "interrupted")
+        for child in self.children.values():
+            self._send(child, "go")
+        if self.host is not None:
+            self.host.start()
+        return self._watch()
+
+    def _next_event(self, timeout: float | None) -> dict[str, Any] | None:
+        try:
+            return self.events.get(timeout=None if timeout is None else max(timeout, 0.0))
+        except queue.Empty:
+            return None
+
+    def _watch(self) -> LaunchResult:
+        end = None if self.duration is None else time.monotonic() + self.duration
+        running = set(self.children) | ({"launcher"} if self.host else set())
+        while running:
+            event = self._next_event(None if end is None else end - time.monotonic())
+            if event is None:
+                return LaunchResult(1 if self.failures else 0, self.failures, "duration elapsed")
+            kind = event["event"]
+            if kind == "signal":
+                return LaunchResult(1 if self.failures else 0, self.failures, "interrupted")
+            if kind == "node_failed":
+                what = "restarting it" if event["restarting"] else "shutting the graph down"
+                sys.stderr.write(f"[ERROR] [launch]: node {event['node']} (target {event['target']}) "
+                                 f"raised; {what}:\n{event['traceback']}")
+                sys.stderr.flush()
+                if not event["restarting"]:
+                    self.failures.append(event["node"])
+                    return LaunchResult(1, self.failures, f"node {event['node']} failed")
+            elif kind == "exited":
+                child = self.children[event["target"]]
+                running.discard(event["target"])
+                if child.stopping:
+                    continue
+                code = event["code"]
+                if code != 0:
+                    cause = f"killed by {signal.Signals(-code).name}" if code < 0 else f"exit code {code}"
+                    sys.stderr.write(f"[ERROR] [launch]: target {event['target']} (pid {child.proc.pid}) "
+                                     f"died: {cause}; shutting the graph down\n")
+                    sys.stderr.flush()
+                    self.failures.append(event["target"])
+                    return LaunchResult(1, self.failures, f"target {event['target']} died")
+            elif kind == "local_done":
+                running.discard("launcher")
+            elif kind == "stopped" and event.get("failed"):
+                self.failures.extend(event["failed"])
+        return LaunchResult(1 if self.failures else 0, self.failures, "all nodes finished")
+
+    # -- stop ------------------------------------------------------------------------------
+
+    def _send(self, child: _Child, line: str) -> None:
+        try:
+            assert child.proc.stdin is not None
+            child.proc.stdin.write(line + "\n")
+            child.proc.stdin.flush()
+        except (BrokenPipeError, OSError, ValueError):
+            pass
+
+    def _shutdown(self) -> None:
+        self.stop.set()
+        for child in self.children.values():
+            child.stopping = True
+            self._send(child, "stop")
+        stuck: list[str] = []
+        if self.host is not None:
+            stuck = self.host.stop(timeout=5.0)
+        deadline = time.monotonic() + 5.0
+        for child in self.children.values():
+            try:
+                child.proc.wait(timeout=max(deadline - time.monotonic(), 0.1))
+            except subprocess.TimeoutExpired:
+                log.warning("target %s did not stop within 5 s; killing it", child.target)
+                child.proc.kill()
+                child.proc.wait()
+            if child.proc.stdin is not None:
+                try:
+                    child.proc.stdin.close()
+                except OSError:
+                    pass
+        if stuck:
+            log.warning("nodes %s did not return within 5 s of shutdown", ", ".join(stuck))
+        remove_session_segments(self.session)
+        cleanup_stale()
+
+
+def launch(plan: Plan, *, duration: float | None = None) -> LaunchResult:
+    return Launcher(plan, duration=duration).run()

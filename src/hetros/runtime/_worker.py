@@ -1,0 +1,75 @@
+"""Entry point of a process target: ``python -m hetros.runtime._worker``.
+
+The launcher passes the plan as a JSON file (never pickle), talks over stdin
+("go", "stop"; end of input means the launcher died, so the worker stops) and
+reads JSON status lines from a pipe.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from ._host import Host
+from ._log import setup_logging
+from ._plan import Plan
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="hetros-worker")
+    parser.add_argument("--plan", required=True)
+    parser.add_argument("--target", required=True)
+    parser.add_argument("--session", required=True)
+    parser.add_argument("--status-fd", type=int, required=True)
+    args = parser.parse_args(argv)
+    setup_logging()
+    status = os.fdopen(args.status_fd, "w", buffering=1)
+    lock = threading.Lock()
+
+    def report(event: str, **fields: Any) -> None:
+        with lock:
+            status.write(json.dumps({"event": event, "target": args.target, **fields}) + "\n")
+
+    plan = Plan.from_json(Path(args.plan).read_text(encoding="utf-8"))
+    cpus = plan.targets[args.target].cpus
+    if cpus:
+        os.sched_setaffinity(0, cpus)
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    try:
+        host = Host(plan, args.target, args.session,
+                    lambda node, tb, restarting: report("node_failed", node=node, traceback=tb,
+                                                        restarting=restarting), stop, stop.set)
+    except Exception as exc:  # noqa: BLE001 - reported to the launcher, which prints it
+        import traceback
+
+        report("start_failed", error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
+        return 2
+    report("ready", pid=os.getpid(), cpus=sorted(os.sched_getaffinity(0)))
+
+    def control() -> None:
+        for line in sys.stdin:
+            if line.strip() == "go":
+                host.start()
+            elif line.strip() == "stop":
+                break
+        stop.set()
+
+    threading.Thread(target=control, name="control", daemon=True).start()
+    stop.wait()
+    stuck = host.stop()
+    failed = [t.spec.name for t in host.threads if t.failed]
+    report("stopped", stuck=stuck, failed=failed)
+    status.close()
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -59,8 +59,10 @@ def to_dot(plan: Plan) -> str:
             out.append(f'  "{edge.publisher}" -> "{edge.subscriber}" [label="{channel.service} '
                        f'({edge.transport})", style=dashed];')
     out.append("}")
-    seen: set[str] = set()
-    unique = [line for line in out if not (line in seen or seen.add(line))]  # type: ignore[func-returns-value]
+    unique: list[str] = []
+    for line in out:
+        if "->" not in line or line not in unique:
+            unique.append(line)
     return "\n".join(unique) + "\n"
 
 

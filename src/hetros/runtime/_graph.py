@@ -8,6 +8,7 @@ this host (served by shm). A writer feeds both; a reader drains both.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from typing import Any
 
 from .._errors import UndeclaredEndpointError
@@ -86,6 +87,22 @@ class Graph:
         self._adhoc_qos: dict[str, QoS] = {}
         self._shm: ShmDomain | None = None
         self._codecs: dict[tuple[str, bool], Codec] = {}
+        self._stop_hooks: list[Callable[[], None]] = []
+
+    def on_stop(self, hook: Callable[[], None]) -> None:
+        """Call ``hook`` when the graph stops (executors and blocked takes wake up)."""
+        with self._lock:
+            self._stop_hooks.append(hook)
+        if self.stop.is_set():
+            hook()
+
+    def shutdown(self) -> None:
+        """Stop every node of this process: set the stop flag and wake everything waiting."""
+        self.stop.set()
+        with self._lock:
+            hooks = list(self._stop_hooks)
+        for hook in hooks:
+            hook()
 
     @classmethod
     def standalone(cls) -> Graph:
@@ -178,7 +195,7 @@ class Graph:
         return _MergedReader(parts)
 
     def close(self) -> None:
-        self.stop.set()
+        self.shutdown()
         with self._lock:
             domain, self._shm = self._shm, None
         if domain is not None:

@@ -132,7 +132,7 @@ class Host:
 
     def stop(self, timeout: float = 5.0) -> list[str]:
         """Stop every node; return the names of nodes that did not finish in time."""
-        self.graph.stop.set()
+        self.graph.shutdown()
         stuck = []
         for nthread in self.threads:
             nthread.thread.join(timeout)

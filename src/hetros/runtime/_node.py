@@ -89,9 +89,12 @@ class Subscription(Generic[M]):
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
 
-    def _on_wake(self) -> None:
+    def _wake_takers(self) -> None:
         with self._cond:
             self._cond.notify_all()
+
+    def _on_wake(self) -> None:
+        self._wake_takers()
         if self.callback is not None:
             self.node.executor.notify(self)
 
@@ -124,7 +127,8 @@ class Subscription(Generic[M]):
                 wait = None if deadline is None else deadline - time.monotonic()
                 if wait is not None and wait <= 0:
                     raise TakeTimeoutError(f"no message on {self.topic} within {timeout:g} s")
-                self._cond.wait(0.5 if wait is None else min(wait, 0.5))
+                if self._reader is not None and not stop.is_set():
+                    self._cond.wait(wait)
 
     def __iter__(self) -> Iterator[M]:
         """Messages until shutdown (the iterator form of a subscription)."""
@@ -212,6 +216,7 @@ class Client:
         self._ids = itertools.count(1)
         self._pending: dict[int, Future[Any]] = {}
         self._lock = threading.Lock()
+        self._reader: Reader | None = None
         self._writer = node.graph.open_writer(
             request_channel(name), node.name, self._request_type, envelope=True
         )
@@ -220,7 +225,7 @@ class Client:
         )
 
     def _on_reply(self) -> None:
-        while True:
+        while self._reader is not None:
             with self._lock:
                 envelope = self._reader.try_take()
                 if envelope is None:
@@ -256,7 +261,8 @@ class Client:
                     ) from None
 
     def close(self) -> None:
-        self._reader.close()
+        if self._reader is not None:
+            self._reader.close()
 
 
 class Node:
@@ -268,6 +274,7 @@ class Node:
         self.graph = graph or Graph.standalone()
         self.log = node_logger(name)
         self.executor = Executor(self.graph.stop)
+        self.graph.on_stop(self.executor.wake)
         self._parameters = dict(parameters or {})
         if self.graph.plan is not None and name in self.graph.plan.nodes and parameters is None:
             self._parameters = dict(self.graph.plan.nodes[name].parameters)
@@ -290,6 +297,7 @@ class Node:
         typename = _typename(msg_type)
         self._check_declared_type(topic, typename)
         subscription = Subscription(self, msg_type, topic, callback)
+        self.graph.on_stop(subscription._wake_takers)
         if callback is not None:
             self.executor.entities += 1
         subscription._attach(self.graph.open_reader(topic, self.name, typename, subscription._on_wake, qos=qos))

@@ -170,6 +170,9 @@ class _Service:
         self.qos = qos
         digest = hashlib.sha1(f"{topic}@{target}".encode()).hexdigest()[:20]
         base = f"hetros/{domain.session}/{digest}"
+        # keep_last: iceoryx2's own overflow keeps exactly the newest `depth`; keep_all: the
+        # credits bound the fill at `depth`, the slack only absorbs a subscriber's join race.
+        self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
         self.lock = threading.RLock()
         self.space = threading.Condition(self.lock)
         self._closed = False
@@ -179,7 +182,7 @@ class _Service:
                 .publish_subscribe(iox2.Slice[ctypes.c_uint8])
                 .max_publishers(MAX_PUBLISHERS_PER_SERVICE)
                 .max_subscribers(MAX_SUBSCRIBER_SLOTS)
-                .subscriber_max_buffer_size(qos.depth + 2)
+                .subscriber_max_buffer_size(self.buffer)
                 .history_size(qos.depth if qos.keeps_history else 0)
                 .enable_safe_overflow(not qos.blocks_publisher)
             )
@@ -294,7 +297,7 @@ class _Service:
     # -- subscribing side ------------------------------------------------------------------
 
     def subscriber(self, slot: int) -> tuple[Any, Any, Any]:
-        subscriber = self.data.subscriber_builder().buffer_size(self.qos.depth + 2).create()
+        subscriber = self.data.subscriber_builder().buffer_size(self.buffer).create()
         self.credits.set_slot(slot, self.credits.published, os.getpid())
         listener = self.wakeup.listener_builder().create()
         back = self.back.notifier_builder().create()

@@ -1,0 +1,257 @@
+"""One suite every transport runs: same QoS meaning on inproc and shm.
+
+Each transport provides a harness that opens writers (one per publisher, each
+publisher its own "process" for shm) and readers on one topic.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+from hetros import PublishTimeoutError
+from hetros.msg import freeze, registry
+from hetros.transport import InprocTopic, MessageCodec, QoS, Reader, ShmDomain, Writer, remove_session_segments
+
+TYPE = "sensor_msgs/msg/Image"
+
+
+def image(pub: int, seq: int, size: int = 8) -> Any:
+    cls = registry().get(TYPE)
+    return cls(height=pub, width=seq, data=np.full(size, seq % 251, dtype=np.uint8))
+
+
+class Harness:
+    def writer(self, index: int = 0) -> Writer:
+        raise NotImplementedError
+
+    def reader(self, index: int = 0, wake: Callable[[], None] = lambda: None) -> Reader:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+
+class InprocHarness(Harness):
+    def __init__(self, qos: QoS, session: str) -> None:
+        self.topic = InprocTopic("/t", qos)
+
+    def writer(self, index: int = 0) -> Writer:
+        inner = self.topic.open_writer()
+
+        class Freezing(Writer):
+            def write(self, message: Any) -> None:
+                inner.write(freeze(message))
+
+            def close(self) -> None:
+                inner.close()
+
+        return Freezing()
+
+    def reader(self, index: int = 0, wake: Callable[[], None] = lambda: None) -> Reader:
+        return self.topic.open_reader(f"sub{index}", wake)
+
+
+class ShmHarness(Harness):
+    """Publisher i lives in 'process' pub{i} and subscribers in their own domains."""
+
+    def __init__(self, qos: QoS, session: str) -> None:
+        self.qos = qos
+        self.session = session
+        self.codec = MessageCodec(registry(), TYPE)
+        self.domains: list[ShmDomain] = []
+        self.publishers = 0
+        self.readers: list[Reader] = []
+
+    def _domain(self, name: str) -> ShmDomain:
+        domain = ShmDomain(self.session, name)
+        self.domains.append(domain)
+        return domain
+
+    def writer(self, index: int = 0) -> Writer:
+        self.publishers = max(self.publishers, index + 1)
+        return self._domain(f"pub{index}").open_writer("/t", f"pub{index}", self.qos, self.codec)
+
+    def reader(self, index: int = 0, wake: Callable[[], None] = lambda: None) -> Reader:
+        targets = [f"pub{i}" for i in range(max(self.publishers, 3))]
+        reader = self._domain(f"sub{index}").open_reader("/t", targets, self.qos, self.codec, index, wake)
+        self.readers.append(reader)
+        return reader
+
+    def close(self) -> None:
+        for reader in self.readers:
+            reader.close()
+        for domain in self.domains:
+            domain.close()
+        remove_session_segments(self.session)
+
+
+HARNESSES = {"inproc": InprocHarness, "shm": ShmHarness}
+
+
+@pytest.fixture(params=sorted(HARNESSES))
+def make(request: pytest.FixtureRequest, shm_session: str) -> Iterator[Callable[[QoS], Harness]]:
+    made: list[Harness] = []
+
+    def factory(qos: QoS) -> Harness:
+        harness = HARNESSES[request.param](qos, shm_session)
+        made.append(harness)
+        return harness
+
+    yield factory
+    for harness in made:
+        harness.close()
+
+
+def drain(reader: Reader) -> list[Any]:
+    out = []
+    while (item := reader.try_take()) is not None:
+        out.append(item)
+    return out
+
+
+def test_order_is_kept(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=100))
+    reader = h.reader()
+    writer = h.writer()
+    for seq in range(50):
+        writer.write(image(0, seq))
+    assert [m.width for m in drain(reader)] == list(range(50))
+
+
+def test_three_publishers_whole_messages_per_publisher_order(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=1000))
+    writers = [h.writer(i) for i in range(3)]
+    reader = h.reader()
+
+    def run(pub: int) -> None:
+        for seq in range(100):
+            writers[pub].write(image(pub, seq, size=1000 + pub))
+
+    threads = [threading.Thread(target=run, args=(p,)) for p in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    got = drain(reader)
+    assert len(got) == 300
+    for pub in range(3):
+        mine = [m for m in got if m.height == pub]
+        assert [m.width for m in mine] == list(range(100))
+        for m in mine:
+            assert m.data.size == 1000 + pub and np.all(m.data == m.width % 251)
+
+
+def test_broadcast_to_three_subscribers_each_with_own_fifo(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=20))
+    readers = [h.reader(i) for i in range(3)]
+    writer = h.writer()
+    for seq in range(10):
+        writer.write(image(0, seq))
+    first = drain(readers[0])
+    assert [m.width for m in first] == list(range(10))
+    for reader in readers[1:]:
+        assert [m.width for m in drain(reader)] == list(range(10))
+
+
+def test_backpressure_blocks_then_times_out(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=3, publish_timeout=0.5))
+    reader = h.reader()
+    writer = h.writer()
+    for seq in range(3):
+        writer.write(image(0, seq))
+    start = time.monotonic()
+    with pytest.raises(PublishTimeoutError, match="depth 3"):
+        writer.write(image(0, 99))
+    assert time.monotonic() - start >= 0.4
+    # a consumer that frees a slot unblocks a waiting publisher
+    done = threading.Event()
+
+    def publish() -> None:
+        writer.write(image(0, 3))
+        done.set()
+
+    thread = threading.Thread(target=publish)
+    thread.start()
+    assert not done.wait(0.2), "publisher must block while the FIFO is full"
+    assert reader.try_take().width == 0
+    assert done.wait(2.0), "publisher must resume once the subscriber takes"
+    thread.join()
+    assert [m.width for m in drain(reader)] == [1, 2, 3]
+
+
+def test_keep_last_drops_the_oldest(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(history="keep_last", depth=3))
+    reader = h.reader()
+    writer = h.writer()
+    for seq in range(10):
+        writer.write(image(0, seq))
+    assert [m.width for m in drain(reader)] == [7, 8, 9]
+
+
+def test_best_effort_never_blocks(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(reliability="best_effort", history="keep_all", depth=2, publish_timeout=0.2))
+    reader = h.reader()
+    writer = h.writer()
+    start = time.monotonic()
+    for seq in range(20):
+        writer.write(image(0, seq))
+    assert time.monotonic() - start < 1.0
+    assert [m.width for m in drain(reader)] == [18, 19]
+
+
+def test_transient_local_late_joiner_gets_last_n(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(history="keep_last", depth=2, durability="transient_local"))
+    writer = h.writer()
+    for seq in range(5):
+        writer.write(image(0, seq))
+    woke = threading.Event()
+    reader = h.reader(wake=woke.set)
+    assert woke.wait(2.0)
+    deadline = time.monotonic() + 2.0
+    got: list[Any] = []
+    while len(got) < 2 and time.monotonic() < deadline:
+        got += drain(reader)
+        time.sleep(0.01)
+    assert [m.width for m in got] == [3, 4]
+
+
+@pytest.mark.parametrize("size", [0, 1, 16 * 1024 * 1024])
+def test_sizes_arrive_intact(make: Callable[[QoS], Harness], size: int) -> None:
+    h = make(QoS(depth=2))
+    reader = h.reader()
+    writer = h.writer()
+    payload = np.random.default_rng(size).integers(0, 256, size, dtype=np.uint8)
+    cls = registry().get(TYPE)
+    writer.write(cls(width=size, data=payload))
+    got = reader.try_take()
+    assert got is not None and got.width == size
+    assert np.array_equal(got.data, payload)
+
+
+def test_delivered_messages_are_read_only(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=2))
+    reader = h.reader()
+    h.writer().write(image(0, 1))
+    got = reader.try_take()
+    if not got.is_frozen:
+        freeze(got)  # shm hands over bytes; the runtime freezes what it decodes
+    with pytest.raises(ValueError, match="read-only"):
+        got.data[0] = 1
+
+
+def test_subscriber_is_woken_not_polled(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=4))
+    woke = threading.Event()
+    reader = h.reader(wake=woke.set)
+    writer = h.writer()
+    time.sleep(0.05)
+    woke.clear()
+    writer.write(image(0, 7))
+    assert woke.wait(2.0)
+    assert reader.try_take().width == 7

@@ -1,0 +1,124 @@
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hetros import DefinitionError, ReadOnlyMessageError, UnknownTypeError
+from hetros.msg import TypeRegistry, freeze, read_package, registry
+
+
+def write_pkg(root: Path, files: dict[str, str]) -> Path:
+    pkg = root / "my_pkg"
+    for rel, text in files.items():
+        path = pkg / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    return pkg
+
+
+def test_standard_and_shipped_types_import() -> None:
+    from hetros.interfaces.example_interfaces.action import Fibonacci
+    from hetros.interfaces.example_interfaces.srv import AddTwoInts
+    from hetros.interfaces.std_msgs.msg import String
+
+    assert String(data="x").data == "x"
+    assert AddTwoInts.Request(a=1, b=2).b == 2
+    assert AddTwoInts.Response().sum == 0
+    assert Fibonacci.Goal(order=3).order == 3
+    assert list(Fibonacci.Result(sequence=[1, 1, 2]).sequence) == [1, 1, 2]
+    assert Fibonacci.SendGoal.Request().goal_id.uuid.shape == (16,)
+    assert Fibonacci.FeedbackMessage().__msgtype__ == "example_interfaces/action/Fibonacci_FeedbackMessage"
+
+
+def test_cdr_roundtrip_matches_hand_annotated_bytes() -> None:
+    from hetros.interfaces.std_msgs.msg import String
+
+    data = bytes(registry().serialize(String(data="hi")))
+    # encapsulation (CDR_LE) | length 3 incl. NUL | 'h' 'i' NUL
+    assert data == b"\x00\x01\x00\x00" + b"\x03\x00\x00\x00" + b"hi\x00"
+    assert registry().deserialize(data, "std_msgs/msg/String") == String(data="hi")
+
+
+def test_image_roundtrip_and_numpy_fields() -> None:
+    from hetros.interfaces.sensor_msgs.msg import Image
+
+    img = Image(height=2, width=3, encoding="mono8", step=3, data=np.arange(6, dtype=np.uint8))
+    back = registry().deserialize(registry().serialize(img), "sensor_msgs/msg/Image")
+    assert back == img
+    assert back.data.dtype == np.uint8
+
+
+def test_frozen_message_is_read_only_and_copy_is_writable() -> None:
+    from hetros.interfaces.sensor_msgs.msg import Image
+
+    img = freeze(Image(width=1, data=[1, 2, 3]))
+    with pytest.raises(ReadOnlyMessageError, match=r"msg\.copy\(\)"):
+        img.width = 2  # type: ignore[attr-defined]
+    with pytest.raises(ValueError, match="read-only"):
+        img.data[0] = 9  # type: ignore[attr-defined]
+    with pytest.raises(ReadOnlyMessageError):
+        img.header.frame_id = "x"  # type: ignore[attr-defined]
+    copy = img.copy()
+    copy.width = 5
+    copy.data[0] = 9
+    assert isinstance(img, Image) and img.data[0] == 1 and copy.data[0] == 9
+
+
+def test_user_package_srv_and_action_split(tmp_path: Path) -> None:
+    pkg = write_pkg(tmp_path, {
+        "msg/Point2.msg": "# a point\nfloat64 x\nfloat64 y\nint8 ORIGIN=0\n",
+        "srv/Nearest.srv": "Point2[] points\n---\nPoint2 nearest\nuint32 index\n",
+        "action/Move.action": "Point2 goal\n---\nbool ok\n---\nfloat64 distance\n",
+    })
+    types = TypeRegistry()
+    assert types.load_folder(pkg) == ["my_pkg"]
+    nearest = types.get_service("my_pkg/srv/Nearest")
+    assert [f for f in nearest.Request.__fieldnames__] == ["points"]
+    assert nearest.Response.__fieldnames__ == ("nearest", "index")
+    move = types.get_action("my_pkg/Move")
+    assert move.Feedback.__fieldnames__ == ("distance",)
+    assert move.SendGoal.Request.__fieldnames__ == ("goal_id", "goal")
+    assert move.GetResult.Response.__fieldnames__ == ("status", "result")
+    assert types.get("my_pkg/msg/Point2").ORIGIN == 0  # type: ignore[attr-defined]
+    text = types.definition_text("my_pkg/msg/Point2")
+    assert "float64 x" in text
+
+
+@pytest.mark.parametrize(
+    ("files", "where", "reason"),
+    [
+        ({"msg/Bad.msg": "int32 a\nint32\n"}, "Bad.msg:2", "expected '<type> <name>'"),
+        ({"msg/Bad.msg": "int32 a\nint32 a\n"}, "Bad.msg:2", "already defined on line 1"),
+        ({"msg/Bad.msg": "in$t b\n"}, "Bad.msg:1", "not a valid field type"),
+        ({"msg/Bad.msg": "int32 9lives\n"}, "Bad.msg:1", "not a valid field name"),
+        ({"msg/Bad.msg": "int32<=5 a\n"}, "Bad.msg:1", "only strings take"),
+        ({"msg/Bad.msg": "int32 a\nNoSuch b\n"}, "Bad.msg:2", "unknown field type 'my_pkg/msg/NoSuch'"),
+        ({"srv/Bad.srv": "int32 a\n"}, "Bad.srv:1", "exactly 1 '---' separator"),
+        ({"action/Bad.action": "int32 a\n---\nint32 b\n"}, "Bad.action:3", "exactly 2 '---'"),
+        ({"srv/Bad.srv": "int32 a\n---\nint32 b c d\nfoo/Bar baz\n"}, "Bad.srv:4",
+         "unknown field type 'foo/msg/Bar'"),
+    ],
+)
+def test_malformed_definitions_name_file_line_and_reason(
+    tmp_path: Path, files: dict[str, str], where: str, reason: str
+) -> None:
+    pkg = write_pkg(tmp_path, files)
+    with pytest.raises(DefinitionError) as info:
+        TypeRegistry().load_folder(pkg)
+    assert where in str(info.value)
+    assert reason in str(info.value)
+
+
+def test_unknown_type_lookup_says_what_to_do() -> None:
+    with pytest.raises(UnknownTypeError, match="messages:"):
+        registry().get("nope_msgs/msg/Nothing")
+    with pytest.raises(UnknownTypeError, match="pkg/msg/Name"):
+        registry().get("bad")
+
+
+def test_read_package_lists_what_it_found(tmp_path: Path) -> None:
+    pkg = write_pkg(tmp_path, {"srv/Ping.srv": "---\n"})
+    found = read_package(pkg)
+    assert found.services == ("my_pkg/srv/Ping",)

@@ -1,7 +1,8 @@
 """A service and a client: the client asks /add_two_ints and logs the sums."""
 
-from hetros import Node
 from hetros.interfaces.example_interfaces.srv import AddTwoInts
+
+from hetros import Node
 
 
 def server(node: Node) -> None:

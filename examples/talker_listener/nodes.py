@@ -1,7 +1,8 @@
 """The ROS-lite paper's example (Fig. 6): one talker, two listeners on /chatter."""
 
-from hetros import Node
 from hetros.interfaces.std_msgs.msg import String
+
+from hetros import Node
 
 
 def talker(node: Node) -> None:

@@ -11,13 +11,13 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+# rosbags' own field-definition tuples are loosely typed; Any keeps them opaque here.
+from typing import Any
+
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import TypesysError, get_types_from_msg
 
 from .._errors import DefinitionError
-
-# rosbags' own field-definition tuples are loosely typed; Any keeps them opaque here.
-from typing import Any
 
 Typesdict = dict[str, Any]
 

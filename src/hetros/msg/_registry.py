@@ -249,7 +249,7 @@ class TypeRegistry:
         lines.extend(body or ["        pass"])
         lines.append(f"class Frozen{short}(FrozenMessage, {short}):")
         lines.append("    __slots__ = ()")
-        exec(compile("\n".join(lines), f"<hetros message {full}>", "exec"), namespace)  # noqa: S102
+        exec(compile("\n".join(lines), f"<hetros message {full}>", "exec"), namespace)
         cls: type[Message] = namespace[short]
         frozen: type[Message] = namespace[f"Frozen{short}"]
         package, kind, _ = full.split("/")
@@ -258,7 +258,7 @@ class TypeRegistry:
         cls._frozen_class = frozen
         cls._thawed_class = cls
         self._classes[full] = cls
-        self.store.types[full] = cls  # type: ignore[assignment]
+        self.store.types[full] = cls
         self.store.cache.pop(full, None)
         return cls
 

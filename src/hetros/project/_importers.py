@@ -102,7 +102,8 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
         def node_of(ref: str) -> dict[str, Any]:
             if ref not in variables:
                 raise ProjectError(f"{path}:{lineno}: {ref!r} is not a node defined earlier in this group")
-            return nodes[variables[ref]]
+            found: dict[str, Any] = nodes[variables[ref]]
+            return found
 
         def message_of(ref: str) -> str:
             if ref not in messages:

@@ -105,13 +105,13 @@ def _line_index(node: yaml.Node, prefix: tuple[str, ...], out: dict[tuple[str, .
     out[prefix] = node.start_mark.line + 1
     if isinstance(node, yaml.MappingNode):
         for key, value in node.value:
-            child = prefix + (str(key.value),)
+            child = (*prefix, str(key.value))
             out[child] = key.start_mark.line + 1
             _line_index(value, child, out)
             out[child] = key.start_mark.line + 1
     elif isinstance(node, yaml.SequenceNode):
         for index, item in enumerate(node.value):
-            _line_index(item, prefix + (str(index),), out)
+            _line_index(item, (*prefix, str(index)), out)
 
 
 def load_project(path: str | Path) -> LoadedProject:

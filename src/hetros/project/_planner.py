@@ -104,9 +104,9 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                     full = typename
                 table.setdefault(endpoint, []).append((nname, full))
 
-    for topic, subs in subscribers.items():
+    for topic, subscribed in subscribers.items():
         if topic not in publishers:
-            for nname, _ in subs:
+            for nname, _ in subscribed:
                 report.errors.append(
                     f"{where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}; "
                     "add a publisher under some node's 'publish' or remove this subscription"
@@ -117,22 +117,22 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             users = ", ".join(f"{n}: {t}" for n, t in publishers.get(topic, []) + subscribers.get(topic, []))
             report.errors.append(f"{where('nodes')}: topic {topic} is declared with different types "
                                  f"({users}); one topic carries one type")
-    for service, users in clients.items():
+    for service, calling in clients.items():
         if service not in servers:
-            for nname, _ in users:
+            for nname, _ in calling:
                 report.errors.append(f"{where('nodes', nname, 'clients', service)}: no node serves "
                                      f"{service}; add it under some node's 'services'")
-    for service, users in servers.items():
-        if len(users) > 1:
-            report.errors.append(f"{where('nodes', users[1][0], 'services', service)}: {service} is "
-                                 f"already served by {users[0][0]}; a service has one server")
-        declared = {t for _, t in users + clients.get(service, [])}
+    for service, serving in servers.items():
+        if len(serving) > 1:
+            report.errors.append(f"{where('nodes', serving[1][0], 'services', service)}: {service} is "
+                                 f"already served by {serving[0][0]}; a service has one server")
+        declared = {t for _, t in serving + clients.get(service, [])}
         if len(declared) > 1:
             report.errors.append(f"{where('nodes')}: service {service} is declared with different types")
-    for topic, spec in model.topics.items():
+    for topic, topic_spec in model.topics.items():
         if topic not in publishers and topic not in subscribers:
             report.errors.append(f"{where('topics', topic)}: no node publishes or subscribes {topic}")
-        if spec.reliability == "best_effort" and spec.history == "keep_all":
+        if topic_spec.reliability == "best_effort" and topic_spec.history == "keep_all":
             report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
                                    "behaves like keep_last with this depth")
     _check_sources(project, report)

@@ -2,7 +2,7 @@
 
 from ._graph import Graph
 from ._host import Host, resolve
-from ._launcher import LaunchResult, Launcher, launch
+from ._launcher import Launcher, LaunchResult, launch
 from ._log import setup_logging
 from ._node import Client, Node, Publisher, Service, Subscription, Timer
 from ._plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan

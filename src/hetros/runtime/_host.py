@@ -78,7 +78,7 @@ class NodeThread:
                 return
             except ShutdownError:
                 return
-            except BaseException:  # noqa: BLE001 - any failure of user code is reported, not lost
+            except BaseException:
                 if self.graph.stop.is_set():
                     return
                 restart = self.spec.restart == "on-failure" and restarts < self.spec.max_restarts

@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
         host = Host(plan, args.target, args.session,
                     lambda node, tb, restarting: report("node_failed", node=node, traceback=tb,
                                                         restarting=restarting), stop, stop.set)
-    except Exception as exc:  # noqa: BLE001 - reported to the launcher, which prints it
+    except Exception as exc:
         import traceback
 
         report("start_failed", error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())

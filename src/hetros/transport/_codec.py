@@ -42,7 +42,7 @@ class EnvelopeCodec(Codec):
         self._inner = inner
 
     def size(self, envelope: Any) -> int:
-        request_id, client, message = envelope
+        _request_id, client, message = envelope
         return _ENVELOPE.size + len(client.encode()) + self._inner.size(message)
 
     def encode_into(self, envelope: Any, buffer: memoryview) -> None:

@@ -36,7 +36,7 @@ from ._base import Codec, Reader, Wake, Writer
 from ._qos import QoS
 
 os.environ.setdefault("IOX2_LOG_LEVEL", "Error")
-import iceoryx2 as iox2  # noqa: E402
+import iceoryx2 as iox2
 
 iox2.set_log_level(iox2.LogLevel.Error)
 
@@ -235,7 +235,7 @@ class _Service:
         while not self._closed:
             try:
                 listener.blocking_wait()
-            except Exception:  # noqa: BLE001 - the listener fails only when torn down
+            except Exception:
                 return
             with self.lock:
                 if self._closed:
@@ -358,7 +358,7 @@ class ShmReader(Reader):
         while not self._closed:
             try:
                 listener.blocking_wait()
-            except Exception:  # noqa: BLE001 - the listener fails only when torn down
+            except Exception:
                 return
             if not self._closed:
                 self._wake()
@@ -414,7 +414,7 @@ def cleanup_stale() -> list[str]:
     removed: list[str] = []
     try:
         states = iox2.Node.list(iox2.ServiceType.Ipc, iox2.config.global_config())
-    except Exception:  # noqa: BLE001 - listing is best effort; a fresh machine has nothing
+    except Exception:
         states = []
     for state in states:
         dead = getattr(state, "Dead", None)
@@ -425,7 +425,7 @@ def cleanup_stale() -> list[str]:
             try:
                 view.try_remove_stale_resources()
                 removed.append("iceoryx2 node")
-            except Exception:  # noqa: BLE001
+            except Exception:
                 pass
     for path in SHM_DIR.glob("hetros-*"):
         owner = path.name.split("-")[1].split("x")[0] if path.name.count("-") >= 2 else ""

@@ -66,6 +66,18 @@ class _MergedReader(Reader):
             part.close()
 
 
+class _Relay:
+    """A wake-up target fixed later: readers opened at start-up, before their node runs."""
+
+    def __init__(self) -> None:
+        self.target: Wake | None = None
+
+    def __call__(self) -> None:
+        target = self.target
+        if target is not None:
+            target()
+
+
 class Graph:
     """Endpoints of the nodes hosted by this process, wired as the plan says."""
 
@@ -88,6 +100,22 @@ class Graph:
         self._shm: ShmDomain | None = None
         self._codecs: dict[tuple[str, bool], Codec] = {}
         self._stop_hooks: list[Callable[[], None]] = []
+        self._prepared: dict[tuple[str, str], tuple[Reader, _Relay]] = {}
+
+    def prepare(self, nodes: list[str]) -> None:
+        """Open every declared subscription of ``nodes`` now (static initialisation).
+
+        Messages published before a node's code reaches ``create_subscription``
+        wait in its FIFO instead of being lost to start-up order.
+        """
+        assert self.plan is not None
+        for channel in self.plan.channels.values():
+            for node in channel.subscribers:
+                if node in nodes:
+                    relay = _Relay()
+                    reader = self._open_reader(channel, node, channel.type, relay, None,
+                                               envelope=channel.kind != "topic")
+                    self._prepared[(channel.name, node)] = (reader, relay)
 
     def on_stop(self, hook: Callable[[], None]) -> None:
         """Call ``hook`` when the graph stops (executors and blocked takes wake up)."""
@@ -181,9 +209,21 @@ class Graph:
     def open_reader(self, name: str, node: str, typename: str, wake: Wake, *,
                     qos: QoS | None = None, envelope: bool = False) -> Reader:
         channel = self.channel(name, node, "subscribe")
-        effective = self.qos_of(name, qos)
         if channel is None:
+            effective = self.qos_of(name, qos)
             return _MergedReader([self._inproc_topic(name, effective).open_reader(node, wake)])
+        prepared = self._prepared.pop((name, node), None)
+        if prepared is not None:
+            reader, relay = prepared
+            relay.target = wake
+            wake()
+            return reader
+        return self._open_reader(channel, node, typename, wake, qos, envelope=envelope)
+
+    def _open_reader(self, channel: ChannelPlan, node: str, typename: str, wake: Wake,
+                     qos: QoS | None, *, envelope: bool) -> Reader:
+        name = channel.name
+        effective = self.qos_of(name, qos)
         local, remote = self._split(channel.publishers)
         parts: list[Reader] = []
         if local:
@@ -196,6 +236,9 @@ class Graph:
 
     def close(self) -> None:
         self.shutdown()
+        for reader, _relay in self._prepared.values():
+            reader.close()
+        self._prepared.clear()
         with self._lock:
             domain, self._shm = self._shm, None
         if domain is not None:

@@ -112,6 +112,7 @@ class Host:
                         for n in plan.nodes_in(process)]
         for nthread in self.threads:
             resolve(nthread.spec.run, plan.root)
+        self.graph.prepare(plan.nodes_in(process))
 
     def _exited(self) -> None:
         with self._count_lock:

@@ -92,7 +92,8 @@ class Launcher:
         self.events.put({"event": "exited", "target": child.target, "code": code})
 
     def _local_failure(self, node: str, tb: str, restarting: bool) -> None:
-        self.events.put({"event": "node_failed", "target": "launcher", "node": node, "traceback": tb,
+        self.events.put({"event": "node_failed", "target": self.plan.nodes[node].target, "node": node,
+                         "traceback": tb,
                          "restarting": restarting})
 
     def run(self) -> LaunchResult:

@@ -1,0 +1,82 @@
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+
+
+def hetros(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "hetros", *args], capture_output=True, text=True,
+                          timeout=60, check=False, cwd=cwd)
+
+
+def test_check_ok_and_errors_exit_1() -> None:
+    ok = hetros("check", str(EXAMPLES / "talker_listener" / "project.yaml"))
+    assert ok.returncode == 0 and "OK" in ok.stdout
+    bad = hetros("check", str(ROOT / "tests" / "cases" / "type_mismatch.yaml"))
+    assert bad.returncode == 1
+    assert "topic /x is declared with different types" in bad.stderr
+
+
+def test_graph_prints_both_graphs_and_writes_dot_and_svg(tmp_path: Path) -> None:
+    result = hetros("graph", str(EXAMPLES / "talker_listener" / "project.yaml"), "--out", str(tmp_path / "g"))
+    assert result.returncode == 0, result.stderr
+    assert "computation graph" in result.stdout and "architecture graph" in result.stdout
+    assert "talker -> listener  /chatter  via shm" in result.stdout
+    assert (tmp_path / "g.dot").read_text().startswith("digraph")
+    assert "<svg" in (tmp_path / "g.svg").read_text()
+
+
+def test_import_roslite_writes_a_project_that_checks(tmp_path: Path) -> None:
+    out = tmp_path / "imported.yaml"
+    src = EXAMPLES / "talker_listener"
+    result = hetros("import", "roslite", str(src / "talker_listener.map"), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    (tmp_path / "nodes.py").write_text((src / "nodes.py").read_text())
+    data = yaml.safe_load(out.read_text())
+    assert data["nodes"]["listener"]["target"] == "cluster2"
+    checked = hetros("check", str(out))
+    assert checked.returncode == 0, checked.stderr
+
+
+def test_init_writes_a_template(tmp_path: Path) -> None:
+    out = tmp_path / "p.yaml"
+    result = hetros("init", str(EXAMPLES / "add_two_ints" / "nodes.py"), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    data = yaml.safe_load(out.read_text())
+    assert data["nodes"]["server"]["services"] == {"/add_two_ints": "example_interfaces/srv/AddTwoInts"}
+
+
+def test_msg_show_prints_nested_definitions() -> None:
+    result = hetros("msg", "show", "sensor_msgs/msg/Image")
+    assert result.returncode == 0
+    assert "uint8[] data" in result.stdout and "MSG: std_msgs/Header" in result.stdout
+    srv = hetros("msg", "show", "example_interfaces/srv/AddTwoInts")
+    assert srv.stdout.split() == ["int64", "a", "int64", "b", "---", "int64", "sum"]
+    unknown = hetros("msg", "show", "nope/msg/Nothing")
+    assert unknown.returncode == 1 and "unknown message type" in unknown.stderr
+
+
+def test_msg_build_writes_importable_typed_modules(tmp_path: Path) -> None:
+    pkg = tmp_path / "src" / "geo_pkg"
+    (pkg / "msg").mkdir(parents=True)
+    (pkg / "srv").mkdir()
+    (pkg / "msg" / "Pose2.msg").write_text("float64 x\nfloat64 y\nfloat64 theta\n")
+    (pkg / "srv" / "Go.srv").write_text("Pose2 target\n---\nbool ok\n")
+    out = tmp_path / "gen"
+    result = hetros("msg", "build", str(pkg), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    text = (out / "geo_pkg" / "msg.py").read_text()
+    assert text.startswith("# DO NOT EDIT")
+    probe = subprocess.run(
+        [sys.executable, "-c", "from geo_pkg.msg import Pose2; from geo_pkg.srv import Go_Request;"
+         "p = Pose2(x=1.0); print(p.x, Go_Request().target.theta)"],
+        capture_output=True, text=True, cwd=out, check=False, timeout=60,
+    )
+    assert probe.returncode == 0, probe.stderr
+    assert probe.stdout.split() == ["1.0", "0.0"]

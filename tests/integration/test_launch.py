@@ -1,0 +1,166 @@
+"""Examples and failure handling, run through the real CLI with real processes."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+SHM = Path("/dev/shm")
+
+
+def hetros(*args: str, timeout: float = 90) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "hetros", *args], capture_output=True, text=True,
+                          timeout=timeout, check=False)
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().split()[2]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def worker_pids(text: str) -> dict[str, int]:
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"target (\S+) ready \(pid (\d+)", text)}
+
+
+def session_segments(launcher_pid: int) -> list[str]:
+    return [p.name for p in SHM.glob(f"hetros-{launcher_pid}x*")]
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_talker_listener(project: str) -> None:
+    result = hetros("launch", str(EXAMPLES / "talker_listener" / project), "--duration", "2.5")
+    assert result.returncode == 0, result.stderr
+    for listener in ("listener", "listener2"):
+        heard = re.findall(rf"\[INFO\] \[{listener}\]: I heard: \[hello world (\d+)\]", result.stderr)
+        numbers = [int(n) for n in heard]
+        assert len(numbers) >= 10, result.stderr
+        assert numbers == list(range(numbers[0], numbers[0] + len(numbers))), "in order, none lost"
+        assert numbers[0] == 0, "the start barrier lets the first message reach every listener"
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_add_two_ints(project: str) -> None:
+    result = hetros("launch", str(EXAMPLES / "add_two_ints" / project), "--duration", "3")
+    assert result.returncode == 0, result.stderr
+    sums = re.findall(r"\[client\]: Result of add_two_ints: (\d+) \+ (\d+) = (\d+)", result.stderr)
+    assert [(int(a), int(b), int(c)) for a, b, c in sums] == [(i, 10 * i, 11 * i) for i in range(5)]
+    assert result.stderr.count("[server]: Incoming request") == 5
+
+
+FAILING = textwrap.dedent('''
+    from pathlib import Path
+    from hetros.interfaces.std_msgs.msg import String
+
+    def ticker(node):
+        pub = node.create_publisher(String, "/t")
+        for i in node.rate(50):
+            pub.publish(String(data=str(i)))
+
+    def crasher(node):
+        seen = []
+        def on_message(msg):
+            seen.append(msg.data)
+            if len(seen) == 5:
+                raise ValueError("boom after five messages")
+        node.create_subscription(String, "/t", on_message)
+
+    def flaky(node):
+        marker = Path(node.get_parameter("marker"))
+        if not marker.exists():
+            marker.write_text("failed once")
+            raise RuntimeError("first start fails")
+        node.log.info("second start works")
+        node.create_subscription(String, "/t", lambda m: None)
+''')
+
+
+def failing_project(tmp_path: Path, kind: str, consumer: str = "crasher", restart: str = "never") -> Path:
+    (tmp_path / "failing.py").write_text(FAILING)
+    path = tmp_path / "project.yaml"
+    path.write_text(textwrap.dedent(f"""
+        name: failing
+        targets: {{a: {{kind: {kind}}}, b: {{kind: {kind}}}}}
+        nodes:
+          ticker: {{run: failing:ticker, target: a, publish: {{/t: std_msgs/msg/String}}}}
+          {consumer}: {{run: failing:{consumer}, target: b, subscribe: {{/t: std_msgs/msg/String}},
+                     restart: {restart}, parameters: {{marker: {tmp_path / 'marker'}}}}}
+    """))
+    return path
+
+
+@pytest.mark.parametrize("kind", ["process", "thread"])
+def test_node_that_raises_is_reported_once_and_stops_the_graph(tmp_path: Path, kind: str) -> None:
+    start = time.monotonic()
+    result = hetros("launch", str(failing_project(tmp_path, kind)), "--duration", "30")
+    assert result.returncode != 0
+    assert time.monotonic() - start < 20, "the failure must stop the graph, not the duration"
+    assert result.stderr.count("ValueError: boom after five messages") == 1, result.stderr
+    assert "node crasher (target b) raised" in result.stderr
+    assert "Traceback" in result.stderr
+
+
+@pytest.mark.parametrize("kind", ["process", "thread"])
+def test_restart_on_failure(tmp_path: Path, kind: str) -> None:
+    result = hetros("launch", str(failing_project(tmp_path, kind, "flaky", "on-failure")), "--duration", "3")
+    assert result.returncode == 0, result.stderr
+    assert "RuntimeError: first start fails" in result.stderr
+    assert "restarting it" in result.stderr
+    assert "[flaky]: second start works" in result.stderr
+
+
+def start_launcher(project: Path) -> tuple[subprocess.Popen[str], dict[str, int], str]:
+    proc = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(project)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stderr is not None
+    seen = ""
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        seen += line
+        if "I heard" in line:
+            break
+    pids = worker_pids(seen)
+    assert len(pids) == 2, seen
+    return proc, pids, seen
+
+
+def test_sigkill_of_a_worker_is_detected_and_reported(tmp_path: Path) -> None:
+    proc, pids, _ = start_launcher(EXAMPLES / "talker_listener" / "project.yaml")
+    killed_at = time.monotonic()
+    os.kill(pids["cluster2"], signal.SIGKILL)
+    _out, err = proc.communicate(timeout=30)
+    assert proc.returncode != 0
+    assert "target cluster2" in err and "died: killed by SIGKILL" in err, err
+    detected = time.monotonic() - killed_at
+    assert detected < 10
+    for pid in pids.values():
+        assert not alive(pid)
+    assert session_segments(proc.pid) == []
+
+
+def test_ctrl_c_shuts_down_in_order_and_leaves_nothing(tmp_path: Path) -> None:
+    proc, pids, _ = start_launcher(EXAMPLES / "talker_listener" / "project.yaml")
+    os.kill(proc.pid, signal.SIGINT)
+    _out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    for pid in pids.values():
+        assert not alive(pid), "no stray worker process"
+    assert session_segments(proc.pid) == [], "no shared-memory segment left"
+    assert "did not stop" not in err

@@ -1,0 +1,185 @@
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from hetros import (
+    Node,
+    ParameterError,
+    PublishTimeoutError,
+    QoS,
+    ReadOnlyMessageError,
+    ServiceTimeoutError,
+    TakeTimeoutError,
+    TopicTypeError,
+    UndeclaredEndpointError,
+)
+from hetros.interfaces.example_interfaces.srv import AddTwoInts
+from hetros.interfaces.std_msgs.msg import Int32, String
+from hetros.runtime import Graph
+
+
+@pytest.fixture
+def graph() -> Iterator[Graph]:
+    g = Graph.standalone()
+    yield g
+    g.close()
+
+
+def spin_in_thread(node: Node) -> threading.Thread:
+    thread = threading.Thread(target=node.spin, daemon=True)
+    thread.start()
+    return thread
+
+
+def test_callbacks_of_one_node_never_run_concurrently(graph: Graph) -> None:
+    node = Node("worker", graph)
+    active = 0
+    overlaps = 0
+    calls = 0
+    lock = threading.Lock()
+
+    def callback(_msg: object) -> None:
+        nonlocal active, overlaps, calls
+        with lock:
+            active += 1
+            overlaps += active > 1
+        time.sleep(0.001)
+        with lock:
+            active -= 1
+            calls += 1
+
+    for topic in ("/a", "/b", "/c"):
+        node.create_subscription(String, topic, callback, qos=QoS(depth=100))
+    node.create_timer(0.001, lambda: callback(None))
+    thread = spin_in_thread(node)
+    pubs = [Node(f"p{i}", graph).create_publisher(String, t, qos=QoS(depth=100))
+            for i, t in enumerate(("/a", "/b", "/c"))]
+    senders = [threading.Thread(target=lambda p=p: [p.publish(String(data="x")) for _ in range(50)])
+               for p in pubs]
+    for s in senders:
+        s.start()
+    for s in senders:
+        s.join()
+    deadline = time.monotonic() + 5
+    while calls < 150 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    graph.shutdown()
+    thread.join(2)
+    assert calls >= 150
+    assert overlaps == 0
+
+
+def test_take_try_take_and_iterator(graph: Graph) -> None:
+    sub = Node("s", graph).create_subscription(Int32, "/n")
+    pub = Node("p", graph).create_publisher(Int32, "/n")
+    assert sub.try_take() is None
+    with pytest.raises(TakeTimeoutError, match="/n"):
+        sub.take(timeout=0.05)
+    pub.publish(Int32(data=1))
+    assert sub.take(timeout=1).data == 1
+    pub.publish(Int32(data=2))
+    threading.Timer(0.2, graph.shutdown).start()
+    assert [m.data for m in sub] == [2]
+
+
+def test_published_message_is_handed_over_read_only(graph: Graph) -> None:
+    sub = Node("s", graph).create_subscription(String, "/x")
+    pub = Node("p", graph).create_publisher(String, "/x")
+    msg = String(data="a")
+    pub.publish(msg)
+    got = sub.try_take()
+    assert got is msg, "inproc hands over the object itself"
+    with pytest.raises(ReadOnlyMessageError):
+        msg.data = "b"
+    assert got.copy().data == "a"
+
+
+def test_wrong_type_is_refused_with_the_topic_named(graph: Graph) -> None:
+    pub = Node("p", graph).create_publisher(String, "/x")
+    with pytest.raises(TopicTypeError, match="topic /x carries std_msgs/msg/String, not std_msgs/msg/Int32"):
+        pub.publish(Int32(data=1))  # type: ignore[arg-type]
+
+
+def test_backpressure_timeout_through_the_node_api(graph: Graph) -> None:
+    Node("s", graph).create_subscription(Int32, "/q", qos=QoS(depth=1, publish_timeout=0.1))
+    pub = Node("p", graph).create_publisher(Int32, "/q")
+    pub.publish(Int32(data=1))
+    with pytest.raises(PublishTimeoutError, match="raise 'depth'"):
+        pub.publish(Int32(data=2))
+
+
+def test_service_call_inside_a_callback_does_not_deadlock(graph: Graph) -> None:
+    server = Node("server", graph)
+    server.create_service(AddTwoInts, "/add", lambda rq: AddTwoInts.Response(sum=rq.a + rq.b))
+    node = Node("dip", graph)
+    client = node.create_client(AddTwoInts, "/add")
+    results: list[int] = []
+    node.create_subscription(Int32, "/in", lambda m: results.append(
+        client.call(AddTwoInts.Request(a=m.data, b=1), timeout=2).sum))
+    threads = [spin_in_thread(server), spin_in_thread(node)]
+    pub = Node("p", graph).create_publisher(Int32, "/in")
+    for i in range(3):
+        pub.publish(Int32(data=i))
+    deadline = time.monotonic() + 5
+    while len(results) < 3 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    future = client.call_async(AddTwoInts.Request(a=20, b=22))
+    assert future.result(2).sum == 42
+    graph.shutdown()
+    for t in threads:
+        t.join(2)
+    assert results == [1, 2, 3]
+
+
+def test_service_timeout_names_the_service(graph: Graph) -> None:
+    Node("server", graph).create_service(AddTwoInts, "/slow", lambda rq: AddTwoInts.Response())
+    client = Node("c", graph).create_client(AddTwoInts, "/slow")  # the server never spins
+    with pytest.raises(ServiceTimeoutError, match="/slow did not reply within 0.1 s"):
+        client.call(AddTwoInts.Request(), timeout=0.1)
+
+
+def test_timer_and_rate_end_on_shutdown(graph: Graph) -> None:
+    node = Node("t", graph)
+    ticks: list[float] = []
+    node.create_timer(0.01, lambda: ticks.append(time.monotonic()))
+    threading.Timer(0.3, graph.shutdown).start()
+    node.spin()
+    assert len(ticks) >= 5
+    assert list(node.rate(100.0)) == []
+
+
+def test_parameters(graph: Graph) -> None:
+    node = Node("n", graph, parameters={"gain": 2.5})
+    assert node.get_parameter("gain") == 2.5
+    assert node.get_parameter("other", 1) == 1
+    with pytest.raises(ParameterError, match=r"nodes\.n\.parameters\.missing"):
+        node.get_parameter("missing")
+
+
+def test_log_lines_carry_the_node_name(graph: Graph, caplog: pytest.LogCaptureFixture) -> None:
+    from hetros.runtime._log import NodeFormatter
+
+    node = Node("talker", graph)
+    with caplog.at_level("INFO", logger="hetros"):
+        node.log.info("hello %d", 1)
+    assert NodeFormatter().format(caplog.records[-1]) == "[INFO] [talker]: hello 1"
+
+
+def test_undeclared_endpoint_refused_at_run_time() -> None:
+    from hetros.runtime import ChannelPlan, NodePlan, Plan, TargetPlan
+
+    plan = Plan("p", "/", (), {"main": TargetPlan("main", "thread")},
+                {"a": NodePlan("a", "m:f", "main", publish={"/x": "std_msgs/msg/String"})},
+                {"/x": ChannelPlan("/x", "std_msgs/msg/String", "topic", QoS(), ("a",), ())}, ())
+    graph = Graph(plan)
+    node = Node("a", graph)
+    node.create_publisher(String, "/x")
+    with pytest.raises(UndeclaredEndpointError, match=r"nodes\.a\.publish"):
+        node.create_publisher(String, "/y")
+    with pytest.raises(TopicTypeError, match="project declares std_msgs/msg/String"):
+        node.create_publisher(Int32, "/x")
+    graph.close()

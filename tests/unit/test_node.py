@@ -5,6 +5,8 @@ import time
 from collections.abc import Iterator
 
 import pytest
+from hetros.interfaces.example_interfaces.srv import AddTwoInts
+from hetros.interfaces.std_msgs.msg import Int32, String
 
 from hetros import (
     Node,
@@ -17,8 +19,6 @@ from hetros import (
     TopicTypeError,
     UndeclaredEndpointError,
 )
-from hetros.interfaces.example_interfaces.srv import AddTwoInts
-from hetros.interfaces.std_msgs.msg import Int32, String
 from hetros.runtime import Graph
 
 
@@ -138,7 +138,7 @@ def test_service_call_inside_a_callback_does_not_deadlock(graph: Graph) -> None:
 def test_service_timeout_names_the_service(graph: Graph) -> None:
     Node("server", graph).create_service(AddTwoInts, "/slow", lambda rq: AddTwoInts.Response())
     client = Node("c", graph).create_client(AddTwoInts, "/slow")  # the server never spins
-    with pytest.raises(ServiceTimeoutError, match="/slow did not reply within 0.1 s"):
+    with pytest.raises(ServiceTimeoutError, match=r"/slow did not reply within 0\.1 s"):
         client.call(AddTwoInts.Request(), timeout=0.1)
 
 

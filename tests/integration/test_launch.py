@@ -164,3 +164,23 @@ def test_ctrl_c_shuts_down_in_order_and_leaves_nothing(tmp_path: Path) -> None:
         assert not alive(pid), "no stray worker process"
     assert session_segments(proc.pid) == [], "no shared-memory segment left"
     assert "did not stop" not in err
+
+
+def test_process_targets_are_pinned_to_their_cpus(tmp_path: Path) -> None:
+    src = (EXAMPLES / "talker_listener" / "nodes.py").read_text()
+    (tmp_path / "nodes.py").write_text(src)
+    project = tmp_path / "project.yaml"
+    project.write_text(textwrap.dedent("""
+        name: pinned
+        targets: {c0: {kind: process, cpus: [0]}, c1: {kind: process, cpus: [1]}}
+        nodes:
+          talker:   {run: nodes:talker, target: c0, publish: {/chatter: std_msgs/msg/String}}
+          listener: {run: nodes:listener, target: c1, subscribe: {/chatter: std_msgs/msg/String}}
+    """))
+    if (os.cpu_count() or 1) < 2:
+        pytest.skip("needs two CPUs")
+    result = hetros("launch", str(project), "--duration", "1")
+    assert result.returncode == 0, result.stderr
+    assert "target c0 ready" in result.stderr and "cpus [0])" in result.stderr
+    assert "cpus [1])" in result.stderr
+    assert "[listener]: I heard" in result.stderr

@@ -33,16 +33,33 @@ class TargetSpec(_Strict):
         return value
 
 
+class EndpointSpec(_Strict):
+    """An endpoint with its own QoS request, checked against its peers' (ROS 2 request/offer)."""
+
+    type: str
+    reliability: Literal["reliable", "best_effort"] | None = None
+    durability: Literal["volatile", "transient_local"] | None = None
+
+
 class NodeSpec(_Strict):
     run: str
     target: str
-    publish: dict[str, str] = Field(default_factory=dict)
-    subscribe: dict[str, str] = Field(default_factory=dict)
+    publish: dict[str, str | EndpointSpec] = Field(default_factory=dict)
+    subscribe: dict[str, str | EndpointSpec] = Field(default_factory=dict)
     services: dict[str, str] = Field(default_factory=dict)
     clients: dict[str, str] = Field(default_factory=dict)
     parameters: dict[str, Any] = Field(default_factory=dict)
     restart: Literal["never", "on-failure"] = "never"
     max_restarts: int = Field(default=3, ge=0)
+
+    def types(self, section: str) -> dict[str, str]:
+        """Endpoint name -> type name for publish/subscribe/services/clients."""
+        table: dict[str, str | EndpointSpec] = getattr(self, section)
+        return {k: (v if isinstance(v, str) else v.type) for k, v in table.items()}
+
+    def endpoint(self, section: str, name: str) -> EndpointSpec | None:
+        value = getattr(self, section).get(name)
+        return value if isinstance(value, EndpointSpec) else None
 
     @field_validator("run")
     @classmethod

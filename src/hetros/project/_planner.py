@@ -89,7 +89,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             )
         for section, table, kind in (("publish", publishers, "msg"), ("subscribe", subscribers, "msg"),
                                      ("services", servers, "srv"), ("clients", clients, "srv")):
-            for endpoint, typename in getattr(spec, section).items():
+            for endpoint, typename in spec.types(section).items():
                 if not endpoint.startswith("/"):
                     report.errors.append(f"{where('nodes', nname, section, endpoint)}: names must be "
                                          f"absolute, like '/{endpoint}'")
@@ -135,8 +135,37 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
         if topic_spec.reliability == "best_effort" and topic_spec.history == "keep_all":
             report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
                                    "behaves like keep_last with this depth")
+    _check_qos_compatibility(project, publishers, subscribers, report)
     _check_sources(project, report)
     return report
+
+
+def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[tuple[str, str]]],
+                             subscribers: dict[str, list[tuple[str, str]]], report: CheckReport) -> None:
+    """A subscriber may not request more than a publisher offers (reliability, durability)."""
+    model = project.model
+    rank = {"best_effort": 0, "reliable": 1, "volatile": 0, "transient_local": 1}
+    for topic, subscribed in subscribers.items():
+        topic_spec = model.topics.get(topic)
+        for policy in ("reliability", "durability"):
+            default = getattr(topic_spec, policy) if topic_spec else ("reliable" if policy == "reliability"
+                                                                       else "volatile")
+
+            def effective(node: str, section: str, policy: str = policy, default: str = default) -> str:
+                spec = model.nodes[node].endpoint(section, topic)
+                value = getattr(spec, policy) if spec else None
+                return str(value or default)
+
+            for pub, _ in publishers.get(topic, []):
+                offered = effective(pub, "publish")
+                for sub, _ in subscribed:
+                    requested = effective(sub, "subscribe")
+                    if rank[requested] > rank[offered]:
+                        report.errors.append(
+                            f"{project.where('nodes', sub, 'subscribe', topic)}: incompatible QoS on "
+                            f"{topic}: {sub} requests {policy} {requested} but {pub} offers {offered} "
+                            f"({project.where('nodes', pub, 'publish', topic)}); make them agree"
+                        )
 
 
 def _check_sources(project: LoadedProject, report: CheckReport) -> None:
@@ -156,7 +185,7 @@ def _check_sources(project: LoadedProject, report: CheckReport) -> None:
         if found is None:
             continue
         for section, endpoints in found.endpoints.items():
-            declared = getattr(spec, section)
+            declared = spec.types(section)
             for endpoint in endpoints:
                 if endpoint not in declared:
                     report.errors.append(
@@ -178,9 +207,9 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
     }
     channels: dict[str, ChannelPlan] = {}
     for nname, spec in model.nodes.items():
-        for topic, typename in spec.publish.items():
+        for topic, typename in spec.types("publish").items():
             _add(channels, topic, normalize_typename(typename), "topic", project, pub=nname)
-        for topic, typename in spec.subscribe.items():
+        for topic, typename in spec.types("subscribe").items():
             _add(channels, topic, normalize_typename(typename), "topic", project, sub=nname)
     for nname, spec in model.nodes.items():
         for service, typename in spec.services.items():
@@ -209,7 +238,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         targets={n: TargetPlan(n, t.kind, tuple(t.cpus)) for n, t in model.targets.items()},
         nodes={
             n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts,
-                        dict(s.publish), dict(s.subscribe), dict(s.services), dict(s.clients))
+                        s.types("publish"), s.types("subscribe"), dict(s.services), dict(s.clients))
             for n, s in model.nodes.items()
         },
         channels=channels,

@@ -7,6 +7,7 @@ this host (served by shm). A writer feeds both; a reader drains both.
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -26,6 +27,9 @@ from ..transport import (
     Writer,
 )
 from ._plan import ChannelPlan, Plan
+
+
+log = logging.getLogger("hetros.graph")
 
 
 def _freeze_payload(item: Any) -> Any:
@@ -155,7 +159,11 @@ class Graph:
 
     def qos_of(self, name: str, requested: QoS | None) -> QoS:
         if self.plan is not None and name in self.plan.channels:
-            return self.plan.channels[name].qos
+            declared = self.plan.channels[name].qos
+            if requested is not None and requested != declared:
+                log.warning("%s: the code asks for %s but the project file's QoS applies: %s "
+                            "(change it under topics.%s)", name, requested, declared, name)
+            return declared
         with self._lock:
             return self._adhoc_qos.setdefault(name, requested or DEFAULT_QOS)
 

@@ -142,6 +142,7 @@ def start_launcher(project: Path) -> tuple[subprocess.Popen[str], dict[str, int]
 
 
 def test_sigkill_of_a_worker_is_detected_and_reported(tmp_path: Path) -> None:
+    before = set(os.listdir(SHM))
     proc, pids, _ = start_launcher(EXAMPLES / "talker_listener" / "project.yaml")
     killed_at = time.monotonic()
     os.kill(pids["cluster2"], signal.SIGKILL)
@@ -153,6 +154,9 @@ def test_sigkill_of_a_worker_is_detected_and_reported(tmp_path: Path) -> None:
     for pid in pids.values():
         assert not alive(pid)
     assert session_segments(proc.pid) == []
+    assert set(os.listdir(SHM)) - before == set(), "the killed worker's shared memory is reclaimed"
+    again = hetros("launch", str(EXAMPLES / "talker_listener" / "project.yaml"), "--duration", "1")
+    assert again.returncode == 0 and "I heard" in again.stderr, again.stderr
 
 
 def test_ctrl_c_shuts_down_in_order_and_leaves_nothing(tmp_path: Path) -> None:

@@ -151,7 +151,8 @@ def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[
             default = getattr(topic_spec, policy) if topic_spec else ("reliable" if policy == "reliability"
                                                                        else "volatile")
 
-            def effective(node: str, section: str, policy: str = policy, default: str = default) -> str:
+            def effective(node: str, section: str, policy: str = policy, default: str = default,
+                          topic: str = topic) -> str:
                 spec = model.nodes[node].endpoint(section, topic)
                 value = getattr(spec, policy) if spec else None
                 return str(value or default)

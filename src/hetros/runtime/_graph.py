@@ -28,7 +28,6 @@ from ..transport import (
 )
 from ._plan import ChannelPlan, Plan
 
-
 log = logging.getLogger("hetros.graph")
 
 

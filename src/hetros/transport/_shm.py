@@ -401,12 +401,16 @@ def remove_session_segments(session: str) -> list[str]:
     """Unlink every credits file of a session (the launcher calls it on the way out)."""
     removed: list[str] = []
     for path in SHM_DIR.glob(f"{segment_prefix(session)}*"):
-        try:
-            path.unlink()
-            removed.append(path.name)
-        except FileNotFoundError:
-            pass
+        _unlink(path, removed)
     return removed
+
+
+def _unlink(path: Path, removed: list[str]) -> None:
+    try:
+        path.unlink()
+        removed.append(path.name)
+    except FileNotFoundError:
+        pass
 
 
 def cleanup_stale() -> list[str]:
@@ -417,22 +421,19 @@ def cleanup_stale() -> list[str]:
     except Exception:
         states = []
     for state in states:
-        dead = getattr(state, "Dead", None)
-        view = dead if dead is not None and not callable(dead) else None
-        if view is None and type(state).__name__.endswith("Dead"):
-            view = state
-        if view is not None and hasattr(view, "try_remove_stale_resources"):
-            try:
-                view.try_remove_stale_resources()
-                removed.append("iceoryx2 node")
-            except Exception:
-                pass
+        if type(state).__name__ != "Dead":
+            continue
+        view = state._0
+        details = view.details
+        if details is None or not details.name.as_str().startswith("hetros-"):
+            continue
+        try:
+            view.try_remove_stale_resources()
+            removed.append(details.name.as_str())
+        except Exception:
+            pass
     for path in SHM_DIR.glob("hetros-*"):
         owner = path.name.split("-")[1].split("x")[0] if path.name.count("-") >= 2 else ""
         if owner.isdigit() and not _pid_alive(int(owner)):
-            try:
-                path.unlink()
-                removed.append(path.name)
-            except FileNotFoundError:
-                pass
+            _unlink(path, removed)
     return removed

@@ -16,3 +16,7 @@ __all__ = [
     "read_package",
     "registry",
 ]
+
+from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout  # noqa: E402
+
+__all__ += ["ArrayField", "FlatLayout", "LayoutField", "array_fields", "flat_layout"]

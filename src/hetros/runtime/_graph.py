@@ -12,8 +12,10 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from .._errors import UndeclaredEndpointError
-from ..msg import Message, TypeRegistry, freeze, registry
+import numpy as np
+
+from .._errors import TransportError, UndeclaredEndpointError
+from ..msg import Message, TypeRegistry, array_fields, freeze, registry
 from ..transport import (
     DEFAULT_QOS,
     Codec,
@@ -23,6 +25,8 @@ from ..transport import (
     QoS,
     Reader,
     ShmDomain,
+    ShmReader,
+    ShmWriter,
     Wake,
     Writer,
 )
@@ -40,10 +44,47 @@ def _freeze_payload(item: Any) -> Any:
 
 
 class _FanoutWriter(Writer):
-    def __init__(self, parts: list[Writer]) -> None:
+    """Feeds the in-process FIFOs and the shared-memory service of one endpoint."""
+
+    def __init__(self, parts: list[Writer], types: TypeRegistry) -> None:
         self._parts = parts
+        self._types = types
+        self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
+        self._loaned: set[int] = set()
+
+    def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
+        """A message to fill in place: its arrays live in shared memory when a process reads it."""
+        if self._shm is not None:
+            message: Message = self._shm.loan(sizes)
+            self._loaned.add(id(message))
+            return message
+        message = cls()
+        wanted = dict(sizes)
+        for field in array_fields(self._types, cls.__msgtype__):
+            name = ".".join(field.path)
+            length = wanted.pop(name, None)
+            if length is not None and field.length is None:
+                holder: Any = message
+                for part in field.path[:-1]:
+                    holder = getattr(holder, part)
+                setattr(holder, field.path[-1], np.zeros(length, field.dtype))
+        if wanted:
+            raise TransportError(f"{cls.__msgtype__} has no variable-length primitive array "
+                                 f"{', '.join(wanted)}")
+        return message
 
     def write(self, message: Any) -> None:
+        loaned = id(message) in self._loaned
+        if loaned:
+            self._loaned.discard(id(message))
+            local = message.copy()
+            _freeze_payload(local)
+            for part in self._parts:
+                if part is not self._shm:
+                    part.write(local)
+            assert self._shm is not None
+            self._shm.write(_freeze_payload(message))
+            return
         _freeze_payload(message)
         for part in self._parts:
             part.write(message)
@@ -56,6 +97,13 @@ class _FanoutWriter(Writer):
 class _MergedReader(Reader):
     def __init__(self, parts: list[Reader]) -> None:
         self._parts = parts
+
+    def direct(self) -> ShmReader | None:
+        """The one shared-memory reader a taking thread can wait on itself, if that is all."""
+        if len(self._parts) == 1 and isinstance(self._parts[0], ShmReader):
+            reader = self._parts[0]
+            return reader if reader.can_wait_directly else None
+        return None
 
     def try_take(self) -> Any | None:
         for part in self._parts:
@@ -203,7 +251,7 @@ class Graph:
         channel = self.channel(name, node, "publish")
         effective = self.qos_of(name, qos)
         if channel is None:
-            return _FanoutWriter([self._inproc_topic(name, effective).open_writer()])
+            return _FanoutWriter([self._inproc_topic(name, effective).open_writer()], self.types)
         local, remote = self._split(channel.subscribers)
         parts: list[Writer] = []
         if local:
@@ -211,7 +259,7 @@ class Graph:
         if remote:
             parts.append(self._domain().open_writer(name, self.process, effective,
                                                     self._codec(typename, envelope)))
-        return _FanoutWriter(parts)
+        return _FanoutWriter(parts, self.types)
 
     def open_reader(self, name: str, node: str, typename: str, wake: Wake, *,
                     qos: QoS | None = None, envelope: bool = False) -> Reader:

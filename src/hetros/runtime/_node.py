@@ -65,9 +65,19 @@ class Publisher(Generic[M]):
         _check_type(message, self.typename, f"topic {self.topic}")
         self._writer.write(message)
 
-    def loan(self) -> M:
-        """A fresh message to fill and publish; the shared-memory transport may back it."""
-        return self.msg_type()
+    def loan(self, **sizes: int) -> M:
+        """A message to fill in place and publish without a copy.
+
+        Give the length of each variable-length primitive array to fill (``data=640*480*3``);
+        fixed-size arrays are placed automatically. When a subscriber is in another process
+        the arrays live in the shared-memory slot that is then sent as it is. After
+        ``publish`` the loaned message is handed over: its arrays are no longer yours.
+        """
+        loan = getattr(self._writer, "loan", None)
+        if loan is None:
+            return self.msg_type()
+        message: M = loan(self.msg_type, {k.replace("__", "."): v for k, v in sizes.items()})
+        return message
 
     def close(self) -> None:
         self._writer.close()
@@ -85,13 +95,21 @@ class Subscription(Generic[M]):
         self.callback = callback
         self._cond = threading.Condition()
         self._reader: Reader | None = None
+        self._direct: Any = None
 
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
+        direct = getattr(reader, "direct", None)
+        if self.callback is None and direct is not None:
+            self._direct = direct()
+            if self._direct is not None:
+                self._direct.use_direct_wait()
 
     def _wake_takers(self) -> None:
         with self._cond:
             self._cond.notify_all()
+        if self._direct is not None and self.node.graph.stop.is_set():
+            self._direct._poke()
 
     def _on_wake(self) -> None:
         self._wake_takers()
@@ -123,6 +141,12 @@ class Subscription(Generic[M]):
                 return message
             if stop.is_set():
                 raise ShutdownError(f"take on {self.topic} interrupted: the graph is shutting down")
+            if self._direct is not None:
+                wait = None if deadline is None else deadline - time.monotonic()
+                if wait is not None and wait <= 0:
+                    raise TakeTimeoutError(f"no message on {self.topic} within {timeout:g} s")
+                self._direct.wait(wait)
+                continue
             with self._cond:
                 wait = None if deadline is None else deadline - time.monotonic()
                 if wait is not None and wait <= 0:

@@ -4,7 +4,7 @@ from ._base import Codec, Reader, Wake, Writer
 from ._codec import EnvelopeCodec, MessageCodec
 from ._inproc import InprocTopic, Mailbox
 from ._qos import DEFAULT_QOS, QoS
-from ._shm import ShmDomain, cleanup_stale, remove_session_segments
+from ._shm import ShmDomain, ShmReader, ShmWriter, cleanup_stale, remove_session_segments
 
 __all__ = [
     "DEFAULT_QOS",
@@ -16,6 +16,8 @@ __all__ = [
     "QoS",
     "Reader",
     "ShmDomain",
+    "ShmReader",
+    "ShmWriter",
     "Wake",
     "Writer",
     "cleanup_stale",

@@ -6,7 +6,7 @@ import struct
 from typing import Any
 
 from .._errors import SerializationError
-from ..msg import Message, TypeRegistry
+from ..msg import ArrayField, Message, TypeRegistry, array_fields
 from ._base import Codec
 
 _CDR_LE = b"\x00\x01\x00\x00"
@@ -18,8 +18,16 @@ class MessageCodec(Codec):
     def __init__(self, registry: TypeRegistry, typename: str) -> None:
         self.typename = typename
         self._registry = registry
-        registry.get(typename)
+        self.cls = registry.get(typename)
         self._msgdef = registry.store.get_msgdef(typename)
+        self._arrays: list[ArrayField] | None = None
+
+    @property
+    def arrays(self) -> list[ArrayField]:
+        """The primitive arrays a loan can place in shared memory, in a fixed order."""
+        if self._arrays is None:
+            self._arrays = array_fields(self._registry, self.typename)
+        return self._arrays
 
     def size(self, message: Any) -> int:
         return 4 + int(self._msgdef.getsize_cdr(0, message, self._registry.store))
@@ -29,6 +37,7 @@ class MessageCodec(Codec):
         self._msgdef.serialize_cdr_le(buffer[4:], 0, message, self._registry.store)
 
     def decode(self, data: memoryview) -> Message:
+        """Decode CDR; primitive arrays come out as read-only views on ``data`` (no copy)."""
         return self._registry.deserialize(data, self.typename)
 
 

@@ -27,12 +27,16 @@ import os
 import struct
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._errors import PublishTimeoutError, ShutdownError, TransportError
+import numpy as np
+
+from .._errors import PublishTimeoutError, SerializationError, ShutdownError, TransportError
 from ._base import Codec, Reader, Wake, Writer
+from ._codec import MessageCodec
 from ._qos import QoS
 
 os.environ.setdefault("IOX2_LOG_LEVEL", "Error")
@@ -43,16 +47,51 @@ iox2.set_log_level(iox2.LogLevel.Error)
 log = logging.getLogger("hetros.transport.shm")
 
 SHM_DIR = Path("/dev/shm")
-HEADER = struct.Struct("<QII")
+# Every sample: sequence number, publisher slot, layout, padding; then the message. With the
+# CDR layout the 4-byte encapsulation sits at 28..32 so the CDR body starts 8-byte aligned.
+HEADER = struct.Struct("<QII12x")
+LAYOUT_CDR = 0
+LAYOUT_SPLIT = 1
+# The split layout (loaned messages): small part as CDR, primitive arrays as separate blobs
+# at 64-byte aligned offsets, each named by its index in the type's array list.
+SPLIT = struct.Struct("<II")
+BLOB = struct.Struct("<IIQQ")
+LOAN_RESERVE = 4096
 CREDIT = struct.Struct("<QQ")
 MAX_SUBSCRIBER_SLOTS = 32
 MAX_PUBLISHERS_PER_SERVICE = 8
 MAX_EVENT_PORTS = 64
+BORROW_LIMIT = 16
+SPIN_SECONDS = 50e-6
+HOT_STREAM_SECONDS = 0.01
 _PUBLISHED = struct.Struct("<Q")
 
 
 def segment_prefix(session: str) -> str:
     return f"hetros-{session}-"
+
+
+def _align(value: int, to: int) -> int:
+    return (value + to - 1) & -to
+
+
+def _slot_memory(address: int, size: int, keepalive: object) -> memoryview:
+    """Bytes at ``address`` as a memoryview that keeps ``keepalive`` alive while referenced."""
+    raw = (ctypes.c_uint8 * size).from_address(address)
+    raw._hetros_keepalive = keepalive  # type: ignore[attr-defined]
+    return memoryview(raw).cast("B")
+
+
+def _set_path(message: Any, path: tuple[str, ...], value: object) -> None:
+    for name in path[:-1]:
+        message = getattr(message, name)
+    object.__setattr__(message, path[-1], value)
+
+
+def _get_path(message: Any, path: tuple[str, ...]) -> Any:
+    for name in path:
+        message = getattr(message, name)
+    return message
 
 
 def _pid_alive(pid: int) -> bool:
@@ -185,6 +224,7 @@ class _Service:
                 .subscriber_max_buffer_size(self.buffer)
                 .history_size(qos.depth if qos.keeps_history else 0)
                 .enable_safe_overflow(not qos.blocks_publisher)
+                .subscriber_max_borrowed_samples(BORROW_LIMIT)
             )
             self.data = builder.open_or_create()
             self.wakeup = (
@@ -276,19 +316,19 @@ class _Service:
                 raise ShutdownError(f"publishing on {self.topic} interrupted by shutdown")
             self.space.wait(min(remaining, 0.1))
 
-    def send(self, size: int, fill: Callable[[memoryview], None], publisher_slot: int) -> None:
+    def loan(self, size: int) -> tuple[Any, memoryview]:
+        """A writable slot of ``size`` payload bytes (header included) and its memory."""
+        sample = self.publisher().loan_slice_uninit(size)
+        return sample, _slot_memory(sample.payload_ptr, size, sample)
+
+    def send(self, sample: Any, memory: memoryview, layout: int, publisher_slot: int) -> None:
+        """Stamp the header and send; blocks first while a reliable keep_all FIFO is full."""
         with self.lock:
-            publisher = self.publisher()
             if self.qos.blocks_publisher:
                 self.wait_for_space(time.monotonic() + self.qos.publish_timeout, publisher_slot)
             seq = self.next_seq
-            sample = publisher.loan_slice_uninit(HEADER.size + size)
-            view = memoryview(
-                (ctypes.c_uint8 * (HEADER.size + size)).from_address(sample.payload_ptr)
-            ).cast("B")
-            HEADER.pack_into(view, 0, seq, publisher_slot, 0)
-            fill(view[HEADER.size:])
-            view.release()
+            HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
+            memory.release()
             sample.assume_init().send()
             self.next_seq = seq + 1
             self.credits.published = seq
@@ -316,23 +356,144 @@ class _Service:
         self.credits.close()
 
 
+@dataclass
+class _Loan:
+    sample: Any
+    memory: memoryview
+    arrays: list[tuple[int, tuple[str, ...], np.ndarray[Any, Any], int]]
+    small_at: int
+
+
 class ShmWriter(Writer):
+    """Publishes into one service: a copy into the slot, or a loaned slot sent as it is."""
+
     def __init__(self, service: _Service, codec: Codec, slot: int) -> None:
         self._service = service
         self._codec = codec
         self._slot = slot
+        self._loans: dict[int, _Loan] = {}
         service.publisher()
 
     def write(self, message: Any) -> None:
+        loan = self._loans.pop(id(message), None)
+        if loan is not None:
+            self._send_loan(message, loan)
+            return
+        size = HEADER.size + self._codec.size(message)
+        sample, memory = self._service.loan(size)
+        self._codec.encode_into(message, memory[HEADER.size:])
+        self._service.send(sample, memory, LAYOUT_CDR, self._slot)
+
+    def loan(self, sizes: dict[str, int]) -> Any:
+        """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""
         codec = self._codec
-        self._service.send(codec.size(message), lambda view: codec.encode_into(message, view), self._slot)
+        if not isinstance(codec, MessageCodec):
+            raise TransportError("only topic messages can be loaned")
+        wanted = dict(sizes)
+        plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]] = []
+        for index, field in enumerate(codec.arrays):
+            name = ".".join(field.path)
+            length = wanted.pop(name, field.length or 0)
+            if field.length is not None and length != field.length:
+                raise TransportError(f"{name} of {codec.typename} has fixed length {field.length}, not {length}")
+            if length:
+                plan.append((index, field.path, field.dtype, length))
+        if wanted:
+            known = ", ".join(".".join(f.path) for f in codec.arrays if f.length is None) or "none"
+            raise TransportError(
+                f"{codec.typename} has no variable-length primitive array {', '.join(wanted)!s}; "
+                f"loan sizes can be given for: {known}"
+            )
+        table_end = HEADER.size + SPLIT.size + BLOB.size * len(plan)
+        small_at = _align(table_end, 8) + 4
+        offset = _align(small_at + LOAN_RESERVE, 64)
+        placed: list[tuple[int, tuple[str, ...], np.dtype[Any], int, int]] = []
+        for index, path, dtype, length in plan:
+            placed.append((index, path, dtype, length, offset))
+            offset = _align(offset + length * dtype.itemsize, 64)
+        sample, memory = self._service.loan(offset)
+        message = codec.cls()
+        arrays = []
+        for index, path, dtype, length, at in placed:
+            array = np.frombuffer(memory, dtype=dtype, count=length, offset=at)
+            _set_path(message, path, array)
+            arrays.append((index, path, array, at))
+        self._loans[id(message)] = _Loan(sample, memory, arrays, small_at)
+        return message
+
+    def _send_loan(self, message: Any, loan: _Loan) -> None:
+        codec = self._codec
+        memory = loan.memory
+        for _index, path, array, _at in loan.arrays:
+            current = _get_path(message, path)
+            if current is not array:
+                if not isinstance(current, np.ndarray) or current.shape != array.shape:
+                    # the node replaced a loaned array with one of another size: send a plain copy
+                    for _i, other_path, other, _a in loan.arrays:
+                        if _get_path(message, other_path) is other:
+                            _set_path(message, other_path, other.copy())
+                    del loan, memory
+                    self.write(message)
+                    return
+                np.copyto(array, current, casting="unsafe")
+        empties = []
+        for _index, path, array, _at in loan.arrays:
+            empty = array[:0]
+            _set_path(message, path, empty)
+            empties.append(empty)
+        small = codec.size(message)
+        if small > LOAN_RESERVE:
+            for (_index, path, array, _at) in loan.arrays:
+                _set_path(message, path, array.copy())
+            del loan, memory
+            self.write(message)
+            return
+        codec.encode_into(message, memory[loan.small_at:loan.small_at + small])
+        SPLIT.pack_into(memory, HEADER.size, small, len(loan.arrays))
+        for position, (index, _path, array, at) in enumerate(loan.arrays):
+            BLOB.pack_into(memory, HEADER.size + SPLIT.size + BLOB.size * position, index, loan.small_at,
+                           at, array.nbytes)
+        for _index, _path, array, _at in loan.arrays:
+            del array
+        loan.arrays.clear()
+        self._service.send(loan.sample, memory, LAYOUT_SPLIT, self._slot)
 
     def close(self) -> None:
-        return None
+        self._loans.clear()
+
+
+class _Borrowed:
+    """Counts a reader's samples still referenced by delivered messages."""
+
+    __slots__ = ("count", "lock")
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.lock = threading.Lock()
+
+
+class _Lease:
+    """Holds a received sample; it goes back to the publisher when no message refers to it."""
+
+    __slots__ = ("borrowed", "sample")
+
+    def __init__(self, sample: Any, borrowed: _Borrowed) -> None:
+        self.sample = sample
+        self.borrowed = borrowed
+        with borrowed.lock:
+            borrowed.count += 1
+
+    def __del__(self) -> None:
+        with self.borrowed.lock:
+            self.borrowed.count -= 1
 
 
 class ShmReader(Reader):
-    """Takes from every publishing target's service of one topic; one waiter thread each."""
+    """Takes from every publishing target's service of one topic.
+
+    Delivered primitive arrays are read-only views on the shared-memory slot; the slot
+    is returned when the last of them is gone (``msg.copy()`` keeps data longer).
+    """
 
     def __init__(self, services: list[_Service], codec: Codec, slot: int, wake: Wake) -> None:
         self._codec = codec
@@ -343,6 +504,9 @@ class ShmReader(Reader):
         self._threads: list[threading.Thread] = []
         self._next = 0
         self._lock = threading.Lock()
+        self._borrowed = _Borrowed()
+        self._last_arrival = 0.0
+        self._direct = False
         for service in services:
             subscriber, listener, back = service.subscriber(slot)
             self._ports.append((service, subscriber, listener, back))
@@ -355,13 +519,49 @@ class ShmReader(Reader):
         self._wake()
 
     def _wait(self, listener: Any) -> None:
-        while not self._closed:
+        while not self._closed and not self._direct:
             try:
                 listener.blocking_wait()
-            except Exception:
+            except Exception:  # noqa: BLE001 - the listener fails only when torn down
                 return
-            if not self._closed:
+            if not self._closed and not self._direct:
                 self._wake()
+
+    # -- direct waiting (thread-style subscriptions) ---------------------------------------
+
+    @property
+    def can_wait_directly(self) -> bool:
+        return len(self._ports) == 1
+
+    def use_direct_wait(self) -> None:
+        """Let the taking thread wait on the event itself: one wake-up instead of two."""
+        if not self.can_wait_directly or self._direct:
+            return
+        self._direct = True
+        self._poke()
+        for thread in self._threads:
+            thread.join(timeout=2.0)
+
+    def wait(self, timeout: float | None) -> None:
+        """Block until a sample may be there (spinning briefly first on a hot stream)."""
+        _service, subscriber, listener, _back = self._ports[0]
+        if time.monotonic() - self._last_arrival < HOT_STREAM_SECONDS:
+            spin_end = time.perf_counter() + SPIN_SECONDS
+            while time.perf_counter() < spin_end:
+                if subscriber.has_samples():
+                    return
+        if timeout is None:
+            listener.blocking_wait()
+        else:
+            listener.timed_wait(iox2.Duration.from_secs_f64(max(timeout, 0.0)))
+
+    def _poke(self) -> None:
+        for service, _subscriber, _listener, _back in self._ports:
+            notifier = service.wakeup.notifier_builder().create()
+            notifier.notify()
+            del notifier
+
+    # -- taking ----------------------------------------------------------------------------
 
     def try_take(self) -> Any | None:
         with self._lock:
@@ -371,17 +571,40 @@ class ShmReader(Reader):
                 sample = subscriber.receive()
                 if sample is None:
                     continue
-                payload = sample.payload()
-                data = bytes(payload.as_memory_view())
-                del payload
-                sample.delete()
-                seq, _publisher_slot, _ = HEADER.unpack_from(data, 0)
+                self._last_arrival = time.monotonic()
+                size = sample.payload().len()
+                memory = _slot_memory(sample.payload_ptr, size, _Lease(sample, self._borrowed))
+                del sample
+                seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
                 taken, _pid = service.credits.slot(self._slot)
                 service.credits.set_taken(self._slot, max(taken, seq))
                 if service.qos.blocks_publisher:
                     back.notify()
-                return self._codec.decode(memoryview(data)[HEADER.size:])
+                if self._borrowed.count >= BORROW_LIMIT - 2:
+                    memory = memoryview(bytes(memory))
+                return self._decode(memory.toreadonly(), layout)
             return None
+
+    def _decode(self, memory: memoryview, layout: int) -> Any:
+        if layout == LAYOUT_CDR:
+            return self._codec.decode(memory[HEADER.size:])
+        if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
+            raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")
+        small, count = SPLIT.unpack_from(memory, HEADER.size)
+        arrays = self._codec.arrays
+        blobs = [BLOB.unpack_from(memory, HEADER.size + SPLIT.size + BLOB.size * i) for i in range(count)]
+        small_at = blobs[0][1] if blobs else _align(HEADER.size + SPLIT.size, 8) + 4
+        message = self._codec.decode(memory[small_at:small_at + small])
+        for index, _small_at, offset, nbytes in blobs:
+            if index >= len(arrays) or offset + nbytes > len(memory):
+                raise SerializationError(
+                    f"blob {index} at offset {offset} ({nbytes} bytes) does not fit a "
+                    f"{len(memory)}-byte sample of {self._codec.typename}"
+                )
+            field = arrays[index]
+            view = np.frombuffer(memory, dtype=field.dtype, count=nbytes // field.dtype.itemsize, offset=offset)
+            _set_path(message, field.path, view)
+        return message
 
     def close(self) -> None:
         if self._closed:
@@ -389,9 +612,7 @@ class ShmReader(Reader):
         self._closed = True
         for service, _subscriber, _listener, _back in self._ports:
             service.credits.set_slot(self._slot, 0, 0)
-            notifier = service.wakeup.notifier_builder().create()
-            notifier.notify()
-            del notifier
+        self._poke()
         for thread in self._threads:
             thread.join(timeout=2.0)
         self._ports.clear()

@@ -6,9 +6,15 @@ publisher its own "process" for shm) and readers on one topic.
 
 from __future__ import annotations
 
+import dataclasses
+import json
+import queue
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -77,8 +83,11 @@ class ShmHarness(Harness):
         self.publishers = max(self.publishers, index + 1)
         return self._domain(f"pub{index}").open_writer("/t", f"pub{index}", self.qos, self.codec)
 
+    def targets(self) -> list[str]:
+        return [f"pub{i}" for i in range(max(self.publishers, 3))]
+
     def reader(self, index: int = 0, wake: Callable[[], None] = lambda: None) -> Reader:
-        targets = [f"pub{i}" for i in range(max(self.publishers, 3))]
+        targets = self.targets()
         reader = self._domain(f"sub{index}").open_reader("/t", targets, self.qos, self.codec, index, wake)
         self.readers.append(reader)
         return reader
@@ -91,7 +100,67 @@ class ShmHarness(Harness):
         remove_session_segments(self.session)
 
 
-HARNESSES = {"inproc": InprocHarness, "shm": ShmHarness}
+class _AgentReader(Reader):
+    """A reader living in a subscriber process of its own (the agent)."""
+
+    def __init__(self, harness: ShmProcessHarness, index: int, wake: Callable[[], None]) -> None:
+        self.wake = wake
+        self.replies: queue.Queue[Any] = queue.Queue()
+        self.proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("_agent.py"))],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        threading.Thread(target=self._pump, daemon=True).start()
+        self.call({"op": "open", "session": harness.session, "name": f"agent{index}", "type": TYPE,
+                   "topic": "/t", "targets": harness.targets(), "qos": dataclasses.asdict(harness.qos),
+                   "slot": index})
+
+    def _pump(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            item = json.loads(line)
+            if item.get("event") == "wake":
+                self.wake()
+            else:
+                self.replies.put(item["reply"])
+
+    def call(self, command: dict[str, Any]) -> Any:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(json.dumps(command) + "\n")
+        self.proc.stdin.flush()
+        return self.replies.get(timeout=30)
+
+    def try_take(self) -> Any | None:
+        reply = self.call({"op": "take"})
+        if reply is None:
+            return None
+        path = Path(reply["file"])
+        data = np.fromfile(path, dtype=np.uint8)
+        path.unlink()
+        assert reply["readonly"], "arrays delivered from shared memory are read-only"
+        return freeze(registry().get(TYPE)(height=reply["height"], width=reply["width"], data=data))
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            try:
+                self.call({"op": "close"})
+            except (BrokenPipeError, queue.Empty):
+                pass
+        self.proc.kill()
+        self.proc.wait()
+
+
+class ShmProcessHarness(ShmHarness):
+    """Publishers in this process, every subscriber in a process of its own."""
+
+    def targets(self) -> list[str]:
+        return [f"pub{i}" for i in range(3)]
+
+    def reader(self, index: int = 0, wake: Callable[[], None] = lambda: None) -> Reader:
+        reader = _AgentReader(self, index, wake)
+        self.readers.append(reader)
+        return reader
+
+
+HARNESSES = {"inproc": InprocHarness, "shm": ShmHarness, "shm-processes": ShmProcessHarness}
 
 
 @pytest.fixture(params=sorted(HARNESSES))
@@ -221,7 +290,7 @@ def test_transient_local_late_joiner_gets_last_n(make: Callable[[QoS], Harness])
     assert [m.width for m in got] == [3, 4]
 
 
-@pytest.mark.parametrize("size", [0, 1, 16 * 1024 * 1024])
+@pytest.mark.parametrize("size", [0, 1, 16 * 1024 * 1024, 64 * 1024 * 1024])
 def test_sizes_arrive_intact(make: Callable[[QoS], Harness], size: int) -> None:
     h = make(QoS(depth=2))
     reader = h.reader()
@@ -255,3 +324,40 @@ def test_subscriber_is_woken_not_polled(make: Callable[[QoS], Harness]) -> None:
     writer.write(image(0, 7))
     assert woke.wait(2.0)
     assert reader.try_take().width == 7
+
+
+def test_three_publishers_by_three_subscribers(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=400))
+    writers = [h.writer(i) for i in range(3)]
+    readers = [h.reader(i) for i in range(3)]
+    threads = [threading.Thread(target=lambda p=p: [writers[p].write(image(p, s, 64 + p)) for s in range(100)])
+               for p in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for reader in readers:
+        got = drain(reader)
+        assert len(got) == 300
+        for pub in range(3):
+            assert [m.width for m in got if m.height == pub] == list(range(100))
+
+
+def test_slow_subscriber_backpressure_loses_nothing(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=2, publish_timeout=10.0))
+    reader = h.reader()
+    writer = h.writer()
+    sender = threading.Thread(target=lambda: [writer.write(image(0, s, 1000)) for s in range(30)])
+    sender.start()
+    got: list[Any] = []
+    deadline = time.monotonic() + 30
+    while len(got) < 30 and time.monotonic() < deadline:
+        message = reader.try_take()
+        if message is None:
+            time.sleep(0.005)
+            continue
+        got.append(message)
+        time.sleep(0.002)
+    sender.join(10)
+    assert not sender.is_alive()
+    assert [m.width for m in got] == list(range(30))

@@ -17,6 +17,6 @@ __all__ = [
     "registry",
 ]
 
-from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout  # noqa: E402
+from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout
 
 __all__ += ["ArrayField", "FlatLayout", "LayoutField", "array_fields", "flat_layout"]

@@ -257,6 +257,9 @@ class _Service:
                     self.data.publisher_builder()
                     .initial_max_slice_len(4096)
                     .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo)
+                    # hetros' credits do the blocking (with a timeout and crash detection);
+                    # iceoryx2's own retry would spin forever on a dead subscriber's full buffer
+                    .backpressure_strategy(iox2.BackpressureStrategy.DiscardData)
                     .create()
                 )
                 self._notifier = self.wakeup.notifier_builder().create()
@@ -329,7 +332,11 @@ class _Service:
             seq = self.next_seq
             HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
             memory.release()
-            sample.assume_init().send()
+            ready = sample.assume_init()
+            try:
+                ready.send()
+            except iox2.SendError as exc:
+                raise TransportError(f"iceoryx2 could not send on {self.topic}: {exc}") from exc
             self.next_seq = seq + 1
             self.credits.published = seq
             self._notifier.notify()
@@ -522,7 +529,7 @@ class ShmReader(Reader):
         while not self._closed and not self._direct:
             try:
                 listener.blocking_wait()
-            except Exception:  # noqa: BLE001 - the listener fails only when torn down
+            except Exception:
                 return
             if not self._closed and not self._direct:
                 self._wake()

@@ -1,0 +1,138 @@
+"""What only the shared-memory transport promises: real zero copy, crash tolerance, loans."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from hetros.msg import freeze, registry
+from hetros.transport import MessageCodec, QoS, ShmDomain, remove_session_segments
+
+from .test_transports import TYPE, ShmProcessHarness, drain, image
+
+
+def shm_mappings() -> list[tuple[int, int, str]]:
+    ranges = []
+    for line in Path("/proc/self/maps").read_text().splitlines():
+        parts = line.split()
+        if len(parts) >= 6 and parts[5].startswith("/dev/shm/iox2_"):
+            start, end = (int(x, 16) for x in parts[0].split("-"))
+            ranges.append((start, end, parts[5]))
+    return ranges
+
+
+def in_shared_memory(array: np.ndarray[Any, Any]) -> bool:
+    address = array.__array_interface__["data"][0]
+    return any(start <= address < end for start, end, _ in shm_mappings())
+
+
+@pytest.fixture
+def pair(shm_session: str) -> Any:
+    codec = MessageCodec(registry(), TYPE)
+    publisher_side = ShmDomain(shm_session, "pub")
+    subscriber_side = ShmDomain(shm_session, "sub")
+    qos = QoS(depth=4)
+    reader = subscriber_side.open_reader("/img", ["pub"], qos, codec, 0, lambda: None)
+    writer = publisher_side.open_writer("/img", "pub", qos, codec)
+    yield writer, reader
+    reader.close()
+    publisher_side.close()
+    subscriber_side.close()
+    remove_session_segments(shm_session)
+
+
+def test_subscriber_array_is_a_read_only_view_on_shared_memory(pair: Any) -> None:
+    writer, reader = pair
+    payload = np.arange(3 * 1024 * 1024, dtype=np.uint32).view(np.uint8)
+    writer.write(registry().get(TYPE)(width=7, data=payload))
+    message = reader.try_take()
+    assert message.width == 7
+    assert np.array_equal(message.data, payload)
+    assert in_shared_memory(message.data), "the array must be a view on the slot, not a copy"
+    assert not message.data.flags.writeable
+    with pytest.raises(ValueError, match="read-only"):
+        message.data[0] = 1
+    kept = message.copy()
+    assert kept.data.flags.writeable and not in_shared_memory(kept.data)
+
+
+def test_loaned_publish_writes_in_place_and_hands_the_slot_over(pair: Any) -> None:
+    writer, reader = pair
+    size = 6 * 1024 * 1024
+    message = writer.loan({"data": size})
+    assert in_shared_memory(message.data), "a loaned array lives in the slot"
+    message.data[:] = 7
+    message.data[-1] = 9
+    message.width = 3
+    message.encoding = "mono8"
+    message.header.frame_id = "camera"
+    writer.write(freeze(message))
+    assert message.data.size == 0, "after publish the loaned slot is no longer the publisher's"
+    got = reader.try_take()
+    assert (got.width, got.encoding, got.header.frame_id) == (3, "mono8", "camera")
+    assert got.data.size == size and got.data[0] == 7 and got.data[-1] == 9
+    assert in_shared_memory(got.data) and not got.data.flags.writeable
+
+
+def test_loan_errors_name_the_fields(pair: Any) -> None:
+    writer, _reader = pair
+    with pytest.raises(Exception, match="loan sizes can be given for: data"):
+        writer.loan({"pixels": 3})
+
+
+def test_loan_with_a_replaced_array_still_arrives(pair: Any) -> None:
+    writer, reader = pair
+    message = writer.loan({"data": 16})
+    message.data = np.full(32, 5, dtype=np.uint8)
+    writer.write(freeze(message))
+    got = reader.try_take()
+    assert got.data.size == 32 and np.all(got.data == 5)
+
+
+def test_subscriber_killed_mid_stream_does_not_hang_the_publisher(
+    shm_session: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    harness = ShmProcessHarness(QoS(depth=4, publish_timeout=20.0), shm_session)
+    try:
+        writer = harness.writer(0)
+        survivor = harness.reader(0)
+        victim = harness.reader(1)
+        got: list[Any] = []
+        stop = threading.Event()
+
+        def consume() -> None:
+            while not stop.is_set():
+                got.extend(drain(survivor))
+                time.sleep(0.002)
+
+        consumer = threading.Thread(target=consume, daemon=True)
+        consumer.start()
+        for seq in range(3):
+            writer.write(image(0, seq, 256))
+        os.kill(victim.proc.pid, signal.SIGKILL)  # type: ignore[attr-defined]
+        victim.proc.wait()  # type: ignore[attr-defined]
+        start = time.monotonic()
+        try:
+            with caplog.at_level(logging.WARNING, logger="hetros.transport.shm"):
+                for seq in range(3, 40):
+                    writer.write(image(0, seq, 256))
+        finally:
+            elapsed = time.monotonic() - start
+            stop.set()
+        deadline = time.monotonic() + 10
+        while len(got) < 40 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        consumer.join()
+        assert elapsed < 10, "the publisher must not wait out its timeout for a dead subscriber"
+        assert any("is gone" in r.getMessage() for r in caplog.records), "the lost subscriber is reported"
+        assert [m.width for m in got] == list(range(40))
+    finally:
+        harness.close()

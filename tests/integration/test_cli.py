@@ -80,3 +80,10 @@ def test_msg_build_writes_importable_typed_modules(tmp_path: Path) -> None:
     )
     assert probe.returncode == 0, probe.stderr
     assert probe.stdout.split() == ["1.0", "0.0"]
+
+
+def test_msg_layout_prints_offsets() -> None:
+    result = hetros("msg", "layout", "geometry_msgs/msg/PoseWithCovariance")
+    assert result.returncode == 0
+    assert "fixed size, 344 bytes" in result.stdout
+    assert "56    288  float64[36]  covariance" in result.stdout

@@ -114,6 +114,14 @@ def cmd_msg_list(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_msg_layout(args: argparse.Namespace) -> int:
+    from ..msg import flat_layout
+
+    _load_types(args)
+    print(flat_layout(registry(), args.type).describe())
+    return 0
+
+
 def cmd_msg_build(args: argparse.Namespace) -> int:
     from ..msg._codegen import build_package_modules
 
@@ -156,6 +164,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = msg.add_parser("list", help="list known message types")
     p.add_argument("--messages", action="append")
     p.set_defaults(func=cmd_msg_list)
+    p = msg.add_parser("layout", help="print the flattened primitive layout (offsets, sizes)")
+    p.add_argument("type")
+    p.add_argument("--messages", action="append")
+    p.set_defaults(func=cmd_msg_layout)
     p = msg.add_parser("build", help="write importable, typed modules for a package")
     p.add_argument("folder")
     p.add_argument("-o", "--output", required=True)

@@ -29,7 +29,7 @@ run: install
 	$(VENV)/bin/hetros launch examples/talker_listener/project.yaml --duration 5
 
 lint: install-test
-	$(VENV)/bin/ruff check src tests examples
+	$(VENV)/bin/ruff check src tests examples benchmarks
 	$(VENV)/bin/mypy --strict src
 
 test: lint

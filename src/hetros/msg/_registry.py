@@ -154,7 +154,7 @@ class TypeRegistry:
         except UnknownTypeError:
             return False
 
-    def get(self, name: str) -> type[Message]:
+    def get(self, name: str) -> type[Any]:
         """The message class for ``name``; generated on first use."""
         full = normalize_typename(name)
         cls = self._classes.get(full)

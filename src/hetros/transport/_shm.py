@@ -331,7 +331,6 @@ class _Service:
                 self.wait_for_space(time.monotonic() + self.qos.publish_timeout, publisher_slot)
             seq = self.next_seq
             HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
-            memory.release()
             ready = sample.assume_init()
             try:
                 ready.send()
@@ -371,25 +370,79 @@ class _Loan:
     small_at: int
 
 
+def _without_arrays(message: Any, paths: list[tuple[str, ...]]) -> Any:
+    """A shallow copy of ``message`` whose arrays at ``paths`` are empty (the original is untouched)."""
+
+    def shallow(msg: Any) -> Any:
+        cls = msg._thawed_class
+        clone = cls.__new__(cls)
+        for name in cls.__fieldnames__:
+            object.__setattr__(clone, name, getattr(msg, name))
+        return clone
+
+    root = shallow(message)
+    for path in paths:
+        holder = root
+        for name in path[:-1]:
+            child = shallow(getattr(holder, name))
+            object.__setattr__(holder, name, child)
+            holder = child
+        array = getattr(holder, path[-1])
+        object.__setattr__(holder, path[-1], array[:0])
+    return root
+
+
 class ShmWriter(Writer):
-    """Publishes into one service: a copy into the slot, or a loaned slot sent as it is."""
+    """Publishes into one service: arrays go into the slot as blobs (one copy, or none when loaned)."""
 
     def __init__(self, service: _Service, codec: Codec, slot: int) -> None:
         self._service = service
         self._codec = codec
         self._slot = slot
         self._loans: dict[int, _Loan] = {}
+        self._arrays = codec.arrays if isinstance(codec, MessageCodec) else []
         service.publisher()
 
     def write(self, message: Any) -> None:
         loan = self._loans.pop(id(message), None)
         if loan is not None:
             self._send_loan(message, loan)
-            return
-        size = HEADER.size + self._codec.size(message)
-        sample, memory = self._service.loan(size)
-        self._codec.encode_into(message, memory[HEADER.size:])
-        self._service.send(sample, memory, LAYOUT_CDR, self._slot)
+        elif self._arrays:
+            self._send_copy(message)
+        else:
+            size = HEADER.size + self._codec.size(message)
+            sample, memory = self._service.loan(size)
+            # rosbags' serializer leaves terminators and padding to a zeroed buffer
+            ctypes.memset(sample.payload_ptr + HEADER.size, 0, size - HEADER.size)
+            self._codec.encode_into(message, memory[HEADER.size:])
+            self._service.send(sample, memory, LAYOUT_CDR, self._slot)
+
+    def _place(self, plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]], reserve: int
+               ) -> tuple[Any, memoryview, int, list[tuple[int, tuple[str, ...], np.ndarray[Any, Any], int]]]:
+        """A slot with room for the small part and 64-byte aligned blobs; views on the blobs."""
+        table_end = HEADER.size + SPLIT.size + BLOB.size * len(plan)
+        small_at = _align(table_end, 8) + 4
+        offset = _align(small_at + reserve, 64)
+        offsets = []
+        for _index, _path, dtype, length in plan:
+            offsets.append(offset)
+            offset = _align(offset + length * dtype.itemsize, 64)
+        sample, memory = self._service.loan(offset)
+        views = [(index, path, np.frombuffer(memory, dtype=dtype, count=length, offset=at), at)
+                 for (index, path, dtype, length), at in zip(plan, offsets, strict=True)]
+        return sample, memory, small_at, views
+
+    def _send_copy(self, message: Any) -> None:
+        plan = []
+        for index, field in enumerate(self._arrays):
+            array = np.asarray(_get_path(message, field.path))
+            if array.size:
+                plan.append((index, field.path, field.dtype, int(array.size)))
+        reserve = self._codec.size(_without_arrays(message, [path for _i, path, _d, _n in plan]))
+        sample, memory, small_at, views = self._place(plan, reserve)
+        for _index, path, view, _at in views:
+            np.copyto(view, _get_path(message, path), casting="unsafe")
+        self._finish(message, _Loan(sample, memory, views, small_at))
 
     def loan(self, sizes: dict[str, int]) -> Any:
         """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""
@@ -398,7 +451,7 @@ class ShmWriter(Writer):
             raise TransportError("only topic messages can be loaned")
         wanted = dict(sizes)
         plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]] = []
-        for index, field in enumerate(codec.arrays):
+        for index, field in enumerate(self._arrays):
             name = ".".join(field.path)
             length = wanted.pop(name, field.length or 0)
             if field.length is not None and length != field.length:
@@ -406,63 +459,50 @@ class ShmWriter(Writer):
             if length:
                 plan.append((index, field.path, field.dtype, length))
         if wanted:
-            known = ", ".join(".".join(f.path) for f in codec.arrays if f.length is None) or "none"
+            known = ", ".join(".".join(f.path) for f in self._arrays if f.length is None) or "none"
             raise TransportError(
                 f"{codec.typename} has no variable-length primitive array {', '.join(wanted)!s}; "
                 f"loan sizes can be given for: {known}"
             )
-        table_end = HEADER.size + SPLIT.size + BLOB.size * len(plan)
-        small_at = _align(table_end, 8) + 4
-        offset = _align(small_at + LOAN_RESERVE, 64)
-        placed: list[tuple[int, tuple[str, ...], np.dtype[Any], int, int]] = []
-        for index, path, dtype, length in plan:
-            placed.append((index, path, dtype, length, offset))
-            offset = _align(offset + length * dtype.itemsize, 64)
-        sample, memory = self._service.loan(offset)
+        sample, memory, small_at, views = self._place(plan, LOAN_RESERVE)
         message = codec.cls()
-        arrays = []
-        for index, path, dtype, length, at in placed:
-            array = np.frombuffer(memory, dtype=dtype, count=length, offset=at)
-            _set_path(message, path, array)
-            arrays.append((index, path, array, at))
-        self._loans[id(message)] = _Loan(sample, memory, arrays, small_at)
+        for _index, path, view, _at in views:
+            _set_path(message, path, view)
+        self._loans[id(message)] = _Loan(sample, memory, views, small_at)
         return message
 
     def _send_loan(self, message: Any, loan: _Loan) -> None:
-        codec = self._codec
-        memory = loan.memory
         for _index, path, array, _at in loan.arrays:
             current = _get_path(message, path)
-            if current is not array:
-                if not isinstance(current, np.ndarray) or current.shape != array.shape:
-                    # the node replaced a loaned array with one of another size: send a plain copy
-                    for _i, other_path, other, _a in loan.arrays:
-                        if _get_path(message, other_path) is other:
-                            _set_path(message, other_path, other.copy())
-                    del loan, memory
-                    self.write(message)
-                    return
-                np.copyto(array, current, casting="unsafe")
-        empties = []
+            if current is array:
+                continue
+            if not isinstance(current, np.ndarray) or current.size != array.size:
+                # the node replaced a loaned array with one of another size: send a plain copy
+                loan.arrays.clear()
+                self._send_copy(message)
+                return
+            np.copyto(array, current, casting="unsafe")
+        self._finish(message, loan)
         for _index, path, array, _at in loan.arrays:
-            empty = array[:0]
-            _set_path(message, path, empty)
-            empties.append(empty)
-        small = codec.size(message)
+            _set_path(message, path, array[:0].copy())
+
+    def _finish(self, message: Any, loan: _Loan) -> None:
+        """Encode the small part, write the blob table and send the slot."""
+        codec = self._codec
+        memory = loan.memory
+        small_message = _without_arrays(message, [path for _i, path, _a, _at in loan.arrays])
+        small = codec.size(small_message)
         if small > LOAN_RESERVE:
-            for (_index, path, array, _at) in loan.arrays:
-                _set_path(message, path, array.copy())
-            del loan, memory
-            self.write(message)
-            return
-        codec.encode_into(message, memory[loan.small_at:loan.small_at + small])
+            raise TransportError(
+                f"{getattr(codec, 'typename', 'message')}: {small} bytes besides its arrays exceed the "
+                f"{LOAN_RESERVE}-byte reserve of a shared-memory slot; shorten its strings"
+            )
+        memory[loan.small_at:loan.small_at + small] = bytes(small)
+        codec.encode_into(small_message, memory[loan.small_at:loan.small_at + small])
         SPLIT.pack_into(memory, HEADER.size, small, len(loan.arrays))
         for position, (index, _path, array, at) in enumerate(loan.arrays):
             BLOB.pack_into(memory, HEADER.size + SPLIT.size + BLOB.size * position, index, loan.small_at,
                            at, array.nbytes)
-        for _index, _path, array, _at in loan.arrays:
-            del array
-        loan.arrays.clear()
         self._service.send(loan.sample, memory, LAYOUT_SPLIT, self._slot)
 
     def close(self) -> None:

@@ -1,0 +1,1 @@
+"""Benchmarks of hetros against its peers (``hetros bench latency``); needs ``hetros[bench]``."""

@@ -1,0 +1,405 @@
+"""Ping and echo roles of every benchmarked system, run as ``python -m hetros.bench._roles``.
+
+Every system moves the same thing: a payload of N bytes plus a send timestamp and a
+sequence number. The ping role stamps ``time.monotonic_ns()`` (one clock for every
+process on the host) when it starts publishing; the echo role records the one-way
+latency when it holds the message, copies the payload into a new message and sends
+it back; ping records the round trip. Peers that carry raw bytes put stamp and
+sequence number into a 16-byte prefix.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import os
+import queue
+import struct
+import sys
+import threading
+import time
+from abc import ABC, abstractmethod
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+PREFIX = struct.Struct("<qq")
+PROBE = -1
+STOP = -2
+
+
+class Endpoint(ABC):
+    """One side of a ping-pong pair: send to the other side, receive from it."""
+
+    @abstractmethod
+    def send(self, stamp: int, seq: int, payload: Any) -> None: ...
+
+    @abstractmethod
+    def recv(self, timeout: float) -> tuple[int, int, Any] | None: ...
+
+    def echo(self, stamp: int, seq: int, received: Any) -> None:
+        """Send back a copy of what was received (the copy is part of the measurement)."""
+        self.send(stamp, seq, bytes(received) if not isinstance(received, np.ndarray) else received.copy())
+
+    def close(self) -> None:
+        return None
+
+
+def framed(size: int) -> bytearray:
+    return bytearray(PREFIX.size + size)
+
+
+# -- hetros ------------------------------------------------------------------------------
+
+def _hetros_plan(qos_depth: int) -> Any:
+    from hetros.runtime import ChannelPlan, NodePlan, Plan, TargetPlan
+    from hetros.transport import QoS
+
+    image = "sensor_msgs/msg/Image"
+    qos = QoS(depth=qos_depth, publish_timeout=30.0)
+    return Plan(
+        "bench", "/", (),
+        {"p0": TargetPlan("p0", "process"), "p1": TargetPlan("p1", "process")},
+        {"ping": NodePlan("ping", "m:f", "p0", publish={"/send": image}, subscribe={"/recv": image}),
+         "echo": NodePlan("echo", "m:f", "p1", publish={"/recv": image}, subscribe={"/send": image})},
+        {"/send": ChannelPlan("/send", image, "topic", qos, ("ping",), ("echo",)),
+         "/recv": ChannelPlan("/recv", image, "topic", qos, ("echo",), ("ping",))},
+        (),
+    )
+
+
+class HetrosEndpoint(Endpoint):
+    """A hetros node: inproc when both roles share a graph, shm across processes."""
+
+    def __init__(self, role: str, graph: Any, loaned: bool) -> None:
+        from hetros import Node
+        from hetros.msg import registry
+
+        Image = registry().get("sensor_msgs/msg/Image")
+        self.Image = Image
+        self.node = Node(role, graph)
+        out_topic, in_topic = ("/send", "/recv") if role == "ping" else ("/recv", "/send")
+        self.pub = self.node.create_publisher(Image, out_topic)
+        self.sub = self.node.create_subscription(Image, in_topic)
+        self.loaned = loaned
+
+    def send(self, stamp: int, seq: int, payload: Any) -> None:
+        if self.loaned:
+            msg = self.pub.loan(data=len(payload))
+        else:
+            msg = self.Image(data=payload)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+        msg.height = seq & 0xFFFFFFFF
+        msg.width = 1 if seq < 0 else 0
+        self.pub.publish(msg)
+
+    def echo(self, stamp: int, seq: int, received: Any) -> None:
+        if self.loaned:
+            msg = self.pub.loan(data=received.size)
+            np.copyto(msg.data, received)
+        else:
+            msg = self.Image(data=received.copy())
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+        msg.height = seq & 0xFFFFFFFF
+        msg.width = 1 if seq < 0 else 0
+        self.pub.publish(msg)
+
+    def recv(self, timeout: float) -> tuple[int, int, Any] | None:
+        from hetros import TakeTimeoutError
+
+        try:
+            msg = self.sub.take(timeout=timeout)
+        except TakeTimeoutError:
+            return None
+        seq = msg.height if not msg.width else msg.height - (1 << 32)
+        return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec, seq, msg.data
+
+
+def open_hetros_shm(role: str, cfg: dict[str, Any], loaned: bool) -> Endpoint:
+    from hetros.runtime import Graph
+
+    graph = Graph(_hetros_plan(16), "p0" if role == "ping" else "p1", cfg["session"])
+    if role == "echo":
+        graph.prepare(["echo"])
+    return HetrosEndpoint(role, graph, loaned)
+
+
+# -- iceoryx2 used directly ----------------------------------------------------------------
+
+class Iceoryx2Endpoint(Endpoint):
+    """iceoryx2 publish-subscribe plus an event service: the same blocking wait as hetros."""
+
+    def __init__(self, role: str, cfg: dict[str, Any]) -> None:
+        import iceoryx2 as iox2
+
+        iox2.set_log_level(iox2.LogLevel.Error)
+        self.iox2 = iox2
+        self.node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
+        base = f"bench/{cfg['session']}"
+        out_name, in_name = (f"{base}/send", f"{base}/recv") if role == "ping" else (f"{base}/recv", f"{base}/send")
+
+        def pubsub(name: str) -> Any:
+            return (self.node.service_builder(iox2.ServiceName.new(name))
+                    .publish_subscribe(iox2.Slice[ctypes.c_uint8]).max_publishers(2).max_subscribers(2)
+                    .subscriber_max_buffer_size(16).history_size(0).open_or_create())
+
+        def event(name: str) -> Any:
+            return self.node.service_builder(iox2.ServiceName.new(name + "/ev")).event().open_or_create()
+
+        self.pub = (pubsub(out_name).publisher_builder().initial_max_slice_len(4096)
+                    .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo).create())
+        self.sub = pubsub(in_name).subscriber_builder().create()
+        self.notifier = event(out_name).notifier_builder().create()
+        self.listener = event(in_name).listener_builder().create()
+
+    def send(self, stamp: int, seq: int, payload: Any) -> None:
+        size = PREFIX.size + len(payload)
+        sample = self.pub.loan_slice_uninit(size)
+        PREFIX.pack_into((ctypes.c_uint8 * PREFIX.size).from_address(sample.payload_ptr), 0, stamp, seq)
+        if len(payload):
+            src = bytes(payload)
+            ctypes.memmove(sample.payload_ptr + PREFIX.size, src, len(src))
+        sample.assume_init().send()
+        self.notifier.notify()
+
+    def echo(self, stamp: int, seq: int, received: Any) -> None:
+        data, size = received
+        sample = self.pub.loan_slice_uninit(size)
+        ctypes.memmove(sample.payload_ptr, data.payload_ptr, size)
+        sample.assume_init().send()
+        self.notifier.notify()
+
+    def recv(self, timeout: float) -> tuple[int, int, Any] | None:
+        deadline = time.monotonic() + timeout
+        while True:
+            sample = self.sub.receive()
+            if sample is not None:
+                size = sample.payload().len()
+                stamp, seq = PREFIX.unpack_from((ctypes.c_uint8 * PREFIX.size).from_address(sample.payload_ptr))
+                return stamp, seq, (sample, size)
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            self.listener.timed_wait(self.iox2.Duration.from_secs_f64(left))
+
+
+# -- multiprocessing.Pipe --------------------------------------------------------------------
+
+class PipeEndpoint(Endpoint):
+    def __init__(self, role: str, cfg: dict[str, Any]) -> None:
+        from multiprocessing.connection import Connection
+
+        read_fd, write_fd = cfg["fds"][role]
+        self.rx = Connection(read_fd, writable=False)
+        self.tx = Connection(write_fd, readable=False)
+
+    def send(self, stamp: int, seq: int, payload: Any) -> None:
+        frame = framed(len(payload))
+        PREFIX.pack_into(frame, 0, stamp, seq)
+        frame[PREFIX.size:] = payload
+        self.tx.send_bytes(frame)
+
+    def echo(self, stamp: int, seq: int, received: Any) -> None:
+        self.tx.send_bytes(bytes(received))
+
+    def recv(self, timeout: float) -> tuple[int, int, Any] | None:
+        if not self.rx.poll(timeout):
+            return None
+        data = self.rx.recv_bytes()
+        stamp, seq = PREFIX.unpack_from(data)
+        return stamp, seq, data
+
+
+# -- zenoh -----------------------------------------------------------------------------------
+
+class ZenohEndpoint(Endpoint):
+    def __init__(self, role: str, cfg: dict[str, Any]) -> None:
+        import zenoh
+
+        conf = zenoh.Config()
+        conf.insert_json5("mode", '"peer"')
+        conf.insert_json5("scouting/multicast/enabled", "false")
+        conf.insert_json5("scouting/gossip/enabled", "false")
+        endpoint = f'["tcp/127.0.0.1:{cfg["port"]}"]'
+        conf.insert_json5("listen/endpoints", endpoint if role == "ping" else "[]")
+        conf.insert_json5("connect/endpoints", endpoint if role == "echo" else "[]")
+        self.session = zenoh.open(conf)
+        out_key, in_key = ("bench/send", "bench/recv") if role == "ping" else ("bench/recv", "bench/send")
+        self.pub = self.session.declare_publisher(out_key)
+        self.inbox: queue.Queue[bytes] = queue.Queue()
+        self.sub = self.session.declare_subscriber(in_key, lambda sample: self.inbox.put(sample.payload.to_bytes()))
+
+    def send(self, stamp: int, seq: int, payload: Any) -> None:
+        frame = framed(len(payload))
+        PREFIX.pack_into(frame, 0, stamp, seq)
+        frame[PREFIX.size:] = payload
+        self.pub.put(bytes(frame))
+
+    def echo(self, stamp: int, seq: int, received: Any) -> None:
+        self.pub.put(bytes(received))
+
+    def recv(self, timeout: float) -> tuple[int, int, Any] | None:
+        try:
+            data = self.inbox.get(timeout=timeout)
+        except queue.Empty:
+            return None
+        stamp, seq = PREFIX.unpack_from(data)
+        return stamp, seq, data
+
+    def close(self) -> None:
+        self.session.close()  # type: ignore[no-untyped-call]
+
+
+# -- CycloneDDS (Python binding) ----------------------------------------------------------------
+
+class CycloneEndpoint(Endpoint):
+    """The binding at its best: a fixed ``uint8`` array per size (one block copy)."""
+
+    def __init__(self, role: str, cfg: dict[str, Any]) -> None:
+        from cyclonedds.core import Policy, Qos
+        from cyclonedds.domain import DomainParticipant
+        from cyclonedds.pub import DataWriter
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
+        from cyclonedds.util import duration
+
+        from ._cyclone_types import payload_type
+
+        Payload = payload_type(cfg["size"])
+        self.Payload = Payload
+        self.size = max(cfg["size"], 1)
+        self.duration = duration
+        qos = Qos(Policy.Reliability.Reliable(duration(seconds=10)), Policy.History.KeepLast(16))
+        self.dp = DomainParticipant(cfg.get("domain", 0))
+        out_name, in_name = ("rt/bench_send", "rt/bench_recv") if role == "ping" else ("rt/bench_recv", "rt/bench_send")
+        self.writer = DataWriter(self.dp, Topic(self.dp, out_name, Payload), qos=qos)
+        self.reader = DataReader(self.dp, Topic(self.dp, in_name, Payload), qos=qos)
+
+    def send(self, stamp: int, seq: int, payload: Any) -> None:
+        data = bytes(payload)
+        if len(data) != self.size:
+            data = data.ljust(self.size, b"\0")[: self.size]
+        self.writer.write(self.Payload(stamp=stamp, seq=seq, data=data))
+
+    def echo(self, stamp: int, seq: int, received: Any) -> None:
+        self.writer.write(self.Payload(stamp=stamp, seq=seq, data=bytes(received)))
+
+    def recv(self, timeout: float) -> tuple[int, int, Any] | None:
+        try:
+            sample = self.reader.take_one(timeout=self.duration(seconds=timeout))
+        except Exception:
+            return None
+        return sample.stamp, sample.seq, sample.data
+
+
+# -- driver ------------------------------------------------------------------------------------
+
+def open_endpoint(system: str, role: str, cfg: dict[str, Any]) -> Endpoint:
+    if system == "hetros-shm":
+        return open_hetros_shm(role, cfg, loaned=False)
+    if system == "hetros-shm-loan":
+        return open_hetros_shm(role, cfg, loaned=True)
+    if system == "iceoryx2":
+        return Iceoryx2Endpoint(role, cfg)
+    if system == "mp-pipe":
+        return PipeEndpoint(role, cfg)
+    if system == "zenoh":
+        return ZenohEndpoint(role, cfg)
+    if system == "cyclonedds":
+        return CycloneEndpoint(role, cfg)
+    raise SystemExit(f"unknown system {system!r}")
+
+
+def ping(endpoint: Endpoint, cfg: dict[str, Any]) -> dict[str, Any]:
+    payload = bytes(cfg["size"]) if cfg["system"] not in ("hetros-shm", "hetros-shm-loan", "hetros-inproc") \
+        else np.zeros(cfg["size"], dtype=np.uint8)
+    deadline = time.monotonic() + cfg.get("connect_timeout", 30.0)
+    while True:
+        endpoint.send(time.monotonic_ns(), PROBE, payload)
+        if endpoint.recv(0.2) is not None:
+            break
+        if time.monotonic() > deadline:
+            raise SystemExit(f"{cfg['system']}: the echo side never answered")
+    while endpoint.recv(0.05) is not None:
+        pass
+    rtt: list[int] = []
+    total = cfg["warmup"] + cfg["reps"]
+    for seq in range(total):
+        start = time.monotonic_ns()
+        endpoint.send(start, seq, payload)
+        while True:
+            reply = endpoint.recv(10.0)
+            if reply is None:
+                raise SystemExit(f"{cfg['system']}: reply {seq} lost")
+            if reply[1] == seq:
+                break
+        if seq >= cfg["warmup"]:
+            rtt.append(time.monotonic_ns() - start)
+        if cfg.get("gap"):
+            time.sleep(cfg["gap"])
+    endpoint.send(time.monotonic_ns(), STOP, payload[:0])
+    return {"rtt_ns": rtt}
+
+
+def echo(endpoint: Endpoint, cfg: dict[str, Any]) -> dict[str, Any]:
+    one_way: list[int] = []
+    while True:
+        got = endpoint.recv(120.0)
+        now = time.monotonic_ns()
+        if got is None:
+            raise SystemExit(f"{cfg['system']}: echo waited 120 s for a message")
+        stamp, seq, data = got
+        if seq == STOP:
+            break
+        if seq >= cfg["warmup"]:
+            one_way.append(now - stamp)
+        endpoint.echo(stamp, seq, data)
+        del data, got
+    return {"one_way_ns": one_way}
+
+
+def run_inproc(cfg: dict[str, Any]) -> dict[str, Any]:
+    """Both roles as threads of one process on one hetros graph (the inproc transport)."""
+    from hetros.runtime import Graph
+
+    graph = Graph.standalone()
+    pinger = HetrosEndpoint("ping", graph, loaned=False)
+    echoer = HetrosEndpoint("echo", graph, loaned=False)
+    result: dict[str, Any] = {}
+
+    def run_echo() -> None:
+        if cfg.get("cpus"):
+            os.sched_setaffinity(threading.get_native_id(), [cfg["cpus"][1]])
+        result.update(echo(echoer, cfg))
+
+    thread = threading.Thread(target=run_echo)
+    thread.start()
+    if cfg.get("cpus"):
+        os.sched_setaffinity(threading.get_native_id(), [cfg["cpus"][0]])
+    result.update(ping(pinger, cfg))
+    thread.join()
+    graph.close()
+    return result
+
+
+def main() -> None:
+    system, role, cfg_path = sys.argv[1], sys.argv[2], Path(sys.argv[3])
+    cfg = json.loads(cfg_path.read_text())
+    cfg["system"] = system
+    if cfg.get("fds"):
+        cfg["fds"] = {k: tuple(v) for k, v in cfg["fds"].items()}
+    if role == "inproc":
+        result = run_inproc(cfg)
+    else:
+        if cfg.get("cpus"):
+            os.sched_setaffinity(0, [cfg["cpus"][0 if role == "ping" else 1]])
+        endpoint = open_endpoint(system, role, cfg)
+        result = ping(endpoint, cfg) if role == "ping" else echo(endpoint, cfg)
+        endpoint.close()
+    Path(cfg[f"{role}_out"]).write_text(json.dumps(result))
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,469 @@
+"""Latency, throughput and idle-CPU benchmark of hetros against the peers a Python user would pick.
+
+    python benchmarks/latency.py [--quick] [--out DIR]      (or: hetros bench latency)
+
+One run measures every system side by side, each ping and echo process pinned the same
+way (ping on one CPU, echo on the other). It prints markdown tables, writes JSON lines
+and a PNG plot, and reports every peer that could not run as missing, with the reason.
+Timings are for comparison within one run: report ratios, not absolute numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+SIZES = [4, 3 * 1024, 12 * 1024, 48 * 1024, 192 * 1024, 768 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
+SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "196 kB",
+               786432: "786 kB", 3145728: "3146 kB", 6291456: "6 MiB"}
+SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "iceoryx2", "cyclonedds", "zenoh", "dora-rs",
+           "rospy", "mp-pipe", "numpy-copy"]
+HERE = Path(__file__).resolve().parent
+LOOPBACK_CYCLONEDDS = textwrap.dedent("""\
+    <CycloneDDS><Domain id="any">
+      <General><Interfaces><NetworkInterface name="lo"/></Interfaces>
+        <AllowMulticast>false</AllowMulticast></General>
+      <Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>50</MaxAutoParticipantIndex>
+        <Peers><Peer Address="127.0.0.1"/></Peers></Discovery>
+    </Domain></CycloneDDS>""")
+
+
+@dataclass
+class Stats:
+    mean: float
+    std: float
+    p50: float
+    p99: float
+    n: int
+
+    @classmethod
+    def of(cls, values_ns: list[int]) -> Stats:
+        us = np.asarray(values_ns, dtype=np.float64) / 1000.0
+        return cls(float(us.mean()), float(us.std()), float(np.percentile(us, 50)),
+                   float(np.percentile(us, 99)), int(us.size))
+
+
+@dataclass
+class Result:
+    system: str
+    size: int
+    one_way: Stats | None = None
+    rtt: Stats | None = None
+    error: str = ""
+
+
+@dataclass
+class Run:
+    results: list[Result] = field(default_factory=list)
+    missing: dict[str, str] = field(default_factory=dict)
+    throughput: list[dict[str, Any]] = field(default_factory=list)
+    cpu: list[dict[str, Any]] = field(default_factory=list)
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def venv_python() -> str:
+    return sys.executable
+
+
+class Bench:
+    def __init__(self, out: Path, quick: bool, cpus: list[int] | None) -> None:
+        self.out = out
+        self.quick = quick
+        self.cpus = cpus
+        self.tmp = Path(tempfile.mkdtemp(prefix="hetros-bench-"))
+        self.env = dict(os.environ)
+        self.env["CYCLONEDDS_URI"] = LOOPBACK_CYCLONEDDS
+        self.env["DORA_ZENOH_MULTICAST"] = "off"
+        self.env["DORA_NODE_SHM_POOL_SIZE"] = str(256 * 1024 * 1024)
+        self.env["IOX2_LOG_LEVEL"] = "Error"
+        self.env.setdefault("RUST_LOG", "error")
+        self.rosmaster: subprocess.Popen[bytes] | None = None
+
+    def reps_for(self, size: int) -> tuple[int, int]:
+        if self.quick:
+            return (10, 100) if size <= 196608 else (5, 20)
+        return (50, 1000) if size <= 196608 else (10, 200)
+
+    def config(self, system: str, size: int) -> tuple[dict[str, Any], Path]:
+        warmup, reps = self.reps_for(size)
+        tag = f"{system}-{size}"
+        cfg: dict[str, Any] = {
+            "size": size, "warmup": warmup, "reps": reps, "cpus": self.cpus,
+            "session": f"{os.getpid()}x{os.urandom(3).hex()}",
+            "ping_out": str(self.tmp / f"{tag}-ping.json"), "echo_out": str(self.tmp / f"{tag}-echo.json"),
+            "inproc_out": str(self.tmp / f"{tag}-inproc.json"), "port": free_port(),
+        }
+        path = self.tmp / f"{tag}.json"
+        return cfg, path
+
+    # -- systems ---------------------------------------------------------------------------
+
+    def run_pair(self, system: str, size: int) -> Result:
+        cfg, path = self.config(system, size)
+        roles = [sys.executable, "-m", "hetros.bench._roles", system]
+        pass_fds: tuple[int, ...] = ()
+        if system == "mp-pipe":
+            a_read, a_write = os.pipe()
+            b_read, b_write = os.pipe()
+            cfg["fds"] = {"ping": [b_read, a_write], "echo": [a_read, b_write]}
+            pass_fds = (a_read, a_write, b_read, b_write)
+        path.write_text(json.dumps(cfg))
+        timeout = 600
+        if system == "hetros-inproc":
+            proc = subprocess.run([*roles, "inproc", str(path)], env=self.env, capture_output=True, text=True,
+                                  timeout=timeout, check=False)
+            if proc.returncode != 0:
+                return Result(system, size, error=proc.stderr.strip()[-400:])
+            data = json.loads(Path(cfg["inproc_out"]).read_text())
+            return Result(system, size, Stats.of(data["one_way_ns"]), Stats.of(data["rtt_ns"]))
+        if system == "rospy":
+            cmd = ["/usr/bin/python3", str(HERE / "_rospy_peer.py")]
+            echo = subprocess.Popen([*cmd, "echo", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
+            time.sleep(0.5)
+            ping = subprocess.Popen([*cmd, "ping", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
+        else:
+            echo = subprocess.Popen([*roles, "echo", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
+                                    pass_fds=pass_fds)
+            ping = subprocess.Popen([*roles, "ping", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
+                                    pass_fds=pass_fds)
+        for fd in pass_fds:
+            os.close(fd)
+        try:
+            _, ping_err = ping.communicate(timeout=timeout)
+            _, echo_err = echo.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            ping.kill()
+            echo.kill()
+            return Result(system, size, error="timed out")
+        if ping.returncode != 0 or echo.returncode != 0:
+            return Result(system, size, error=(ping_err + echo_err).strip()[-400:])
+        rtt = json.loads(Path(cfg["ping_out"]).read_text())["rtt_ns"]
+        one_way = json.loads(Path(cfg["echo_out"]).read_text())["one_way_ns"]
+        return Result(system, size, Stats.of(one_way), Stats.of(rtt))
+
+    def run_dora(self, size: int) -> Result:
+        cfg, path = self.config("dora-rs", size)
+        path.write_text(json.dumps(cfg))
+        node = HERE / "_dora_node.py"
+        flow = self.tmp / f"dora-{size}.yml"
+        flow.write_text(textwrap.dedent(f"""\
+            nodes:
+              - id: ping
+                path: {node}
+                inputs: {{reply: echo/out}}
+                outputs: [out]
+                env: {{BENCH_ROLE: ping, BENCH_CONFIG: "{path}"}}
+              - id: echo
+                path: {node}
+                inputs: {{msg: ping/out}}
+                outputs: [out]
+                env: {{BENCH_ROLE: echo, BENCH_CONFIG: "{path}"}}
+            """))
+        dora = shutil.which("dora", path=str(Path(sys.executable).parent)) or shutil.which("dora")
+        if dora is None:
+            return Result("dora-rs", size, error="the dora CLI is not installed (pip install dora-rs-cli)")
+        env = dict(self.env)
+        env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+        proc = subprocess.run([dora, "run", str(flow)], env=env, capture_output=True, text=True, timeout=900,
+                              check=False, cwd=self.tmp)
+        try:
+            rtt = json.loads(Path(cfg["ping_out"]).read_text())["rtt_ns"]
+            one_way = json.loads(Path(cfg["echo_out"]).read_text())["one_way_ns"]
+        except (OSError, KeyError, json.JSONDecodeError):
+            return Result("dora-rs", size, error=(proc.stderr or proc.stdout).strip()[-400:] or "no results")
+        return Result("dora-rs", size, Stats.of(one_way), Stats.of(rtt))
+
+    def run_numpy_copy(self, size: int) -> Result:
+        warmup, reps = self.reps_for(size)
+        src = np.random.default_rng(0).integers(0, 255, size, dtype=np.uint8)
+        dst = np.empty_like(src)
+        times = []
+        for i in range(warmup + reps):
+            start = time.monotonic_ns()
+            np.copyto(dst, src)
+            if i >= warmup:
+                times.append(time.monotonic_ns() - start)
+        return Result("numpy-copy", size, Stats.of(times), None)
+
+    def start_rosmaster(self) -> str:
+        if not Path("/usr/bin/rosmaster").exists():
+            raise FileNotFoundError("Debian's rosmaster is not installed (apt-get install ros-core python3-rospy)")
+        port = free_port()
+        uri = f"http://127.0.0.1:{port}"
+        ros_home = self.tmp / "ros"
+        ros_home.mkdir(exist_ok=True)
+        self.env.update({"ROS_MASTER_URI": uri, "ROS_HOSTNAME": "127.0.0.1", "ROS_HOME": str(ros_home),
+                         "ROS_LOG_DIR": str(ros_home)})
+        self.rosmaster = subprocess.Popen(["/usr/bin/rosmaster", "--core", "-p", str(port)], env=self.env,
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        import xmlrpc.client
+
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            try:
+                xmlrpc.client.ServerProxy(uri).getSystemState("/bench")
+                return uri
+            except OSError:
+                time.sleep(0.2)
+        raise TimeoutError("rosmaster did not come up on 127.0.0.1")
+
+    def available(self, system: str) -> str:
+        """Empty when ``system`` can run here, else why not."""
+        probes = {"cyclonedds": "cyclonedds", "zenoh": "zenoh", "dora-rs": "dora", "iceoryx2": "iceoryx2"}
+        if system in probes:
+            check = subprocess.run([sys.executable, "-c", f"import {probes[system]}"], capture_output=True,
+                                   text=True, check=False, env=self.env)
+            if check.returncode != 0:
+                return f"cannot import {probes[system]} (pip install -e '.[bench]')"
+        if system == "rospy":
+            check = subprocess.run(["/usr/bin/python3", "-c", "import rospy, std_msgs.msg"], capture_output=True,
+                                   text=True, check=False)
+            if check.returncode != 0:
+                return "Debian's rospy is missing (apt-get install ros-core python3-rospy python3-std-msgs)"
+            try:
+                self.start_rosmaster()
+            except (OSError, TimeoutError) as exc:
+                return str(exc)
+        return ""
+
+    def run_system(self, system: str, size: int) -> Result:
+        if system == "numpy-copy":
+            return self.run_numpy_copy(size)
+        if system == "dora-rs":
+            return self.run_dora(size)
+        return self.run_pair(system, size)
+
+    # -- throughput and idle CPU -------------------------------------------------------------
+
+    def throughput(self, system: str, size: int, seconds: float) -> dict[str, Any]:
+        cfg, path = self.config(system, size)
+        cfg["seconds"] = seconds
+        path.write_text(json.dumps(cfg))
+        cmd = [sys.executable, "-m", "hetros.bench._throughput", system]
+        sub = subprocess.Popen([*cmd, "sub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
+        pub = subprocess.Popen([*cmd, "pub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
+        _, pub_err = pub.communicate(timeout=120)
+        _, sub_err = sub.communicate(timeout=60)
+        if pub.returncode or sub.returncode:
+            return {"system": system, "size": size, "error": (pub_err + sub_err).strip()[-300:]}
+        data = json.loads(Path(cfg["echo_out"]).read_text())
+        return {"system": system, "size": size, **data}
+
+    def idle_cpu(self, seconds: float) -> list[dict[str, Any]]:
+        out = []
+        for label, period in (("node with a 100 Hz timer", 0.01), ("idle node (subscription, no traffic)", 0.0)):
+            proc = subprocess.run([sys.executable, "-m", "hetros.bench._throughput", "cpu", str(period),
+                                   str(seconds)], capture_output=True, text=True, env=self.env, check=False,
+                                  timeout=seconds + 60)
+            if proc.returncode:
+                out.append({"what": label, "error": proc.stderr.strip()[-300:]})
+                continue
+            data = json.loads(proc.stdout.strip().splitlines()[-1])
+            out.append({"what": label, **data})
+        return out
+
+    def close(self) -> None:
+        if self.rosmaster is not None:
+            self.rosmaster.terminate()
+            self.rosmaster.wait(10)
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+# -- report ------------------------------------------------------------------------------------
+
+def fmt(value: float) -> str:
+    return f"{value:.1f}" if value < 1000 else f"{value:,.0f}"
+
+
+def render(run: Run, systems: list[str], sizes: list[int]) -> str:
+    by = {(r.system, r.size): r for r in run.results}
+    shown = [s for s in systems if s not in run.missing]
+    lines = ["### One-way latency, p50 µs (p99)", ""]
+    lines.append("| size | " + " | ".join(shown) + " |")
+    lines.append("|---|" + "---|" * len(shown))
+    for size in sizes:
+        cells = []
+        for system in shown:
+            r = by.get((system, size))
+            cells.append("-" if r is None or r.one_way is None else
+                         ("err" if r.error else f"{fmt(r.one_way.p50)} ({fmt(r.one_way.p99)})"))
+        lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
+    lines += ["", "### One-way latency, mean ± std µs", ""]
+    lines.append("| size | " + " | ".join(shown) + " |")
+    lines.append("|---|" + "---|" * len(shown))
+    for size in sizes:
+        cells = []
+        for system in shown:
+            r = by.get((system, size))
+            cells.append("-" if r is None or r.one_way is None else f"{fmt(r.one_way.mean)} ± {fmt(r.one_way.std)}")
+        lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
+    rtt_systems = [s for s in shown if s != "numpy-copy"]
+    lines += ["", "### Round trip with a copy in the echo node (ReconROS Table 3), mean ± std µs", ""]
+    lines.append("| size | " + " | ".join(rtt_systems) + " |")
+    lines.append("|---|" + "---|" * len(rtt_systems))
+    for size in sizes:
+        cells = []
+        for system in rtt_systems:
+            r = by.get((system, size))
+            cells.append("-" if r is None or r.rtt is None else f"{fmt(r.rtt.mean)} ± {fmt(r.rtt.std)}")
+        lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
+    for ours in ("hetros-shm-loan", "hetros-inproc"):
+        if ours not in shown:
+            continue
+        peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
+        lines += ["", f"### Speed-up of {ours} (p50 one-way) over each peer: peer p50 / {ours} p50", ""]
+        lines.append("| size | " + " | ".join(peers) + " |")
+        lines.append("|---|" + "---|" * len(peers))
+        for size in sizes:
+            mine = by.get((ours, size))
+            cells = []
+            for peer in peers:
+                theirs = by.get((peer, size))
+                if mine is None or theirs is None or mine.one_way is None or theirs.one_way is None:
+                    cells.append("-")
+                else:
+                    cells.append(f"{theirs.one_way.p50 / mine.one_way.p50:.1f}x")
+            lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
+    if "hetros-shm" in shown and "iceoryx2" in shown:
+        lines += ["", "### Framework overhead: hetros round trip / iceoryx2 round trip (mean, same wait strategy)", ""]
+        lines.append("| size | hetros-shm | hetros-shm-loan |")
+        lines.append("|---|---|---|")
+        for size in sizes:
+            base = by.get(("iceoryx2", size))
+            cells = []
+            for ours in ("hetros-shm", "hetros-shm-loan"):
+                r = by.get((ours, size))
+                ok = base and r and base.rtt and r.rtt
+                cells.append(f"{r.rtt.mean / base.rtt.mean:.2f}x" if ok else "-")  # type: ignore[union-attr]
+            lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
+    if run.throughput:
+        lines += ["", "### Throughput, one publisher, one subscriber in another process", ""]
+        lines.append("| system | size | messages/s | MiB/s |")
+        lines.append("|---|---|---|---|")
+        for t in run.throughput:
+            if "error" in t:
+                lines.append(f"| {t['system']} | {t['size']} B | error | {t['error'][:60]} |")
+            else:
+                lines.append(f"| {t['system']} | {t['size']} B | {t['rate']:,.0f} | "
+                             f"{t['rate'] * t['size'] / 2**20:,.1f} |")
+    if run.cpu:
+        lines += ["", "### CPU share of one core", ""]
+        lines.append("| what | CPU % |")
+        lines.append("|---|---|")
+        for c in run.cpu:
+            lines.append(f"| {c['what']} | {c.get('cpu_percent', float('nan')):.2f} |")
+    if run.missing:
+        lines += ["", "### Missing peers", ""]
+        for system, why in run.missing.items():
+            lines.append(f"- {system}: {why}")
+    errors = [r for r in run.results if r.error]
+    if errors:
+        lines += ["", "### Errors", ""]
+        for r in errors:
+            lines.append(f"- {r.system} at {SIZE_LABELS.get(r.size, r.size)}: {r.error.splitlines()[-1][:200]}")
+    return "\n".join(lines)
+
+
+def plot(run: Run, systems: list[str], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
+    for system in systems:
+        points = [(r.size, r.one_way.p50) for r in run.results
+                  if r.system == system and r.one_way is not None and not r.error]
+        rtts = [(r.size, r.rtt.mean) for r in run.results if r.system == system and r.rtt is not None]
+        style = "-o" if system.startswith("hetros") else "--."
+        if points:
+            axes[0].plot(*zip(*points, strict=True), style, label=system)
+        if rtts:
+            axes[1].plot(*zip(*rtts, strict=True), style, label=system)
+    for ax, title in zip(axes, ("one-way latency, p50", "round trip with copy, mean"), strict=True):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("payload bytes")
+        ax.set_ylabel("µs")
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")
+    parser.add_argument("--out", default="out/bench", help="folder for latency.jsonl, latency.md, latency.png")
+    parser.add_argument("--systems", help="comma-separated subset of: " + ", ".join(SYSTEMS))
+    parser.add_argument("--no-pin", action="store_true", help="do not pin ping and echo to separate CPUs")
+    args = parser.parse_args(argv)
+    systems = args.systems.split(",") if args.systems else list(SYSTEMS)
+    sizes = [4, 3072, 196608, 3145728] if args.quick else SIZES
+    cpus = None if args.no_pin or (os.cpu_count() or 1) < 2 else [0, 1]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    bench = Bench(out, args.quick, cpus)
+    run = Run()
+    try:
+        for system in systems:
+            why = bench.available(system)
+            if why:
+                run.missing[system] = why
+                print(f"[bench] {system}: missing: {why}", flush=True)
+                continue
+            for size in sizes:
+                result = bench.run_system(system, size)
+                run.results.append(result)
+                status = result.error.splitlines()[-1][:120] if result.error else (
+                    f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")
+                print(f"[bench] {system:16} {SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
+        tp_seconds = 1.0 if args.quick else 3.0
+        for system in ("hetros-shm", "hetros-shm-loan", "mp-pipe"):
+            if system in systems:
+                for size in (64, 1024 * 1024):
+                    run.throughput.append(bench.throughput(system, size, tp_seconds))
+        run.cpu = bench.idle_cpu(3.0 if args.quick else 10.0)
+    finally:
+        bench.close()
+    report = render(run, systems, sizes)
+    print()
+    print(report)
+    (out / "latency.md").write_text(report + "\n")
+    with (out / "latency.jsonl").open("w") as handle:
+        for r in run.results:
+            handle.write(json.dumps({"system": r.system, "size": r.size, "error": r.error,
+                                     "one_way_us": r.one_way.__dict__ if r.one_way else None,
+                                     "rtt_us": r.rtt.__dict__ if r.rtt else None}) + "\n")
+        for t in run.throughput:
+            handle.write(json.dumps({"throughput": t}) + "\n")
+        for c in run.cpu:
+            handle.write(json.dumps({"cpu": c}) + "\n")
+        for system, why in run.missing.items():
+            handle.write(json.dumps({"missing": system, "why": why}) + "\n")
+    plot(run, [s for s in systems if s not in run.missing], out / "latency.png")
+    print(f"\nwrote {out / 'latency.md'}, {out / 'latency.jsonl'}, {out / 'latency.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -18,7 +18,7 @@ _cache: dict[int, Any] = {}
 def payload_type(size: int) -> Any:
     if size not in _cache:
         _cache[size] = make_dataclass(
-            f"Payload{size}", [("stamp", int64), ("seq", int64), ("data", array[uint8, max(size, 1)])],
+            f"Payload{size}", [("stamp", int64), ("seq", int64), ("data", array[uint8, max(size, 1)])],  # type: ignore[misc]
             bases=(IdlStruct,), namespace={"__module__": __name__},
         )
         _cache[size].__idl_typename__ = f"hetros_bench::msg::dds_::Payload{size}_"

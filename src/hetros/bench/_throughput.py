@@ -80,6 +80,8 @@ def main() -> None:
         print(json.dumps(idle_cpu(float(sys.argv[2]), float(sys.argv[3]))))
         return
     cfg = json.loads(Path(sys.argv[3]).read_text())
+    if cfg.get("fds"):
+        cfg["fds"] = {k: tuple(v) for k, v in cfg["fds"].items()}
     if cfg.get("cpus"):
         os.sched_setaffinity(0, [cfg["cpus"][0 if role == "pub" else 1]])
     if role == "pub":

@@ -79,8 +79,12 @@ def free_port() -> int:
         return int(sock.getsockname()[1])
 
 
-def venv_python() -> str:
-    return sys.executable
+def pipe_fds(cfg: dict[str, Any]) -> tuple[int, ...]:
+    """Two pipes for the multiprocessing.Pipe peer, named in ``cfg`` for each role."""
+    a_read, a_write = os.pipe()
+    b_read, b_write = os.pipe()
+    cfg["fds"] = {"ping": [b_read, a_write], "echo": [a_read, b_write]}
+    return (a_read, a_write, b_read, b_write)
 
 
 class Bench:
@@ -119,12 +123,7 @@ class Bench:
     def run_pair(self, system: str, size: int) -> Result:
         cfg, path = self.config(system, size)
         roles = [sys.executable, "-m", "hetros.bench._roles", system]
-        pass_fds: tuple[int, ...] = ()
-        if system == "mp-pipe":
-            a_read, a_write = os.pipe()
-            b_read, b_write = os.pipe()
-            cfg["fds"] = {"ping": [b_read, a_write], "echo": [a_read, b_write]}
-            pass_fds = (a_read, a_write, b_read, b_write)
+        pass_fds = pipe_fds(cfg) if system == "mp-pipe" else ()
         path.write_text(json.dumps(cfg))
         timeout = 600
         if system == "hetros-inproc":
@@ -256,10 +255,15 @@ class Bench:
     def throughput(self, system: str, size: int, seconds: float) -> dict[str, Any]:
         cfg, path = self.config(system, size)
         cfg["seconds"] = seconds
+        pass_fds = pipe_fds(cfg) if system == "mp-pipe" else ()
         path.write_text(json.dumps(cfg))
         cmd = [sys.executable, "-m", "hetros.bench._throughput", system]
-        sub = subprocess.Popen([*cmd, "sub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
-        pub = subprocess.Popen([*cmd, "pub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
+        sub = subprocess.Popen([*cmd, "sub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
+                               pass_fds=pass_fds)
+        pub = subprocess.Popen([*cmd, "pub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
+                               pass_fds=pass_fds)
+        for fd in pass_fds:
+            os.close(fd)
         _, pub_err = pub.communicate(timeout=120)
         _, sub_err = sub.communicate(timeout=60)
         if pub.returncode or sub.returncode:

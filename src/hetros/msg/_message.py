@@ -25,6 +25,10 @@ class Message:
     __fieldnames__: ClassVar[tuple[str, ...]] = ()
     _frozen_class: ClassVar[type[Message]]
     _thawed_class: ClassVar[type[Message]]
+    # what freeze() must visit, fixed per type when the class is generated
+    _array_names: ClassVar[tuple[str, ...]] = ()
+    _nested_names: ClassVar[tuple[str, ...]] = ()
+    _nested_list_names: ClassVar[tuple[str, ...]] = ()
 
     def copy(self) -> Any:
         """Return a deep, writable copy (use it to keep a delivered message)."""
@@ -77,23 +81,20 @@ class FrozenMessage(Message):
 def freeze(message: Message) -> Message:
     """Make ``message`` read-only in place, including nested messages and arrays."""
     cls = type(message)
-    if cls is cls._frozen_class:
+    frozen = cls._frozen_class
+    if cls is frozen:
         return message
-    for name in cls.__fieldnames__:
-        _freeze_value(getattr(message, name))
-    object.__setattr__(message, "__class__", cls._frozen_class)
+    for name in cls._array_names:
+        value = getattr(message, name)
+        if type(value) is np.ndarray:
+            value.flags.writeable = False
+    for name in cls._nested_names:
+        freeze(getattr(message, name))
+    for name in cls._nested_list_names:
+        for item in getattr(message, name):
+            freeze(item)
+    object.__setattr__(message, "__class__", frozen)
     return message
-
-
-def _freeze_value(value: object) -> None:
-    if isinstance(value, np.ndarray):
-        value.flags.writeable = False
-    elif isinstance(value, Message):
-        freeze(value)
-    elif isinstance(value, list):
-        for item in value:
-            if isinstance(item, Message):
-                freeze(item)
 
 
 def _thaw_value(value: object) -> object:

@@ -257,6 +257,12 @@ class TypeRegistry:
         cls.__qualname__ = short
         cls._frozen_class = frozen
         cls._thawed_class = cls
+        kinds = [(attr, desc) for attr, (_name, desc) in zip(fieldnames, fields, strict=True)]
+        cls._array_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
+                                 and d[1][0][0] == Nodetype.BASE and d[1][0][1][0] != "string")
+        cls._nested_names = tuple(a for a, d in kinds if d[0] == Nodetype.NAME)
+        cls._nested_list_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
+                                       and d[1][0][0] == Nodetype.NAME)
         self._classes[full] = cls
         self.store.types[full] = cls
         self.store.cache.pop(full, None)

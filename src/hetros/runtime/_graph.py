@@ -77,10 +77,11 @@ class _FanoutWriter(Writer):
         loaned = id(message) in self._loaned
         if loaned:
             self._loaned.discard(id(message))
-            local = message.copy()
-            _freeze_payload(local)
-            for part in self._parts:
-                if part is not self._shm:
+            others = [part for part in self._parts if part is not self._shm]
+            if others:
+                # the slot leaves with the shared-memory send: in-process readers get their own copy
+                local = _freeze_payload(message.copy())
+                for part in others:
                     part.write(local)
             assert self._shm is not None
             self._shm.write(_freeze_payload(message))

@@ -62,9 +62,6 @@ MAX_SUBSCRIBER_SLOTS = 32
 MAX_PUBLISHERS_PER_SERVICE = 8
 MAX_EVENT_PORTS = 64
 BORROW_LIMIT = 16
-SPIN_SECONDS = 50e-6
-HOT_STREAM_SECONDS = 0.01
-_PUBLISHED = struct.Struct("<Q")
 
 
 def segment_prefix(session: str) -> str:
@@ -104,10 +101,20 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-class Credits:
-    """The credits file of one service: ``published`` then (taken, pid) per subscriber slot."""
+_SLOT_TABLE = struct.Struct(f"<{2 * MAX_SUBSCRIBER_SLOTS}Q")
 
-    SIZE = _PUBLISHED.size + CREDIT.size * MAX_SUBSCRIBER_SLOTS
+
+class Credits:
+    """The credits file of one service.
+
+    Layout (little endian u64): ``published`` sequence number, ``waiting`` (a publisher is
+    blocked on a full FIFO, so takers must signal), then (taken, pid) per subscriber slot.
+    Each word has one writer: the publishing process writes the first two, a subscriber
+    writes its own slot.
+    """
+
+    HEAD = 2
+    SIZE = 8 * (HEAD + 2 * MAX_SUBSCRIBER_SLOTS)
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -118,26 +125,42 @@ class Credits:
             self._map = mmap.mmap(fd, self.SIZE)
         finally:
             os.close(fd)
+        self.words = np.frombuffer(self._map, dtype="<u8")
+        self.slots = self.words[self.HEAD:].reshape(MAX_SUBSCRIBER_SLOTS, 2)
 
     @property
     def published(self) -> int:
-        return int(_PUBLISHED.unpack_from(self._map, 0)[0])
+        return int(self.words[0])
 
     @published.setter
     def published(self, seq: int) -> None:
-        _PUBLISHED.pack_into(self._map, 0, seq)
+        self.words[0] = seq
+
+    @property
+    def waiting(self) -> bool:
+        return bool(self.words[1])
+
+    @waiting.setter
+    def waiting(self, flag: bool) -> None:
+        self.words[1] = int(flag)
 
     def slot(self, index: int) -> tuple[int, int]:
-        taken, pid = CREDIT.unpack_from(self._map, _PUBLISHED.size + CREDIT.size * index)
+        taken, pid = self.slots[index]
         return int(taken), int(pid)
 
     def set_slot(self, index: int, taken: int, pid: int) -> None:
-        CREDIT.pack_into(self._map, _PUBLISHED.size + CREDIT.size * index, taken, pid)
+        self.slots[index] = (taken, pid)
 
     def set_taken(self, index: int, taken: int) -> None:
-        struct.pack_into("<Q", self._map, _PUBLISHED.size + CREDIT.size * index, taken)
+        self.slots[index, 0] = taken
+
+    def full_slots(self, published: int, depth: int) -> list[int]:
+        """Slots of live subscribers whose FIFO holds ``depth`` messages already."""
+        words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
+        return [i >> 1 for i in range(0, len(words), 2) if words[i + 1] and words[i] + depth <= published]
 
     def close(self) -> None:
+        del self.words, self.slots
         try:
             self._map.close()
         except BufferError:
@@ -212,6 +235,7 @@ class _Service:
         # keep_last: iceoryx2's own overflow keeps exactly the newest `depth`; keep_all: the
         # credits bound the fill at `depth`, the slack only absorbs a subscriber's join race.
         self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
+        self.blocking = qos.blocks_publisher
         self.lock = threading.RLock()
         self.space = threading.Condition(self.lock)
         self._closed = False
@@ -287,37 +311,40 @@ class _Service:
                     self._publisher.update_connections()
                 self.space.notify_all()
 
-    def wait_for_space(self, deadline: float, publisher_slot: int) -> None:
+    def wait_for_space(self, deadline: float) -> None:
         """Block (with ``self.lock`` held) until every live blocking subscriber has room."""
-        seq_before = self.next_seq - 1
+        published = self.next_seq - 1
+        credits = self.credits
         while True:
-            full: tuple[int, int] | None = None
-            for index in range(MAX_SUBSCRIBER_SLOTS):
-                taken, pid = self.credits.slot(index)
-                if pid == 0 or seq_before - taken < self.qos.depth:
-                    continue
+            blocked = credits.full_slots(published, self.qos.depth)
+            for index in list(blocked):
+                _taken, pid = credits.slot(index)
                 if not _pid_alive(pid):
                     log.warning(
                         "topic %s: subscriber in process %d is gone (crashed or killed); "
                         "publishing continues without it", self.topic, pid,
                     )
-                    self.credits.set_slot(index, 0, 0)
-                    continue
-                full = (index, pid)
-                break
-            if full is None:
+                    credits.set_slot(index, 0, 0)
+                    blocked.remove(index)
+            if not blocked:
+                credits.waiting = False
                 return
+            if not credits.waiting:
+                credits.waiting = True
+                continue  # re-check after announcing: a take may have slipped in between
             remaining = deadline - time.monotonic()
             if remaining <= 0:
+                credits.waiting = False
                 raise PublishTimeoutError(
-                    f"publishing on {self.topic}: the subscriber in process {full[1]} kept its FIFO "
-                    f"of depth {self.qos.depth} full for {self.qos.publish_timeout:g} s "
+                    f"publishing on {self.topic}: the subscriber in process {credits.slot(blocked[0])[1]} "
+                    f"kept its FIFO of depth {self.qos.depth} full for {self.qos.publish_timeout:g} s "
                     "(reliable + keep_all blocks the publisher); make the subscriber faster, "
                     "raise 'depth' or 'publish_timeout', or use keep_last"
                 )
             if self._closed:
                 raise ShutdownError(f"publishing on {self.topic} interrupted by shutdown")
-            self.space.wait(min(remaining, 0.1))
+            # short slices: a wake-up lost to store reordering costs at most one slice
+            self.space.wait(min(remaining, 0.01))
 
     def loan(self, size: int) -> tuple[Any, memoryview]:
         """A writable slot of ``size`` payload bytes (header included) and its memory."""
@@ -328,7 +355,7 @@ class _Service:
         """Stamp the header and send; blocks first while a reliable keep_all FIFO is full."""
         with self.lock:
             if self.qos.blocks_publisher:
-                self.wait_for_space(time.monotonic() + self.qos.publish_timeout, publisher_slot)
+                self.wait_for_space(time.monotonic() + self.qos.publish_timeout)
             seq = self.next_seq
             HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
             ready = sample.assume_init()
@@ -552,7 +579,6 @@ class ShmReader(Reader):
         self._next = 0
         self._lock = threading.Lock()
         self._borrowed = _Borrowed()
-        self._last_arrival = 0.0
         self._direct = False
         for service in services:
             subscriber, listener, back = service.subscriber(slot)
@@ -590,13 +616,8 @@ class ShmReader(Reader):
             thread.join(timeout=2.0)
 
     def wait(self, timeout: float | None) -> None:
-        """Block until a sample may be there (spinning briefly first on a hot stream)."""
-        _service, subscriber, listener, _back = self._ports[0]
-        if time.monotonic() - self._last_arrival < HOT_STREAM_SECONDS:
-            spin_end = time.perf_counter() + SPIN_SECONDS
-            while time.perf_counter() < spin_end:
-                if subscriber.has_samples():
-                    return
+        """Block until a sample may be there."""
+        listener = self._ports[0][2]
         if timeout is None:
             listener.blocking_wait()
         else:
@@ -618,14 +639,13 @@ class ShmReader(Reader):
                 sample = subscriber.receive()
                 if sample is None:
                     continue
-                self._last_arrival = time.monotonic()
-                size = sample.payload().len()
+                size = sample.header.number_of_elements
                 memory = _slot_memory(sample.payload_ptr, size, _Lease(sample, self._borrowed))
                 del sample
                 seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
-                taken, _pid = service.credits.slot(self._slot)
-                service.credits.set_taken(self._slot, max(taken, seq))
-                if service.qos.blocks_publisher:
+                credits = service.credits
+                credits.set_taken(self._slot, seq)
+                if service.blocking and credits.waiting:
                     back.notify()
                 if self._borrowed.count >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))

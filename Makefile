@@ -6,7 +6,10 @@ STAMP   := $(VENV)/.installed
 TSTAMP  := $(VENV)/.installed-test
 PYTHON  ?= python3
 
-.PHONY: install install-test run test lint clean
+BSTAMP  := $(VENV)/.installed-bench
+ROS_DEBS := ros-core python3-rospy python3-rostopic python3-std-msgs
+
+.PHONY: install install-test install-bench run test lint bench bench-quick clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +26,21 @@ $(TSTAMP): pyproject.toml | $(PY)
 	touch $(STAMP) $@
 
 install-test: $(TSTAMP)
+
+# The benchmark's peers: pip extras, and Debian's rospy + rosmaster when we may install them.
+$(BSTAMP): pyproject.toml | $(PY)
+	$(PIP) install --quiet -e '.[bench]'
+	@if [ ! -x /usr/bin/rosmaster ] && [ "$$(id -u)" = 0 ]; then \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(ROS_DEBS); fi
+	touch $(STAMP) $@
+
+install-bench: $(BSTAMP)
+
+bench: install-bench
+	$(VENV)/bin/hetros bench latency
+
+bench-quick: install-bench
+	$(VENV)/bin/hetros bench latency --quick
 
 run: install
 	$(VENV)/bin/hetros graph examples/talker_listener/project.yaml

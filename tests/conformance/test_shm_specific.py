@@ -136,3 +136,40 @@ def test_subscriber_killed_mid_stream_does_not_hang_the_publisher(
         assert [m.width for m in got] == list(range(40))
     finally:
         harness.close()
+
+
+def test_recycled_slots_never_leak_old_bytes_into_new_messages(pair: Any) -> None:
+    """Serializers rely on zeroed padding and string terminators; slots are reused dirty."""
+    writer, reader = pair
+    cls = registry().get(TYPE)
+    for round_ in range(3):
+        for _ in range(4):
+            writer.write(cls(encoding="x" * 300, data=np.full(5000, 0xFF, dtype=np.uint8)))
+            assert reader.try_take().encoding == "x" * 300
+        for _ in range(4):
+            loaned = writer.loan({"data": 3})
+            loaned.width = round_
+            writer.write(freeze(loaned))
+            got = reader.try_take()
+            assert (got.encoding, got.header.frame_id, got.width) == ("", "", round_)
+        for _ in range(4):
+            writer.write(cls(width=round_))
+            got = reader.try_take()
+            assert (got.encoding, got.data.size) == ("", 0)
+
+
+def test_messages_without_arrays_use_zeroed_cdr(shm_session: str) -> None:
+    codec = MessageCodec(registry(), "std_msgs/msg/String")
+    a, b = ShmDomain(shm_session, "a"), ShmDomain(shm_session, "b")
+    try:
+        reader = b.open_reader("/s", ["a"], QoS(depth=8), codec, 0, lambda: None)
+        writer = a.open_writer("/s", "a", QoS(depth=8), codec)
+        string = registry().get("std_msgs/msg/String")
+        for text in ["y" * 1000, "", "ab", "y" * 999, "", "z"] * 3:
+            writer.write(string(data=text))
+            assert reader.try_take().data == text
+        reader.close()
+    finally:
+        a.close()
+        b.close()
+        remove_session_segments(shm_session)

@@ -130,6 +130,20 @@ def cmd_msg_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    try:
+        from ..bench.latency import main as latency
+    except ImportError as exc:
+        print(f"the benchmark needs the bench extra: pip install -e '.[bench]' ({exc})", file=sys.stderr)
+        return EXIT_ERROR
+    forwarded = ["--quick"] if args.quick else []
+    if args.out:
+        forwarded += ["--out", args.out]
+    if args.systems:
+        forwarded += ["--systems", args.systems]
+    return latency(forwarded)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hetros", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -156,6 +170,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output")
     p.add_argument("--module", default="nodes", help="module holding the node functions")
     p.set_defaults(func=cmd_import)
+    bench = sub.add_parser("bench", help="benchmarks against the peers").add_subparsers(dest="bench", required=True)
+    p = bench.add_parser("latency", help="latency, throughput and idle CPU against CycloneDDS, iceoryx2, ...")
+    p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")
+    p.add_argument("--out", help="output folder (default out/bench)")
+    p.add_argument("--systems", help="comma-separated subset")
+    p.set_defaults(func=cmd_bench)
     msg = sub.add_parser("msg", help="message types").add_subparsers(dest="msg_command", required=True)
     p = msg.add_parser("show", help="print a type's full definition")
     p.add_argument("type")

@@ -180,6 +180,7 @@ class ShmDomain:
             .create(iox2.ServiceType.Ipc)
         )
         self._services: dict[str, _Service] = {}
+        self._readers: list[ShmReader] = []
         self._closed = False
 
     def _service(self, topic: str, publisher_target: str, qos: QoS) -> _Service:
@@ -209,7 +210,9 @@ class ShmDomain:
                 f"a topic carries at most {MAX_SUBSCRIBER_SLOTS} cross-process subscribers"
             )
         services = [self._service(topic, target, qos) for target in publisher_targets]
-        return ShmReader(services, codec, slot, wake)
+        reader = ShmReader(services, codec, slot, wake)
+        self._readers.append(reader)
+        return reader
 
     def close(self) -> None:
         with self._lock:
@@ -218,9 +221,13 @@ class ShmDomain:
             self._closed = True
             services = list(self._services.values())
             self._services.clear()
+        for reader in list(self._readers):
+            reader.close()
+        self._readers.clear()
         for service in services:
             service.close()
-        del self._node
+        # iceoryx2 removes a node's shared memory when its last handle is dropped
+        self._node = None
 
 
 class _Service:
@@ -385,7 +392,8 @@ class _Service:
                 self._back_notifier_self.notify()
         if self._watcher is not None:
             self._watcher.join(timeout=2.0)
-        self._publisher = None
+        self._publisher = self._notifier = self._back_listener = self._back_notifier_self = None
+        self.data = self.wakeup = self.back = None
         self.credits.close()
 
 

@@ -152,6 +152,9 @@ class Iceoryx2Endpoint(Endpoint):
         self.sub = pubsub(in_name).subscriber_builder().create()
         self.notifier = event(out_name).notifier_builder().create()
         self.listener = event(in_name).listener_builder().create()
+        from hetros.runtime._node import AdaptiveSpin
+
+        self.spin = AdaptiveSpin()  # the wait strategy of hetros' take: a like-for-like baseline
 
     def send(self, stamp: int, seq: int, payload: Any) -> None:
         size = PREFIX.size + len(payload)
@@ -172,12 +175,17 @@ class Iceoryx2Endpoint(Endpoint):
 
     def recv(self, timeout: float) -> tuple[int, int, Any] | None:
         deadline = time.monotonic() + timeout
+        spin = self.spin.budget()
+        spin_end = time.perf_counter() + spin
         while True:
             sample = self.sub.receive()
             if sample is not None:
-                size = sample.payload().len()
+                self.spin.arrived()
+                size = sample.header.number_of_elements
                 stamp, seq = PREFIX.unpack_from((ctypes.c_uint8 * PREFIX.size).from_address(sample.payload_ptr))
                 return stamp, seq, (sample, size)
+            if spin and time.perf_counter() < spin_end:
+                continue
             left = deadline - time.monotonic()
             if left <= 0:
                 return None

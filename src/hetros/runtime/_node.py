@@ -34,9 +34,34 @@ from ._plan import reply_channel, request_channel
 
 M = TypeVar("M", bound=Message)
 _MISSING: Any = object()
-HOT_STREAM = 0.01
-MIN_SPIN = 50e-6
-MAX_SPIN = 1e-3
+
+
+class AdaptiveSpin:
+    """How long to wait awake before blocking: on a hot stream, about two message gaps.
+
+    A blocking wake-up of another CPU costs tens of microseconds here; a stream whose
+    messages come faster than that is cheaper to wait for awake. An idle or slow stream
+    (nothing for ``HOT`` seconds) never spins, so an idle subscriber costs no CPU.
+    """
+
+    HOT = 0.01
+    LOW = 50e-6
+    HIGH = 1e-3
+
+    def __init__(self) -> None:
+        self.last = 0.0
+        self.gap = 0.0
+
+    def budget(self) -> float:
+        if time.monotonic() - self.last > self.HOT:
+            return 0.0
+        return min(max(2.0 * self.gap, self.LOW), self.HIGH)
+
+    def arrived(self) -> None:
+        now = time.monotonic()
+        gap = now - self.last
+        self.gap = gap if self.gap == 0.0 else 0.8 * self.gap + 0.2 * gap
+        self.last = now
 
 
 def _typename(msg_type: type[Message]) -> str:
@@ -100,8 +125,7 @@ class Subscription(Generic[M]):
         self._cond = threading.Condition()
         self._reader: Reader | None = None
         self._direct: Any = None
-        self._last_message = 0.0
-        self._gap = 0.0
+        self._spin = AdaptiveSpin()
 
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
@@ -137,42 +161,25 @@ class Subscription(Generic[M]):
         message: M | None = self._reader.try_take()
         return message
 
-    def _spin_budget(self) -> float:
-        """Seconds worth spinning before blocking: on a hot stream, about two message gaps.
-
-        A blocking wake-up of another CPU costs tens of microseconds here; a stream whose
-        messages come faster than that is cheaper to wait for awake. An idle or slow
-        subscription (nothing for HOT_STREAM seconds) never spins, so it costs no CPU.
-        """
-        if time.monotonic() - self._last_message > HOT_STREAM:
-            return 0.0
-        return min(max(2.0 * self._gap, MIN_SPIN), MAX_SPIN)
-
-    def _arrived(self) -> None:
-        now = time.monotonic()
-        gap = now - self._last_message
-        self._gap = gap if self._gap == 0.0 else 0.8 * self._gap + 0.2 * gap
-        self._last_message = now
-
     def take(self, timeout: float | None = None) -> M:
         """Block for the next message; raise TakeTimeoutError, or ShutdownError on shutdown."""
         deadline = None if timeout is None else time.monotonic() + timeout
         stop = self.node.graph.stop
-        spin = self._spin_budget()
+        spin = self._spin.budget()
         if spin:
             spin_end = time.perf_counter() + spin
             yield_gil = self._direct is None
             while time.perf_counter() < spin_end:
                 message = self.try_take()
                 if message is not None:
-                    self._arrived()
+                    self._spin.arrived()
                     return message
                 if yield_gil:
                     os.sched_yield()  # lets the publishing thread have the GIL (sleep(0) naps ~90 µs)
         while True:
             message = self.try_take()
             if message is not None:
-                self._arrived()
+                self._spin.arrived()
                 return message
             if stop.is_set():
                 raise ShutdownError(f"take on {self.topic} interrupted: the graph is shutting down")

@@ -154,6 +154,11 @@ class Credits:
     def set_taken(self, index: int, taken: int) -> None:
         self.slots[index, 0] = taken
 
+    def max_fill(self, published: int) -> int:
+        """The fullest live subscriber FIFO, in messages (0 without subscribers)."""
+        words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
+        return max((published - words[i] for i in range(0, len(words), 2) if words[i + 1]), default=0)
+
     def full_slots(self, published: int, depth: int) -> list[int]:
         """Slots of live subscribers whose FIFO holds ``depth`` messages already."""
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
@@ -240,9 +245,11 @@ class _Service:
         digest = hashlib.sha1(f"{topic}@{target}".encode()).hexdigest()[:20]
         base = f"hetros/{domain.session}/{digest}"
         # keep_last: iceoryx2's own overflow keeps exactly the newest `depth`; keep_all: the
-        # credits bound the fill at `depth`, the slack only absorbs a subscriber's join race.
-        self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
+        # credits bound the fill at `depth`, the slack absorbs a subscriber's join race.
+        self.buffer = qos.depth if not qos.blocks_publisher else (
+            2 * qos.depth + 2 if qos.keeps_history else qos.depth + 2)  # a late joiner's history comes on top
         self.blocking = qos.blocks_publisher
+        self.room = 0
         self.lock = threading.RLock()
         self.space = threading.Condition(self.lock)
         self._closed = False
@@ -335,6 +342,8 @@ class _Service:
                     blocked.remove(index)
             if not blocked:
                 credits.waiting = False
+                # until this many more sends, no FIFO can fill up: skip the scan until then
+                self.room = self.qos.depth - credits.max_fill(published)
                 return
             if not credits.waiting:
                 credits.waiting = True
@@ -361,8 +370,10 @@ class _Service:
     def send(self, sample: Any, memory: memoryview, layout: int, publisher_slot: int) -> None:
         """Stamp the header and send; blocks first while a reliable keep_all FIFO is full."""
         with self.lock:
-            if self.qos.blocks_publisher:
-                self.wait_for_space(time.monotonic() + self.qos.publish_timeout)
+            if self.blocking:
+                if self.room <= 0:
+                    self.wait_for_space(time.monotonic() + self.qos.publish_timeout)
+                self.room -= 1
             seq = self.next_seq
             HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
             ready = sample.assume_init()

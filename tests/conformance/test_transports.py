@@ -361,3 +361,23 @@ def test_slow_subscriber_backpressure_loses_nothing(make: Callable[[QoS], Harnes
     sender.join(10)
     assert not sender.is_alive()
     assert [m.width for m in got] == list(range(30))
+
+
+def test_late_joiners_history_fills_its_reliable_fifo(make: Callable[[QoS], Harness]) -> None:
+    h = make(QoS(depth=2, durability="transient_local", publish_timeout=0.3))
+    writer = h.writer()
+    for seq in range(2):
+        writer.write(image(0, seq))
+    woke = threading.Event()
+    reader = h.reader(wake=woke.set)
+    assert woke.wait(2.0)
+    time.sleep(0.1)
+    with pytest.raises(PublishTimeoutError):
+        writer.write(image(0, 2))
+    first = None
+    deadline = time.monotonic() + 2
+    while first is None and time.monotonic() < deadline:
+        first = reader.try_take()
+    assert first is not None and first.width == 0
+    writer.write(image(0, 2))
+    assert [m.width for m in drain(reader)] == [1, 2]

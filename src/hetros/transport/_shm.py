@@ -246,8 +246,7 @@ class _Service:
         base = f"hetros/{domain.session}/{digest}"
         # keep_last: iceoryx2's own overflow keeps exactly the newest `depth`; keep_all: the
         # credits bound the fill at `depth`, the slack absorbs a subscriber's join race.
-        self.buffer = qos.depth if not qos.blocks_publisher else (
-            2 * qos.depth + 2 if qos.keeps_history else qos.depth + 2)  # a late joiner's history comes on top
+        self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
         self.blocking = qos.blocks_publisher
         self.room = 0
         self.lock = threading.RLock()
@@ -323,6 +322,7 @@ class _Service:
                     return
                 if self.qos.keeps_history and self._publisher is not None:
                     self._publisher.update_connections()
+                self.room = 0  # a subscriber joined or took: recount before the next send
                 self.space.notify_all()
 
     def wait_for_space(self, deadline: float) -> None:
@@ -389,7 +389,10 @@ class _Service:
 
     def subscriber(self, slot: int) -> tuple[Any, Any, Any]:
         subscriber = self.data.subscriber_builder().buffer_size(self.buffer).create()
-        self.credits.set_slot(slot, self.credits.published, os.getpid())
+        published = self.credits.published
+        # a late joiner's FIFO starts with the history it is about to receive
+        start = published - min(published, self.qos.depth) if self.qos.keeps_history else published
+        self.credits.set_slot(slot, start, os.getpid())
         listener = self.wakeup.listener_builder().create()
         back = self.back.notifier_builder().create()
         back.notify()

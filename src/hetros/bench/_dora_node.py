@@ -1,5 +1,9 @@
 """A dora-rs Python node for the latency benchmark (``dora run`` starts it).
 
+It keeps its own copy of the ping/echo loop: with the shared loop of ``_roles``
+(which drains with 50 ms receive timeouts after the handshake) the dataflow
+stalled after the handshake under dora-rs 1.1, and this event-driven one does not.
+
 Its role and configuration come from the environment the dataflow sets; the
 protocol matches ``_roles``: a 16-byte prefix in a uint8 arrow array.
 """

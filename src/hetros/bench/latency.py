@@ -20,6 +20,7 @@ import sys
 import tempfile
 import textwrap
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -297,67 +298,55 @@ def fmt(value: float) -> str:
     return f"{value:.1f}" if value < 1000 else f"{value:,.0f}"
 
 
+def _table(lines: list[str], title: str, columns: list[str], sizes: list[int],
+           cell: Callable[[int, str], str]) -> None:
+    lines += ["", f"### {title}", "", "| size | " + " | ".join(columns) + " |", "|---|" + "---|" * len(columns)]
+    for size in sizes:
+        lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cell(size, c) for c in columns) + " |")
+
+
 def render(run: Run, systems: list[str], sizes: list[int]) -> str:
     by = {(r.system, r.size): r for r in run.results}
     shown = [s for s in systems if s not in run.missing]
-    lines = ["### One-way latency, p50 µs (p99)", ""]
-    lines.append("| size | " + " | ".join(shown) + " |")
-    lines.append("|---|" + "---|" * len(shown))
-    for size in sizes:
-        cells = []
-        for system in shown:
+
+    def stat(metric: str, text: Callable[[Stats], str]) -> Callable[[int, str], str]:
+        def cell(size: int, system: str) -> str:
             r = by.get((system, size))
-            cells.append("-" if r is None or r.one_way is None else
-                         ("err" if r.error else f"{fmt(r.one_way.p50)} ({fmt(r.one_way.p99)})"))
-        lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
-    lines += ["", "### One-way latency, mean ± std µs", ""]
-    lines.append("| size | " + " | ".join(shown) + " |")
-    lines.append("|---|" + "---|" * len(shown))
-    for size in sizes:
-        cells = []
-        for system in shown:
-            r = by.get((system, size))
-            cells.append("-" if r is None or r.one_way is None else f"{fmt(r.one_way.mean)} ± {fmt(r.one_way.std)}")
-        lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
-    rtt_systems = [s for s in shown if s != "numpy-copy"]
-    lines += ["", "### Round trip with a copy in the echo node (ReconROS Table 3), mean ± std µs", ""]
-    lines.append("| size | " + " | ".join(rtt_systems) + " |")
-    lines.append("|---|" + "---|" * len(rtt_systems))
-    for size in sizes:
-        cells = []
-        for system in rtt_systems:
-            r = by.get((system, size))
-            cells.append("-" if r is None or r.rtt is None else f"{fmt(r.rtt.mean)} ± {fmt(r.rtt.std)}")
-        lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
+            value = None if r is None else getattr(r, metric)
+            return "err" if r is not None and r.error else ("-" if value is None else text(value))
+        return cell
+
+    lines: list[str] = []
+    _table(lines, "One-way latency, p50 µs (p99)", shown, sizes,
+           stat("one_way", lambda s: f"{fmt(s.p50)} ({fmt(s.p99)})"))
+    _table(lines, "One-way latency, mean ± std µs", shown, sizes,
+           stat("one_way", lambda s: f"{fmt(s.mean)} ± {fmt(s.std)}"))
+    _table(lines, "Round trip with a copy in the echo node (ReconROS Table 3), mean ± std µs",
+           [s for s in shown if s != "numpy-copy"], sizes, stat("rtt", lambda s: f"{fmt(s.mean)} ± {fmt(s.std)}"))
+    def ratio(ours: str, metric: str, field: str, invert: bool = False) -> Callable[[int, str], str]:
+        def cell(size: int, other: str) -> str:
+            mine, theirs = by.get((ours, size)), by.get((other, size))
+            a = None if mine is None else getattr(mine, metric)
+            b = None if theirs is None else getattr(theirs, metric)
+            if a is None or b is None:
+                return "-"
+            value = getattr(a, field) / getattr(b, field) if invert else getattr(b, field) / getattr(a, field)
+            return f"{value:.2f}x" if invert else f"{value:.1f}x"
+        return cell
+
+    peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
     for ours in ("hetros-shm-loan", "hetros-inproc"):
-        if ours not in shown:
-            continue
-        peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
-        lines += ["", f"### Speed-up of {ours} (p50 one-way) over each peer: peer p50 / {ours} p50", ""]
-        lines.append("| size | " + " | ".join(peers) + " |")
-        lines.append("|---|" + "---|" * len(peers))
-        for size in sizes:
-            mine = by.get((ours, size))
-            cells = []
-            for peer in peers:
-                theirs = by.get((peer, size))
-                if mine is None or theirs is None or mine.one_way is None or theirs.one_way is None:
-                    cells.append("-")
-                else:
-                    cells.append(f"{theirs.one_way.p50 / mine.one_way.p50:.1f}x")
-            lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
-    if "hetros-shm" in shown and "iceoryx2" in shown:
-        lines += ["", "### Framework overhead: hetros round trip / iceoryx2 round trip (mean, same wait strategy)", ""]
-        lines.append("| size | hetros-shm | hetros-shm-loan |")
-        lines.append("|---|---|---|")
-        for size in sizes:
-            base = by.get(("iceoryx2", size))
-            cells = []
-            for ours in ("hetros-shm", "hetros-shm-loan"):
-                r = by.get((ours, size))
-                ok = base and r and base.rtt and r.rtt
-                cells.append(f"{r.rtt.mean / base.rtt.mean:.2f}x" if ok else "-")  # type: ignore[union-attr]
-            lines.append(f"| {SIZE_LABELS.get(size, size)} | " + " | ".join(cells) + " |")
+        if ours in shown:
+            _table(lines, f"Speed-up of {ours} (p50 one-way) over each peer: peer p50 / {ours} p50",
+                   peers, sizes, ratio(ours, "one_way", "p50"))
+    if "iceoryx2" in shown:
+        ours_shm: list[str] = [s for s in ("hetros-shm", "hetros-shm-loan") if s in shown]
+
+        def overhead(size: int, ours: str) -> str:
+            return ratio(ours, "rtt", "mean", invert=True)(size, "iceoryx2")
+
+        _table(lines, "Framework overhead: hetros round trip / iceoryx2 round trip (mean, same wait strategy)",
+               ours_shm, sizes, overhead)
     if run.throughput:
         lines += ["", "### Throughput, one publisher, one subscriber in another process", ""]
         lines.append("| system | size | messages/s | MiB/s |")

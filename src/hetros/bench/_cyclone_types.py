@@ -15,10 +15,15 @@ from cyclonedds.idl.types import array, int64, uint8
 _cache: dict[int, Any] = {}
 
 
+def _fixed_bytes(size: int) -> Any:
+    fixed: Any = array  # indexed like a generic: array[element type, length]
+    return fixed[uint8, max(size, 1)]
+
+
 def payload_type(size: int) -> Any:
     if size not in _cache:
         _cache[size] = make_dataclass(
-            f"Payload{size}", [("stamp", int64), ("seq", int64), ("data", array[uint8, max(size, 1)])],  # type: ignore[misc]
+            f"Payload{size}", [("stamp", int64), ("seq", int64), ("data", _fixed_bytes(size))],
             bases=(IdlStruct,), namespace={"__module__": __name__},
         )
         _cache[size].__idl_typename__ = f"hetros_bench::msg::dds_::Payload{size}_"

@@ -72,6 +72,10 @@ def _hetros_plan(qos_depth: int) -> Any:
 class HetrosEndpoint(Endpoint):
     """A hetros node: inproc when both roles share a graph, shm across processes."""
 
+    def close(self) -> None:
+        self.node.close()
+        self.node.graph.close()
+
     def __init__(self, role: str, graph: Any, loaned: bool) -> None:
         from hetros import Node
         from hetros.msg import registry
@@ -135,7 +139,8 @@ class Iceoryx2Endpoint(Endpoint):
 
         iox2.set_log_level(iox2.LogLevel.Error)
         self.iox2 = iox2
-        self.node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
+        name = f"hetros-bench-{os.getpid()}"  # a "hetros-" name: cleanup_stale reclaims it after a crash
+        self.node = iox2.NodeBuilder.new().name(iox2.NodeName.new(name)).create(iox2.ServiceType.Ipc)
         base = f"bench/{cfg['session']}"
         out_name, in_name = (f"{base}/send", f"{base}/recv") if role == "ping" else (f"{base}/recv", f"{base}/send")
 
@@ -152,6 +157,7 @@ class Iceoryx2Endpoint(Endpoint):
         self.sub = pubsub(in_name).subscriber_builder().create()
         self.notifier = event(out_name).notifier_builder().create()
         self.listener = event(in_name).listener_builder().create()
+        self.ports: list[Any] = [self.pub, self.sub, self.notifier, self.listener]
         from hetros.runtime._node import AdaptiveSpin
 
         self.spin = AdaptiveSpin()  # the wait strategy of hetros' take: a like-for-like baseline
@@ -165,6 +171,11 @@ class Iceoryx2Endpoint(Endpoint):
             ctypes.memmove(sample.payload_ptr + PREFIX.size, src, len(src))
         sample.assume_init().send()
         self.notifier.notify()
+
+    def close(self) -> None:
+        """Drop every iceoryx2 handle, so the node removes its shared memory before _exit."""
+        self.ports.clear()
+        del self.pub, self.sub, self.notifier, self.listener, self.node
 
     def echo(self, stamp: int, seq: int, received: Any) -> None:
         data, size = received
@@ -232,7 +243,7 @@ class ZenohEndpoint(Endpoint):
         endpoint = f'["tcp/127.0.0.1:{cfg["port"]}"]'
         conf.insert_json5("listen/endpoints", endpoint if role == "ping" else "[]")
         conf.insert_json5("connect/endpoints", endpoint if role == "echo" else "[]")
-        self.session = zenoh.open(conf)
+        self.session: Any = zenoh.open(conf)
         out_key, in_key = ("bench/send", "bench/recv") if role == "ping" else ("bench/recv", "bench/send")
         self.pub = self.session.declare_publisher(out_key)
         self.inbox: queue.Queue[bytes] = queue.Queue()
@@ -256,7 +267,8 @@ class ZenohEndpoint(Endpoint):
         return stamp, seq, data
 
     def close(self) -> None:
-        self.session.close()  # type: ignore[no-untyped-call]
+        session: Any = self.session
+        session.close()
 
 
 # -- CycloneDDS (Python binding) ----------------------------------------------------------------
@@ -411,7 +423,7 @@ def main() -> None:
         result = ping(endpoint, cfg) if role == "ping" else echo(endpoint, cfg)
         endpoint.close()
     Path(cfg[f"{role}_out"]).write_text(json.dumps(result))
-    os._exit(0)
+    os._exit(0)  # some peers' background threads would hold the interpreter at exit
 
 
 if __name__ == "__main__":

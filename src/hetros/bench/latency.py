@@ -27,6 +27,8 @@ from typing import Any
 
 import numpy as np
 
+from ..transport import cleanup_stale, remove_session_segments
+
 SIZES = [4, 3 * 1024, 12 * 1024, 48 * 1024, 192 * 1024, 768 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
 SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "196 kB",
                786432: "786 kB", 3145728: "3146 kB", 6291456: "6 MiB"}
@@ -101,6 +103,7 @@ class Bench:
         self.env["IOX2_LOG_LEVEL"] = "Error"
         self.env.setdefault("RUST_LOG", "error")
         self.rosmaster: subprocess.Popen[bytes] | None = None
+        self.sessions: list[str] = []
 
     def reps_for(self, size: int) -> tuple[int, int]:
         if self.quick:
@@ -110,9 +113,11 @@ class Bench:
     def config(self, system: str, size: int) -> tuple[dict[str, Any], Path]:
         warmup, reps = self.reps_for(size)
         tag = f"{system}-{size}"
+        session = f"{os.getpid()}x{os.urandom(3).hex()}"
+        self.sessions.append(session)
         cfg: dict[str, Any] = {
             "size": size, "warmup": warmup, "reps": reps, "cpus": self.cpus,
-            "session": f"{os.getpid()}x{os.urandom(3).hex()}",
+            "session": session,
             "ping_out": str(self.tmp / f"{tag}-ping.json"), "echo_out": str(self.tmp / f"{tag}-echo.json"),
             "inproc_out": str(self.tmp / f"{tag}-inproc.json"), "port": free_port(),
         }
@@ -290,6 +295,9 @@ class Bench:
             self.rosmaster.terminate()
             self.rosmaster.wait(10)
         shutil.rmtree(self.tmp, ignore_errors=True)
+        for session in self.sessions:
+            remove_session_segments(session)
+        cleanup_stale()
 
 
 # -- report ------------------------------------------------------------------------------------

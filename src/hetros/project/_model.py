@@ -50,6 +50,7 @@ class NodeSpec(_Strict):
     clients: dict[str, str] = Field(default_factory=dict)
     parameters: dict[str, Any] = Field(default_factory=dict)
     restart: Literal["never", "on-failure"] = "never"
+    required: bool = False
     max_restarts: int = Field(default=3, ge=0)
 
     def types(self, section: str) -> dict[str, str]:

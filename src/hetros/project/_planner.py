@@ -238,7 +238,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
         targets={n: TargetPlan(n, t.kind, tuple(t.cpus)) for n, t in model.targets.items()},
         nodes={
-            n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts,
+            n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts, s.required,
                         s.types("publish"), s.types("subscribe"), dict(s.services), dict(s.clients))
             for n, s in model.nodes.items()
         },

@@ -19,6 +19,7 @@ from ._node import Node
 from ._plan import NodePlan, Plan
 
 FailureReport = Callable[[str, str, bool], None]
+DoneReport = Callable[[str], None]
 
 
 def resolve(run: str, root: str) -> Callable[..., Any]:
@@ -50,8 +51,9 @@ class NodeThread:
     """One node in its own thread, restarted per its ``restart`` policy."""
 
     def __init__(self, spec: NodePlan, graph: Graph, on_failure: FailureReport,
-                 on_exit: Callable[[], None]) -> None:
+                 on_exit: Callable[[], None], on_done: DoneReport) -> None:
         self.on_exit = on_exit
+        self.on_done = on_done
         self.spec = spec
         self.graph = graph
         self.on_failure = on_failure
@@ -75,6 +77,8 @@ class NodeThread:
             node = Node(self.spec.name, self.graph)
             try:
                 run_node_body(resolve(self.spec.run, root), node)
+                if not self.graph.stop.is_set():
+                    self.on_done(self.spec.name)
                 return
             except ShutdownError:
                 return
@@ -100,7 +104,8 @@ class Host:
 
     def __init__(self, plan: Plan, process: str, session: str, on_failure: FailureReport,
                  stop: threading.Event | None = None,
-                 on_all_exited: Callable[[], None] = lambda: None) -> None:
+                 on_all_exited: Callable[[], None] = lambda: None,
+                 on_done: DoneReport = lambda node: None) -> None:
         self._running = 0
         self._count_lock = threading.Lock()
         self._on_all_exited = on_all_exited
@@ -108,7 +113,7 @@ class Host:
         for folder in plan.message_paths:
             types.load_folder(Path(folder))
         self.graph = Graph(plan, process, session, stop, types)
-        self.threads = [NodeThread(plan.nodes[n], self.graph, on_failure, self._exited)
+        self.threads = [NodeThread(plan.nodes[n], self.graph, on_failure, self._exited, on_done)
                         for n in plan.nodes_in(process)]
         for nthread in self.threads:
             resolve(nthread.spec.run, plan.root)

@@ -123,7 +123,8 @@ class Launcher:
         local_nodes = self.plan.nodes_in("launcher")
         if local_nodes:
             self.host = Host(self.plan, "launcher", self.session, self._local_failure, self.stop,
-                             lambda: self.events.put({"event": "local_done"}))
+                             lambda: self.events.put({"event": "local_done"}),
+                             lambda node: self.events.put({"event": "node_done", "node": node}))
         waiting = set(self.children)
         deadline = time.monotonic() + 60.0
         while waiting:
@@ -188,6 +189,9 @@ class Launcher:
                     return LaunchResult(1, self.failures, f"target {event['target']} died")
             elif kind == "local_done":
                 running.discard("launcher")
+            elif kind == "node_done" and self.plan.nodes[event["node"]].required:
+                log.info("required node %s finished; shutting the graph down", event["node"])
+                return LaunchResult(1 if self.failures else 0, self.failures, f"required node {event['node']} finished")
             elif kind == "stopped" and event.get("failed"):
                 self.failures.extend(event["failed"])
         return LaunchResult(1 if self.failures else 0, self.failures, "all nodes finished")

@@ -15,6 +15,8 @@ class NodeFormatter(logging.Formatter):
         name = record.name
         if name.startswith(NODE_LOGGER_PREFIX):
             name = name[len(NODE_LOGGER_PREFIX):]
+        elif name.startswith("hetros."):
+            name = name[len("hetros."):]
         text = f"[{record.levelname}] [{name}]: {record.getMessage()}"
         if record.exc_info:
             text += "\n" + self.formatException(record.exc_info)

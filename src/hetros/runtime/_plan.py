@@ -33,6 +33,7 @@ class NodePlan:
     parameters: dict[str, Any] = field(default_factory=dict)
     restart: str = "never"
     max_restarts: int = 3
+    required: bool = False
     publish: dict[str, str] = field(default_factory=dict)
     subscribe: dict[str, str] = field(default_factory=dict)
     services: dict[str, str] = field(default_factory=dict)

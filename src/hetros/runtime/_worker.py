@@ -46,7 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         host = Host(plan, args.target, args.session,
                     lambda node, tb, restarting: report("node_failed", node=node, traceback=tb,
-                                                        restarting=restarting), stop, stop.set)
+                                                        restarting=restarting), stop, stop.set,
+                    lambda node: report("node_done", node=node))
     except Exception as exc:
         import traceback
 

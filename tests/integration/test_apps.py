@@ -1,0 +1,51 @@
+"""Reference applications from the papers, each in both mappings, results checked."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def launch(project: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "120"],
+                          capture_output=True, text=True, timeout=180, check=False)
+
+
+def load(example: str) -> object:
+    spec = importlib.util.spec_from_file_location(f"{example}_nodes", EXAMPLES / example / "nodes.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_ping_pong_round_trips_every_size_intact(project: str) -> None:
+    result = launch(EXAMPLES / "ping_pong" / project)
+    assert result.returncode == 0, result.stderr
+    sizes = [int(s) for s in re.findall(r"\[ping\]: round trip +(\d+) B:", result.stderr)]
+    assert sizes == [4, 8192, 1 << 20, 6 << 20]
+    assert "required node ping finished" in result.stderr
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_sorting_matches_numpy_in_both_mappings(project: str) -> None:
+    result = launch(EXAMPLES / "sorting" / project)
+    assert result.returncode == 0, result.stderr
+    assert len(re.findall(r"run \d: 2048 numbers sorted correctly", result.stderr)) == 5
+
+
+@pytest.mark.parametrize("size", [0, 1, 2, 3, 17, 2048])
+def test_odd_even_transposition_sort(size: int) -> None:
+    sort = load("sorting").odd_even_transposition_sort  # type: ignore[attr-defined]
+    values = np.random.default_rng(size).integers(0, 2**32, size, dtype=np.uint32)
+    assert np.array_equal(sort(values), np.sort(values))
+    assert np.array_equal(sort(np.sort(values)[::-1]), np.sort(values))

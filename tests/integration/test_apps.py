@@ -49,3 +49,31 @@ def test_odd_even_transposition_sort(size: int) -> None:
     values = np.random.default_rng(size).integers(0, 2**32, size, dtype=np.uint32)
     assert np.array_equal(sort(values), np.sort(values))
     assert np.array_equal(sort(np.sort(values)[::-1]), np.sort(values))
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_sobel_service_pipeline(project: str) -> None:
+    result = launch(EXAMPLES / "sobel" / project)
+    assert result.returncode == 0, result.stderr
+    frames = sorted(int(n) for n in re.findall(r"\[display\]: frame (\d+) filtered correctly", result.stderr))
+    assert frames == list(range(10)), "every frame reached the display, filtered as the reference says"
+
+
+def test_sobel_matches_scipy_reference() -> None:
+    ndimage = pytest.importorskip("scipy.ndimage")
+    nodes = load_with_types("sobel")
+    img = nodes.frame(3)  # type: ignore[attr-defined]
+    ours = nodes.sobel(img)  # type: ignore[attr-defined]
+    for channel in range(3):
+        plane = img[..., channel].astype(np.int32)
+        reference = np.abs(ndimage.sobel(plane, axis=1)) + np.abs(ndimage.sobel(plane, axis=0))
+        expected = np.clip(reference, 0, 255)[1:-1, 1:-1]
+        assert np.array_equal(ours[1:-1, 1:-1, channel], expected)
+    assert not ours[0].any() and not ours[:, -1].any()
+
+
+def load_with_types(example: str) -> object:
+    from hetros.msg import registry
+
+    registry().load_folder(EXAMPLES / example / "msg")
+    return load(example)

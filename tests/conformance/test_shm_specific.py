@@ -173,3 +173,24 @@ def test_messages_without_arrays_use_zeroed_cdr(shm_session: str) -> None:
         a.close()
         b.close()
         remove_session_segments(shm_session)
+
+
+def test_fixed_size_arrays_stay_inline(shm_session: str) -> None:
+    codec = MessageCodec(registry(), "geometry_msgs/msg/PoseWithCovariance")
+    a, b = ShmDomain(shm_session, "a"), ShmDomain(shm_session, "b")
+    try:
+        reader = b.open_reader("/p", ["a"], QoS(depth=2), codec, 0, lambda: None)
+        writer = a.open_writer("/p", "a", QoS(depth=2), codec)
+        cls = registry().get("geometry_msgs/msg/PoseWithCovariance")
+        sent = cls(covariance=np.arange(36, dtype=np.float64))
+        sent.pose.position.x = 1.5
+        writer.write(sent)
+        got = reader.try_take()
+        assert got == sent
+        with pytest.raises(Exception, match="loan sizes can be given for: none"):
+            writer.loan({"covariance": 36})
+        reader.close()
+    finally:
+        a.close()
+        b.close()
+        remove_session_segments(shm_session)

@@ -77,3 +77,31 @@ def load_with_types(example: str) -> object:
 
     registry().load_folder(EXAMPLES / example / "msg")
     return load(example)
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_inverse_kinematics_against_a_numeric_solution(project: str) -> None:
+    optimize = pytest.importorskip("scipy.optimize")
+    sys.path.insert(0, str(EXAMPLES / "inverse_kinematics"))
+    try:
+        import kinematics  # type: ignore[import-not-found]
+    finally:
+        sys.path.pop(0)
+    result = launch(EXAMPLES / "inverse_kinematics" / project)
+    assert result.returncode == 0, result.stderr
+    answers = re.findall(r"command (0x[0-9a-f]+) -> pwm ((?:\d+ ?){6})", result.stderr)
+    assert len(answers) == 20
+    for command, pwm in answers:
+        x, y = kinematics.unpack(int(command, 16))
+        joints = kinematics.platform_joints(x, y)
+        for leg in range(6):
+            beta = kinematics.BETA[leg]
+
+            def rod_error(alpha: float, leg: int = leg, beta: float = beta) -> float:
+                tip = kinematics.BASE[leg] + kinematics.ARM * np.array(
+                    [np.cos(alpha) * np.cos(beta), np.cos(alpha) * np.sin(beta), np.sin(alpha)])
+                return float(np.linalg.norm(joints[leg] - tip) - kinematics.ROD)
+
+            alpha = optimize.brentq(rod_error, -np.pi / 2, np.pi / 2)
+            expected = round((np.degrees(alpha) + 90.0) / 180.0 * 1023.0)
+            assert abs(int(pwm.split()[leg]) - expected) <= 1, (command, leg)

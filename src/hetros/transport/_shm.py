@@ -449,7 +449,9 @@ class ShmWriter(Writer):
         self._codec = codec
         self._slot = slot
         self._loans: dict[int, _Loan] = {}
-        self._arrays = codec.arrays if isinstance(codec, MessageCodec) else []
+        # variable-length arrays travel as blobs; fixed-size ones stay in the CDR part
+        self._arrays = [(index, field) for index, field in enumerate(codec.arrays) if field.length is None] \
+            if isinstance(codec, MessageCodec) else []
         service.publisher()
 
     def write(self, message: Any) -> None:
@@ -483,7 +485,7 @@ class ShmWriter(Writer):
 
     def _send_copy(self, message: Any) -> None:
         plan = []
-        for index, field in enumerate(self._arrays):
+        for index, field in self._arrays:
             array = np.asarray(_get_path(message, field.path))
             if array.size:
                 plan.append((index, field.path, field.dtype, int(array.size)))
@@ -500,15 +502,12 @@ class ShmWriter(Writer):
             raise TransportError("only topic messages can be loaned")
         wanted = dict(sizes)
         plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]] = []
-        for index, field in enumerate(self._arrays):
-            name = ".".join(field.path)
-            length = wanted.pop(name, field.length or 0)
-            if field.length is not None and length != field.length:
-                raise TransportError(f"{name} of {codec.typename} has fixed length {field.length}, not {length}")
+        for index, field in self._arrays:
+            length = wanted.pop(".".join(field.path), 0)
             if length:
                 plan.append((index, field.path, field.dtype, length))
         if wanted:
-            known = ", ".join(".".join(f.path) for f in self._arrays if f.length is None) or "none"
+            known = ", ".join(".".join(f.path) for _i, f in self._arrays) or "none"
             raise TransportError(
                 f"{codec.typename} has no variable-length primitive array {', '.join(wanted)!s}; "
                 f"loan sizes can be given for: {known}"

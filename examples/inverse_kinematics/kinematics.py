@@ -27,7 +27,7 @@ HOME = float(np.sqrt(ROD**2 - ((PLATFORM[:, :2] - _ARM_TIPS) ** 2).sum(1)).mean(
 
 def pack(x_deg: float, y_deg: float) -> int:
     """Two angles as signed Q8.6 halves of one uint32."""
-    qx, qy = (int(round(v * 64)) & 0xFFFF for v in (x_deg, y_deg))
+    qx, qy = (round(v * 64) & 0xFFFF for v in (x_deg, y_deg))
     return qx | (qy << 16)
 
 

@@ -97,7 +97,7 @@ def test_inverse_kinematics_against_a_numeric_solution(project: str) -> None:
         for leg in range(6):
             beta = kinematics.BETA[leg]
 
-            def rod_error(alpha: float, leg: int = leg, beta: float = beta) -> float:
+            def rod_error(alpha: float, leg: int = leg, beta: float = beta, joints: np.ndarray = joints) -> float:
                 tip = kinematics.BASE[leg] + kinematics.ARM * np.array(
                     [np.cos(alpha) * np.cos(beta), np.cos(alpha) * np.sin(beta), np.sin(alpha)])
                 return float(np.linalg.norm(joints[leg] - tip) - kinematics.ROD)

@@ -105,3 +105,41 @@ def test_inverse_kinematics_against_a_numeric_solution(project: str) -> None:
             alpha = optimize.brentq(rod_error, -np.pi / 2, np.pi / 2)
             expected = round((np.degrees(alpha) + 90.0) / 180.0 * 1023.0)
             assert abs(int(pwm.split()[leg]) - expected) <= 1, (command, leg)
+
+
+def ball_on_plate(tmp_path: Path, mapping: str, seed: int) -> subprocess.CompletedProcess[str]:
+    """The shipped project with another seed and a faster tick (the simulated step stays 20 ms)."""
+    import os
+
+    import yaml
+
+    example = EXAMPLES / "ball_on_plate"
+    data = yaml.safe_load((example / mapping).read_text())
+    data["messages"] = [str((example / m).resolve()) for m in data["messages"]]
+    data["nodes"]["physics"]["parameters"].update({"seed": seed, "hz": 200.0})
+    project = tmp_path / f"{seed}-{mapping}"
+    project.write_text(yaml.safe_dump(data))
+    env = dict(os.environ, PYTHONPATH=str(example))
+    return subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "120"],
+                          capture_output=True, text=True, timeout=180, check=False, env=env)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_ball_on_plate_settles_from_random_starts(tmp_path: Path, seed: int) -> None:
+    result = ball_on_plate(tmp_path, "project.yaml", seed)
+    assert result.returncode == 0, result.stderr
+    found = re.search(r"after 10\.0 s: ball at \S+ \S+ m, ([\d.]+) m from the centre; farthest ([\d.]+) m; "
+                      r"settled at ([\d.]+) s", result.stderr)
+    assert found, result.stderr
+    distance, farthest, settled = (float(v) for v in found.groups())
+    assert distance < 0.01 and farthest < 0.10 and settled < 10.0
+    assert re.search(r"\[control\]: control period [\d.]+ ± [\d.]+ ms", result.stderr)
+
+
+def test_ball_on_plate_mappings_agree(tmp_path: Path) -> None:
+    outcomes = []
+    for mapping in ("project.yaml", "project_threads.yaml"):
+        result = ball_on_plate(tmp_path, mapping, 2)
+        assert result.returncode == 0, result.stderr
+        outcomes.append(re.search(r"\[physics\]: after .*", result.stderr).group(0))  # type: ignore[union-attr]
+    assert outcomes[0] == outcomes[1]

@@ -107,21 +107,26 @@ def test_inverse_kinematics_against_a_numeric_solution(project: str) -> None:
             assert abs(int(pwm.split()[leg]) - expected) <= 1, (command, leg)
 
 
-def ball_on_plate(tmp_path: Path, mapping: str, seed: int) -> subprocess.CompletedProcess[str]:
-    """The shipped project with another seed and a faster tick (the simulated step stays 20 ms)."""
+def variant(tmp_path: Path, name: str, mapping: str, node: str, **parameters: object
+            ) -> subprocess.CompletedProcess[str]:
+    """A shipped project with other parameters for one node (e.g. a faster tick in simulated time)."""
     import os
 
     import yaml
 
-    example = EXAMPLES / "ball_on_plate"
+    example = EXAMPLES / name
     data = yaml.safe_load((example / mapping).read_text())
     data["messages"] = [str((example / m).resolve()) for m in data["messages"]]
-    data["nodes"]["physics"]["parameters"].update({"seed": seed, "hz": 200.0})
-    project = tmp_path / f"{seed}-{mapping}"
+    data["nodes"][node].setdefault("parameters", {}).update(parameters)
+    project = tmp_path / f"{node}-{'-'.join(map(str, parameters.values()))}-{mapping}"
     project.write_text(yaml.safe_dump(data))
     env = dict(os.environ, PYTHONPATH=str(example))
     return subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "120"],
                           capture_output=True, text=True, timeout=180, check=False, env=env)
+
+
+def ball_on_plate(tmp_path: Path, mapping: str, seed: int) -> subprocess.CompletedProcess[str]:
+    return variant(tmp_path, "ball_on_plate", mapping, "physics", seed=seed, hz=200.0)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -143,3 +148,17 @@ def test_ball_on_plate_mappings_agree(tmp_path: Path) -> None:
         assert result.returncode == 0, result.stderr
         outcomes.append(re.search(r"\[physics\]: after .*", result.stderr).group(0))  # type: ignore[union-attr]
     assert outcomes[0] == outcomes[1]
+
+
+def test_autoware_slice_follows_the_route_in_both_mappings(tmp_path: Path) -> None:
+    summaries = []
+    for mapping in ("project.yaml", "project_threads.yaml"):
+        result = variant(tmp_path, "autoware", mapping, "vehicle", hz=100.0)
+        assert result.returncode == 0, result.stderr
+        found = re.search(r"\[vehicle\]: (drove to x=([\d.]+) m .*max after 5 s ([\d.]+) m); chain latency "
+                          r"[\d.]+ ± [\d.]+ ms; \d+ deadline misses", result.stderr)
+        assert found, result.stderr
+        assert float(found.group(2)) > 200.0, "the car reached the end of the route"
+        assert float(found.group(3)) < 0.2, "once converged, the car stays within 0.2 m of the route"
+        summaries.append(found.group(1))
+    assert summaries[0] == summaries[1], "the same trajectory in both mappings"

@@ -162,3 +162,36 @@ def test_autoware_slice_follows_the_route_in_both_mappings(tmp_path: Path) -> No
         assert float(found.group(3)) < 0.2, "once converged, the car stays within 0.2 m of the route"
         summaries.append(found.group(1))
     assert summaries[0] == summaries[1], "the same trajectory in both mappings"
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_digit_classifier_service_accuracy(project: str) -> None:
+    pytest.importorskip("sklearn")
+    result = launch(EXAMPLES / "digit_classifier" / project)
+    assert result.returncode == 0, result.stderr
+    found = re.search(r"\[client\]: accuracy ([\d.]+) on 450 held-out digits", result.stderr)
+    assert found, result.stderr
+    assert float(found.group(1)) >= 0.97
+
+
+def test_cnn_backward_pass_matches_finite_differences() -> None:
+    sys.path.insert(0, str(EXAMPLES / "digit_classifier"))
+    try:
+        import cnn  # type: ignore[import-not-found]
+    finally:
+        sys.path.pop(0)
+    rng = np.random.default_rng(1)
+    params = cnn.init(rng)
+    images, labels = rng.random((4, 8, 8)), rng.integers(0, 10, 4)
+    _loss, grads = cnn.gradients(params, images, labels)
+    for key in ("conv0", "conv2", "fc0", "bfc1"):
+        flat = params[key].reshape(-1)
+        for index in rng.choice(flat.size, 3, replace=False):
+            saved = flat[index]
+            flat[index] = saved + 1e-5
+            up, _ = cnn.gradients(params, images, labels)
+            flat[index] = saved - 1e-5
+            down, _ = cnn.gradients(params, images, labels)
+            flat[index] = saved
+            numeric = (up - down) / 2e-5
+            assert abs(numeric - grads[key].reshape(-1)[index]) < 1e-4 + 1e-3 * abs(numeric), key

@@ -13,7 +13,7 @@ CHANNELS = (1, 8, 16, 32)
 
 def im2col(x: np.ndarray) -> np.ndarray:
     """(N, H, W, C) with 'same' zero padding -> (N, H, W, 9*C) patches of 3x3."""
-    n, h, w, c = x.shape
+    _n, h, w, _c = x.shape
     padded = np.pad(x, ((0, 0), (1, 1), (1, 1), (0, 0)))
     patches = [padded[:, i:i + h, j:j + w, :] for i in range(3) for j in range(3)]
     return np.concatenate(patches, axis=3)
@@ -84,7 +84,7 @@ def gradients(params: dict[str, np.ndarray], images: np.ndarray, labels: np.ndar
     dx = (dh @ params["fc0"].T).reshape(n, 1, 1, CHANNELS[3])
     for layer in (2, 1, 0):
         cols, in_shape, z, mask, a_shape = keep.pop()
-        nn, h, w, c = a_shape
+        _nn, _h, _w, c = a_shape
         da = (mask * dx[:, :, None, :, None, :]).reshape(a_shape)
         dz = da * (z > 0)
         g[f"conv{layer}"] = cols.reshape(-1, cols.shape[-1]).T @ dz.reshape(-1, c)

@@ -43,8 +43,8 @@ bench-quick: install-bench
 	$(VENV)/bin/hetros bench latency --quick
 
 run: install
-	$(VENV)/bin/hetros graph examples/talker_listener/project.yaml
-	$(VENV)/bin/hetros launch examples/talker_listener/project.yaml --duration 5
+	$(VENV)/bin/hetros graph examples/lane_following/project.yaml
+	$(VENV)/bin/hetros launch examples/lane_following/project.yaml --duration 40
 
 lint: install-test
 	$(VENV)/bin/ruff check src tests examples benchmarks

@@ -195,3 +195,29 @@ def test_cnn_backward_pass_matches_finite_differences() -> None:
             flat[index] = saved
             numeric = (up - down) / 2e-5
             assert abs(numeric - grads[key].reshape(-1)[index]) < 1e-4 + 1e-3 * abs(numeric), key
+
+
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_lane_following_finds_the_centre_and_obeys_the_light(tmp_path: Path, project: str) -> None:
+    import os
+
+    import yaml
+
+    example = EXAMPLES / "lane_following"
+    data = yaml.safe_load((example / project).read_text())
+    data["messages"] = [str((example / m).resolve()) for m in data["messages"]]
+    data["nodes"]["camera"]["parameters"]["frames"] = 45
+    data["nodes"]["monitor"]["parameters"].update({"frames": 45, "out": str(tmp_path / "out")})
+    variant_file = tmp_path / project
+    variant_file.write_text(yaml.safe_dump(data))
+    result = subprocess.run([sys.executable, "-m", "hetros", "launch", str(variant_file), "--duration", "120"],
+                            capture_output=True, text=True, timeout=180, check=False,
+                            env=dict(os.environ, PYTHONPATH=str(example)))
+    assert result.returncode == 0, result.stderr
+    found = re.search(r"centre error max ([\d.]+) px; stopped in frames \[([\d, ]*)\]", result.stderr)
+    assert found, result.stderr
+    assert float(found.group(1)) < 3.0, "the computed lane centre is within a few pixels of the truth"
+    stopped = [int(f) for f in found.group(2).split(", ") if f]
+    assert stopped == list(range(20, 35)), "stops on red (frames 20-34) and resumes on green"
+    assert (tmp_path / "out" / "latency.png").stat().st_size > 0 and (tmp_path / "out" / "frame.png").exists()
+    assert len(re.findall(r"node time [\d.]+ ± [\d.]+ ms", result.stderr)) >= 5

@@ -1,0 +1,158 @@
+"""The scene and the image processing of the lane-following vehicle (fpgaDDS Fig. 6).
+
+Bird's-eye view (BEV): 1000 x 600 pixels of 1 cm; column 500 is straight ahead, row 599 is
+1 m in front of the car, row 0 is 7 m. The camera (640 x 480) sees the BEV ground plane
+through a fixed homography; everything is vectorised numpy.
+"""
+
+import numpy as np
+
+CAM_W, CAM_H = 640, 480
+BEV_W, BEV_H = 1000, 600
+HORIZON = 200
+LANE_HALF_WIDTH_M = 1.0
+STRIPE_M = 0.12
+NEAR_ROW = 560
+
+# BEV corners (x, y) -> camera trapezoid: the near edge spans the image, the far edge narrows.
+_BEV_CORNERS = np.array([[0, 0], [BEV_W - 1, 0], [BEV_W - 1, BEV_H - 1], [0, BEV_H - 1]], dtype=np.float64)
+_CAM_CORNERS = np.array([[250, HORIZON + 20], [390, HORIZON + 20], [CAM_W + 260, CAM_H - 1], [-260, CAM_H - 1]],
+                        dtype=np.float64)
+
+
+def homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    rows = []
+    for (x, y), (u, v) in zip(src, dst, strict=True):
+        rows.append([x, y, 1, 0, 0, 0, -u * x, -u * y, -u])
+        rows.append([0, 0, 0, x, y, 1, -v * x, -v * y, -v])
+    _, _, vt = np.linalg.svd(np.array(rows))
+    return vt[-1].reshape(3, 3) / vt[-1, -1]
+
+
+BEV_TO_CAM = homography(_BEV_CORNERS, _CAM_CORNERS)
+CAM_TO_BEV = np.linalg.inv(BEV_TO_CAM)
+
+
+def apply(h: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    w = h[2, 0] * x + h[2, 1] * y + h[2, 2]
+    return (h[0, 0] * x + h[0, 1] * y + h[0, 2]) / w, (h[1, 0] * x + h[1, 1] * y + h[1, 2]) / w
+
+
+def lane_shape(frame: int) -> tuple[float, float]:
+    """Lateral offset (m) and curvature (1/m^2 factor) of the lane centre for a frame."""
+    return 0.35 * np.sin(frame / 9.0), 0.02 * np.sin(frame / 13.0)
+
+
+def centre_m(frame: int, forward_m: np.ndarray) -> np.ndarray:
+    offset, curve = lane_shape(frame)
+    return offset + curve * forward_m**2
+
+
+def forward_of_row(row: np.ndarray) -> np.ndarray:
+    return 1.0 + (BEV_H - 1 - row) / 100.0
+
+
+def light_is_red(frame: int) -> bool:
+    return 20 <= frame % 60 < 35
+
+
+def render(frame: int) -> tuple[np.ndarray, float]:
+    """A camera frame (noise and outlier pixels included) and the true lane centre at NEAR_ROW (BEV px)."""
+    rng = np.random.default_rng(frame)
+    img = np.empty((CAM_H, CAM_W, 3), dtype=np.float64)
+    img[:HORIZON] = (135, 170, 215)
+    img[HORIZON:] = (70, 70, 72)
+    v, u = np.mgrid[HORIZON:CAM_H, 0:CAM_W].astype(np.float64)
+    bx, by = apply(CAM_TO_BEV, u, v)
+    lateral = (bx - BEV_W / 2) / 100.0
+    centre = centre_m(frame, forward_of_row(by))
+    on_road = (by >= 0) & (by < BEV_H)
+    stripe = np.zeros_like(on_road)
+    for side in (-1, 1):
+        stripe |= np.abs(lateral - (centre + side * LANE_HALF_WIDTH_M)) < STRIPE_M / 2
+    img[HORIZON:][stripe & on_road] = (235, 235, 235)
+    light = (255, 20, 20) if light_is_red(frame) else (20, 230, 40)
+    cy, cx = 60, 560
+    yy, xx = np.mgrid[0:CAM_H, 0:CAM_W]
+    img[(yy - cy) ** 2 + (xx - cx) ** 2 < 15**2] = light
+    img += rng.normal(0, 6, img.shape)
+    outliers = rng.random((CAM_H, CAM_W)) < 0.004
+    img[outliers] = rng.choice([0, 255], size=(int(outliers.sum()), 1))
+    truth = BEV_W / 2 + 100.0 * float(centre_m(frame, forward_of_row(np.array(NEAR_ROW))))
+    return np.clip(img, 0, 255).astype(np.uint8), truth
+
+
+# Paeth's 19 compare-exchanges that leave the median of nine in position 4.
+_MEDIAN9 = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8), (0, 3), (5, 8), (4, 7),
+            (3, 6), (1, 4), (2, 5), (4, 7), (4, 2), (6, 4), (4, 2))
+
+
+def median3x3(img: np.ndarray) -> np.ndarray:
+    padded = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    p = [padded[i:i + img.shape[0], j:j + img.shape[1]] for i in range(3) for j in range(3)]
+    for a, b in _MEDIAN9:
+        p[a], p[b] = np.minimum(p[a], p[b]), np.maximum(p[a], p[b])
+    return p[4]
+
+
+def compensate(img: np.ndarray) -> np.ndarray:
+    """Outlier pixels out (3x3 median), then a contrast stretch from the histogram (1st-99th percentile)."""
+    filtered = median3x3(img)
+    counts = np.bincount(filtered.reshape(-1), minlength=256).cumsum()
+    median = filtered.astype(np.float32)
+    low, high = np.searchsorted(counts, counts[-1] * 0.01), np.searchsorted(counts, counts[-1] * 0.99)
+    return np.clip((median - low) * 255.0 / max(high - low, 1.0), 0, 255).astype(np.uint8)
+
+
+def blur(img: np.ndarray) -> np.ndarray:
+    """5x5 Gaussian (sigma 1), separable."""
+    kernel = np.exp(-0.5 * np.arange(-2, 3) ** 2)
+    kernel /= kernel.sum()
+    x = img.astype(np.float32)
+    padded = np.pad(x, ((2, 2), (0, 0), (0, 0)), mode="edge")
+    x = sum(kernel[k] * padded[k:k + img.shape[0]] for k in range(5))
+    padded = np.pad(x, ((0, 0), (2, 2), (0, 0)), mode="edge")
+    x = sum(kernel[k] * padded[:, k:k + img.shape[1]] for k in range(5))
+    return np.clip(x, 0, 255).astype(np.uint8)
+
+
+_BY, _BX = np.mgrid[0:BEV_H, 0:BEV_W].astype(np.float64)
+_SRC_U, _SRC_V = apply(BEV_TO_CAM, _BX, _BY)
+_VALID = (_SRC_U >= 0) & (_SRC_U < CAM_W) & (_SRC_V >= 0) & (_SRC_V < CAM_H)
+_U = np.clip(np.round(_SRC_U), 0, CAM_W - 1).astype(np.intp)
+_V = np.clip(np.round(_SRC_V), 0, CAM_H - 1).astype(np.intp)
+
+
+def project(img: np.ndarray) -> np.ndarray:
+    """Perspective warp to the 1000 x 600 bird's-eye view (grey)."""
+    grey = img.mean(axis=2).astype(np.uint8)
+    return np.where(_VALID, grey[_V, _U], 0).astype(np.uint8)
+
+
+def find_lane(bev: np.ndarray) -> tuple[bool, float, float, float]:
+    """Left and right stripe near the car (bright columns of a band around NEAR_ROW), and their centre."""
+    band = bev[NEAR_ROW - 10:NEAR_ROW + 10]
+    bright = (band > 180).sum(axis=0)
+    columns = np.flatnonzero(bright > 10)
+    if columns.size < 2:
+        return False, 0.0, 0.0, 0.0
+    gaps = np.flatnonzero(np.diff(columns) > 20)
+    if gaps.size == 0:
+        return False, 0.0, 0.0, 0.0
+    left = float(columns[: gaps[0] + 1].mean())
+    right = float(columns[gaps[-1] + 1:].mean())
+    return True, (left + right) / 2.0, left, right
+
+
+def light_pixels(img: np.ndarray, colour: str) -> int:
+    """Pixels of the traffic-light colour in the upper part of the frame, thresholded in HSV."""
+    rgb = img[:HORIZON].astype(np.float32) / 255.0
+    maxc, minc = rgb.max(axis=2), rgb.min(axis=2)
+    delta = np.where(maxc > minc, maxc - minc, 1.0)
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    hue = np.where(maxc == r, ((g - b) / delta) % 6, np.where(maxc == g, (b - r) / delta + 2, (r - g) / delta + 4)) * 60
+    saturation = np.where(maxc > 0, (maxc - minc) / np.maximum(maxc, 1e-6), 0)
+    vivid = (saturation > 0.6) & (maxc > 0.5)
+    if colour == "red":
+        return int((vivid & ((hue < 15) | (hue > 345))).sum())
+    return int((vivid & (hue > 90) & (hue < 150)).sum())

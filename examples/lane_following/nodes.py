@@ -188,7 +188,7 @@ def write_pngs(out: Path, latencies: np.ndarray) -> None:
     frame = 25
     img, truth = vision.render(frame)
     bev = vision.project(vision.blur(vision.compensate(img)))
-    found, centre, left, right = vision.find_lane(bev)
+    _found, centre, left, right = vision.find_lane(bev)
     fig, axes = plt.subplots(1, 2, figsize=(12, 4))
     axes[0].imshow(img)
     axes[0].set_title(f"camera frame {frame}: light {'red' if vision.light_is_red(frame) else 'green'}")

@@ -1,6 +1,6 @@
 """ReconROS's Sobel example (Listings 1-3, Fig. 5): camera -> DIP -> sobel_service -> display.
 
-The DIP node subscribes to /image_raw, calls the ``/sobelservice`` service (a custom
+The DIP node subscribes to /image_raw, calls the ``/sobel_service`` service (a custom
 .srv of this example's own message package) served by the Sobel node, and publishes
 /image_filtered. Sobel: two 3x3 kernels per channel, magnitude approximated as
 |Gx| + |Gy| and clipped to 255, border pixels 0; vectorised with numpy slices.
@@ -59,7 +59,7 @@ def camera(node: Node) -> None:
 
 
 def dip(node: Node) -> None:
-    sobel_service = node.create_client(SobelSrv, "/sobelservice")
+    sobel_service = node.create_client(SobelSrv, "/sobel_service")
     pub = node.create_publisher(Image, "/image_filtered")
 
     def on_image(msg: Image) -> None:
@@ -75,7 +75,7 @@ def sobel_node(node: Node) -> None:
         filtered.header = request.image.header
         return SobelSrv.Response(image=filtered)
 
-    node.create_service(SobelSrv, "/sobelservice", filter_image)
+    node.create_service(SobelSrv, "/sobel_service", filter_image)
 
 
 def display(node: Node) -> None:

@@ -96,6 +96,7 @@ class NodeThread:
                 )
                 self.graph.stop.wait(min(0.2 * 2**restarts, 2.0))
             finally:
+                node.report_times()
                 node.close()
 
 

@@ -112,6 +112,33 @@ class Publisher(Generic[M]):
         self._writer.close()
 
 
+class HandlingStats:
+    """How long a node spends on each message of one endpoint (the "node time" of the papers' tables).
+
+    For callbacks and service handlers it is the handler's duration; for ``take`` loops,
+    the time from one ``take`` returning to the next ``take`` call.
+    """
+
+    __slots__ = ("count", "total", "total_sq")
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.total = 0.0
+        self.total_sq = 0.0
+
+    def add(self, seconds: float) -> None:
+        self.count += 1
+        self.total += seconds
+        self.total_sq += seconds * seconds
+
+    def summary(self) -> tuple[int, float, float]:
+        """(count, mean ms, std ms)."""
+        if not self.count:
+            return 0, 0.0, 0.0
+        mean = self.total / self.count
+        return self.count, mean * 1000.0, max(self.total_sq / self.count - mean * mean, 0.0) ** 0.5 * 1000.0
+
+
 class Subscription(Generic[M]):
     """Receives from one topic: by callback (run by the node's executor) or by ``take``."""
 
@@ -125,6 +152,8 @@ class Subscription(Generic[M]):
         self._cond = threading.Condition()
         self._reader: Reader | None = None
         self._direct: Any = None
+        self.stats = HandlingStats()
+        self._returned_at = 0.0
         self._spin = AdaptiveSpin()
 
     def _attach(self, reader: Reader) -> None:
@@ -151,7 +180,9 @@ class Subscription(Generic[M]):
         if message is None:
             return False
         assert self.callback is not None
+        start = time.perf_counter()
         self.callback(message)
+        self.stats.add(time.perf_counter() - start)
         return True
 
     def try_take(self) -> M | None:
@@ -163,6 +194,14 @@ class Subscription(Generic[M]):
 
     def take(self, timeout: float | None = None) -> M:
         """Block for the next message; raise TakeTimeoutError, or ShutdownError on shutdown."""
+        if self._returned_at:
+            self.stats.add(time.perf_counter() - self._returned_at)
+            self._returned_at = 0.0
+        message = self._take(timeout)
+        self._returned_at = time.perf_counter()
+        return message
+
+    def _take(self, timeout: float | None) -> M:
         deadline = None if timeout is None else time.monotonic() + timeout
         stop = self.node.graph.stop
         spin = self._spin.budget()
@@ -245,6 +284,7 @@ class Service:
         self._request_type = _typename(srv_type.Request)
         self._response_type = _typename(srv_type.Response)
         self._replies: dict[str, Writer] = {}
+        self.stats = HandlingStats()
         self._reader = node.graph.open_reader(
             request_channel(name), node.name, self._request_type,
             lambda: node.executor.notify(self), envelope=True,
@@ -255,7 +295,9 @@ class Service:
         if envelope is None:
             return False
         request_id, client, request = envelope
+        start = time.perf_counter()
         response = self.handler(request)
+        self.stats.add(time.perf_counter() - start)
         _check_type(response, self._response_type, f"the response of service {self.name}")
         writer = self._replies.get(client)
         if writer is None:
@@ -455,6 +497,15 @@ class Node:
     @property
     def parameters(self) -> dict[str, Any]:
         return dict(self._parameters)
+
+    def report_times(self) -> None:
+        """Log, per subscription and service, how many messages the node handled and how long each took."""
+        for endpoint in self._closables:
+            stats = getattr(endpoint, "stats", None)
+            if stats is not None and stats.count:
+                count, mean, std = stats.summary()
+                name = getattr(endpoint, "topic", None) or getattr(endpoint, "name", "")
+                self.log.info("node time on %s: %.3f ± %.3f ms per message over %d", name, mean, std, count)
 
     def close(self) -> None:
         for endpoint in reversed(self._closables):

@@ -46,34 +46,10 @@ def camera(node: Node) -> None:
         truth.publish(LaneCentre(header=header, found=True, centre_px=centre))
 
 
-class Timing:
-    """Per-node compute time, logged when the node stops (a row of the chain table)."""
-
-    def __init__(self, node: Node) -> None:
-        self.node = node
-        self.times: list[float] = []
-
-    def __enter__(self) -> "Timing":
-        self.start = time.perf_counter()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.times.append((time.perf_counter() - self.start) * 1000.0)
-
-    def report(self) -> None:
-        if self.times:
-            self.node.log.info("node time %.2f ± %.2f ms over %d frames", float(np.mean(self.times)),
-                               float(np.std(self.times)), len(self.times))
-
-
 def stage(node: Node, source: str, target: str, work, encoding: str = "rgb8") -> None:  # type: ignore[no-untyped-def]
     pub = node.create_publisher(Image, target)
-    timing = Timing(node)
     for msg in node.create_subscription(Image, source):
-        with timing:
-            result = work(pixels(msg))
-        pub.publish(to_image(result, msg.header, encoding))
-    timing.report()
+        pub.publish(to_image(work(pixels(msg)), msg.header, encoding))
 
 
 def compensation(node: Node) -> None:
@@ -90,22 +66,16 @@ def projection(node: Node) -> None:
 
 def lane_following(node: Node) -> None:
     pub = node.create_publisher(LaneCentre, "/lane_centre")
-    timing = Timing(node)
     for msg in node.create_subscription(Image, "/image_bev"):
-        with timing:
-            found, centre, left, right = vision.find_lane(pixels(msg))
+        found, centre, left, right = vision.find_lane(pixels(msg))
         pub.publish(LaneCentre(header=msg.header, found=found, centre_px=centre, left_px=left, right_px=right))
-    timing.report()
 
 
 def light_detection(node: Node, colour: str) -> None:
     pub = node.create_publisher(LightState, f"/light_{colour}")
-    timing = Timing(node)
     for msg in node.create_subscription(Image, "/image_comp"):
-        with timing:
-            count = vision.light_pixels(pixels(msg), colour)
+        count = vision.light_pixels(pixels(msg), colour)
         pub.publish(LightState(header=msg.header, on=count > 150, pixels=count))
-    timing.report()
 
 
 def red_light(node: Node) -> None:

@@ -220,4 +220,4 @@ def test_lane_following_finds_the_centre_and_obeys_the_light(tmp_path: Path, pro
     stopped = [int(f) for f in found.group(2).split(", ") if f]
     assert stopped == list(range(20, 35)), "stops on red (frames 20-34) and resumes on green"
     assert (tmp_path / "out" / "latency.png").stat().st_size > 0 and (tmp_path / "out" / "frame.png").exists()
-    assert len(re.findall(r"node time [\d.]+ ± [\d.]+ ms", result.stderr)) >= 5
+    assert len(re.findall(r"node time on \S+: [\d.]+ ± [\d.]+ ms per message", result.stderr)) >= 8

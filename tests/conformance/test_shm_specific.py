@@ -158,39 +158,36 @@ def test_recycled_slots_never_leak_old_bytes_into_new_messages(pair: Any) -> Non
             assert (got.encoding, got.data.size) == ("", 0)
 
 
-def test_messages_without_arrays_use_zeroed_cdr(shm_session: str) -> None:
-    codec = MessageCodec(registry(), "std_msgs/msg/String")
-    a, b = ShmDomain(shm_session, "a"), ShmDomain(shm_session, "b")
-    try:
-        reader = b.open_reader("/s", ["a"], QoS(depth=8), codec, 0, lambda: None)
-        writer = a.open_writer("/s", "a", QoS(depth=8), codec)
-        string = registry().get("std_msgs/msg/String")
-        for text in ["y" * 1000, "", "ab", "y" * 999, "", "z"] * 3:
-            writer.write(string(data=text))
-            assert reader.try_take().data == text
-        reader.close()
-    finally:
-        a.close()
-        b.close()
-        remove_session_segments(shm_session)
+@pytest.fixture
+def open_pair(shm_session: str) -> Any:
+    """A writer in one domain and a reader in another, for a given type (closed afterwards)."""
+    domains = [ShmDomain(shm_session, "a"), ShmDomain(shm_session, "b")]
+
+    def make(typename: str, depth: int = 8) -> tuple[Any, Any]:
+        codec = MessageCodec(registry(), typename)
+        reader = domains[1].open_reader("/t", ["a"], QoS(depth=depth), codec, 0, lambda: None)
+        return domains[0].open_writer("/t", "a", QoS(depth=depth), codec), reader
+
+    yield make
+    for domain in domains:
+        domain.close()
+    remove_session_segments(shm_session)
 
 
-def test_fixed_size_arrays_stay_inline(shm_session: str) -> None:
-    codec = MessageCodec(registry(), "geometry_msgs/msg/PoseWithCovariance")
-    a, b = ShmDomain(shm_session, "a"), ShmDomain(shm_session, "b")
-    try:
-        reader = b.open_reader("/p", ["a"], QoS(depth=2), codec, 0, lambda: None)
-        writer = a.open_writer("/p", "a", QoS(depth=2), codec)
-        cls = registry().get("geometry_msgs/msg/PoseWithCovariance")
-        sent = cls(covariance=np.arange(36, dtype=np.float64))
-        sent.pose.position.x = 1.5
-        writer.write(sent)
-        got = reader.try_take()
-        assert got == sent
-        with pytest.raises(Exception, match="loan sizes can be given for: none"):
-            writer.loan({"covariance": 36})
-        reader.close()
-    finally:
-        a.close()
-        b.close()
-        remove_session_segments(shm_session)
+def test_messages_without_arrays_use_zeroed_cdr(open_pair: Any) -> None:
+    writer, reader = open_pair("std_msgs/msg/String")
+    string = registry().get("std_msgs/msg/String")
+    for text in ["y" * 1000, "", "ab", "y" * 999, "", "z"] * 3:
+        writer.write(string(data=text))
+        assert reader.try_take().data == text
+
+
+def test_fixed_size_arrays_stay_inline(open_pair: Any) -> None:
+    writer, reader = open_pair("geometry_msgs/msg/PoseWithCovariance", depth=2)
+    cls = registry().get("geometry_msgs/msg/PoseWithCovariance")
+    sent = cls(covariance=np.arange(36, dtype=np.float64))
+    sent.pose.position.x = 1.5
+    writer.write(sent)
+    assert reader.try_take() == sent
+    with pytest.raises(Exception, match="loan sizes can be given for: none"):
+        writer.loan({"covariance": 36})

@@ -126,6 +126,17 @@ class Bench:
 
     # -- systems ---------------------------------------------------------------------------
 
+    def spawn_pair(self, receiver: list[str], sender: list[str], pass_fds: tuple[int, ...], delay: float = 0.0
+                   ) -> tuple[subprocess.Popen[str], subprocess.Popen[str]]:
+        """Start the receiving side, then the sending side; the pipes passed to them close here."""
+        first = subprocess.Popen(receiver, env=self.env, stderr=subprocess.PIPE, text=True, pass_fds=pass_fds)
+        if delay:
+            time.sleep(delay)
+        second = subprocess.Popen(sender, env=self.env, stderr=subprocess.PIPE, text=True, pass_fds=pass_fds)
+        for fd in pass_fds:
+            os.close(fd)
+        return first, second
+
     def run_pair(self, system: str, size: int) -> Result:
         cfg, path = self.config(system, size)
         roles = [sys.executable, "-m", "hetros.bench._roles", system]
@@ -141,16 +152,9 @@ class Bench:
             return Result(system, size, Stats.of(data["one_way_ns"]), Stats.of(data["rtt_ns"]))
         if system == "rospy":
             cmd = ["/usr/bin/python3", str(HERE / "_rospy_peer.py")]
-            echo = subprocess.Popen([*cmd, "echo", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
-            time.sleep(0.5)
-            ping = subprocess.Popen([*cmd, "ping", str(path)], env=self.env, stderr=subprocess.PIPE, text=True)
+            echo, ping = self.spawn_pair([*cmd, "echo", str(path)], [*cmd, "ping", str(path)], (), delay=0.5)
         else:
-            echo = subprocess.Popen([*roles, "echo", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
-                                    pass_fds=pass_fds)
-            ping = subprocess.Popen([*roles, "ping", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
-                                    pass_fds=pass_fds)
-        for fd in pass_fds:
-            os.close(fd)
+            echo, ping = self.spawn_pair([*roles, "echo", str(path)], [*roles, "ping", str(path)], pass_fds)
         try:
             _, ping_err = ping.communicate(timeout=timeout)
             _, echo_err = echo.communicate(timeout=30)
@@ -264,12 +268,7 @@ class Bench:
         pass_fds = pipe_fds(cfg) if system == "mp-pipe" else ()
         path.write_text(json.dumps(cfg))
         cmd = [sys.executable, "-m", "hetros.bench._throughput", system]
-        sub = subprocess.Popen([*cmd, "sub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
-                               pass_fds=pass_fds)
-        pub = subprocess.Popen([*cmd, "pub", str(path)], env=self.env, stderr=subprocess.PIPE, text=True,
-                               pass_fds=pass_fds)
-        for fd in pass_fds:
-            os.close(fd)
+        sub, pub = self.spawn_pair([*cmd, "sub", str(path)], [*cmd, "pub", str(path)], pass_fds)
         _, pub_err = pub.communicate(timeout=120)
         _, sub_err = sub.communicate(timeout=60)
         if pub.returncode or sub.returncode:

@@ -1,22 +1,26 @@
 """Message layer: types from .msg/.srv/.action files, CDR codecs, read-only delivery."""
 
 from ._definitions import find_packages, read_package
+from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
 from ._message import FrozenMessage, Message, freeze
 from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
 
 __all__ = [
     "ActionType",
+    "ArrayField",
+    "FlatLayout",
     "FrozenMessage",
+    "LayoutField",
     "Message",
     "ServiceType",
     "TypeRegistry",
+    "array_fields",
     "find_packages",
+    "flat_layout",
     "freeze",
+    "get_path",
     "normalize_typename",
     "read_package",
     "registry",
+    "set_path",
 ]
-
-from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout
-
-__all__ += ["ArrayField", "FlatLayout", "LayoutField", "array_fields", "flat_layout"]

@@ -150,6 +150,18 @@ def _flatten(types: TypeRegistry, typename: str, prefix: str, cursor: list[int |
         cursor[0] = None
 
 
+def get_path(message: Any, path: tuple[str, ...]) -> Any:
+    """The field at ``path`` (an ArrayField's path: attribute names through nested messages)."""
+    for name in path:
+        message = getattr(message, name)
+    return message
+
+
+def set_path(message: Any, path: tuple[str, ...], value: object) -> None:
+    """Set the field at ``path``; works on read-only (frozen) messages too, for transports."""
+    object.__setattr__(get_path(message, path[:-1]), path[-1], value)
+
+
 def array_fields(types: TypeRegistry, typename: str) -> list[ArrayField]:
     """Primitive arrays reachable through nested messages (not inside sequences of messages)."""
     found: list[ArrayField] = []

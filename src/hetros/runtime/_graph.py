@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import TransportError, UndeclaredEndpointError
-from ..msg import Message, TypeRegistry, array_fields, freeze, registry
+from ..msg import Message, TypeRegistry, array_fields, freeze, registry, set_path
 from ..transport import (
     DEFAULT_QOS,
     Codec,
@@ -64,10 +64,7 @@ class _FanoutWriter(Writer):
             name = ".".join(field.path)
             length = wanted.pop(name, None)
             if length is not None and field.length is None:
-                holder: Any = message
-                for part in field.path[:-1]:
-                    holder = getattr(holder, part)
-                setattr(holder, field.path[-1], np.zeros(length, field.dtype))
+                set_path(message, field.path, np.zeros(length, field.dtype))
         if wanted:
             raise TransportError(f"{cls.__msgtype__} has no variable-length primitive array "
                                  f"{', '.join(wanted)}")

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import PublishTimeoutError, SerializationError, ShutdownError, TransportError
+from ..msg import get_path, set_path
 from ._base import Codec, Reader, Wake, Writer
 from ._codec import MessageCodec
 from ._qos import QoS
@@ -77,18 +78,6 @@ def _slot_memory(address: int, size: int, keepalive: object) -> memoryview:
     raw = (ctypes.c_uint8 * size).from_address(address)
     raw._hetros_keepalive = keepalive  # type: ignore[attr-defined]
     return memoryview(raw).cast("B")
-
-
-def _set_path(message: Any, path: tuple[str, ...], value: object) -> None:
-    for name in path[:-1]:
-        message = getattr(message, name)
-    object.__setattr__(message, path[-1], value)
-
-
-def _get_path(message: Any, path: tuple[str, ...]) -> Any:
-    for name in path:
-        message = getattr(message, name)
-    return message
 
 
 def _pid_alive(pid: int) -> bool:
@@ -486,13 +475,13 @@ class ShmWriter(Writer):
     def _send_copy(self, message: Any) -> None:
         plan = []
         for index, field in self._arrays:
-            array = np.asarray(_get_path(message, field.path))
+            array = np.asarray(get_path(message, field.path))
             if array.size:
                 plan.append((index, field.path, field.dtype, int(array.size)))
         reserve = self._codec.size(_without_arrays(message, [path for _i, path, _d, _n in plan]))
         sample, memory, small_at, views = self._place(plan, reserve)
         for _index, path, view, _at in views:
-            np.copyto(view, _get_path(message, path), casting="unsafe")
+            np.copyto(view, get_path(message, path), casting="unsafe")
         self._finish(message, _Loan(sample, memory, views, small_at))
 
     def loan(self, sizes: dict[str, int]) -> Any:
@@ -515,13 +504,13 @@ class ShmWriter(Writer):
         sample, memory, small_at, views = self._place(plan, LOAN_RESERVE)
         message = codec.cls()
         for _index, path, view, _at in views:
-            _set_path(message, path, view)
+            set_path(message, path, view)
         self._loans[id(message)] = _Loan(sample, memory, views, small_at)
         return message
 
     def _send_loan(self, message: Any, loan: _Loan) -> None:
         for _index, path, array, _at in loan.arrays:
-            current = _get_path(message, path)
+            current = get_path(message, path)
             if current is array:
                 continue
             if not isinstance(current, np.ndarray) or current.size != array.size:
@@ -532,7 +521,7 @@ class ShmWriter(Writer):
             np.copyto(array, current, casting="unsafe")
         self._finish(message, loan)
         for _index, path, array, _at in loan.arrays:
-            _set_path(message, path, array[:0].copy())
+            set_path(message, path, array[:0].copy())
 
     def _finish(self, message: Any, loan: _Loan) -> None:
         """Encode the small part, write the blob table and send the slot."""
@@ -691,7 +680,7 @@ class ShmReader(Reader):
                 )
             field = arrays[index]
             view = np.frombuffer(memory, dtype=field.dtype, count=nbytes // field.dtype.itemsize, offset=offset)
-            _set_path(message, field.path, view)
+            set_path(message, field.path, view)
         return message
 
     def close(self) -> None:

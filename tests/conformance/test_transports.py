@@ -184,6 +184,27 @@ def drain(reader: Reader) -> list[Any]:
     return out
 
 
+def join_late(h: Harness) -> Reader:
+    """A subscriber that joins after publishing started; returns once it has been woken."""
+    woke = threading.Event()
+    reader = h.reader(wake=woke.set)
+    assert woke.wait(2.0)
+    return reader
+
+
+def take_within(reader: Reader, count: int, seconds: float) -> list[Any]:
+    """Up to ``count`` messages, polling for at most ``seconds`` (history may arrive a moment late)."""
+    deadline = time.monotonic() + seconds
+    got: list[Any] = []
+    while len(got) < count and time.monotonic() < deadline:
+        message = reader.try_take()
+        if message is None:
+            time.sleep(0.01)
+        else:
+            got.append(message)
+    return got
+
+
 def test_order_is_kept(make: Callable[[QoS], Harness]) -> None:
     h = make(QoS(depth=100))
     reader = h.reader()
@@ -279,15 +300,8 @@ def test_transient_local_late_joiner_gets_last_n(make: Callable[[QoS], Harness])
     writer = h.writer()
     for seq in range(5):
         writer.write(image(0, seq))
-    woke = threading.Event()
-    reader = h.reader(wake=woke.set)
-    assert woke.wait(2.0)
-    deadline = time.monotonic() + 2.0
-    got: list[Any] = []
-    while len(got) < 2 and time.monotonic() < deadline:
-        got += drain(reader)
-        time.sleep(0.01)
-    assert [m.width for m in got] == [3, 4]
+    reader = join_late(h)
+    assert [m.width for m in take_within(reader, 2, 2.0)] == [3, 4]
 
 
 @pytest.mark.parametrize("size", [0, 1, 16 * 1024 * 1024, 64 * 1024 * 1024])
@@ -368,16 +382,10 @@ def test_late_joiners_history_fills_its_reliable_fifo(make: Callable[[QoS], Harn
     writer = h.writer()
     for seq in range(2):
         writer.write(image(0, seq))
-    woke = threading.Event()
-    reader = h.reader(wake=woke.set)
-    assert woke.wait(2.0)
+    reader = join_late(h)
     time.sleep(0.1)
     with pytest.raises(PublishTimeoutError):
         writer.write(image(0, 2))
-    first = None
-    deadline = time.monotonic() + 2
-    while first is None and time.monotonic() < deadline:
-        first = reader.try_take()
-    assert first is not None and first.width == 0
+    assert [m.width for m in take_within(reader, 1, 2.0)] == [0]
     writer.write(image(0, 2))
     assert [m.width for m in drain(reader)] == [1, 2]

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from hetros.msg import registry
-from hetros.transport import MessageCodec, QoS, ShmDomain
+from hetros.transport import MessageCodec, QoS, ShmDomain, WakeChannel
 
 _out_lock = threading.Lock()
 
@@ -24,6 +24,12 @@ def send(obj: dict[str, Any]) -> None:
     with _out_lock:
         sys.stdout.write(json.dumps(obj) + "\n")
         sys.stdout.flush()
+
+
+def pump(channel: WakeChannel) -> None:
+    """Stands in for the owner node's executor: waits on its wake channel, runs the wakes."""
+    while True:
+        channel.wait(0.05)
 
 
 def main() -> None:
@@ -38,7 +44,8 @@ def main() -> None:
             domain = ShmDomain(cmd["session"], cmd["name"])
             codec = MessageCodec(registry(), cmd["type"])
             reader = domain.open_reader(cmd["topic"], cmd["targets"], QoS(**cmd["qos"]), codec,
-                                        cmd["slot"], lambda: send({"event": "wake"}))
+                                        cmd["slot"], lambda: send({"event": "wake"}), cmd["name"])
+            threading.Thread(target=pump, args=(domain.wake_channel(cmd["name"]),), daemon=True).start()
             send({"reply": "opened"})
         elif op == "take":
             message = reader.try_take()

@@ -40,7 +40,7 @@ def pair(shm_session: str) -> Any:
     publisher_side = ShmDomain(shm_session, "pub")
     subscriber_side = ShmDomain(shm_session, "sub")
     qos = QoS(depth=4)
-    reader = subscriber_side.open_reader("/img", ["pub"], qos, codec, 0, lambda: None)
+    reader = subscriber_side.open_reader("/img", ["pub"], qos, codec, 0, lambda: None, "sub")
     writer = publisher_side.open_writer("/img", "pub", qos, codec)
     yield writer, reader
     reader.close()
@@ -165,7 +165,7 @@ def open_pair(shm_session: str) -> Any:
 
     def make(typename: str, depth: int = 8) -> tuple[Any, Any]:
         codec = MessageCodec(registry(), typename)
-        reader = domains[1].open_reader("/t", ["a"], QoS(depth=depth), codec, 0, lambda: None)
+        reader = domains[1].open_reader("/t", ["a"], QoS(depth=depth), codec, 0, lambda: None, "sub")
         return domains[0].open_writer("/t", "a", QoS(depth=depth), codec), reader
 
     yield make

@@ -73,11 +73,27 @@ class ShmHarness(Harness):
         self.domains: list[ShmDomain] = []
         self.publishers = 0
         self.readers: list[Reader] = []
+        self.pumps: list[threading.Event] = []
+        self.pump_threads: list[threading.Thread] = []
 
     def _domain(self, name: str) -> ShmDomain:
         domain = ShmDomain(self.session, name)
         self.domains.append(domain)
         return domain
+
+    def _pump(self, domain: ShmDomain, owner: str) -> None:
+        """Stands in for the owner node's executor: waits on its wake channel, runs the wakes."""
+        channel = domain.wake_channel(owner)
+        stop = threading.Event()
+        self.pumps.append(stop)
+
+        def run() -> None:
+            while not stop.is_set():
+                channel.wait(0.05)
+
+        thread = threading.Thread(target=run, daemon=True)
+        thread.start()
+        self.pump_threads.append(thread)
 
     def writer(self, index: int = 0) -> Writer:
         self.publishers = max(self.publishers, index + 1)
@@ -88,11 +104,17 @@ class ShmHarness(Harness):
 
     def reader(self, index: int = 0, wake: Callable[[], None] = lambda: None) -> Reader:
         targets = self.targets()
-        reader = self._domain(f"sub{index}").open_reader("/t", targets, self.qos, self.codec, index, wake)
+        domain = self._domain(f"sub{index}")
+        reader = domain.open_reader("/t", targets, self.qos, self.codec, index, wake, f"sub{index}")
+        self._pump(domain, f"sub{index}")
         self.readers.append(reader)
         return reader
 
     def close(self) -> None:
+        for stop in self.pumps:
+            stop.set()
+        for thread in self.pump_threads:
+            thread.join()
         for reader in self.readers:
             reader.close()
         for domain in self.domains:

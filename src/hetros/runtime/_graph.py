@@ -25,9 +25,9 @@ from ..transport import (
     QoS,
     Reader,
     ShmDomain,
-    ShmReader,
     ShmWriter,
     Wake,
+    WakeChannel,
     Writer,
 )
 from ._plan import ChannelPlan, Plan
@@ -96,13 +96,6 @@ class _MergedReader(Reader):
     def __init__(self, parts: list[Reader]) -> None:
         self._parts = parts
 
-    def direct(self) -> ShmReader | None:
-        """The one shared-memory reader a taking thread can wait on itself, if that is all."""
-        if len(self._parts) == 1 and isinstance(self._parts[0], ShmReader):
-            reader = self._parts[0]
-            return reader if reader.can_wait_directly else None
-        return None
-
     def try_take(self) -> Any | None:
         for part in self._parts:
             item = part.try_take()
@@ -127,6 +120,26 @@ class _Relay:
             target()
 
 
+class _Retained(Reader):
+    """A reader opened from the plan at start-up; it outlives the node that uses it.
+
+    When its node fails and restarts, the FIFO (and its place in the publisher's credits)
+    stays, so the restarted node resumes where the failed one stopped.
+    """
+
+    def __init__(self, inner: Reader, relay: _Relay, release: Callable[[_Retained], None]) -> None:
+        self.inner = inner
+        self.relay = relay
+        self._release = release
+
+    def try_take(self) -> Any | None:
+        return self.inner.try_take()
+
+    def close(self) -> None:
+        self.relay.target = None
+        self._release(self)
+
+
 class Graph:
     """Endpoints of the nodes hosted by this process, wired as the plan says."""
 
@@ -149,7 +162,7 @@ class Graph:
         self._shm: ShmDomain | None = None
         self._codecs: dict[tuple[str, bool], Codec] = {}
         self._stop_hooks: list[Callable[[], None]] = []
-        self._prepared: dict[tuple[str, str], tuple[Reader, _Relay]] = {}
+        self._prepared: dict[tuple[str, str], _Retained] = {}
 
     def prepare(self, nodes: list[str]) -> None:
         """Open every declared subscription of ``nodes`` now (static initialisation).
@@ -164,7 +177,25 @@ class Graph:
                     relay = _Relay()
                     reader = self._open_reader(channel, node, channel.type, relay, None,
                                                envelope=channel.kind != "topic")
-                    self._prepared[(channel.name, node)] = (reader, relay)
+                    self._prepared[(channel.name, node)] = _Retained(reader, relay, self._give_back(channel.name, node))
+
+    def _give_back(self, channel: str, node: str) -> Callable[[_Retained], None]:
+        def release(reader: _Retained) -> None:
+            with self._lock:
+                if not self.stop.is_set():
+                    self._prepared[(channel, node)] = reader
+                    return
+            reader.inner.close()
+        return release
+
+    def wake_source(self, node: str) -> WakeChannel | None:
+        """The wake channel of ``node`` if any of its readers is fed from another process."""
+        if self.plan is None:
+            return None
+        for channel in self.plan.channels.values():
+            if node in channel.subscribers and self._split(channel.publishers)[1]:
+                return self._domain().wake_channel(node)
+        return None
 
     def on_stop(self, hook: Callable[[], None]) -> None:
         """Call ``hook`` when the graph stops (executors and blocked takes wake up)."""
@@ -265,12 +296,12 @@ class Graph:
         if channel is None:
             effective = self.qos_of(name, qos)
             return _MergedReader([self._inproc_topic(name, effective).open_reader(node, wake)])
-        prepared = self._prepared.pop((name, node), None)
+        with self._lock:
+            prepared = self._prepared.pop((name, node), None)
         if prepared is not None:
-            reader, relay = prepared
-            relay.target = wake
+            prepared.relay.target = wake
             wake()
-            return reader
+            return prepared
         return self._open_reader(channel, node, typename, wake, qos, envelope=envelope)
 
     def _open_reader(self, channel: ChannelPlan, node: str, typename: str, wake: Wake,
@@ -284,14 +315,16 @@ class Graph:
         if remote:
             slot = channel.subscribers.index(node)
             parts.append(self._domain().open_reader(name, remote, effective,
-                                                    self._codec(typename, envelope), slot, wake))
+                                                    self._codec(typename, envelope), slot, wake, node))
         return _MergedReader(parts)
 
     def close(self) -> None:
         self.shutdown()
-        for reader, _relay in self._prepared.values():
-            reader.close()
-        self._prepared.clear()
+        with self._lock:
+            prepared = list(self._prepared.values())
+            self._prepared.clear()
+        for reader in prepared:
+            reader.inner.close()
         with self._lock:
             domain, self._shm = self._shm, None
         if domain is not None:

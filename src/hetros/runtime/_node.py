@@ -14,7 +14,6 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
-from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any, Generic, TypeVar
 
 from .._errors import (
@@ -149,31 +148,19 @@ class Subscription(Generic[M]):
         self.topic = topic
         self.typename = _typename(msg_type)
         self.callback = callback
-        self._cond = threading.Condition()
         self._reader: Reader | None = None
-        self._direct: Any = None
         self.stats = HandlingStats()
         self._returned_at = 0.0
         self._spin = AdaptiveSpin()
 
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
-        direct = getattr(reader, "direct", None)
-        if self.callback is None and direct is not None:
-            self._direct = direct()
-            if self._direct is not None:
-                self._direct.use_direct_wait()
-
-    def _wake_takers(self) -> None:
-        with self._cond:
-            self._cond.notify_all()
-        if self._direct is not None and self.node.graph.stop.is_set():
-            self._direct._poke()
 
     def _on_wake(self) -> None:
-        self._wake_takers()
         if self.callback is not None:
             self.node.executor.notify(self)
+        else:
+            self.node.executor.wake()
 
     def dispatch(self) -> bool:
         message = self.try_take()
@@ -204,36 +191,28 @@ class Subscription(Generic[M]):
     def _take(self, timeout: float | None) -> M:
         deadline = None if timeout is None else time.monotonic() + timeout
         stop = self.node.graph.stop
+        executor = self.node.executor
         spin = self._spin.budget()
         if spin:
             spin_end = time.perf_counter() + spin
-            yield_gil = self._direct is None
             while time.perf_counter() < spin_end:
                 message = self.try_take()
                 if message is not None:
                     self._spin.arrived()
                     return message
-                if yield_gil:
-                    os.sched_yield()  # lets the publishing thread have the GIL (sleep(0) naps ~90 µs)
+                os.sched_yield()  # lets a publishing thread have the GIL (sleep(0) naps ~90 µs)
         while True:
+            seen = executor.generation
             message = self.try_take()
             if message is not None:
                 self._spin.arrived()
                 return message
             if stop.is_set():
                 raise ShutdownError(f"take on {self.topic} interrupted: the graph is shutting down")
-            if self._direct is not None:
-                wait = None if deadline is None else deadline - time.monotonic()
-                if wait is not None and wait <= 0:
-                    raise TakeTimeoutError(f"no message on {self.topic} within {timeout:g} s")
-                self._direct.wait(wait)
-                continue
-            with self._cond:
-                wait = None if deadline is None else deadline - time.monotonic()
-                if wait is not None and wait <= 0:
-                    raise TakeTimeoutError(f"no message on {self.topic} within {timeout:g} s")
-                if self._reader is not None and not stop.is_set():
-                    self._cond.wait(wait)
+            wait = None if deadline is None else deadline - time.monotonic()
+            if wait is not None and wait <= 0:
+                raise TakeTimeoutError(f"no message on {self.topic} within {timeout:g} s")
+            executor.wait(seen, wait)
 
     def __iter__(self) -> Iterator[M]:
         """Messages until shutdown (the iterator form of a subscription)."""
@@ -329,8 +308,12 @@ class Client:
             request_channel(name), node.name, self._request_type, envelope=True
         )
         self._reader = node.graph.open_reader(
-            reply_channel(name, node.name), node.name, self._response_type, self._on_reply, envelope=True
+            reply_channel(name, node.name), node.name, self._response_type, self._reply_arrived, envelope=True
         )
+
+    def _reply_arrived(self) -> None:
+        self._on_reply()
+        self.node.executor.wake()
 
     def _on_reply(self) -> None:
         while self._reader is not None:
@@ -352,21 +335,26 @@ class Client:
         return future
 
     def call(self, request: Any, timeout: float = 5.0) -> Any:
+        """Send ``request`` and wait for the response; the caller's thread waits on the reply reader itself."""
         future = self.call_async(request)
         deadline = time.monotonic() + timeout
+        executor = self.node.executor
         while True:
+            seen = executor.generation
+            self._on_reply()
+            if future.done():
+                return future.result()
             if self.node.graph.stop.is_set():
                 raise ShutdownError(f"call to {self.name} interrupted: the graph is shutting down")
-            try:
-                return future.result(min(0.5, max(deadline - time.monotonic(), 0.0)))
-            except FutureTimeout:
-                if time.monotonic() >= deadline:
-                    with self._lock:
-                        self._pending = {k: v for k, v in self._pending.items() if v is not future}
-                    raise ServiceTimeoutError(
-                        f"service {self.name} did not reply within {timeout:g} s; is its server "
-                        "node running (see `hetros graph`)?"
-                    ) from None
+            left = deadline - time.monotonic()
+            if left <= 0:
+                with self._lock:
+                    self._pending = {k: v for k, v in self._pending.items() if v is not future}
+                raise ServiceTimeoutError(
+                    f"service {self.name} did not reply within {timeout:g} s; is its server "
+                    "node running (see `hetros graph`)?"
+                )
+            executor.wait(seen, left)
 
     def close(self) -> None:
         if self._reader is not None:
@@ -381,7 +369,7 @@ class Node:
         self.name = name
         self.graph = graph or Graph.standalone()
         self.log = node_logger(name)
-        self.executor = Executor(self.graph.stop)
+        self.executor = Executor(self.graph.stop, self.graph.wake_source(name))
         self.graph.on_stop(self.executor.wake)
         self._parameters = dict(parameters or {})
         if self.graph.plan is not None and name in self.graph.plan.nodes and parameters is None:
@@ -405,7 +393,6 @@ class Node:
         typename = _typename(msg_type)
         self._check_declared_type(topic, typename)
         subscription = Subscription(self, msg_type, topic, callback)
-        self.graph.on_stop(subscription._wake_takers)
         if callback is not None:
             self.executor.entities += 1
         subscription._attach(self.graph.open_reader(topic, self.name, typename, subscription._on_wake, qos=qos))

@@ -4,7 +4,15 @@ from ._base import Codec, Reader, Wake, Writer
 from ._codec import EnvelopeCodec, MessageCodec
 from ._inproc import InprocTopic, Mailbox
 from ._qos import DEFAULT_QOS, QoS
-from ._shm import ShmDomain, ShmReader, ShmWriter, cleanup_stale, remove_session_segments
+from ._shm import (
+    ShmDomain,
+    ShmReader,
+    ShmWriter,
+    WakeChannel,
+    cleanup_stale,
+    raise_open_file_limit,
+    remove_session_segments,
+)
 
 __all__ = [
     "DEFAULT_QOS",
@@ -19,7 +27,9 @@ __all__ = [
     "ShmReader",
     "ShmWriter",
     "Wake",
+    "WakeChannel",
     "Writer",
     "cleanup_stale",
+    "raise_open_file_limit",
     "remove_session_segments",
 ]

@@ -5,13 +5,28 @@ Layout, fixed by the static plan (no discovery at run time):
 * one iceoryx2 publish-subscribe service per (topic, publishing target), so a
   process never receives through shared memory what it already delivered to
   itself in-process; all publishers of a service live in one process;
-* one iceoryx2 event service beside it that wakes subscribers (no polling),
-  and a back-channel event service that wakes blocked publishers;
+* one *wake channel* (an iceoryx2 event service) per subscribing node: every
+  reader of the node has an event id on it, and the node's executor is the only
+  thing that waits on it (no thread per reader);
+* one *back channel* per publishing process, watched by one thread, that wakes
+  publishers blocked on a full FIFO and connects late joiners to history;
 * a small *credits* file in /dev/shm per service: the sequence number last
-  published and, per subscriber slot, the sequence it last took and its pid.
-  A reliable keep_all publisher computes each subscriber's fill level from it
-  and blocks while a FIFO holds ``depth`` messages: back-pressure across
-  processes, with a timeout and with crashed subscribers detected by pid.
+  published and, per subscriber slot, the sequence it last took, its pid and
+  the wake channel and event id to notify. A reliable keep_all publisher
+  computes each subscriber's fill level from it and blocks while a FIFO holds
+  ``depth`` messages: back-pressure across processes, with a timeout and with
+  crashed subscribers detected by pid.
+
+Nothing on a reliable topic is lost without an error: a reader checks that the
+sequence numbers of each service arrive without gaps and that what the credits
+say was published does arrive (iceoryx2 skips a publisher it cannot connect to,
+for example when the process is out of file descriptors, without telling the
+receiver; that is the silent loss this check turns into a
+:class:`~hetros.TransportError`).
+
+Resources per endpoint: one iceoryx2 service (2 file descriptors) and one port
+(1 for a subscriber, 4 for a publisher, 3 more per connection); per node one
+wake channel (5); per process one back channel and one thread.
 
 Every sample starts with a 16-byte header (sequence number, publisher slot,
 reserved); the message follows in the codec's format (CDR for messages).
@@ -21,9 +36,11 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import itertools
 import logging
 import mmap
 import os
+import resource
 import struct
 import threading
 import time
@@ -58,11 +75,15 @@ LAYOUT_SPLIT = 1
 SPLIT = struct.Struct("<II")
 BLOB = struct.Struct("<IIQQ")
 LOAN_RESERVE = 4096
-CREDIT = struct.Struct("<QQ")
 MAX_SUBSCRIBER_SLOTS = 32
 MAX_PUBLISHERS_PER_SERVICE = 8
-MAX_EVENT_PORTS = 64
+MAX_EVENT_PORTS = 256
+MAX_EVENT_ID = 65535
+INTERRUPT_EVENT = 0
 BORROW_LIMIT = 16
+# A reader that sees published samples it cannot receive waits this long for a late connection
+# before it reports them lost.
+LOSS_GRACE = 0.5
 
 
 def segment_prefix(session: str) -> str:
@@ -90,20 +111,23 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-_SLOT_TABLE = struct.Struct(f"<{2 * MAX_SUBSCRIBER_SLOTS}Q")
+_SLOT_WORDS = 4
+_SLOT_TABLE = struct.Struct(f"<{_SLOT_WORDS * MAX_SUBSCRIBER_SLOTS}Q")
 
 
 class Credits:
     """The credits file of one service.
 
     Layout (little endian u64): ``published`` sequence number, ``waiting`` (a publisher is
-    blocked on a full FIFO, so takers must signal), then (taken, pid) per subscriber slot.
-    Each word has one writer: the publishing process writes the first two, a subscriber
-    writes its own slot.
+    blocked on a full FIFO, so takers must signal), ``version`` (bumped by every subscriber
+    that joins or leaves, so the publisher rereads the slots only then), ``back_event`` (the
+    publisher's event id on its process' back channel); then per subscriber slot: taken, pid,
+    wake channel key, event id. Each word has one writer: the publishing process writes the
+    head (but ``version``), a subscriber writes its own slot and bumps ``version``.
     """
 
-    HEAD = 2
-    SIZE = 8 * (HEAD + 2 * MAX_SUBSCRIBER_SLOTS)
+    HEAD = 4
+    SIZE = 8 * (HEAD + _SLOT_WORDS * MAX_SUBSCRIBER_SLOTS)
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -115,7 +139,7 @@ class Credits:
         finally:
             os.close(fd)
         self.words = np.frombuffer(self._map, dtype="<u8")
-        self.slots = self.words[self.HEAD:].reshape(MAX_SUBSCRIBER_SLOTS, 2)
+        self.slots = self.words[self.HEAD:].reshape(MAX_SUBSCRIBER_SLOTS, _SLOT_WORDS)
 
     @property
     def published(self) -> int:
@@ -133,25 +157,52 @@ class Credits:
     def waiting(self, flag: bool) -> None:
         self.words[1] = int(flag)
 
+    @property
+    def version(self) -> int:
+        return int(self.words[2])
+
+    @property
+    def back_event(self) -> int:
+        return int(self.words[3])
+
+    @back_event.setter
+    def back_event(self, event: int) -> None:
+        self.words[3] = event
+
     def slot(self, index: int) -> tuple[int, int]:
-        taken, pid = self.slots[index]
+        taken, pid, _key, _event = self.slots[index]
         return int(taken), int(pid)
 
-    def set_slot(self, index: int, taken: int, pid: int) -> None:
-        self.slots[index] = (taken, pid)
+    def join(self, index: int, taken: int, wake_key: int, event: int) -> None:
+        self.slots[index] = (taken, os.getpid(), wake_key, event)
+        self.words[2] += 1
+
+    def leave(self, index: int) -> None:
+        self.slots[index] = (0, 0, 0, 0)
+        self.words[2] += 1
 
     def set_taken(self, index: int, taken: int) -> None:
         self.slots[index, 0] = taken
 
+    def taken(self, index: int) -> int:
+        return int(self.slots[index, 0])
+
+    def subscribers(self) -> list[tuple[int, int]]:
+        """(wake channel key, event id) of every live subscriber slot."""
+        words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
+        return [(words[i + 2], words[i + 3]) for i in range(0, len(words), _SLOT_WORDS) if words[i + 1]]
+
     def max_fill(self, published: int) -> int:
         """The fullest live subscriber FIFO, in messages (0 without subscribers)."""
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
-        return max((published - words[i] for i in range(0, len(words), 2) if words[i + 1]), default=0)
+        return max((published - words[i] for i in range(0, len(words), _SLOT_WORDS) if words[i + 1]),
+                   default=0)
 
     def full_slots(self, published: int, depth: int) -> list[int]:
         """Slots of live subscribers whose FIFO holds ``depth`` messages already."""
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
-        return [i >> 1 for i in range(0, len(words), 2) if words[i + 1] and words[i] + depth <= published]
+        return [i // _SLOT_WORDS for i in range(0, len(words), _SLOT_WORDS)
+                if words[i + 1] and words[i] + depth <= published]
 
     def close(self) -> None:
         del self.words, self.slots
@@ -161,11 +212,126 @@ class Credits:
             pass
 
 
+def _channel_key(session: str, owner: str) -> int:
+    """A wake channel's key: 63 bits, never 0 (0 marks an empty slot)."""
+    digest = hashlib.sha1(f"{session}/{owner}".encode()).digest()
+    return (int.from_bytes(digest[:8], "little") >> 1) or 1
+
+
+def _event_service(node: Any, name: str, what: str) -> Any:
+    try:
+        return (node.service_builder(iox2.ServiceName.new(name)).event()
+                .max_listeners(MAX_EVENT_PORTS).max_notifiers(MAX_EVENT_PORTS)
+                .event_id_max_value(MAX_EVENT_ID).open_or_create())
+    except Exception as exc:  # iceoryx2 raises its own exception classes
+        raise TransportError(f"cannot open the {what} ({name}): {type(exc).__name__}: {exc}; "
+                             f"{_fd_hint()}") from exc
+
+
+def _fd_hint() -> str:
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    try:
+        used = str(len(os.listdir("/proc/self/fd")))
+    except OSError:  # out of descriptors itself, most likely
+        used = "all its"
+    return (f"this process has {used} files open with a limit of {soft} (hard limit {hard}); "
+            "if that is close, raise the limit (ulimit -n) or spread the topics over fewer processes")
+
+
+def raise_open_file_limit() -> tuple[int, int]:
+    """Raise the soft open-file limit to the hard one: each endpoint holds a few descriptors.
+
+    Returns (soft, hard) after the attempt; a hard limit below a few thousand is logged.
+    """
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft < hard:
+        try:
+            resource.setrlimit(resource.RLIMIT_NOFILE, (hard, hard))
+            soft = hard
+        except (ValueError, OSError):
+            pass
+    if soft < 4096:
+        log.warning("the open-file limit is %d (hard limit %d): shared memory needs about 10 file "
+                    "descriptors per topic and process, so large graphs may not start; raise it "
+                    "with `ulimit -n`", soft, hard)
+    return soft, hard
+
+
+class WakeChannel:
+    """Where the readers of one node signal that data may be there: one wait covers them all.
+
+    Publishers notify it with the reader's event id; the node's executor waits on it and
+    calls the wake function registered for each id that fired. Event id 0 is the executor's
+    own interrupt (an in-process notification or shutdown).
+    """
+
+    def __init__(self, node: Any, session: str, owner: str) -> None:
+        self.owner = owner
+        self.key = _channel_key(session, owner)
+        self._service = _event_service(node, wake_channel_name(session, self.key),
+                                       f"wake channel of node {owner!r}")
+        self._listener = self._service.listener_builder().create()
+        self._interrupter = self._service.notifier_builder().create()
+        self._routes: dict[int, Wake] = {}
+        self._suspects: set[int] = set()
+        self._lock = threading.Lock()
+        self._ids = itertools.count(1)
+
+    def register(self, wake: Wake) -> int:
+        """An event id for one reader; ``wake`` runs (in the waiting thread) when it fires."""
+        with self._lock:
+            event = next(self._ids)
+            if event > MAX_EVENT_ID:
+                raise TransportError(f"node {self.owner!r} has more than {MAX_EVENT_ID} shared-memory readers")
+            self._routes[event] = wake
+            return event
+
+    def unregister(self, event: int) -> None:
+        with self._lock:
+            self._routes.pop(event, None)
+            self._suspects.discard(event)
+
+    def suspect(self, event: int, suspicious: bool) -> None:
+        """A reader saw published samples it could not receive: wake it again soon to recheck."""
+        with self._lock:
+            if suspicious:
+                self._suspects.add(event)
+            else:
+                self._suspects.discard(event)
+
+    def interrupt(self) -> None:
+        self._interrupter.notify_with_custom_event_id(iox2.EventId.new(INTERRUPT_EVENT))
+
+    def wait(self, timeout: float | None) -> None:
+        """Block (without the GIL) until an event or ``timeout``; run the wake of each reader that fired."""
+        if self._suspects:
+            timeout = LOSS_GRACE if timeout is None else min(timeout, LOSS_GRACE)
+        if timeout is None:
+            fired = self._listener.blocking_wait()
+        else:
+            fired = self._listener.timed_wait(iox2.Duration.from_secs_f64(max(timeout, 0.0)))
+        events = {activation.id.as_value for activation in fired}
+        with self._lock:
+            events |= self._suspects
+            wakes = [self._routes[e] for e in events if e in self._routes]
+        for wake in wakes:
+            wake()
+
+    def close(self) -> None:
+        self._listener = self._interrupter = self._service = None
+
+
+def wake_channel_name(session: str, key: int) -> str:
+    return f"hetros/{session}/wake/{key:016x}"
+
+
 class ShmDomain:
     """This process' view of the shared-memory fabric of one launch ("session")."""
 
     def __init__(self, session: str, process_name: str) -> None:
+        raise_open_file_limit()
         self.session = session
+        self.process_name = process_name
         self._lock = threading.Lock()
         self._node = (
             iox2.NodeBuilder.new()
@@ -175,6 +341,10 @@ class ShmDomain:
         )
         self._services: dict[str, _Service] = {}
         self._readers: list[ShmReader] = []
+        self._channels: dict[str, WakeChannel] = {}
+        self._notifiers: dict[int, Any] = {}
+        self._back_notifiers: dict[str, Any] = {}
+        self._back: _BackChannel | None = None
         self._closed = False
 
     def _service(self, topic: str, publisher_target: str, qos: QoS) -> _Service:
@@ -185,6 +355,40 @@ class ShmDomain:
                 service = _Service(self, self._node, topic, publisher_target, qos)
                 self._services[key] = service
             return service
+
+    def wake_channel(self, owner: str) -> WakeChannel:
+        """The wake channel of node ``owner`` in this process (created on first use)."""
+        with self._lock:
+            channel = self._channels.get(owner)
+            if channel is None:
+                channel = WakeChannel(self._node, self.session, owner)
+                self._channels[owner] = channel
+            return channel
+
+    def notify(self, key: int, event: int) -> None:
+        """Wake reader ``event`` of the node whose wake channel is ``key``."""
+        notifier = self._notifiers.get(key)
+        if notifier is None:
+            service = _event_service(self._node, wake_channel_name(self.session, key), "wake channel of a subscriber")
+            notifier = service.notifier_builder().create()
+            self._notifiers[key] = notifier
+        notifier.notify_with_custom_event_id(iox2.EventId.new(event))
+
+    def notify_back(self, publisher_target: str, event: int) -> None:
+        """Tell the publishing process of a service that one of its subscribers took or joined."""
+        notifier = self._back_notifiers.get(publisher_target)
+        if notifier is None:
+            service = _event_service(self._node, back_channel_name(self.session, publisher_target),
+                                     f"back channel of target {publisher_target!r}")
+            notifier = service.notifier_builder().create()
+            self._back_notifiers[publisher_target] = notifier
+        notifier.notify_with_custom_event_id(iox2.EventId.new(event))
+
+    def back_channel(self) -> _BackChannel:
+        with self._lock:
+            if self._back is None:
+                self._back = _BackChannel(self._node, self.session, self.process_name)
+            return self._back
 
     def open_writer(self, topic: str, target: str, qos: QoS, codec: Codec, slot: int = 0) -> ShmWriter:
         return ShmWriter(self._service(topic, target, qos), codec, slot)
@@ -197,14 +401,16 @@ class ShmDomain:
         codec: Codec,
         slot: int,
         wake: Wake,
+        owner: str,
     ) -> ShmReader:
+        """A reader in subscriber ``slot`` of the topic; ``wake`` runs when ``owner``'s wake channel fires."""
         if not 0 <= slot < MAX_SUBSCRIBER_SLOTS:
             raise TransportError(
                 f"subscriber slot of {topic} must be in 0..{MAX_SUBSCRIBER_SLOTS - 1}, not {slot!r}: "
                 f"a topic carries at most {MAX_SUBSCRIBER_SLOTS} cross-process subscribers"
             )
         services = [self._service(topic, target, qos) for target in publisher_targets]
-        reader = ShmReader(services, codec, slot, wake)
+        reader = ShmReader(self, services, codec, slot, wake, self.wake_channel(owner))
         self._readers.append(reader)
         return reader
 
@@ -215,19 +421,77 @@ class ShmDomain:
             self._closed = True
             services = list(self._services.values())
             self._services.clear()
+            back, self._back = self._back, None
         for reader in list(self._readers):
             reader.close()
         self._readers.clear()
+        if back is not None:
+            back.close()
         for service in services:
             service.close()
+        for channel in self._channels.values():
+            channel.close()
+        self._channels.clear()
+        self._notifiers.clear()
+        self._back_notifiers.clear()
         # iceoryx2 removes a node's shared memory when its last handle is dropped
         self._node = None
 
 
+def back_channel_name(session: str, process: str) -> str:
+    digest = hashlib.sha1(process.encode()).hexdigest()[:20]
+    return f"hetros/{session}/back/{digest}"
+
+
+class _BackChannel:
+    """The publishing process' one back channel and the one thread that watches it.
+
+    Subscribers notify it (with the service's event id) after taking from a FIFO a blocked
+    publisher waits on, and when they join; the thread wakes the blocked publisher and
+    connects a late joiner so that it receives the history.
+    """
+
+    def __init__(self, node: Any, session: str, process: str) -> None:
+        self._service = _event_service(node, back_channel_name(session, process), f"back channel of {process!r}")
+        self._listener = self._service.listener_builder().create()
+        self._interrupter = self._service.notifier_builder().create()
+        self._lock = threading.Lock()
+        self._services: dict[int, _Service] = {}
+        self._ids = itertools.count(1)
+        self._closed = False
+        self._thread = threading.Thread(target=self._watch, name="hetros-shm-back", daemon=True)
+        self._thread.start()
+
+    def register(self, service: _Service) -> int:
+        with self._lock:
+            event = next(self._ids)
+            self._services[event] = service
+            return event
+
+    def _watch(self) -> None:
+        while not self._closed:
+            try:
+                fired = self._listener.blocking_wait()
+            except Exception:  # iceoryx2's wait failed: nothing left to watch
+                return
+            with self._lock:
+                services = [self._services.get(a.id.as_value) for a in fired]
+            for service in services:
+                if service is not None:
+                    service.subscriber_moved()
+
+    def close(self) -> None:
+        self._closed = True
+        self._interrupter.notify_with_custom_event_id(iox2.EventId.new(INTERRUPT_EVENT))
+        self._thread.join(timeout=2.0)
+        self._listener = self._interrupter = self._service = None
+
+
 class _Service:
-    """One (topic, publishing target) service: data, wake-up and back-channel events."""
+    """One (topic, publishing target) service: the data, its credits, and who to wake."""
 
     def __init__(self, domain: ShmDomain, node: Any, topic: str, target: str, qos: QoS) -> None:
+        self.domain = domain
         self.topic = topic
         self.target = target
         self.qos = qos
@@ -242,7 +506,7 @@ class _Service:
         self.space = threading.Condition(self.lock)
         self._closed = False
         try:
-            builder = (
+            self.data = (
                 node.service_builder(iox2.ServiceName.new(base))
                 .publish_subscribe(iox2.Slice[ctypes.c_uint8])
                 .max_publishers(MAX_PUBLISHERS_PER_SERVICE)
@@ -251,27 +515,17 @@ class _Service:
                 .history_size(qos.depth if qos.keeps_history else 0)
                 .enable_safe_overflow(not qos.blocks_publisher)
                 .subscriber_max_borrowed_samples(BORROW_LIMIT)
-            )
-            self.data = builder.open_or_create()
-            self.wakeup = (
-                node.service_builder(iox2.ServiceName.new(base + "/wake")).event()
-                .max_listeners(MAX_EVENT_PORTS).max_notifiers(MAX_EVENT_PORTS).open_or_create()
-            )
-            self.back = (
-                node.service_builder(iox2.ServiceName.new(base + "/back")).event()
-                .max_listeners(MAX_EVENT_PORTS).max_notifiers(MAX_EVENT_PORTS).open_or_create()
+                .open_or_create()
             )
         except Exception as exc:  # iceoryx2 raises its own exception classes
             raise TransportError(
                 f"cannot open the shared-memory service of {topic} (publisher target {target!r}): "
-                f"{type(exc).__name__}: {exc}; all endpoints of a topic must use the same QoS"
+                f"{type(exc).__name__}: {exc}; all endpoints of a topic must use the same QoS; {_fd_hint()}"
             ) from exc
         self.credits = Credits(SHM_DIR / f"{segment_prefix(domain.session)}{digest}")
         self._publisher: Any = None
-        self._notifier: Any = None
-        self._back_notifier: Any = None
-        self._watcher: threading.Thread | None = None
-        self._back_listener: Any = None
+        self._wakes: list[tuple[int, int]] = []
+        self._wakes_version = -1
         self.next_seq = 1
 
     # -- publishing side -------------------------------------------------------------------
@@ -279,40 +533,32 @@ class _Service:
     def publisher(self) -> Any:
         with self.lock:
             if self._publisher is None:
-                self._publisher = (
-                    self.data.publisher_builder()
-                    .initial_max_slice_len(4096)
-                    .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo)
-                    # hetros' credits do the blocking (with a timeout and crash detection);
-                    # iceoryx2's own retry would spin forever on a dead subscriber's full buffer
-                    .backpressure_strategy(iox2.BackpressureStrategy.DiscardData)
-                    .create()
-                )
-                self._notifier = self.wakeup.notifier_builder().create()
-                self._back_listener = self.back.listener_builder().create()
-                self._back_notifier_self = self.back.notifier_builder().create()
+                try:
+                    self._publisher = (
+                        self.data.publisher_builder()
+                        .initial_max_slice_len(4096)
+                        .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo)
+                        # hetros' credits do the blocking (with a timeout and crash detection);
+                        # iceoryx2's own retry would spin forever on a dead subscriber's full buffer
+                        .backpressure_strategy(iox2.BackpressureStrategy.DiscardData)
+                        .create()
+                    )
+                except Exception as exc:  # iceoryx2 raises its own exception classes
+                    raise TransportError(f"cannot create a shared-memory publisher on {self.topic}: "
+                                         f"{type(exc).__name__}: {exc}; {_fd_hint()}") from exc
+                self.credits.back_event = self.domain.back_channel().register(self)
                 self.next_seq = self.credits.published + 1
-                self._watcher = threading.Thread(
-                    target=self._watch_back_channel, name=f"hetros-shm-back{self.topic}", daemon=True
-                )
-                self._watcher.start()
             return self._publisher
 
-    def _watch_back_channel(self) -> None:
-        """Wake blocked publishers when a subscriber takes; connect late joiners."""
-        listener = self._back_listener
-        while not self._closed:
-            try:
-                listener.blocking_wait()
-            except Exception:
+    def subscriber_moved(self) -> None:
+        """A subscriber took or joined: recount the room, wake a blocked send, send history."""
+        with self.lock:
+            if self._closed:
                 return
-            with self.lock:
-                if self._closed:
-                    return
-                if self.qos.keeps_history and self._publisher is not None:
-                    self._publisher.update_connections()
-                self.room = 0  # a subscriber joined or took: recount before the next send
-                self.space.notify_all()
+            if self.qos.keeps_history and self._publisher is not None:
+                self._publisher.update_connections()
+            self.room = 0
+            self.space.notify_all()
 
     def wait_for_space(self, deadline: float) -> None:
         """Block (with ``self.lock`` held) until every live blocking subscriber has room."""
@@ -327,7 +573,7 @@ class _Service:
                         "topic %s: subscriber in process %d is gone (crashed or killed); "
                         "publishing continues without it", self.topic, pid,
                     )
-                    credits.set_slot(index, 0, 0)
+                    credits.leave(index)
                     blocked.remove(index)
             if not blocked:
                 credits.waiting = False
@@ -372,31 +618,36 @@ class _Service:
                 raise TransportError(f"iceoryx2 could not send on {self.topic}: {exc}") from exc
             self.next_seq = seq + 1
             self.credits.published = seq
-            self._notifier.notify()
+            credits = self.credits
+            if credits.version != self._wakes_version:
+                self._wakes_version = credits.version
+                self._wakes = credits.subscribers()
+            for key, event in self._wakes:
+                self.domain.notify(key, event)
 
     # -- subscribing side ------------------------------------------------------------------
 
-    def subscriber(self, slot: int) -> tuple[Any, Any, Any]:
-        subscriber = self.data.subscriber_builder().buffer_size(self.buffer).create()
+    def subscriber(self, slot: int, channel: WakeChannel, event: int) -> tuple[Any, int]:
+        """Join as subscriber ``slot``; returns the port and the last sequence number before the join."""
+        try:
+            subscriber = self.data.subscriber_builder().buffer_size(self.buffer).create()
+        except Exception as exc:  # iceoryx2 raises its own exception classes
+            raise TransportError(f"cannot subscribe to {self.topic} in shared memory: "
+                                 f"{type(exc).__name__}: {exc}; {_fd_hint()}") from exc
         published = self.credits.published
         # a late joiner's FIFO starts with the history it is about to receive
         start = published - min(published, self.qos.depth) if self.qos.keeps_history else published
-        self.credits.set_slot(slot, start, os.getpid())
-        listener = self.wakeup.listener_builder().create()
-        back = self.back.notifier_builder().create()
-        back.notify()
-        return subscriber, listener, back
+        self.credits.join(slot, start, channel.key, event)
+        if self.credits.back_event:
+            self.domain.notify_back(self.target, self.credits.back_event)
+        return subscriber, start
 
     def close(self) -> None:
         with self.lock:
             self._closed = True
             self.space.notify_all()
-            if self._publisher is not None:
-                self._back_notifier_self.notify()
-        if self._watcher is not None:
-            self._watcher.join(timeout=2.0)
-        self._publisher = self._notifier = self._back_listener = self._back_notifier_self = None
-        self.data = self.wakeup = self.back = None
+        self._publisher = None
+        self.data = None
         self.credits.close()
 
 
@@ -572,6 +823,18 @@ class _Lease:
             self.borrowed.count -= 1
 
 
+class _Port:
+    """One publishing target's service as seen by one reader."""
+
+    __slots__ = ("expected", "service", "subscriber", "suspect_since")
+
+    def __init__(self, service: _Service, subscriber: Any, start: int) -> None:
+        self.service = service
+        self.subscriber = subscriber
+        self.expected = start + 1
+        self.suspect_since = 0.0
+
+
 class ShmReader(Reader):
     """Takes from every publishing target's service of one topic.
 
@@ -579,88 +842,78 @@ class ShmReader(Reader):
     is returned when the last of them is gone (``msg.copy()`` keeps data longer).
     """
 
-    def __init__(self, services: list[_Service], codec: Codec, slot: int, wake: Wake) -> None:
+    def __init__(self, domain: ShmDomain, services: list[_Service], codec: Codec, slot: int, wake: Wake,
+                 channel: WakeChannel) -> None:
+        self._domain = domain
         self._codec = codec
         self._slot = slot
-        self._wake = wake
         self._closed = False
-        self._ports: list[tuple[_Service, Any, Any, Any]] = []
-        self._threads: list[threading.Thread] = []
+        self._channel = channel
+        self.event = channel.register(wake)
+        self._ports: list[_Port] = []
         self._next = 0
         self._lock = threading.Lock()
         self._borrowed = _Borrowed()
-        self._direct = False
+        self.topic = services[0].topic if services else ""
         for service in services:
-            subscriber, listener, back = service.subscriber(slot)
-            self._ports.append((service, subscriber, listener, back))
-            thread = threading.Thread(
-                target=self._wait, args=(listener,), name=f"hetros-shm-wait{service.topic}", daemon=True
-            )
-            self._threads.append(thread)
-        for thread in self._threads:
-            thread.start()
-        self._wake()
-
-    def _wait(self, listener: Any) -> None:
-        while not self._closed and not self._direct:
-            try:
-                listener.blocking_wait()
-            except Exception:
-                return
-            if not self._closed and not self._direct:
-                self._wake()
-
-    # -- direct waiting (thread-style subscriptions) ---------------------------------------
-
-    @property
-    def can_wait_directly(self) -> bool:
-        return len(self._ports) == 1
-
-    def use_direct_wait(self) -> None:
-        """Let the taking thread wait on the event itself: one wake-up instead of two."""
-        if not self.can_wait_directly or self._direct:
-            return
-        self._direct = True
-        self._poke()
-        for thread in self._threads:
-            thread.join(timeout=2.0)
-
-    def wait(self, timeout: float | None) -> None:
-        """Block until a sample may be there."""
-        listener = self._ports[0][2]
-        if timeout is None:
-            listener.blocking_wait()
-        else:
-            listener.timed_wait(iox2.Duration.from_secs_f64(max(timeout, 0.0)))
-
-    def _poke(self) -> None:
-        for service, _subscriber, _listener, _back in self._ports:
-            notifier = service.wakeup.notifier_builder().create()
-            notifier.notify()
-            del notifier
+            subscriber, start = service.subscriber(slot, channel, self.event)
+            self._ports.append(_Port(service, subscriber, start))
+        wake()
 
     # -- taking ----------------------------------------------------------------------------
 
     def try_take(self) -> Any | None:
         with self._lock:
             for _ in range(len(self._ports)):
-                service, subscriber, _listener, back = self._ports[self._next]
+                port = self._ports[self._next]
                 self._next = (self._next + 1) % len(self._ports)
-                sample = subscriber.receive()
+                service = port.service
+                sample = port.subscriber.receive()
                 if sample is None:
+                    if service.blocking:
+                        self._check_arrival(port)
                     continue
                 size = sample.header.number_of_elements
                 memory = _slot_memory(sample.payload_ptr, size, _Lease(sample, self._borrowed))
                 del sample
                 seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
+                if service.blocking and seq != port.expected and seq > port.expected:
+                    self._lost(port, seq - port.expected)
+                port.expected = seq + 1
+                if port.suspect_since:
+                    port.suspect_since = 0.0
+                    self._channel.suspect(self.event, False)
                 credits = service.credits
                 credits.set_taken(self._slot, seq)
                 if service.blocking and credits.waiting:
-                    back.notify()
+                    self._domain.notify_back(service.target, credits.back_event)
                 if self._borrowed.count >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))
                 return self._decode(memory.toreadonly(), layout)
             return None
+
+    def _check_arrival(self, port: _Port) -> None:
+        """Nothing to receive: is that true, or did iceoryx2 fail to connect to the publisher?"""
+        published = port.service.credits.published
+        if published < port.expected:
+            if port.suspect_since:
+                port.suspect_since = 0.0
+                self._channel.suspect(self.event, False)
+            return
+        now = time.monotonic()
+        if not port.suspect_since:
+            port.suspect_since = now
+            self._channel.suspect(self.event, True)
+        elif now - port.suspect_since > LOSS_GRACE:
+            self._lost(port, published - port.expected + 1)
+
+    def _lost(self, port: _Port, count: int) -> None:
+        raise TransportError(
+            f"reliable topic {port.service.topic}: {count} message(s) from target {port.service.target!r} "
+            f"(from #{port.expected}) never reached this subscriber although the publisher sent them; "
+            f"iceoryx2 could not deliver them, most often because a process ran out of file descriptors "
+            f"({_fd_hint()})"
+        )
 
     def _decode(self, memory: memoryview, layout: int) -> Any:
         if layout == LAYOUT_CDR:
@@ -687,11 +940,9 @@ class ShmReader(Reader):
         if self._closed:
             return
         self._closed = True
-        for service, _subscriber, _listener, _back in self._ports:
-            service.credits.set_slot(self._slot, 0, 0)
-        self._poke()
-        for thread in self._threads:
-            thread.join(timeout=2.0)
+        self._channel.unregister(self.event)
+        for port in self._ports:
+            port.service.credits.leave(self._slot)
         self._ports.clear()
 
 

@@ -88,17 +88,35 @@ FAILING = textwrap.dedent('''
             raise RuntimeError("first start fails")
         node.log.info("second start works")
         node.create_subscription(String, "/t", lambda m: None)
+
+    def counter(node):
+        pub = node.create_publisher(String, "/t")
+        for i in range(60):
+            pub.publish(String(data=str(i)))
+            node.sleep(0.01)
+
+    def resumer(node):
+        marker = Path(node.get_parameter("marker"))
+        record = marker.with_suffix(".log")
+        def on_message(msg):
+            with record.open("a") as out:
+                out.write(msg.data + "\\n")
+            if msg.data == "20" and not marker.exists():
+                marker.write_text("failed once")
+                raise RuntimeError("fails once on message 20")
+        node.create_subscription(String, "/t", on_message)
 ''')
 
 
-def failing_project(tmp_path: Path, kind: str, consumer: str = "crasher", restart: str = "never") -> Path:
+def failing_project(tmp_path: Path, kind: str, consumer: str = "crasher", restart: str = "never",
+                    producer: str = "ticker") -> Path:
     (tmp_path / "failing.py").write_text(FAILING)
     path = tmp_path / "project.yaml"
     path.write_text(textwrap.dedent(f"""
         name: failing
         targets: {{a: {{kind: {kind}}}, b: {{kind: {kind}}}}}
         nodes:
-          ticker: {{run: failing:ticker, target: a, publish: {{/t: std_msgs/msg/String}}}}
+          ticker: {{run: failing:{producer}, target: a, publish: {{/t: std_msgs/msg/String}}}}
           {consumer}: {{run: failing:{consumer}, target: b, subscribe: {{/t: std_msgs/msg/String}},
                      restart: {restart}, parameters: {{marker: {tmp_path / 'marker'}}}}}
     """))
@@ -123,6 +141,17 @@ def test_restart_on_failure(tmp_path: Path, kind: str) -> None:
     assert "RuntimeError: first start fails" in result.stderr
     assert "restarting it" in result.stderr
     assert "[flaky]: second start works" in result.stderr
+
+
+@pytest.mark.parametrize("kind", ["process", "thread"])
+def test_restarted_subscriber_resumes_its_reliable_queue(tmp_path: Path, kind: str) -> None:
+    """Messages published while a subscriber restarts wait in its FIFO: none is lost."""
+    project = failing_project(tmp_path, kind, "resumer", "on-failure", producer="counter")
+    result = hetros("launch", str(project), "--duration", "6")
+    assert result.returncode == 0, result.stderr
+    assert "RuntimeError: fails once on message 20" in result.stderr
+    received = (tmp_path / "marker.log").read_text().split()
+    assert received == [str(i) for i in range(60)], received
 
 
 def start_launcher(project: Path) -> tuple[subprocess.Popen[str], dict[str, int], str]:
@@ -188,3 +217,60 @@ def test_process_targets_are_pinned_to_their_cpus(tmp_path: Path) -> None:
     assert "target c0 ready" in result.stderr and "cpus [0])" in result.stderr
     assert "cpus [1])" in result.stderr
     assert "[listener]: I heard" in result.stderr
+
+
+def test_launcher_killed_leaves_no_worker_traceback_or_file(tmp_path: Path) -> None:
+    plans_before = set(Path(os.environ.get("TMPDIR", "/tmp")).glob("hetros-plan-*.json"))
+    proc = subprocess.Popen([sys.executable, "-m", "hetros", "launch",
+                             str(EXAMPLES / "talker_listener" / "project.yaml")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stderr is not None
+    seen = ""
+    while "I heard" not in seen:
+        seen += proc.stderr.readline()
+    pids = worker_pids(seen)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    deadline = time.monotonic() + 15
+    while any(alive(pid) for pid in pids.values()) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    rest = proc.stderr.read()
+    assert not any(alive(pid) for pid in pids.values()), "workers stop when their launcher dies"
+    assert "Traceback" not in rest and "BrokenPipeError" not in rest, rest
+    assert "the launcher is gone" in rest
+    assert session_segments(proc.pid) == [], "the credits files of the session are removed"
+    assert set(Path(os.environ.get("TMPDIR", "/tmp")).glob("hetros-plan-*.json")) <= plans_before
+
+
+def test_ctrl_c_during_start_up_is_clean(tmp_path: Path) -> None:
+    for delay in (0.3, 0.8):
+        proc = subprocess.Popen([sys.executable, "-m", "hetros", "launch",
+                                 str(EXAMPLES / "talker_listener" / "project_threads.yaml")],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGINT)
+        _out, err = proc.communicate(timeout=30)
+        assert "Traceback" not in err and "cannot join thread" not in err, err
+
+
+STUBBORN = textwrap.dedent('''
+    import time
+
+    def stubborn(node):
+        while True:          # ignores shutdown on purpose
+            time.sleep(0.1)
+''')
+
+
+def test_a_target_that_had_to_be_killed_fails_the_launch(tmp_path: Path) -> None:
+    (tmp_path / "stubborn.py").write_text(STUBBORN)
+    project = tmp_path / "project.yaml"
+    project.write_text(textwrap.dedent("""
+        name: stubborn
+        targets: {a: {kind: process}}
+        nodes:
+          stubborn: {run: stubborn:stubborn, target: a}
+    """))
+    result = hetros("launch", str(project), "--duration", "1", timeout=60)
+    assert result.returncode == 1, result.stderr
+    assert "did not stop within 5 s" in result.stderr

@@ -142,6 +142,8 @@ class Host:
         self.graph.shutdown()
         stuck = []
         for nthread in self.threads:
+            if nthread.thread.ident is None:
+                continue  # stopped before it started (Ctrl-C during start-up)
             nthread.thread.join(timeout)
             if nthread.thread.is_alive():
                 stuck.append(nthread.spec.name)

@@ -108,14 +108,22 @@ class Launcher:
         if in_main:
             for sig in previous:
                 signal.signal(sig, lambda *_: self.events.put({"event": "signal"}))
+        result = LaunchResult(130, [], "interrupted during start-up")
         try:
-            return self._supervise()
+            result = self._supervise()
+        except KeyboardInterrupt:
+            pass
         finally:
-            self._shutdown()
+            unclean = self._shutdown()
             if in_main:
                 for sig, handler in previous.items():
                     signal.signal(sig, handler)
             self._plan_file.unlink(missing_ok=True)
+        if unclean:
+            result.failures.extend(t for t in unclean if t not in result.failures)
+            result.exit_code = result.exit_code or 1
+            result.reason += f"; {', '.join(unclean)} did not stop in time"
+        return result
 
     def _supervise(self) -> LaunchResult:
         for target in self.plan.processes():
@@ -206,7 +214,8 @@ class Launcher:
         except (BrokenPipeError, OSError, ValueError):
             pass
 
-    def _shutdown(self) -> None:
+    def _shutdown(self) -> list[str]:
+        """Stop everything in order; return the targets and nodes that had to be abandoned or killed."""
         self.stop.set()
         for child in self.children.values():
             child.stopping = True
@@ -219,18 +228,23 @@ class Launcher:
             try:
                 child.proc.wait(timeout=max(deadline - time.monotonic(), 0.1))
             except subprocess.TimeoutExpired:
-                log.warning("target %s did not stop within 5 s; killing it", child.target)
+                log.error("target %s did not stop within 5 s; killing it", child.target)
                 child.proc.kill()
                 child.proc.wait()
+                stuck.append(child.target)
             if child.proc.stdin is not None:
                 try:
                     child.proc.stdin.close()
                 except OSError:
                     pass
+        while (event := self._next_event(0)) is not None:
+            if event["event"] == "stopped":
+                stuck.extend(f"node {node} (target {event['target']})" for node in event.get("stuck", []))
         if stuck:
-            log.warning("nodes %s did not return within 5 s of shutdown", ", ".join(stuck))
+            log.error("%s did not stop within 5 s of shutdown", ", ".join(stuck))
         remove_session_segments(self.session)
         cleanup_stale()
+        return stuck
 
 
 def launch(plan: Plan, *, duration: float | None = None) -> LaunchResult:

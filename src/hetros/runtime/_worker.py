@@ -16,6 +16,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
+from ..transport import remove_session_segments
 from ._host import Host
 from ._log import setup_logging
 from ._plan import Plan
@@ -34,7 +35,10 @@ def main(argv: list[str] | None = None) -> int:
 
     def report(event: str, **fields: Any) -> None:
         with lock:
-            status.write(json.dumps({"event": event, "target": args.target, **fields}) + "\n")
+            try:
+                status.write(json.dumps({"event": event, "target": args.target, **fields}) + "\n")
+            except (BrokenPipeError, ValueError):
+                pass  # the launcher is gone; what matters now is stopping cleanly
 
     plan = Plan.from_json(Path(args.plan).read_text(encoding="utf-8"))
     cpus = plan.targets[args.target].cpus
@@ -55,12 +59,16 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     report("ready", pid=os.getpid(), cpus=sorted(os.sched_getaffinity(0)))
 
+    orphaned = threading.Event()
+
     def control() -> None:
         for line in sys.stdin:
             if line.strip() == "go":
                 host.start()
             elif line.strip() == "stop":
                 break
+        else:
+            orphaned.set()  # end of input without "stop": the launcher died
         stop.set()
 
     threading.Thread(target=control, name="control", daemon=True).start()
@@ -68,7 +76,15 @@ def main(argv: list[str] | None = None) -> int:
     stuck = host.stop()
     failed = [t.spec.name for t in host.threads if t.failed]
     report("stopped", stuck=stuck, failed=failed)
-    status.close()
+    try:
+        status.close()
+    except BrokenPipeError:
+        pass
+    if orphaned.is_set():
+        # nobody else will clean up after the launcher: every worker removes what it can
+        sys.stderr.write(f"[WARN] [{args.target}]: the launcher is gone; stopped and cleaned up\n")
+        remove_session_segments(args.session)
+        Path(args.plan).unlink(missing_ok=True)
     return 1 if failed else 0
 
 

@@ -74,7 +74,7 @@ class NodeSpec(_Strict):
 class TopicSpec(_Strict):
     reliability: Literal["reliable", "best_effort"] = "reliable"
     history: Literal["keep_all", "keep_last"] = "keep_all"
-    depth: int = Field(default=10, ge=1)
+    depth: int = Field(default=10, ge=1, le=1_000_000)
     durability: Literal["volatile", "transient_local"] = "volatile"
     publish_timeout: float = Field(default=5.0, gt=0)
 
@@ -84,13 +84,42 @@ class ExternalSpec(_Strict):
     ros1: dict[str, Any] | None = None
 
 
+_UNITS = {"": 1, "B": 1, "KIB": 1 << 10, "MIB": 1 << 20, "GIB": 1 << 30, "TIB": 1 << 40,
+          "KB": 10**3, "MB": 10**6, "GB": 10**9}
+
+
+def parse_size(value: int | str) -> int:
+    """Bytes from ``1073741824``, ``"1GiB"`` or ``"512 MiB"``."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        if value <= 0:
+            raise ValueError(f"a size must be positive bytes, not {value!r}")
+        return value
+    text = str(value).strip()
+    number = text.rstrip("KMGTiBb ").strip()
+    unit = text[len(number):].strip().upper()
+    if not number.isdigit() or unit not in _UNITS or int(number) == 0:
+        raise ValueError(f"a size must be bytes or a number with KiB/MiB/GiB (like '1GiB'), not {value!r}")
+    return int(number) * _UNITS[unit]
+
+
 class Project(_Strict):
     name: str
     messages: list[str] = Field(default_factory=list)
+    shm_budget: int | str = "1GiB"
     targets: dict[str, TargetSpec] = Field(default_factory=lambda: {"main": TargetSpec(kind="thread")})
     nodes: dict[str, NodeSpec]
     topics: dict[str, TopicSpec] = Field(default_factory=dict)
     external: ExternalSpec | None = None
+
+    @field_validator("shm_budget")
+    @classmethod
+    def _budget(cls, value: int | str) -> int | str:
+        parse_size(value)
+        return value
+
+    @property
+    def shm_budget_bytes(self) -> int:
+        return parse_size(self.shm_budget)
 
     @field_validator("targets")
     @classmethod
@@ -119,38 +148,105 @@ class LoadedProject:
         return f"{self.path}:{line}: {dotted}" if line else f"{self.path}: {dotted}"
 
 
-def _line_index(node: yaml.Node, prefix: tuple[str, ...], out: dict[tuple[str, ...], int]) -> None:
-    out[prefix] = node.start_mark.line + 1
-    if isinstance(node, yaml.MappingNode):
-        for key, value in node.value:
-            child = (*prefix, str(key.value))
-            out[child] = key.start_mark.line + 1
-            _line_index(value, child, out)
-            out[child] = key.start_mark.line + 1
-    elif isinstance(node, yaml.SequenceNode):
-        for index, item in enumerate(node.value):
-            _line_index(item, (*prefix, str(index)), out)
+# A project file lists nodes and topics; one whose aliases expand past this many YAML nodes
+# is an alias bomb, not a project.
+MAX_EXPANDED_NODES = 1_000_000
+MAX_NESTING = 100
+_Loader: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+def _line_index(root: yaml.Node, path: Path) -> dict[tuple[str, ...], int]:
+    """YAML path -> line, for error messages; refuses duplicate keys, deep nesting and alias bombs.
+
+    Walks each distinct node once (aliases share nodes), so an alias bomb costs its size in
+    the file, not its expansion.
+    """
+    out: dict[tuple[str, ...], int] = {}
+    expanded: dict[int, int] = {}
+    stack: list[tuple[yaml.Node, tuple[str, ...]]] = [(root, ())]
+    order: list[yaml.Node] = []
+    while stack:
+        node, prefix = stack.pop()
+        if len(prefix) > MAX_NESTING:
+            raise ProjectError(f"{path}:{node.start_mark.line + 1}: nested more than {MAX_NESTING} levels "
+                               "deep; a project file needs a handful")
+        out.setdefault(prefix, node.start_mark.line + 1)
+        if id(node) in expanded:
+            continue
+        expanded[id(node)] = -1
+        order.append(node)
+        if isinstance(node, yaml.MappingNode):
+            keys: dict[str, int] = {}
+            for key, value in node.value:
+                name = str(key.value)
+                line = key.start_mark.line + 1
+                if name in keys and name != "<<":
+                    raise ProjectError(f"{path}:{line}: {'.'.join((*prefix, name))}: duplicate key {name!r} "
+                                       f"(first at line {keys[name]}); YAML keeps only the last, so "
+                                       "rename or merge the two")
+                keys[name] = line
+                child = (*prefix, name)
+                out[child] = line
+                stack.append((value, child))
+        elif isinstance(node, yaml.SequenceNode):
+            for i, item in enumerate(node.value):
+                stack.append((item, (*prefix, str(i))))
+    for node in reversed(order):
+        children: list[yaml.Node] = []
+        if isinstance(node, yaml.MappingNode):
+            children = [n for pair in node.value for n in pair]
+        elif isinstance(node, yaml.SequenceNode):
+            children = list(node.value)
+        size = 1 + sum(max(expanded.get(id(c), 1), 1) for c in children)
+        if size > MAX_EXPANDED_NODES:
+            raise ProjectError(f"{path}:{node.start_mark.line + 1}: its aliases (*name) expand to more than "
+                               f"{MAX_EXPANDED_NODES:,} YAML nodes; a project file needs no such "
+                               "repetition: write the values out or shorten the chain of aliases")
+        expanded[id(node)] = size
+    return out
+
+
+def _read_text(path: Path) -> str:
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ProjectError(f"cannot read project file {path}: {exc.strerror}") from exc
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise ProjectError(f"{path}:{line}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); "
+                           "save the project file as UTF-8") from None
 
 
 def load_project(path: str | Path) -> LoadedProject:
     """Read and validate a project file; every error names file:line and the YAML path."""
     path = Path(path)
+    text = _read_text(path)
+    if "\x00" in text:
+        raise ProjectError(f"{path}:{text.count(chr(10), 0, text.index(chr(0))) + 1}: a NUL character; "
+                           "a project file is YAML text")
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProjectError(f"cannot read project file {path}: {exc.strerror}") from exc
-    try:
-        tree = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
+        loader = _Loader(text)
+        try:
+            tree = loader.get_single_node()
+            lines = _line_index(tree, path) if tree is not None else {}
+            data = loader.construct_document(tree) if tree is not None else None
+        finally:
+            loader.dispose()
+    except yaml.reader.ReaderError as exc:
+        line = text.count("\n", 0, exc.position) + 1
+        raise ProjectError(f"{path}:{line}: character {exc.character!r} at offset {exc.position} is not "
+                           "allowed in YAML; remove it") from None
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
-        raise ProjectError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from exc
-    lines: dict[tuple[str, ...], int] = {}
-    if tree is not None:
-        _line_index(tree, (), lines)
+        mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else f"{path}:1"
+        raise ProjectError(f"{where}: not valid YAML: {getattr(exc, 'problem', None) or exc}") from None
+    except RecursionError:
+        raise ProjectError(f"{path}:1: nested too deeply to read; a project file needs a handful of levels") from None
     if not isinstance(data, dict):
-        raise ProjectError(f"{path}: the project file must be a mapping with name, targets and nodes")
+        raise ProjectError(f"{path}:1: the project file must be a mapping with name, targets and nodes, "
+                           f"not {type(data).__name__}")
     try:
         model = Project.model_validate(data)
     except ValidationError as exc:
@@ -163,7 +259,7 @@ def load_project(path: str | Path) -> LoadedProject:
                 message = f"unknown key {loc[-1]!r}; check its spelling against the documented keys"
             elif error["type"] == "missing":
                 message = f"required key {loc[-1]!r} is missing"
-            elif error["type"] == "literal_error":
+            elif isinstance(error.get("input"), str | int | float | bool | None):
                 message = f"{message}, not {error.get('input')!r}"
             problems.append(f"{loaded.where(*loc)}: {message}")
         raise ProjectError("invalid project file:\n" + "\n".join(f"  - {p}" for p in problems)) from None

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
+import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from .._errors import CheckError, DefinitionError, MessageError, PlanError
-from ..msg import TypeRegistry, normalize_typename, registry
+from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
 from ..runtime._plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan, reply_channel, request_channel
-from ..transport import QoS
+from ..transport import QoS, reserved_bytes
 from ._model import LoadedProject, load_project
+from ._names import node_name_problem, topic_name_problem
 from ._scan import scan_file
 
 SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
@@ -75,24 +78,30 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     subscribers: dict[str, list[tuple[str, str]]] = {}
     servers: dict[str, list[tuple[str, str]]] = {}
     clients: dict[str, list[tuple[str, str]]] = {}
+    runnable: dict[str, list[str]] = {}
     for nname, spec in model.nodes.items():
         if spec.target not in model.targets:
             report.errors.append(
                 f"{where('nodes', nname, 'target')}: unknown target {spec.target!r}; "
                 f"define it under targets (known: {', '.join(model.targets) or 'none'})"
             )
+        problem = node_name_problem(nname)
+        if problem:
+            report.errors.append(f"{where('nodes', nname)}: {problem}")
         module = spec.run.partition(":")[0]
         if not _module_findable(project, module):
             report.errors.append(
                 f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the "
                 "project file nor in the environment"
             )
+        else:
+            runnable.setdefault(spec.run, []).append(nname)
         for section, table, kind in (("publish", publishers, "msg"), ("subscribe", subscribers, "msg"),
                                      ("services", servers, "srv"), ("clients", clients, "srv")):
             for endpoint, typename in spec.types(section).items():
-                if not endpoint.startswith("/"):
-                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: names must be "
-                                         f"absolute, like '/{endpoint}'")
+                problem = topic_name_problem(endpoint)
+                if problem:
+                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: {endpoint!r} {problem}")
                 try:
                     full = normalize_typename(typename, kind)
                     if kind == "msg":
@@ -104,6 +113,9 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                     full = typename
                 table.setdefault(endpoint, []).append((nname, full))
 
+    for run, problem in _runnable_problems(project, list(runnable)).items():
+        for nname in runnable.get(run, []):
+            report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
     for topic, subscribed in subscribers.items():
         if topic not in publishers:
             for nname, _ in subscribed:
@@ -130,14 +142,109 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
         if len(declared) > 1:
             report.errors.append(f"{where('nodes')}: service {service} is declared with different types")
     for topic, topic_spec in model.topics.items():
+        problem = topic_name_problem(topic)
+        if problem:
+            report.errors.append(f"{where('topics', topic)}: {topic!r} {problem}")
         if topic not in publishers and topic not in subscribers:
             report.errors.append(f"{where('topics', topic)}: no node publishes or subscribes {topic}")
         if topic_spec.reliability == "best_effort" and topic_spec.history == "keep_all":
             report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
                                    "behaves like keep_last with this depth")
     _check_qos_compatibility(project, publishers, subscribers, report)
+    _check_shm_budget(project, types, publishers, subscribers, report)
     _check_sources(project, report)
     return report
+
+
+_PROBE = """
+import importlib, json, sys
+from pathlib import Path
+from hetros.msg import registry
+types = registry()
+for folder in json.loads(sys.argv[2]):
+    types.load_folder(Path(folder))
+out = {}
+for run in json.loads(sys.argv[1]):
+    module_name, _, attr = run.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except BaseException as exc:
+        tb = exc.__traceback__
+        while tb is not None and tb.tb_next is not None:
+            tb = tb.tb_next
+        place = f" ({tb.tb_frame.f_code.co_filename}:{tb.tb_lineno})" if tb is not None else ""
+        out[run] = f"importing {module_name!r} raised {type(exc).__name__}: {exc}{place}; fix the module"
+        continue
+    target = getattr(module, attr, None)
+    if target is None:
+        out[run] = f"module {module_name!r} has no {attr!r}; define it or fix 'run: {run}'"
+    elif not callable(target):
+        out[run] = f"{run} must be a function or class taking the node, not {type(target).__name__}"
+print(json.dumps(out))
+"""
+_probed: dict[tuple[str, tuple[str, ...], tuple[float, ...]], dict[str, str]] = {}
+
+
+def _runnable_problems(project: LoadedProject, runs: list[str]) -> dict[str, str]:
+    """Import every node module as the launch will, in a separate interpreter, and find the nodes.
+
+    A separate process keeps the user's import-time code (and module names that differ
+    between projects, like many a ``nodes``) out of the checking process.
+    """
+    if not runs:
+        return {}
+    root = str(project.root.resolve())
+    stamps = tuple(p.stat().st_mtime for p in sorted(project.root.glob("**/*.py")))
+    key = (root, tuple(sorted(runs)), stamps)
+    if key in _probed:
+        return _probed[key]
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
+    try:
+        folders = [str((project.root / m).resolve()) for m in project.model.messages]
+        done = subprocess.run([sys.executable, "-c", _PROBE, json.dumps(sorted(runs)), json.dumps(folders)],
+                              capture_output=True,
+                              text=True, timeout=60, env=env, cwd=root, check=False)
+    except subprocess.TimeoutExpired:
+        return {run: "importing the node modules took more than 60 s; does a module block on import?"
+                for run in runs}
+    try:
+        problems: dict[str, str] = json.loads(done.stdout.strip().splitlines()[-1])
+    except (json.JSONDecodeError, IndexError):
+        reason = (done.stderr.strip().splitlines() or ["no output"])[-1]
+        problems = {run: f"importing the node modules ended the interpreter: {reason}" for run in runs}
+    _probed[key] = problems
+    return problems
+
+
+def _check_shm_budget(project: LoadedProject, types: TypeRegistry, publishers: dict[str, list[tuple[str, str]]],
+                      subscribers: dict[str, list[tuple[str, str]]], report: CheckReport) -> None:
+    """Refuse a topic whose shared memory (iceoryx2 reserves it up front) exceeds the project's budget."""
+    model = project.model
+    budget = model.shm_budget_bytes
+
+    def process(node: str) -> str:
+        target = model.targets.get(model.nodes[node].target)
+        return "launcher" if target is None or target.kind == "thread" else model.nodes[node].target
+
+    for topic, published in publishers.items():
+        if not any(process(p) != process(s) for p, _ in published for s, _ in subscribers.get(topic, [])):
+            continue
+        typename = published[0][1]
+        spec = model.topics.get(topic)
+        qos = QoS(**spec.model_dump()) if spec is not None else QoS()
+        try:
+            size = flat_layout(types, typename).size
+        except MessageError:
+            continue
+        need = reserved_bytes(qos, size) * len({process(p) for p, _ in published})
+        if need > budget:
+            what = f"{size}-byte messages" if size is not None else "variable-size messages (4 KiB slots at first)"
+            report.errors.append(
+                f"{project.where('topics', topic, 'depth') if spec else project.where('nodes')}: {topic} would "
+                f"reserve {need / 2**20:,.0f} MiB of shared memory (depth {qos.depth}, {what}) but the "
+                f"project's shm_budget is {budget / 2**20:,.0f} MiB; lower the depth or raise shm_budget"
+            )
 
 
 def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[tuple[str, str]]],

@@ -12,6 +12,7 @@ from ._shm import (
     cleanup_stale,
     raise_open_file_limit,
     remove_session_segments,
+    reserved_bytes,
 )
 
 __all__ = [
@@ -32,4 +33,5 @@ __all__ = [
     "cleanup_stale",
     "raise_open_file_limit",
     "remove_session_segments",
+    "reserved_bytes",
 ]

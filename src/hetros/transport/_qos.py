@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Literal
 
+MAX_DEPTH = 1_000_000
 Reliability = Literal["reliable", "best_effort"]
 History = Literal["keep_all", "keep_last"]
 Durability = Literal["volatile", "transient_local"]
@@ -36,8 +37,8 @@ class QoS:
             raise ValueError(f"history must be 'keep_all' or 'keep_last', not {self.history!r}")
         if self.durability not in ("volatile", "transient_local"):
             raise ValueError(f"durability must be 'volatile' or 'transient_local', not {self.durability!r}")
-        if not isinstance(self.depth, int) or self.depth < 1:
-            raise ValueError(f"depth must be a positive integer, not {self.depth!r}")
+        if not isinstance(self.depth, int) or not 1 <= self.depth <= MAX_DEPTH:
+            raise ValueError(f"depth must be an integer from 1 to {MAX_DEPTH:,}, not {self.depth!r}")
         if not self.publish_timeout > 0:
             raise ValueError(f"publish_timeout must be positive seconds, not {self.publish_timeout!r}")
 

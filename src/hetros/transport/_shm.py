@@ -86,6 +86,22 @@ BORROW_LIMIT = 16
 LOSS_GRACE = 0.5
 
 
+INITIAL_SLOT = 4096
+
+
+def reserved_bytes(qos: QoS, message_size: int | None) -> int:
+    """Shared memory one service of a topic reserves (iceoryx2 sizes it up front, sparse).
+
+    ``message_size`` is the CDR size of a fixed-size type, None when it varies: such slots
+    start at 4 KiB and grow by powers of two as larger messages come.
+    """
+    buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
+    history = qos.depth if qos.keeps_history else 0
+    samples = MAX_SUBSCRIBER_SLOTS * (buffer + BORROW_LIMIT) + history + 2
+    slot = HEADER.size + (message_size + 4 if message_size is not None else INITIAL_SLOT)
+    return samples * slot
+
+
 def segment_prefix(session: str) -> str:
     return f"hetros-{session}-"
 
@@ -536,7 +552,7 @@ class _Service:
                 try:
                     self._publisher = (
                         self.data.publisher_builder()
-                        .initial_max_slice_len(4096)
+                        .initial_max_slice_len(INITIAL_SLOT)
                         .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo)
                         # hetros' credits do the blocking (with a timeout and crash detection);
                         # iceoryx2's own retry would spin forever on a dead subscriber's full buffer

@@ -96,6 +96,9 @@ def damaged_text(draw: st.DrawFn) -> bytes:
     return bytes(data)
 
 
+OUTCOMES = {"refused": 0, "accepted": 0}
+
+
 def _load_and_check(path: Path) -> None:
     start = time.monotonic()
     try:
@@ -103,9 +106,11 @@ def _load_and_check(path: Path) -> None:
         report = check(project)
     except ProjectError as exc:
         assert FILE_LINE.search(str(exc)), f"a refusal must name file:line:\n{exc}"
+        OUTCOMES["refused"] += 1
     else:
         for problem in report.errors:
             assert FILE_LINE.search(problem), f"a refusal must name file:line:\n{problem}"
+        OUTCOMES["refused" if report.errors else "accepted"] += 1
     assert time.monotonic() - start < PER_CASE_SECONDS
 
 
@@ -166,3 +171,8 @@ def test_random_yaml_documents_are_refused_with_file_and_line(folder: Path) -> N
         _load_and_check(path)
 
     case()
+
+
+def test_report_outcomes() -> None:
+    """Prints how the generated cases ended (shown with -s; the closing note's table)."""
+    print(f"\nproject fuzz outcomes: {OUTCOMES}")

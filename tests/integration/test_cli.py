@@ -87,3 +87,34 @@ def test_msg_layout_prints_offsets() -> None:
     assert result.returncode == 0
     assert "fixed size, 344 bytes" in result.stdout
     assert "56    288  float64[36]  covariance" in result.stdout
+
+
+def test_msg_build_handles_python_names_and_refuses_invalid_type_names(tmp_path: Path) -> None:
+    pkg = tmp_path / "src" / "odd_pkg"
+    (pkg / "msg").mkdir(parents=True)
+    (pkg / "msg" / "Odd.msg").write_text("int32 self\nint32 np\nfloat64[] copy\nint32 class\nint32 x 7\n")
+    out = tmp_path / "gen"
+    result = hetros("msg", "build", str(pkg), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    stub = (out / "odd_pkg" / "msg.py").read_text()
+    compile(stub, "msg.py", "exec")
+    probe = subprocess.run(
+        [sys.executable, "-c", "from odd_pkg.msg import Odd; o = Odd(self=1, np=2, class_=3);"
+         "print(o.self, o.np, o.class_, o.x, o.copy.size)"],
+        capture_output=True, text=True, cwd=out, check=False, timeout=60,
+    )
+    assert probe.returncode == 0, probe.stderr
+    assert probe.stdout.split() == ["1", "2", "3", "7", "0"]
+    (pkg / "msg" / "1Foo.msg").write_text("int32 x\n")
+    bad = hetros("msg", "build", str(pkg), "-o", str(tmp_path / "gen2"))
+    assert bad.returncode == 1
+    assert "1Foo.msg:1: '1Foo' is not a valid type name" in bad.stderr
+    assert not (tmp_path / "gen2").exists()
+
+
+def test_msg_show_lists_action_parts() -> None:
+    result = hetros("msg", "show", "example_interfaces/action/Fibonacci_SendGoal_Request")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[:2] == ["unique_identifier_msgs/msg/UUID goal_id", "example_interfaces/action/Fibonacci_Goal goal"]
+    assert "MSG: unique_identifier_msgs/msg/UUID" in result.stdout and "int32 order" in result.stdout

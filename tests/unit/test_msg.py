@@ -7,6 +7,7 @@ import pytest
 
 from hetros import DefinitionError, ReadOnlyMessageError, UnknownTypeError
 from hetros.msg import TypeRegistry, freeze, read_package, registry
+from hetros.msg import copy as copy_message
 
 
 def write_pkg(root: Path, files: dict[str, str]) -> Path:
@@ -97,8 +98,26 @@ def test_user_package_srv_and_action_split(tmp_path: Path) -> None:
         ({"msg/Bad.msg": "int32 a\nNoSuch b\n"}, "Bad.msg:2", "unknown field type 'my_pkg/msg/NoSuch'"),
         ({"srv/Bad.srv": "int32 a\n"}, "Bad.srv:1", "exactly 1 '---' separator"),
         ({"action/Bad.action": "int32 a\n---\nint32 b\n"}, "Bad.action:3", "exactly 2 '---'"),
-        ({"srv/Bad.srv": "int32 a\n---\nint32 b c d\nfoo/Bar baz\n"}, "Bad.srv:4",
+        ({"srv/Bad.srv": "int32 a\n---\nint32 b\nfoo/Bar baz\n"}, "Bad.srv:4",
          "unknown field type 'foo/msg/Bar'"),
+        # the cases of the reliability issue: each was accepted silently or ended in a traceback
+        ({"msg/Bad.msg": "int32 x y z\n"}, "Bad.msg:1", "field 'x': the default value must be an integer"),
+        ({"msg/Bad.msg": "int32 C=abc\n"}, "Bad.msg:1", "constant C must be an integer for int32, not 'abc'"),
+        ({"msg/Bad.msg": "uint8 C=300\n"}, "Bad.msg:1", "constant C 300 is out of range for uint8 (0..255)"),
+        ({"msg/Bad.msg": "bool C=maybe\n"}, "Bad.msg:1", "must be true or false"),
+        ({"msg/Bad.msg": "float32 x abc\n"}, "Bad.msg:1", "must be a number for float32"),
+        ({"msg/Bad.msg": "int32[3] x [1, 2]\n"}, "Bad.msg:1", "has 2 elements; the array has exactly 3"),
+        ({"msg/Bad.msg": "string<=3 s 'toolong'\n"}, "Bad.msg:1", "longer than the bound 3"),
+        ({"msg/Bad.msg": "int32 double__under\n"}, "Bad.msg:1", "not a valid field name"),
+        ({"msg/Bad.msg": "int32 trailing_\n"}, "Bad.msg:1", "not a valid field name"),
+        ({"msg/Bad.msg": "int32 lowercase_const=1\n"}, "Bad.msg:1", "not a valid constant name"),
+        ({"msg/Bad.msg": "int32 C=1 2\n"}, "Bad.msg:1", "constant C must be an integer"),
+        ({"msg/Bad.msg": "Bad me\n"}, "Bad.msg:1", "field 'me' makes my_pkg/msg/Bad contain itself"),
+        ({"msg/Bad.msg": "Bad[] children\n"}, "Bad.msg:1", "(my_pkg/msg/Bad -> my_pkg/msg/Bad)"),
+        ({"msg/Aa.msg": "Bb b\n", "msg/Bb.msg": "int32 x\nAa[<=3] back\n"}, "Bb.msg:2",
+         "my_pkg/msg/Aa -> my_pkg/msg/Bb -> my_pkg/msg/Aa"),
+        ({"msg/1Foo.msg": "int32 x\n"}, "1Foo.msg:1", "'1Foo' is not a valid type name"),
+        ({"msg/class.msg": "int32 x\n"}, "class.msg:1", "'class' is not a valid type name"),
     ],
 )
 def test_malformed_definitions_name_file_line_and_reason(
@@ -122,3 +141,43 @@ def test_read_package_lists_what_it_found(tmp_path: Path) -> None:
     pkg = write_pkg(tmp_path, {"srv/Ping.srv": "---\n"})
     found = read_package(pkg)
     assert found.services == ("my_pkg/srv/Ping",)
+
+
+def test_non_utf8_definition_names_file_line_and_offset(tmp_path: Path) -> None:
+    pkg = tmp_path / "my_pkg"
+    (pkg / "msg").mkdir(parents=True)
+    (pkg / "msg" / "Bad.msg").write_bytes("int32 x\n# caf\xe9\n".encode("latin-1"))
+    with pytest.raises(DefinitionError, match=r"Bad\.msg:2: not UTF-8 text \(byte 0xe9 at offset 13\)"):
+        TypeRegistry().load_folder(pkg)
+
+
+def test_default_values_are_honoured(tmp_path: Path) -> None:
+    pkg = write_pkg(tmp_path, {"msg/Defaults.msg": (
+        "int32 x 5\nfloat64 gain -1.5\nbool on true\nstring name 'robot'\nint16[3] triple [1, 2, 3]\n"
+        "uint8[] bytes [7, 8]\nstring[] words ['a', 'b']\nint32 plain\nstring S=hello # not a comment\n")})
+    types = TypeRegistry()
+    types.load_folder(pkg)
+    cls = types.get("my_pkg/msg/Defaults")
+    msg = cls()
+    assert (msg.x, msg.gain, msg.on, msg.name, msg.plain) == (5, -1.5, True, "robot", 0)
+    assert msg.triple.tolist() == [1, 2, 3] and msg.triple.dtype == np.int16
+    assert msg.bytes.tolist() == [7, 8] and msg.words == ["a", "b"]
+    assert cls.S == "hello # not a comment"
+    other = cls()
+    other.triple[0] = 9
+    assert msg.triple[0] == 1, "each message gets its own copy of an array default"
+    assert cls(x=6).x == 6
+
+
+def test_fields_named_like_python_and_message_internals_work(tmp_path: Path) -> None:
+    pkg = write_pkg(tmp_path, {"msg/Odd.msg": "int32 self\nint32 np\nfloat64[] copy\nint32 is_frozen\n"})
+    types = TypeRegistry()
+    types.load_folder(pkg)
+    cls = types.get("my_pkg/msg/Odd")
+    msg = cls(self=1, np=2, copy=[1.0, 2.0])
+    assert (msg.self, msg.np) == (1, 2)
+    assert msg.copy.tolist() == [1.0, 2.0], "a field wins over the method of the same name"
+    kept = copy_message(msg)
+    assert kept == msg and kept is not msg
+    data = types.serialize(msg)
+    assert types.deserialize(data, "my_pkg/msg/Odd") == msg

@@ -2,7 +2,7 @@
 
 from ._definitions import find_packages, read_package
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
-from ._message import FrozenMessage, Message, freeze
+from ._message import FrozenMessage, Message, copy, freeze
 from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
 
 __all__ = [
@@ -15,6 +15,7 @@ __all__ = [
     "ServiceType",
     "TypeRegistry",
     "array_fields",
+    "copy",
     "find_packages",
     "flat_layout",
     "freeze",

@@ -15,7 +15,7 @@ from typing import Any
 from rosbags.interfaces import Nodetype
 
 from ._definitions import find_packages, read_package
-from ._registry import TypeRegistry, registry
+from ._registry import TypeRegistry, _attr_name, registry
 
 _PYTYPES = {"bool": "bool", "string": "str", "float32": "float", "float64": "float"}
 
@@ -42,7 +42,7 @@ def _pytype(desc: Any, package: str, kind: str) -> str:
         return arg.rsplit("/", 1)[-1] if arg.startswith(f"{package}/{kind}/") else "Any"
     sub, _length = arg
     if sub[0] == Nodetype.BASE:
-        return "list[str]" if sub[1][0] == "string" else "np.ndarray[Any, Any]"
+        return "list[str]" if sub[1][0] == "string" else "_np.ndarray[Any, Any]"
     return f"list[{_pytype(sub, package, kind)}]"
 
 
@@ -61,24 +61,26 @@ def render_module(package: str, kind: str, names: list[str], sources: dict[str, 
         f"_types = load_embedded({package!r}, _SOURCES)",
         "",
         "if TYPE_CHECKING:",
-        "    import numpy as np",
+        "    import numpy as _np",
         "",
-        "    from hetros.msg import Message",
+        "    from hetros.msg import Message as _Message",
         "",
     ]
     for full in names:
         short = full.rsplit("/", 1)[-1]
         consts, fields = types.store.fielddefs[full]
-        lines.append(f"    class {short}(Message):")
+        lines.append(f"    class {short}(_Message):")
         for cname, _ctype, cvalue in consts:
             lines.append(f"        {cname}: Any = {cvalue!r}")
         params = []
         for fname, desc in fields:
             pytype = _pytype(desc, package, kind)
-            lines.append(f"        {fname}: {pytype}")
-            params.append(f"{fname}: {pytype} | None = None")
-        lines.append(f"        def __init__(self, {', '.join(params)}) -> None: ..." if params
-                     else "        def __init__(self) -> None: ...")
+            attr = _attr_name(fname)
+            lines.append(f"        {attr}: {pytype}")
+            params.append(f"{attr}: {pytype} | None = None")
+        # `_m`, not `self`: rosidl field names never start with '_', so none can clash
+        lines.append(f"        def __init__(_m, {', '.join(params)}) -> None: ..." if params
+                     else "        def __init__(_m) -> None: ...")
         lines.append("")
     lines.append("else:")
     for full in names:

@@ -25,12 +25,21 @@ _PRIMITIVES = frozenset(
     "bool byte char int8 uint8 int16 uint16 int32 uint32 int64 uint64 float32 float64 "
     "string wstring time duration".split()
 )
+_INT_RANGES = {
+    "byte": (0, 255), "char": (0, 255), "int8": (-2**7, 2**7 - 1), "uint8": (0, 2**8 - 1),
+    "int16": (-2**15, 2**15 - 1), "uint16": (0, 2**16 - 1), "int32": (-2**31, 2**31 - 1),
+    "uint32": (0, 2**32 - 1), "int64": (-2**63, 2**63 - 1), "uint64": (0, 2**64 - 1),
+}
 _TYPE_RE = re.compile(
     r"^(?P<base>[A-Za-z][A-Za-z0-9_]*(?:/[A-Za-z][A-Za-z0-9_]*){0,2})"
-    r"(?P<bound><=\d+)?(?P<array>\[(?:<=)?\d*\])?$"
+    r"(?P<bound><=\d+)?(?P<array>\[(?P<upper><=)?(?P<size>\d*)\])?$"
 )
-_NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
-_PKG_RE = re.compile(r"^[a-z][a-z0-9_]*$")
+# rosidl's grammar (rosidl_adapter.parser): field names lower_snake_case without a double or
+# trailing underscore, constants UPPER_CASE, types PascalCase, packages lower_snake_case.
+_NAME_RE = re.compile(r"^(?!.*__)(?!.*_$)[a-z][a-z0-9_]*$")
+_CONSTANT_RE = re.compile(r"^[A-Z]([A-Z0-9_]?[A-Z0-9]+)*$")
+TYPE_NAME_RE = re.compile(r"^[A-Z][A-Za-z0-9]*$")
+_PKG_RE = re.compile(r"^(?!.*__)(?!.*_$)[a-z][a-z0-9_]*$")
 
 
 @dataclass(frozen=True)
@@ -40,27 +49,95 @@ class FieldUse:
     typename: str
     path: str
     line: int
+    field: str = ""
 
 
 @dataclass(frozen=True)
 class ParsedDefinition:
-    """One message type: rosbags field definitions plus the lines that named types."""
+    """One message type: rosbags field definitions plus the lines that named types, and defaults."""
 
     name: str
     text: str
     typedefs: Typesdict
     uses: tuple[FieldUse, ...]
+    defaults: tuple[tuple[str, Any], ...] = ()
 
 
 def _strip_comment(line: str) -> str:
-    if "=" in line.split("#", 1)[0] and line.split()[0].startswith("string"):
-        return line.strip()
-    return line.split("#", 1)[0].strip()
+    code = line.split("#", 1)[0]
+    head = code.split()
+    if "=" in code and head and head[0].startswith(("string", "wstring")):
+        return line.strip()  # a string constant keeps everything after '=', '#' included
+    return code.strip()
 
 
-def lint_lines(lines: list[str], path: str, first_line: int, package: str) -> list[FieldUse]:
-    """Check each line of one definition section; return the non-primitive types it names."""
+def _scalar(base: str, text: str, what: str) -> Any:
+    """The value of a constant or default of primitive type ``base``, checked like rosidl does."""
+    text = text.strip()
+    if base in _INT_RANGES:
+        try:
+            value = int(text, 0) if text.lower().startswith(("0x", "0o", "0b")) else int(text)
+        except ValueError:
+            raise ValueError(f"{what} must be an integer for {base}, not {text!r}") from None
+        low, high = _INT_RANGES[base]
+        if not low <= value <= high:
+            raise ValueError(f"{what} {value} is out of range for {base} ({low}..{high})")
+        return value
+    if base in ("float32", "float64"):
+        try:
+            return float(text)
+        except ValueError:
+            raise ValueError(f"{what} must be a number for {base}, not {text!r}") from None
+    if base == "bool":
+        lowered = text.lower()
+        if lowered in ("true", "1"):
+            return True
+        if lowered in ("false", "0"):
+            return False
+        raise ValueError(f"{what} must be true or false for bool, not {text!r}")
+    if base in ("string", "wstring"):
+        if len(text) >= 2 and text[0] == text[-1] and text[0] in "'\"":
+            return text[1:-1]
+        return text
+    raise ValueError(f"{base} fields take no {what}")
+
+
+def _split_array(text: str, what: str) -> list[str]:
+    text = text.strip()
+    if not (text.startswith("[") and text.endswith("]")):
+        raise ValueError(f"{what} of an array must be written [a, b, ...], not {text!r}")
+    inner = text[1:-1].strip()
+    return [item.strip() for item in inner.split(",")] if inner else []
+
+
+def _default(match: re.Match[str], text: str) -> Any:
+    base = match.group("base")
+    if base not in _PRIMITIVES or base in ("time", "duration"):
+        raise ValueError(f"a field of type {base} takes no default value")
+    if not match.group("array"):
+        value = _scalar(base, text, "the default value")
+        bound = match.group("bound")
+        if bound and isinstance(value, str) and len(value) > int(bound[2:]):
+            raise ValueError(f"the default value is longer than the bound {bound[2:]}")
+        return value
+    items = [_scalar(base, item, "an element of the default value") for item in _split_array(text, "the default")]
+    size = match.group("size")
+    if size and not match.group("upper") and len(items) != int(size):
+        raise ValueError(f"the default value has {len(items)} elements; the array has exactly {size}")
+    if size and match.group("upper") and len(items) > int(size):
+        raise ValueError(f"the default value has {len(items)} elements; the array holds at most {size}")
+    return items
+
+
+def lint_lines(lines: list[str], path: str, first_line: int, package: str
+               ) -> tuple[list[FieldUse], dict[str, Any]]:
+    """Check each line of one definition section against rosidl's grammar.
+
+    Returns the non-primitive types it names (with their lines) and the default values of
+    its fields (ROS 2 honours them: ``int32 x 5`` makes 5 the default).
+    """
     uses: list[FieldUse] = []
+    defaults: dict[str, Any] = {}
     seen: dict[str, int] = {}
     for offset, raw in enumerate(lines):
         lineno = first_line + offset
@@ -76,29 +153,54 @@ def lint_lines(lines: list[str], path: str, first_line: int, package: str) -> li
         match = _TYPE_RE.match(typetok)
         if not match:
             raise DefinitionError(path, lineno, f"{typetok!r} is not a valid field type")
+        base = match.group("base")
+        if match.group("bound") and base not in {"string", "wstring"}:
+            raise DefinitionError(path, lineno, f"only strings take a '<=N' bound, not {base!r}")
+        if match.group("upper") and not match.group("size"):
+            raise DefinitionError(path, lineno, f"{typetok!r}: a bounded array needs its bound, like [<=10]")
+        name_part = rest.split("=", 1)[0] if "=" in rest else rest
+        tokens = name_part.split(None, 1)
+        name = tokens[0] if tokens else ""
         if "=" in rest:
-            name = rest.split("=", 1)[0].strip()
+            if len(tokens) > 1:
+                raise DefinitionError(path, lineno, f"unexpected {tokens[1]!r} after constant name {name!r}")
             value = rest.split("=", 1)[1].strip()
+            if not _CONSTANT_RE.match(name):
+                raise DefinitionError(path, lineno, f"{name!r} is not a valid constant name (UPPER_CASE letters, "
+                                      "digits and single '_', starting with a letter)")
             if match.group("array"):
                 raise DefinitionError(path, lineno, f"constant {name!r} cannot be an array")
             if not value:
                 raise DefinitionError(path, lineno, f"constant {name!r} has no value after '='")
+            if base not in _PRIMITIVES or base in ("time", "duration"):
+                raise DefinitionError(path, lineno, f"constant {name!r} must have a primitive type, not {base!r}")
+            try:
+                _scalar(base, value, f"constant {name}")
+            except ValueError as exc:
+                raise DefinitionError(path, lineno, str(exc)) from None
         else:
-            name_and_default = rest.split(None, 1)
-            name = name_and_default[0]
-        if not _NAME_RE.match(name):
-            raise DefinitionError(
-                path, lineno, f"{name!r} is not a valid field name (letters, digits, '_'; starts with a letter)"
-            )
+            if not _NAME_RE.match(name):
+                raise DefinitionError(
+                    path, lineno,
+                    f"{name!r} is not a valid field name (lower_snake_case: letters, digits and single '_', "
+                    "starting with a letter, not ending with '_')",
+                )
+            if len(tokens) > 1:
+                try:
+                    defaults[name] = _default(match, tokens[1])
+                except ValueError as exc:
+                    raise DefinitionError(path, lineno, f"field {name!r}: {exc}") from None
         if name in seen:
             raise DefinitionError(path, lineno, f"field {name!r} is already defined on line {seen[name]}")
         seen[name] = lineno
-        base = match.group("base")
-        if match.group("bound") and base not in {"string", "wstring"}:
-            raise DefinitionError(path, lineno, f"only strings take a '<=N' bound, not {base!r}")
         if base not in _PRIMITIVES:
-            uses.append(FieldUse(qualify(base, package), path, lineno))
-    return uses
+            full = qualify(base, package)
+            short = full.rsplit("/", 1)[-1]
+            if not TYPE_NAME_RE.match(short):
+                raise DefinitionError(path, lineno, f"{base!r} is not a valid type name (PascalCase, "
+                                      "starting with an upper-case letter)")
+            uses.append(FieldUse(full, path, lineno, name))
+    return uses, defaults
 
 
 def qualify(typename: str, package: str, kind: str = "msg") -> str:
@@ -116,7 +218,11 @@ def qualify(typename: str, package: str, kind: str = "msg") -> str:
 def parse_section(lines: list[str], name: str, path: str, first_line: int) -> ParsedDefinition:
     """Parse one message section (a whole .msg, or one part of a .srv/.action)."""
     package = name.split("/", 1)[0]
-    uses = lint_lines(lines, path, first_line, package)
+    short = name.rsplit("/", 1)[-1]
+    if not TYPE_NAME_RE.match(short.split("_", 1)[0] if "/srv/" in name or "/action/" in name else short):
+        raise DefinitionError(path, 1, f"{short.split('_', 1)[0]!r} is not a valid type name: rename the file "
+                              "to PascalCase (letters and digits, starting with an upper-case letter)")
+    uses, defaults = lint_lines(lines, path, first_line, package)
     text = "\n".join(lines)
     # rosbags resolves relative names against a msg/ type, so parse as one and rename.
     parse_name = f"{package}/msg/{name.rsplit('/', 1)[-1]}"
@@ -126,7 +232,7 @@ def parse_section(lines: list[str], name: str, path: str, first_line: int) -> Pa
         raise DefinitionError(path, first_line, f"cannot parse the definition of {name}: {exc}") from exc
     if not fields:
         fields = [("structure_needs_at_least_one_member", (Nodetype.BASE, ("uint8", 0)))]
-    return ParsedDefinition(name, text, {name: (consts, fields)}, tuple(uses))
+    return ParsedDefinition(name, text, {name: (consts, fields)}, tuple(uses), tuple(defaults.items()))
 
 
 def split_sections(text: str, path: str, count: int) -> list[tuple[int, list[str]]]:
@@ -175,6 +281,20 @@ class PackageDefinitions:
     actions: tuple[str, ...]
 
 
+def _read(path: Path) -> str:
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise DefinitionError(str(path), line, f"not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
+                              f"{exc.start}); save the file as UTF-8") from None
+    if "\x00" in text:
+        raise DefinitionError(str(path), text.count("\n", 0, text.index("\x00")) + 1,
+                              "a NUL character; interface files are text")
+    return text
+
+
 def read_package(folder: Path) -> PackageDefinitions:
     """Read ``<pkg>/msg/*.msg``, ``<pkg>/srv/*.srv`` and ``<pkg>/action/*.action``."""
     package = folder.name
@@ -186,17 +306,17 @@ def read_package(folder: Path) -> PackageDefinitions:
     services: list[str] = []
     actions: list[str] = []
     for path in sorted((folder / "msg").glob("*.msg")):
-        text = path.read_text(encoding="utf-8")
+        text = _read(path)
         parsed.append(parse_section(text.splitlines(), f"{package}/msg/{path.stem}", str(path), 1))
     for path in sorted((folder / "srv").glob("*.srv")):
-        text = path.read_text(encoding="utf-8")
+        text = _read(path)
         (l1, request), (l2, response) = split_sections(text, str(path), 2)
         base = f"{package}/srv/{path.stem}"
         parsed.append(parse_section(request, f"{base}_Request", str(path), l1))
         parsed.append(parse_section(response, f"{base}_Response", str(path), l2))
         services.append(base)
     for path in sorted((folder / "action").glob("*.action")):
-        text = path.read_text(encoding="utf-8")
+        text = _read(path)
         sections = split_sections(text, str(path), 3)
         base = f"{package}/action/{path.stem}"
         for suffix, (first, lines) in zip(("Goal", "Result", "Feedback"), sections, strict=True):

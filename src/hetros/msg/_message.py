@@ -31,10 +31,12 @@ class Message:
     _nested_list_names: ClassVar[tuple[str, ...]] = ()
 
     def copy(self) -> Any:
-        """Return a deep, writable copy (use it to keep a delivered message)."""
-        cls = self._thawed_class
-        values = [_thaw_value(getattr(self, name)) for name in self.__fieldnames__]
-        return cls(*values)
+        """Return a deep, writable copy (use it to keep a delivered message).
+
+        A message type with a field named ``copy`` hides this method (the field wins, as
+        in ROS 2); :func:`hetros.msg.copy` works for every type.
+        """
+        return copy(self)
 
     @property
     def is_frozen(self) -> bool:
@@ -59,7 +61,7 @@ class Message:
         return f"{self.__msgtype__.rsplit('/', 1)[-1]}({fields})"
 
     def __deepcopy__(self, memo: dict[int, Any]) -> Any:
-        return self.copy()
+        return copy(self)
 
 
 class FrozenMessage(Message):
@@ -76,6 +78,13 @@ class FrozenMessage(Message):
 
     def __delattr__(self, name: str) -> None:
         self.__setattr__(name, None)
+
+
+def copy(message: Message) -> Any:
+    """A deep, writable copy of any message, whatever its field names."""
+    cls = message._thawed_class
+    values = [_thaw_value(getattr(message, name)) for name in message.__fieldnames__]
+    return cls(*values)
 
 
 def freeze(message: Message) -> Message:
@@ -101,7 +110,7 @@ def _thaw_value(value: object) -> object:
     if isinstance(value, np.ndarray):
         return value.copy()
     if isinstance(value, Message):
-        return value.copy()
+        return copy(value)
     if isinstance(value, list):
         return [_thaw_value(v) for v in value]
     return _copy.copy(value)

@@ -23,7 +23,7 @@ from rosbags.typesys import Stores, TypesysError, get_typestore
 from rosbags.typesys.store import Typestore
 
 from .._errors import DefinitionError, SerializationError, UnknownTypeError
-from ._definitions import FieldUse, PackageDefinitions, Typesdict, find_packages, read_package
+from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
 from ._message import FrozenMessage, Message
 
 _NUMPY_DTYPES = {
@@ -87,6 +87,7 @@ class TypeRegistry:
         self.actions: dict[str, ActionType] = {}
         self.sources: dict[str, str] = {}
         self._loaded_folders: set[Path] = set()
+        self._defaults: dict[str, dict[str, Any]] = {}
         for name in list(self.store.fielddefs):
             self.sources[name] = "rosbags ROS 2 jazzy store"
         shipped = resources.files("hetros.msg") / "packages"
@@ -117,6 +118,7 @@ class TypeRegistry:
                 if parsed.uses:
                     self.sources[parsed.name] = parsed.uses[0].path
             known = set(self.store.fielddefs) | set(typedefs)
+            _refuse_recursion(pkg.messages)
             for use in uses:
                 if use.typename not in known:
                     raise DefinitionError(
@@ -129,6 +131,9 @@ class TypeRegistry:
                 self.store.register(typedefs)
             except TypesysError as exc:
                 raise DefinitionError(pkg.package, 0, str(exc)) from exc
+            for parsed in pkg.messages:
+                if parsed.defaults:
+                    self._defaults[parsed.name] = dict(parsed.defaults)
             for service in pkg.services:
                 self.services[service] = ServiceType(
                     service, self.get(f"{service}_Request"), self.get(f"{service}_Response")
@@ -218,8 +223,31 @@ class TypeRegistry:
         """The full definition with nested types, as `hetros msg show` prints it."""
         full = normalize_typename(name)
         self.get(full)
-        text, _ = self.store.generate_msgdef(full, ros_version=2)
-        return text
+        try:
+            text, _ = self.store.generate_msgdef(full, ros_version=2)
+        except (AssertionError, TypesysError, KeyError):
+            # rosbags renders only msg/ types nested; service and action parts are listed here
+            return self._render(full)
+        return str(text)
+
+    def _render(self, full: str) -> str:
+        """The definition of ``full`` and every type it nests, one block each, ROS style."""
+        blocks: list[str] = []
+        pending, seen = [full], {full}
+        while pending:
+            name = pending.pop(0)
+            consts, fields = self.store.fielddefs[name]
+            lines = [f"{ctype} {cname}={cvalue}" for cname, ctype, cvalue in consts]
+            for fname, desc in fields:
+                text, nested = _field_type(desc)
+                lines.append(f"{text} {fname}")
+                for sub in nested:
+                    if sub not in seen:
+                        seen.add(sub)
+                        pending.append(sub)
+            header = "" if name == full else "=" * 80 + f"\nMSG: {name}\n"
+            blocks.append(header + "\n".join(lines))
+        return "\n".join(blocks) + "\n"
 
     # -- class generation ------------------------------------------------------------------
 
@@ -227,29 +255,35 @@ class TypeRegistry:
         if full in self._classes:
             return self._classes[full]
         consts, fields = self.store.fielddefs[full]
-        namespace: dict[str, Any] = {"np": np, "Message": Message, "FrozenMessage": FrozenMessage,
-                                     "_as_array": _as_array}
+        # Generated code names its helpers with a leading underscore: rosidl field names cannot
+        # start with one, so no field (``self``, ``np``, ``copy``...) shadows them.
+        namespace: dict[str, Any] = {"_np": np, "_Message": Message, "_FrozenMessage": FrozenMessage}
+        defaults = self._defaults.get(full, {})
         params: list[str] = []
         body: list[str] = []
         fieldnames: list[str] = []
         for index, (name, desc) in enumerate(fields):
             attr = _attr_name(name)
             fieldnames.append(attr)
-            default_expr, coerce = self._default_for(desc, namespace, index)
+            default_expr, coerce = self._default_for(desc, namespace, index, defaults.get(name, _NO_DEFAULT))
             params.append(f"{attr}=None")
             value = f"{coerce}({attr})" if coerce else attr
-            body.append(f"        self.{attr} = {default_expr} if {attr} is None else {value}")
+            body.append(f"        _m.{attr} = {default_expr} if {attr} is None else {value}")
         short = full.rsplit("/", 1)[-1]
-        lines = [f"class {short}(Message):", f"    __slots__ = {tuple(fieldnames)!r}"]
+        lines = [f"class {short}(_Message):", f"    __slots__ = {tuple(fieldnames)!r}"]
         lines.append(f"    __msgtype__ = {full!r}")
         lines.append(f"    __fieldnames__ = {tuple(fieldnames)!r}")
         for cname, _ctype, cvalue in consts:
             lines.append(f"    {cname} = {cvalue!r}")
-        lines.append(f"    def __init__(self, {', '.join(params)}):" if params else "    def __init__(self):")
+        lines.append(f"    def __init__(_m, {', '.join(params)}):" if params else "    def __init__(_m):")
         lines.extend(body or ["        pass"])
-        lines.append(f"class Frozen{short}(FrozenMessage, {short}):")
+        lines.append(f"class Frozen{short}(_FrozenMessage, {short}):")
         lines.append("    __slots__ = ()")
-        exec(compile("\n".join(lines), f"<hetros message {full}>", "exec"), namespace)
+        try:
+            exec(compile("\n".join(lines), f"<hetros message {full}>", "exec"), namespace)
+        except SyntaxError as exc:  # names the definition checks let through would land here
+            raise DefinitionError(self.sources.get(full, full), 0,
+                                  f"cannot generate a class for {full}: {exc.msg}") from exc
         cls: type[Message] = namespace[short]
         frozen: type[Message] = namespace[f"Frozen{short}"]
         package, kind, _ = full.split("/")
@@ -268,30 +302,86 @@ class TypeRegistry:
         self.store.cache.pop(full, None)
         return cls
 
-    def _default_for(self, desc: Any, namespace: dict[str, Any], index: int) -> tuple[str, str]:
+    def _default_for(self, desc: Any, namespace: dict[str, Any], index: int,
+                     declared: Any = None) -> tuple[str, str]:
         """A Python expression for the default value, and a coercion function name (or '')."""
         kind, arg = desc
+        has_declared = declared is not _NO_DEFAULT
+        if has_declared:
+            namespace[f"_d{index}"] = declared
         if kind == Nodetype.BASE:
-            base = arg[0]
-            return _SCALAR_DEFAULTS.get(base, "0"), ""
+            if has_declared:
+                return f"_d{index}", ""
+            return _SCALAR_DEFAULTS.get(arg[0], "0"), ""
         if kind == Nodetype.NAME:
             sub = self._generate(arg)
             namespace[f"_T{index}"] = sub
             return f"_T{index}()", ""
         subdesc, length = arg
         if subdesc[0] == Nodetype.BASE and subdesc[1][0] != "string":
-            dtype = _NUMPY_DTYPES[subdesc[1][0]]
-            namespace[f"_dt{index}"] = np.dtype(dtype)
-            namespace[f"_co{index}"] = functools.partial(_as_array, dtype=np.dtype(dtype))
+            dtype = np.dtype(_NUMPY_DTYPES[subdesc[1][0]])
+            namespace[f"_dt{index}"] = dtype
+            namespace[f"_co{index}"] = functools.partial(_as_array, dtype=dtype)
+            if has_declared:
+                return f"_np.array(_d{index}, _dt{index})", f"_co{index}"
             size = length if kind == Nodetype.ARRAY else 0
-            return f"np.zeros({size}, _dt{index})", f"_co{index}"
+            return f"_np.zeros({size}, _dt{index})", f"_co{index}"
         if subdesc[0] == Nodetype.BASE:
+            if has_declared:
+                return f"list(_d{index})", "list"
             return (f"[''] * {length}" if kind == Nodetype.ARRAY else "[]"), "list"
         sub = self._generate(subdesc[1])
         namespace[f"_T{index}"] = sub
         if kind == Nodetype.ARRAY:
             return f"[_T{index}() for _ in range({length})]", "list"
         return "[]", "list"
+
+
+_NO_DEFAULT: Any = object()
+
+
+def _field_type(desc: Any) -> tuple[str, list[str]]:
+    """A field's type as a definition writes it, and the message types it nests."""
+    kind, arg = desc
+    if kind == Nodetype.BASE:
+        base, bound = arg
+        return (f"{base}<={bound}" if bound else base), []
+    if kind == Nodetype.NAME:
+        return str(arg), [str(arg)]
+    inner, nested = _field_type(arg[0])
+    length = arg[1]
+    if kind == Nodetype.ARRAY:
+        return f"{inner}[{length}]", nested
+    return (f"{inner}[<={length}]" if length else f"{inner}[]"), nested
+
+
+def _refuse_recursion(definitions: tuple[ParsedDefinition, ...]) -> None:
+    """A message that contains itself (directly, through others, or in a sequence) has no size.
+
+    Depth-first over the package's own types (loaded types cannot refer back to new ones),
+    iterative so that a long chain of types costs no Python recursion.
+    """
+    uses = {d.name: d.uses for d in definitions}
+    finished: set[str] = set()
+    for root in uses:
+        if root in finished:
+            continue
+        path = [root]
+        pending = [iter(uses[root])]
+        while pending:
+            use = next(pending[-1], None)
+            if use is None:
+                finished.add(path.pop())
+                pending.pop()
+                continue
+            target = use.typename
+            if target in path:
+                cycle = " -> ".join([*path[path.index(target):], target])
+                raise DefinitionError(use.path, use.line, f"field {use.field!r} makes {target} contain "
+                                      f"itself ({cycle}); a ROS message cannot be recursive")
+            if target in uses and target not in finished:
+                path.append(target)
+                pending.append(iter(uses[target]))
 
 
 def _as_array(value: Any, dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:

@@ -16,6 +16,7 @@ import numpy as np
 
 from .._errors import TransportError, UndeclaredEndpointError
 from ..msg import Message, TypeRegistry, array_fields, freeze, registry, set_path
+from ..msg import copy as copy_message
 from ..transport import (
     DEFAULT_QOS,
     Codec,
@@ -77,7 +78,7 @@ class _FanoutWriter(Writer):
             others = [part for part in self._parts if part is not self._shm]
             if others:
                 # the slot leaves with the shared-memory send: in-process readers get their own copy
-                local = _freeze_payload(message.copy())
+                local = _freeze_payload(copy_message(message))
                 for part in others:
                     part.write(local)
             assert self._shm is not None

@@ -8,6 +8,7 @@ one root and still tell the kinds apart::
     │   ├── DefinitionError    a malformed definition file (file:line)
     │   ├── UnknownTypeError   a type name nobody defines
     │   ├── SerializationError bytes that do not decode as the type says (offset)
+    │   ├── FieldValueError    a field holds a value its type cannot carry (field, type, value)
     │   └── ReadOnlyMessageError  writing to a message that was handed over
     ├── ProjectError           the project file (YAML path)
     │   └── CheckError         `hetros check` found problems (carries all of them)
@@ -53,6 +54,10 @@ class UnknownTypeError(MessageError):
 
 class SerializationError(MessageError):
     """Bytes that cannot be decoded as the declared type."""
+
+
+class FieldValueError(MessageError, ValueError):
+    """A field holds a value of the wrong type or out of its type's range."""
 
 
 class ReadOnlyMessageError(MessageError, AttributeError):

@@ -89,6 +89,11 @@ FAILING = textwrap.dedent('''
         node.log.info("second start works")
         node.create_subscription(String, "/t", lambda m: None)
 
+    def wrong_value(node):
+        pub = node.create_publisher(String, "/t")
+        node.sleep(0.2)
+        pub.publish(String(data=5))
+
     def counter(node):
         pub = node.create_publisher(String, "/t")
         for i in range(60):
@@ -152,6 +157,16 @@ def test_restarted_subscriber_resumes_its_reliable_queue(tmp_path: Path, kind: s
     assert "RuntimeError: fails once on message 20" in result.stderr
     received = (tmp_path / "marker.log").read_text().split()
     assert received == [str(i) for i in range(60)], received
+
+
+@pytest.mark.parametrize("kind", ["process", "thread"])
+def test_a_wrong_field_value_is_refused_at_publish_in_every_mapping(tmp_path: Path, kind: str) -> None:
+    project = failing_project(tmp_path, kind, "resumer", producer="wrong_value")
+    result = hetros("launch", str(project), "--duration", "5")
+    assert result.returncode == 1, result.stderr
+    assert "FieldValueError: String.data must be a str, not 5 (int)" in result.stderr
+    assert "node ticker (target a) raised" in result.stderr
+    assert not (tmp_path / "marker.log").exists(), "nothing reached the subscriber"
 
 
 def start_launcher(project: Path) -> tuple[subprocess.Popen[str], dict[str, int], str]:

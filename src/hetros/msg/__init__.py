@@ -4,6 +4,7 @@ from ._definitions import find_packages, read_package
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
 from ._message import FrozenMessage, Message, copy, freeze
 from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
+from ._validate import convert_array, validate
 
 __all__ = [
     "ActionType",
@@ -15,6 +16,7 @@ __all__ = [
     "ServiceType",
     "TypeRegistry",
     "array_fields",
+    "convert_array",
     "copy",
     "find_packages",
     "flat_layout",
@@ -24,4 +26,5 @@ __all__ = [
     "read_package",
     "registry",
     "set_path",
+    "validate",
 ]

@@ -18,6 +18,7 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys import TypesysError, get_types_from_msg
 
 from .._errors import DefinitionError
+from ._validate import INT_RANGES
 
 Typesdict = dict[str, Any]
 
@@ -25,11 +26,6 @@ _PRIMITIVES = frozenset(
     "bool byte char int8 uint8 int16 uint16 int32 uint32 int64 uint64 float32 float64 "
     "string wstring time duration".split()
 )
-_INT_RANGES = {
-    "byte": (0, 255), "char": (0, 255), "int8": (-2**7, 2**7 - 1), "uint8": (0, 2**8 - 1),
-    "int16": (-2**15, 2**15 - 1), "uint16": (0, 2**16 - 1), "int32": (-2**31, 2**31 - 1),
-    "uint32": (0, 2**32 - 1), "int64": (-2**63, 2**63 - 1), "uint64": (0, 2**64 - 1),
-}
 _TYPE_RE = re.compile(
     r"^(?P<base>[A-Za-z][A-Za-z0-9_]*(?:/[A-Za-z][A-Za-z0-9_]*){0,2})"
     r"(?P<bound><=\d+)?(?P<array>\[(?P<upper><=)?(?P<size>\d*)\])?$"
@@ -74,12 +70,12 @@ def _strip_comment(line: str) -> str:
 def _scalar(base: str, text: str, what: str) -> Any:
     """The value of a constant or default of primitive type ``base``, checked like rosidl does."""
     text = text.strip()
-    if base in _INT_RANGES:
+    if base in INT_RANGES:
         try:
             value = int(text, 0) if text.lower().startswith(("0x", "0o", "0b")) else int(text)
         except ValueError:
             raise ValueError(f"{what} must be an integer for {base}, not {text!r}") from None
-        low, high = _INT_RANGES[base]
+        low, high = INT_RANGES[base]
         if not low <= value <= high:
             raise ValueError(f"{what} {value} is out of range for {base} ({low}..{high})")
         return value

@@ -30,6 +30,10 @@ class Message:
     _nested_names: ClassVar[tuple[str, ...]] = ()
     _nested_list_names: ClassVar[tuple[str, ...]] = ()
 
+    @staticmethod
+    def _hetros_validate(message: Any, where: str = "") -> None:
+        """Replaced per type by the registry's generated validator."""
+
     def copy(self) -> Any:
         """Return a deep, writable copy (use it to keep a delivered message).
 

@@ -25,8 +25,9 @@ from rosbags.typesys.store import Typestore
 from .._errors import DefinitionError, SerializationError, UnknownTypeError
 from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
 from ._message import FrozenMessage, Message
+from ._validate import Validator, build_validator, convert_array
 
-_NUMPY_DTYPES = {
+NUMPY_DTYPES = {
     "bool": "bool_", "byte": "uint8", "char": "uint8", "int8": "int8", "uint8": "uint8",
     "int16": "int16", "uint16": "uint16", "int32": "int32", "uint32": "uint32",
     "int64": "int64", "uint64": "uint64", "float32": "float32", "float64": "float64",
@@ -257,7 +258,8 @@ class TypeRegistry:
         consts, fields = self.store.fielddefs[full]
         # Generated code names its helpers with a leading underscore: rosidl field names cannot
         # start with one, so no field (``self``, ``np``, ``copy``...) shadows them.
-        namespace: dict[str, Any] = {"_np": np, "_Message": Message, "_FrozenMessage": FrozenMessage}
+        namespace: dict[str, Any] = {"_np": np, "_Message": Message, "_FrozenMessage": FrozenMessage,
+                                     "_U": _UNSET, "_L": _as_list}
         defaults = self._defaults.get(full, {})
         params: list[str] = []
         body: list[str] = []
@@ -265,10 +267,11 @@ class TypeRegistry:
         for index, (name, desc) in enumerate(fields):
             attr = _attr_name(name)
             fieldnames.append(attr)
-            default_expr, coerce = self._default_for(desc, namespace, index, defaults.get(name, _NO_DEFAULT))
-            params.append(f"{attr}=None")
+            default_expr, coerce = self._default_for(desc, namespace, index, defaults.get(name, _NO_DEFAULT),
+                                                     f"{full.rsplit('/', 1)[-1]}.{attr}")
+            params.append(f"{attr}=_U")
             value = f"{coerce}({attr})" if coerce else attr
-            body.append(f"        _m.{attr} = {default_expr} if {attr} is None else {value}")
+            body.append(f"        _m.{attr} = {default_expr} if {attr} is _U else {value}")
         short = full.rsplit("/", 1)[-1]
         lines = [f"class {short}(_Message):", f"    __slots__ = {tuple(fieldnames)!r}"]
         lines.append(f"    __msgtype__ = {full!r}")
@@ -297,13 +300,24 @@ class TypeRegistry:
         cls._nested_names = tuple(a for a, d in kinds if d[0] == Nodetype.NAME)
         cls._nested_list_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
                                        and d[1][0][0] == Nodetype.NAME)
+        setattr(cls, "_hetros_validate", staticmethod(self._lazy_validator(full, cls)))  # noqa: B010
         self._classes[full] = cls
         self.store.types[full] = cls
         self.store.cache.pop(full, None)
         return cls
 
+    def _lazy_validator(self, full: str, cls: type[Message]) -> Validator:
+        """Builds the type's validator on its first use (most types are never published)."""
+
+        def first_use(message: Any, where: str = "") -> None:
+            validator = build_validator(self, full)
+            setattr(cls, "_hetros_validate", staticmethod(validator))  # noqa: B010 (a method mypy sees as fixed)
+            validator(message, where or full.rsplit("/", 1)[-1])
+
+        return first_use
+
     def _default_for(self, desc: Any, namespace: dict[str, Any], index: int,
-                     declared: Any = None) -> tuple[str, str]:
+                     declared: Any = None, where: str = "") -> tuple[str, str]:
         """A Python expression for the default value, and a coercion function name (or '')."""
         kind, arg = desc
         has_declared = declared is not _NO_DEFAULT
@@ -319,25 +333,34 @@ class TypeRegistry:
             return f"_T{index}()", ""
         subdesc, length = arg
         if subdesc[0] == Nodetype.BASE and subdesc[1][0] != "string":
-            dtype = np.dtype(_NUMPY_DTYPES[subdesc[1][0]])
+            dtype = np.dtype(NUMPY_DTYPES[subdesc[1][0]])
             namespace[f"_dt{index}"] = dtype
-            namespace[f"_co{index}"] = functools.partial(_as_array, dtype=dtype)
+            namespace[f"_co{index}"] = functools.partial(
+                convert_array, dtype=dtype, where=f"{where}", length=length if kind == Nodetype.ARRAY else 0,
+                bounded=False)
             if has_declared:
                 return f"_np.array(_d{index}, _dt{index})", f"_co{index}"
             size = length if kind == Nodetype.ARRAY else 0
             return f"_np.zeros({size}, _dt{index})", f"_co{index}"
         if subdesc[0] == Nodetype.BASE:
             if has_declared:
-                return f"list(_d{index})", "list"
-            return (f"[''] * {length}" if kind == Nodetype.ARRAY else "[]"), "list"
+                return f"list(_d{index})", "_L"
+            return (f"[''] * {length}" if kind == Nodetype.ARRAY else "[]"), "_L"
         sub = self._generate(subdesc[1])
         namespace[f"_T{index}"] = sub
         if kind == Nodetype.ARRAY:
-            return f"[_T{index}() for _ in range({length})]", "list"
-        return "[]", "list"
+            return f"[_T{index}() for _ in range({length})]", "_L"
+        return "[]", "_L"
 
 
 _NO_DEFAULT: Any = object()
+
+
+def _as_list(value: Any) -> Any:
+    """A list field keeps its own list; anything else stays as given for the validator to name."""
+    return list(value) if isinstance(value, (list, tuple)) else value
+# "not given" for generated constructors: an explicit None is stored, and refused when published
+_UNSET: Any = type("Unset", (), {"__repr__": lambda self: "<default>"})()
 
 
 def _field_type(desc: Any) -> tuple[str, list[str]]:
@@ -382,14 +405,6 @@ def _refuse_recursion(definitions: tuple[ParsedDefinition, ...]) -> None:
             if target in uses and target not in finished:
                 path.append(target)
                 pending.append(iter(uses[target]))
-
-
-def _as_array(value: Any, dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
-    if type(value) is np.ndarray and value.dtype == dtype:
-        return value
-    if isinstance(value, (bytes, bytearray, memoryview)) and dtype.itemsize == 1:
-        return np.frombuffer(value, dtype)
-    return np.asarray(value, dtype=dtype)
 
 
 def _attr_name(name: str) -> str:

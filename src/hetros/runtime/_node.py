@@ -87,10 +87,13 @@ class Publisher(Generic[M]):
         self.msg_type = msg_type
         self.topic = topic
         self.typename = _typename(msg_type)
+        self._short = self.typename.rsplit("/", 1)[-1]
         self._writer = writer
 
     def publish(self, message: M) -> None:
+        """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
         _check_type(message, self.typename, f"topic {self.topic}")
+        message._hetros_validate(message, self._short)
         self._writer.write(message)
 
     def loan(self, **sizes: int) -> M:
@@ -278,6 +281,7 @@ class Service:
         response = self.handler(request)
         self.stats.add(time.perf_counter() - start)
         _check_type(response, self._response_type, f"the response of service {self.name}")
+        response._hetros_validate(response, f"the response of {self.name}")
         writer = self._replies.get(client)
         if writer is None:
             writer = self.node.graph.open_writer(
@@ -327,6 +331,7 @@ class Client:
 
     def call_async(self, request: Any) -> Future[Any]:
         _check_type(request, self._request_type, f"a request of service {self.name}")
+        request._hetros_validate(request, f"the request to {self.name}")
         future: Future[Any] = Future()
         with self._lock:
             request_id = next(self._ids)

@@ -9,7 +9,8 @@ PYTHON  ?= python3
 BSTAMP  := $(VENV)/.installed-bench
 ROS_DEBS := ros-core python3-rospy python3-rostopic python3-std-msgs
 
-.PHONY: install install-test install-bench run test lint bench bench-quick clean
+
+.PHONY: install install-examples install-test install-bench run test lint bench bench-quick clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -20,6 +21,10 @@ $(STAMP): pyproject.toml | $(PY)
 	touch $@
 
 install: $(STAMP)
+
+# every example beyond the default one: scikit-learn's digits, scipy
+install-examples: | $(PY)
+	$(PIP) install --quiet -e '.[examples]'
 
 $(TSTAMP): pyproject.toml | $(PY)
 	$(PIP) install --quiet -e '.[test]'

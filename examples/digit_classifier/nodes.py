@@ -3,6 +3,7 @@
 import numpy as np
 from cnn import classify, load
 from hetros.interfaces.classifier_msgs.srv import Classify
+from train import split
 
 from hetros import Node
 
@@ -19,8 +20,6 @@ def classifier(node: Node) -> None:
 
 def client(node: Node) -> None:
     """Sends every held-out digit (the split train.py kept out) and reports the accuracy."""
-    from train import split
-
     _train_x, test_x, _train_y, test_y = split()
     service = node.create_client(Classify, "/classify")
     correct = 0

@@ -7,8 +7,13 @@ The held-out split (seed 0, 25 %) is the one the integration test queries throug
 
 import numpy as np
 from cnn import WEIGHTS, forward, gradients, init
-from sklearn.datasets import load_digits
-from sklearn.model_selection import train_test_split
+
+try:
+    from sklearn.datasets import load_digits
+    from sklearn.model_selection import train_test_split
+except ImportError as exc:
+    raise ImportError("the digit classifier takes its digits from scikit-learn: "
+                      "run `.venv/bin/pip install -e '.[examples]'` (or `make install-examples`)") from exc
 
 
 def split() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -118,3 +119,17 @@ def test_msg_show_lists_action_parts() -> None:
     lines = result.stdout.splitlines()
     assert lines[:2] == ["unique_identifier_msgs/msg/UUID goal_id", "example_interfaces/action/Fibonacci_Goal goal"]
     assert "MSG: unique_identifier_msgs/msg/UUID" in result.stdout and "int32 order" in result.stdout
+
+
+def test_an_example_missing_its_extra_says_what_to_install(tmp_path: Path) -> None:
+    """After `make install` alone (no scikit-learn), check names the missing extra in one line."""
+    blocker = tmp_path / "sklearn"
+    blocker.mkdir()
+    (blocker / "__init__.py").write_text("raise ModuleNotFoundError(\"No module named 'sklearn'\")\n")
+    env = dict(os.environ, PYTHONPATH=str(tmp_path))
+    result = subprocess.run([sys.executable, "-m", "hetros", "check",
+                             str(ROOT / "examples" / "digit_classifier" / "project.yaml")],
+                            capture_output=True, text=True, timeout=120, env=env, check=False)
+    assert result.returncode == 1
+    assert "run `.venv/bin/pip install -e '.[examples]'`" in result.stderr, result.stderr
+    assert "nodes.client.run" in result.stderr

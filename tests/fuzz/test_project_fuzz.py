@@ -9,7 +9,9 @@ from __future__ import annotations
 import os
 import re
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
@@ -121,56 +123,45 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-@pytest.mark.slow
-@pytest.mark.timeout(900)
-def test_mutated_projects_are_refused_with_file_and_line(folder: Path) -> None:
+def _fuzz(folder: Path, strategy: st.SearchStrategy[Any], write: Callable[[Path, Any], object]) -> None:
+    """Write each generated case as the project file, then load and check it."""
+
     @SETTINGS
-    @given(mutated_projects())
-    def case(text: str) -> None:
+    @given(strategy)
+    def case(value: Any) -> None:
         path = folder / "project.yaml"
-        path.write_text(text, encoding="utf-8")
+        write(path, value)
         _load_and_check(path)
 
     case()
+
+
+def _text(path: Path, text: str) -> None:
+    path.write_text(text, encoding="utf-8")
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+def test_mutated_projects_are_refused_with_file_and_line(folder: Path) -> None:
+    _fuzz(folder, mutated_projects(), _text)
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_damaged_project_text_is_refused_with_file_and_line(folder: Path) -> None:
-    @SETTINGS
-    @given(damaged_text())
-    def case(data: bytes) -> None:
-        path = folder / "project.yaml"
-        path.write_bytes(data)
-        _load_and_check(path)
-
-    case()
+    _fuzz(folder, damaged_text(), Path.write_bytes)
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_random_bytes_are_refused_with_file_and_line(folder: Path) -> None:
-    @SETTINGS
-    @given(st.binary(max_size=300))
-    def case(data: bytes) -> None:
-        path = folder / "project.yaml"
-        path.write_bytes(data)
-        _load_and_check(path)
-
-    case()
+    _fuzz(folder, st.binary(max_size=300), Path.write_bytes)
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_random_yaml_documents_are_refused_with_file_and_line(folder: Path) -> None:
-    @SETTINGS
-    @given(values)
-    def case(tree: object) -> None:
-        path = folder / "project.yaml"
-        path.write_text(yaml.safe_dump(tree, allow_unicode=True), encoding="utf-8")
-        _load_and_check(path)
-
-    case()
+    _fuzz(folder, values, lambda path, tree: _text(path, yaml.safe_dump(tree, allow_unicode=True)))
 
 
 def test_report_outcomes() -> None:

@@ -56,7 +56,8 @@ def main() -> None:
             path = spool / f"{count}.bin"
             message.data.tofile(path)
             send({"reply": {"height": int(message.height), "width": int(message.width),
-                            "file": str(path), "readonly": not message.data.flags.writeable}})
+                            "file": str(path), "readonly": not message.data.flags.writeable,
+                            "frozen": message.is_frozen}})
         elif op == "close":
             reader.close()
             assert domain is not None

@@ -101,7 +101,7 @@ class _MergedReader(Reader):
         for part in self._parts:
             item = part.try_take()
             if item is not None:
-                return _freeze_payload(item)
+                return item
         return None
 
     def close(self) -> None:

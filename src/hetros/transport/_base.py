@@ -1,7 +1,8 @@
 """What every transport provides: writers that deliver, readers that take.
 
-A reader never calls user code. When data may be available it calls the
-``wake`` function it was given (from any thread); the runtime then takes
+A reader never calls user code. When data may be available its ``wake``
+function runs (for shared memory, in the thread that waits on the node's wake
+channel; in-process, in the publishing thread); the runtime then takes
 messages in the node's own thread. That keeps the executor the only place
 where callbacks run, whatever the transport.
 """
@@ -27,7 +28,11 @@ class Writer(ABC):
 
 
 class Reader(ABC):
-    """Subscribing end; ``try_take`` returns the next message or None when empty."""
+    """Subscribing end; ``try_take`` returns the next message or None when empty.
+
+    What a reader delivers is read-only (a frozen message whose arrays are not writeable):
+    it may be the publisher's own object, or a view on shared memory.
+    """
 
     @abstractmethod
     def try_take(self) -> Any | None: ...

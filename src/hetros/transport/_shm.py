@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import PublishTimeoutError, SerializationError, ShutdownError, TransportError
-from ..msg import get_path, set_path
+from ..msg import Message, freeze, get_path, set_path
 from ._base import Codec, Reader, Wake, Writer
 from ._codec import MessageCodec
 from ._qos import QoS
@@ -839,6 +839,15 @@ class _Lease:
             self.borrowed.count -= 1
 
 
+def _frozen(item: Any) -> Any:
+    """What a reader delivers is read-only: a message, or the message of a service envelope."""
+    if isinstance(item, Message):
+        freeze(item)
+    elif isinstance(item, tuple) and item and isinstance(item[-1], Message):
+        freeze(item[-1])
+    return item
+
+
 class _Port:
     """One publishing target's service as seen by one reader."""
 
@@ -905,7 +914,7 @@ class ShmReader(Reader):
                     self._domain.notify_back(service.target, credits.back_event)
                 if self._borrowed.count >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))
-                return self._decode(memory.toreadonly(), layout)
+                return _frozen(self._decode(memory.toreadonly(), layout))
             return None
 
     def _check_arrival(self, port: _Port) -> None:

@@ -4,6 +4,7 @@ import threading
 import time
 from collections.abc import Iterator
 
+import numpy as np
 import pytest
 from hetros.interfaces.example_interfaces.srv import AddTwoInts
 from hetros.interfaces.std_msgs.msg import Int32, String
@@ -183,3 +184,37 @@ def test_undeclared_endpoint_refused_at_run_time() -> None:
     with pytest.raises(TopicTypeError, match="project declares std_msgs/msg/String"):
         node.create_publisher(Int32, "/x")
     graph.close()
+
+
+def test_publishing_one_reused_buffer_in_a_loop_works(graph: Graph) -> None:
+    """publish never takes the caller's arrays: a refilled buffer is copied for in-process readers."""
+    from hetros.interfaces.std_msgs.msg import UInt8MultiArray
+
+    node = Node("camera", graph)
+    sub = node.create_subscription(UInt8MultiArray, "/frames", qos=QoS(depth=10))
+    pub = node.create_publisher(UInt8MultiArray, "/frames", qos=QoS(depth=10))
+    buffer = np.zeros(4, np.uint8)
+    for value in range(3):
+        buffer[:] = value                       # the common pattern: fill one buffer, publish it
+        pub.publish(UInt8MultiArray(data=buffer))
+    got = [sub.take(timeout=1.0) for _ in range(3)]
+    assert [int(m.data[0]) for m in got] == [0, 1, 2]
+    assert buffer.flags.writeable
+    assert not got[0].data.flags.writeable
+
+
+def test_a_loaned_message_travels_without_a_copy_in_process(graph: Graph) -> None:
+    from hetros.interfaces.std_msgs.msg import UInt8MultiArray
+
+    node = Node("camera", graph)
+    sub = node.create_subscription(UInt8MultiArray, "/frames")
+    pub = node.create_publisher(UInt8MultiArray, "/frames")
+    message = pub.loan(data=1000)
+    message.data[:] = 7
+    filled = message.data
+    pub.publish(message)
+    got = sub.take(timeout=1.0)
+    assert np.shares_memory(got.data, filled), "zero copies for a loan"
+    assert not got.data.flags.writeable
+    with pytest.raises(ReadOnlyMessageError):
+        message.data = np.zeros(3, np.uint8)

@@ -91,6 +91,49 @@ def copy(message: Message) -> Any:
     return cls(*values)
 
 
+class LoanedBytes(bytearray):
+    """The memory of an array that ``pub.loan()`` handed out: hetros owns it, so it travels uncopied."""
+
+
+def loaned_array(length: int, dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
+    """A zeroed array on hetros-owned memory, for a loan with no shared-memory slot behind it."""
+    return np.frombuffer(LoanedBytes(length * dtype.itemsize), dtype)
+
+
+def _is_loaned(array: np.ndarray[Any, Any]) -> bool:
+    base = array.base
+    return isinstance(base, memoryview) and isinstance(base.obj, LoanedBytes)
+
+
+def hand_over(message: Message, copy_arrays: bool) -> Message:
+    """Freeze ``message`` for delivery without taking the caller's arrays.
+
+    A writable array the caller owns is replaced by a read-only copy when ``copy_arrays``
+    (in-process subscribers will hold the very object) and left alone otherwise (the
+    transport copies it anyway). Loaned and already read-only arrays travel as they are.
+    """
+    cls = type(message)
+    frozen = cls._frozen_class
+    if cls is frozen:
+        return message
+    for name in cls._array_names:
+        value = getattr(message, name)
+        if type(value) is np.ndarray and value.flags.writeable:
+            if _is_loaned(value):
+                value.flags.writeable = False
+            elif copy_arrays:
+                value = value.copy()
+                value.flags.writeable = False
+                object.__setattr__(message, name, value)
+    for name in cls._nested_names:
+        hand_over(getattr(message, name), copy_arrays)
+    for name in cls._nested_list_names:
+        for item in getattr(message, name):
+            hand_over(item, copy_arrays)
+    object.__setattr__(message, "__class__", frozen)
+    return message
+
+
 def freeze(message: Message) -> Message:
     """Make ``message`` read-only in place, including nested messages and arrays."""
     cls = type(message)

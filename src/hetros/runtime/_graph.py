@@ -12,10 +12,8 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
 from .._errors import TransportError, UndeclaredEndpointError
-from ..msg import Message, TypeRegistry, array_fields, freeze, registry, set_path
+from ..msg import Message, TypeRegistry, array_fields, freeze, hand_over, loaned_array, registry, set_path
 from ..msg import copy as copy_message
 from ..transport import (
     DEFAULT_QOS,
@@ -36,11 +34,12 @@ from ._plan import ChannelPlan, Plan
 log = logging.getLogger("hetros.graph")
 
 
-def _freeze_payload(item: Any) -> Any:
+def _hand_over(item: Any, copy_arrays: bool) -> Any:
+    """Freeze a message (or a service envelope's message) on its way out; see ``msg.hand_over``."""
     if isinstance(item, Message):
-        freeze(item)
+        hand_over(item, copy_arrays)
     elif isinstance(item, tuple) and item and isinstance(item[-1], Message):
-        freeze(item[-1])
+        hand_over(item[-1], copy_arrays)
     return item
 
 
@@ -51,6 +50,7 @@ class _FanoutWriter(Writer):
         self._parts = parts
         self._types = types
         self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
+        self._local = any(p is not self._shm for p in parts)
         self._loaned: set[int] = set()
 
     def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
@@ -65,7 +65,7 @@ class _FanoutWriter(Writer):
             name = ".".join(field.path)
             length = wanted.pop(name, None)
             if length is not None and field.length is None:
-                set_path(message, field.path, np.zeros(length, field.dtype))
+                set_path(message, field.path, loaned_array(length, field.dtype))
         if wanted:
             raise TransportError(f"{cls.__msgtype__} has no variable-length primitive array "
                                  f"{', '.join(wanted)}")
@@ -78,13 +78,13 @@ class _FanoutWriter(Writer):
             others = [part for part in self._parts if part is not self._shm]
             if others:
                 # the slot leaves with the shared-memory send: in-process readers get their own copy
-                local = _freeze_payload(copy_message(message))
+                local = freeze(copy_message(message))
                 for part in others:
                     part.write(local)
             assert self._shm is not None
-            self._shm.write(_freeze_payload(message))
+            self._shm.write(_hand_over(message, copy_arrays=False))
             return
-        _freeze_payload(message)
+        _hand_over(message, copy_arrays=self._local)
         for part in self._parts:
             part.write(message)
 

@@ -80,7 +80,13 @@ def _check_type(value: object, expected: str, where: str) -> None:
 
 
 class Publisher(Generic[M]):
-    """Publishes on one topic. ``publish`` hands the message over (it becomes read-only)."""
+    """Publishes on one topic.
+
+    ``publish`` hands the message object over (it becomes read-only) but leaves your arrays
+    yours: a writable array you own is copied once (into shared memory, or into a read-only
+    copy for in-process subscribers). ``loan`` gives arrays hetros owns, which travel
+    without a copy.
+    """
 
     def __init__(self, node: Node, msg_type: type[M], topic: str, writer: Writer) -> None:
         self.node = node

@@ -316,9 +316,9 @@ class CycloneEndpoint(Endpoint):
 # -- driver ------------------------------------------------------------------------------------
 
 def open_endpoint(system: str, role: str, cfg: dict[str, Any]) -> Endpoint:
-    if system == "hetros-shm":
+    if system in ("hetros-shm", "hetros-shm-cb"):
         return open_hetros_shm(role, cfg, loaned=False)
-    if system == "hetros-shm-loan":
+    if system in ("hetros-shm-loan", "hetros-shm-loan-cb"):
         return open_hetros_shm(role, cfg, loaned=True)
     if system == "iceoryx2":
         return Iceoryx2Endpoint(role, cfg)
@@ -332,8 +332,7 @@ def open_endpoint(system: str, role: str, cfg: dict[str, Any]) -> Endpoint:
 
 
 def ping(endpoint: Endpoint, cfg: dict[str, Any]) -> dict[str, Any]:
-    payload = bytes(cfg["size"]) if cfg["system"] not in ("hetros-shm", "hetros-shm-loan", "hetros-inproc") \
-        else np.zeros(cfg["size"], dtype=np.uint8)
+    payload = np.zeros(cfg["size"], dtype=np.uint8) if cfg["system"].startswith("hetros") else bytes(cfg["size"])
     deadline = time.monotonic() + cfg.get("connect_timeout", 30.0)
     while True:
         endpoint.send(time.monotonic_ns(), PROBE, payload)
@@ -379,6 +378,49 @@ def echo(endpoint: Endpoint, cfg: dict[str, Any]) -> dict[str, Any]:
     return {"one_way_ns": one_way}
 
 
+def callback_echo(cfg: dict[str, Any], loaned: bool) -> dict[str, Any]:
+    """The echo node as users write it: a subscription callback that publishes a new message.
+
+    The executor waits on the node's wake channel and runs the callback in the node's thread;
+    plain publish copies the received array into a new message, loaned publish copies it
+    into a loan.
+    """
+    from hetros import Node
+    from hetros.msg import registry
+    from hetros.runtime import Graph
+
+    graph = Graph(_hetros_plan(16), "p1", cfg["session"])
+    graph.prepare(["echo"])
+    node = Node("echo", graph)
+    image = registry().get("sensor_msgs/msg/Image")
+    pub = node.create_publisher(image, "/recv")
+    one_way: list[int] = []
+
+    def on_ping(msg: Any) -> None:
+        now = time.monotonic_ns()
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        seq = msg.height if not msg.width else msg.height - (1 << 32)
+        if seq == STOP:
+            graph.shutdown()
+            return
+        if seq >= cfg["warmup"]:
+            one_way.append(now - stamp)
+        if loaned:
+            out = pub.loan(data=msg.data.size)
+            np.copyto(out.data, msg.data)
+        else:
+            out = image(data=msg.data.copy())
+        out.header.stamp.sec, out.header.stamp.nanosec = msg.header.stamp.sec, msg.header.stamp.nanosec
+        out.height, out.width = msg.height, msg.width
+        pub.publish(out)
+
+    node.create_subscription(image, "/send", on_ping)
+    node.spin()
+    node.close()
+    graph.close()
+    return {"one_way_ns": one_way}
+
+
 def run_inproc(cfg: dict[str, Any]) -> dict[str, Any]:
     """Both roles as threads of one process on one hetros graph (the inproc transport).
 
@@ -389,8 +431,9 @@ def run_inproc(cfg: dict[str, Any]) -> dict[str, Any]:
     from hetros.runtime import Graph
 
     graph = Graph.standalone()
-    pinger = HetrosEndpoint("ping", graph, loaned=False)
-    echoer = HetrosEndpoint("echo", graph, loaned=False)
+    # loaned: in a process a loan travels with zero copies (plain publish copies the caller's array)
+    pinger = HetrosEndpoint("ping", graph, loaned=True)
+    echoer = HetrosEndpoint("echo", graph, loaned=True)
     result: dict[str, Any] = {}
 
     def run_echo() -> None:
@@ -419,9 +462,12 @@ def main() -> None:
     else:
         if cfg.get("cpus"):
             os.sched_setaffinity(0, [cfg["cpus"][0 if role == "ping" else 1]])
-        endpoint = open_endpoint(system, role, cfg)
-        result = ping(endpoint, cfg) if role == "ping" else echo(endpoint, cfg)
-        endpoint.close()
+        if role == "echo" and system.endswith("-cb"):
+            result = callback_echo(cfg, loaned="loan" in system)
+        else:
+            endpoint = open_endpoint(system, role, cfg)
+            result = ping(endpoint, cfg) if role == "ping" else echo(endpoint, cfg)
+            endpoint.close()
     Path(cfg[f"{role}_out"]).write_text(json.dumps(result))
     os._exit(0)  # some peers' background threads would hold the interpreter at exit
 

@@ -32,8 +32,10 @@ from ..transport import cleanup_stale, remove_session_segments
 SIZES = [4, 3 * 1024, 12 * 1024, 48 * 1024, 192 * 1024, 768 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
 SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "196 kB",
                786432: "786 kB", 3145728: "3146 kB", 6291456: "6 MiB"}
-SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "iceoryx2", "cyclonedds", "zenoh", "dora-rs",
-           "rospy", "mp-pipe", "numpy-copy"]
+# -cb: the echo node is a subscription callback that publishes (what users write); the others
+# take in a loop on both sides
+SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb", "iceoryx2",
+           "cyclonedds", "zenoh", "dora-rs", "rospy", "mp-pipe", "numpy-copy"]
 HERE = Path(__file__).resolve().parent
 LOOPBACK_CYCLONEDDS = textwrap.dedent("""\
     <CycloneDDS><Domain id="any">
@@ -342,12 +344,13 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
         return cell
 
     peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
-    for ours in ("hetros-shm-loan", "hetros-inproc"):
+    for ours in ("hetros-shm-cb", "hetros-shm-loan-cb", "hetros-shm-loan", "hetros-inproc"):
         if ours in shown:
             _table(lines, f"Speed-up of {ours} (p50 one-way) over each peer: peer p50 / {ours} p50",
                    peers, sizes, ratio(ours, "one_way", "p50"))
     if "iceoryx2" in shown:
-        ours_shm: list[str] = [s for s in ("hetros-shm", "hetros-shm-loan") if s in shown]
+        ours_shm: list[str] = [s for s in ("hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb")
+                               if s in shown]
 
         def overhead(size: int, ours: str) -> str:
             return ratio(ours, "rtt", "mean", invert=True)(size, "iceoryx2")

@@ -12,7 +12,6 @@ one root and still tell the kinds apart::
     │   └── ReadOnlyMessageError  writing to a message that was handed over
     ├── ProjectError           the project file (YAML path)
     │   └── CheckError         `hetros check` found problems (carries all of them)
-    ├── PlanError              a mapping hetros cannot carry out (yet)
     ├── TransportError         moving messages
     │   ├── PublishTimeoutError   back-pressure outlasted the timeout
     │   └── TopicTypeError        a message of the wrong type for the topic
@@ -75,10 +74,6 @@ class CheckError(ProjectError):
         self.problems = list(problems)
         lines = "\n".join(f"  - {p}" for p in self.problems)
         super().__init__(f"{len(self.problems)} problem(s) in the project:\n{lines}")
-
-
-class PlanError(Error):
-    """The project maps something onto a target hetros cannot (yet) run."""
 
 
 class TransportError(Error):

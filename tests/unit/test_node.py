@@ -171,7 +171,7 @@ def test_log_lines_carry_the_node_name(graph: Graph, caplog: pytest.LogCaptureFi
 
 
 def test_undeclared_endpoint_refused_at_run_time() -> None:
-    from hetros.runtime import ChannelPlan, NodePlan, Plan, TargetPlan
+    from hetros.plan import ChannelPlan, NodePlan, Plan, TargetPlan
 
     plan = Plan("p", "/", (), {"main": TargetPlan("main", "thread")},
                 {"a": NodePlan("a", "m:f", "main", publish={"/x": "std_msgs/msg/String"})},

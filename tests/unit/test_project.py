@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 
 from hetros import CheckError, ProjectError
+from hetros.plan import Plan
 from hetros.project import check, import_reconros, import_roslite, load_project, plan, template_from_sources
-from hetros.runtime import Plan
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

@@ -10,7 +10,8 @@ import pytest
 from hetros.interfaces.sensor_msgs.msg import Image
 
 from hetros import Node, ReadOnlyMessageError
-from hetros.runtime import ChannelPlan, Graph, NodePlan, Plan, TargetPlan
+from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
+from hetros.runtime import Graph
 from hetros.transport import QoS, remove_session_segments
 
 from ..conformance.test_shm_specific import in_shared_memory
@@ -24,7 +25,7 @@ def graphs(shm_session: str) -> Iterator[tuple[Graph, Graph]]:
         {"cam": NodePlan("cam", "m:f", "p1", publish={"/img": "sensor_msgs/msg/Image"}),
          "viewer": NodePlan("viewer", "m:f", "p2", subscribe={"/img": "sensor_msgs/msg/Image"})},
         {"/img": ChannelPlan("/img", "sensor_msgs/msg/Image", "topic", QoS(depth=3), ("cam",), ("viewer",))},
-        (),
+        (EdgePlan("/img", "cam", "viewer", "shm"),),
     )
     first, second = Graph(plan, "p1", shm_session), Graph(plan, "p2", shm_session)
     yield first, second

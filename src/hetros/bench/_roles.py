@@ -53,7 +53,7 @@ def framed(size: int) -> bytearray:
 # -- hetros ------------------------------------------------------------------------------
 
 def _hetros_plan(qos_depth: int) -> Any:
-    from hetros.runtime import ChannelPlan, NodePlan, Plan, TargetPlan
+    from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
     from hetros.transport import QoS
 
     image = "sensor_msgs/msg/Image"
@@ -65,7 +65,7 @@ def _hetros_plan(qos_depth: int) -> Any:
          "echo": NodePlan("echo", "m:f", "p1", publish={"/recv": image}, subscribe={"/send": image})},
         {"/send": ChannelPlan("/send", image, "topic", qos, ("ping",), ("echo",)),
          "/recv": ChannelPlan("/recv", image, "topic", qos, ("echo",), ("ping",))},
-        (),
+        (EdgePlan("/send", "ping", "echo", "shm"), EdgePlan("/recv", "echo", "ping", "shm")),
     )
 
 

@@ -190,14 +190,6 @@ class TypeRegistry:
             )
         return self.actions[full]
 
-    def kind_of(self, name: str) -> str:
-        """'msg', 'srv' or 'action' for a full type name, else raise UnknownTypeError."""
-        for kind, table in (("srv", self.services), ("action", self.actions)):
-            if normalize_typename(name, kind) in table:
-                return kind
-        self.get(name)
-        return "msg"
-
     def names(self) -> list[str]:
         return sorted(self.store.fielddefs)
 

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from .._errors import Error
-from ..runtime._plan import Plan
+from ..plan import Plan
 
 
 def describe(plan: Plan) -> str:

@@ -9,8 +9,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._errors import ProjectError
-
-RESERVED_TARGET = "launcher"
+from ..plan import LAUNCHER
 
 
 class _Strict(BaseModel):
@@ -124,8 +123,8 @@ class Project(_Strict):
     @field_validator("targets")
     @classmethod
     def _targets(cls, value: dict[str, TargetSpec]) -> dict[str, TargetSpec]:
-        if RESERVED_TARGET in value:
-            raise ValueError(f"{RESERVED_TARGET!r} is reserved for the launching process; pick another name")
+        if LAUNCHER in value:
+            raise ValueError(f"{LAUNCHER!r} is reserved for the launching process; pick another name")
         return value
 
 

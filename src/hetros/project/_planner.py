@@ -10,9 +10,18 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .._errors import CheckError, DefinitionError, MessageError, PlanError
+from .._errors import CheckError, DefinitionError, MessageError
 from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
-from ..runtime._plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan, reply_channel, request_channel
+from ..plan import (
+    ChannelPlan,
+    EdgePlan,
+    NodePlan,
+    Plan,
+    TargetPlan,
+    process_name,
+    reply_channel,
+    request_channel,
+)
 from ..transport import QoS, reserved_bytes
 from ._model import LoadedProject, load_project
 from ._names import node_name_problem, topic_name_problem
@@ -224,8 +233,9 @@ def _check_shm_budget(project: LoadedProject, types: TypeRegistry, publishers: d
     budget = model.shm_budget_bytes
 
     def process(node: str) -> str:
-        target = model.targets.get(model.nodes[node].target)
-        return "launcher" if target is None or target.kind == "thread" else model.nodes[node].target
+        name = model.nodes[node].target
+        target = model.targets.get(name)
+        return process_name(name, target.kind if target is not None else "thread")
 
     for topic, published in publishers.items():
         if not any(process(p) != process(s) for p, _ in published for s, _ in subscribers.get(topic, [])):
@@ -311,7 +321,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         raise CheckError(report.errors)
     model = project.model
     process_of = {
-        n: ("launcher" if model.targets[s.target].kind == "thread" else s.target) for n, s in model.nodes.items()
+        n: process_name(s.target, model.targets[s.target].kind) for n, s in model.nodes.items()
     }
     channels: dict[str, ChannelPlan] = {}
     for nname, spec in model.nodes.items():
@@ -380,4 +390,4 @@ def ensure_importable(plan_: Plan) -> None:
         sys.path.insert(0, plan_.root)
 
 
-__all__ = ["CheckReport", "PlanError", "check", "ensure_importable", "load_messages", "plan", "plan_file"]
+__all__ = ["CheckReport", "check", "ensure_importable", "load_messages", "plan", "plan_file"]

@@ -15,6 +15,7 @@ from typing import Any
 from .._errors import TransportError, UndeclaredEndpointError
 from ..msg import Message, TypeRegistry, array_fields, freeze, hand_over, loaned_array, registry, set_path
 from ..msg import copy as copy_message
+from ..plan import LAUNCHER, ChannelPlan, EdgePlan, Plan
 from ..transport import (
     DEFAULT_QOS,
     Codec,
@@ -29,7 +30,6 @@ from ..transport import (
     WakeChannel,
     Writer,
 )
-from ._plan import ChannelPlan, Plan
 
 log = logging.getLogger("hetros.graph")
 
@@ -147,7 +147,7 @@ class Graph:
     def __init__(
         self,
         plan: Plan | None,
-        process: str = "launcher",
+        process: str = LAUNCHER,
         session: str = "",
         stop: threading.Event | None = None,
         types: TypeRegistry | None = None,
@@ -164,6 +164,13 @@ class Graph:
         self._codecs: dict[tuple[str, bool], Codec] = {}
         self._stop_hooks: list[Callable[[], None]] = []
         self._prepared: dict[tuple[str, str], _Retained] = {}
+        # the plan's edges, by (channel, publisher) and (channel, subscriber): the runtime wires
+        # what they say and never works the transport out again
+        self._out: dict[tuple[str, str], list[EdgePlan]] = {}
+        self._in: dict[tuple[str, str], list[EdgePlan]] = {}
+        for edge in plan.edges if plan is not None else ():
+            self._out.setdefault((edge.channel, edge.publisher), []).append(edge)
+            self._in.setdefault((edge.channel, edge.subscriber), []).append(edge)
 
     def prepare(self, nodes: list[str]) -> None:
         """Open every declared subscription of ``nodes`` now (static initialisation).
@@ -193,9 +200,9 @@ class Graph:
         """The wake channel of ``node`` if any of its readers is fed from another process."""
         if self.plan is None:
             return None
-        for channel in self.plan.channels.values():
-            if node in channel.subscribers and self._split(channel.publishers)[1]:
-                return self._domain().wake_channel(node)
+        if any(edge.transport == "shm" for (_, subscriber), edges in self._in.items() if subscriber == node
+               for edge in edges):
+            return self._domain().wake_channel(node)
         return None
 
     def on_stop(self, hook: Callable[[], None]) -> None:
@@ -269,24 +276,17 @@ class Graph:
             self._codecs[key] = codec
         return codec
 
-    def _split(self, nodes: tuple[str, ...]) -> tuple[bool, list[str]]:
-        """Whether any of ``nodes`` is in this process, and the other processes hosting some."""
-        assert self.plan is not None
-        local = any(self.plan.process_of(n) == self.process for n in nodes)
-        remote = sorted({self.plan.process_of(n) for n in nodes} - {self.process})
-        return local, remote
-
     def open_writer(self, name: str, node: str, typename: str, *, qos: QoS | None = None,
                     envelope: bool = False) -> Writer:
         channel = self.channel(name, node, "publish")
         effective = self.qos_of(name, qos)
         if channel is None:
             return _FanoutWriter([self._inproc_topic(name, effective).open_writer()], self.types)
-        local, remote = self._split(channel.subscribers)
+        transports = {edge.transport for edge in self._out.get((name, node), ())}
         parts: list[Writer] = []
-        if local:
+        if "inproc" in transports:
             parts.append(self._inproc_topic(name, effective).open_writer())
-        if remote:
+        if "shm" in transports:
             parts.append(self._domain().open_writer(name, self.process, effective,
                                                     self._codec(typename, envelope)))
         return _FanoutWriter(parts, self.types)
@@ -309,9 +309,11 @@ class Graph:
                      qos: QoS | None, *, envelope: bool) -> Reader:
         name = channel.name
         effective = self.qos_of(name, qos)
-        local, remote = self._split(channel.publishers)
+        edges = self._in.get((name, node), ())
+        assert self.plan is not None
+        remote = sorted({self.plan.process_of(e.publisher) for e in edges if e.transport == "shm"})
         parts: list[Reader] = []
-        if local:
+        if any(edge.transport == "inproc" for edge in edges):
             parts.append(self._inproc_topic(name, effective).open_reader(node, wake))
         if remote:
             slot = channel.subscribers.index(node)

@@ -13,10 +13,10 @@ from typing import Any
 
 from .._errors import LaunchError, ShutdownError
 from ..msg import registry
+from ..plan import NodePlan, Plan
 from ._graph import Graph
 from ._log import node_logger
 from ._node import Node
-from ._plan import NodePlan, Plan
 
 FailureReport = Callable[[str, str, bool], None]
 DoneReport = Callable[[str], None]

@@ -25,10 +25,10 @@ from pathlib import Path
 from typing import IO, Any
 
 from .._errors import LaunchError
+from ..plan import LAUNCHER, Plan
 from ..transport import cleanup_stale, remove_session_segments
 from ._host import Host
 from ._log import setup_logging
-from ._plan import Plan
 
 log = logging.getLogger("hetros.launch")
 
@@ -128,9 +128,9 @@ class Launcher:
     def _supervise(self) -> LaunchResult:
         for target in self.plan.processes():
             self.children[target] = self._spawn(target)
-        local_nodes = self.plan.nodes_in("launcher")
+        local_nodes = self.plan.nodes_in(LAUNCHER)
         if local_nodes:
-            self.host = Host(self.plan, "launcher", self.session, self._local_failure, self.stop,
+            self.host = Host(self.plan, LAUNCHER, self.session, self._local_failure, self.stop,
                              lambda: self.events.put({"event": "local_done"}),
                              lambda node: self.events.put({"event": "node_done", "node": node}))
         waiting = set(self.children)
@@ -166,7 +166,7 @@ class Launcher:
 
     def _watch(self) -> LaunchResult:
         end = None if self.duration is None else time.monotonic() + self.duration
-        running = set(self.children) | ({"launcher"} if self.host else set())
+        running = set(self.children) | ({LAUNCHER} if self.host else set())
         while running:
             event = self._next_event(None if end is None else end - time.monotonic())
             if event is None:
@@ -196,7 +196,7 @@ class Launcher:
                     self.failures.append(event["target"])
                     return LaunchResult(1, self.failures, f"target {event['target']} died")
             elif kind == "local_done":
-                running.discard("launcher")
+                running.discard(LAUNCHER)
             elif kind == "node_done" and self.plan.nodes[event["node"]].required:
                 log.info("required node %s finished; shutting the graph down", event["node"])
                 return LaunchResult(1 if self.failures else 0, self.failures, f"required node {event['node']} finished")

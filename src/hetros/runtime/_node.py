@@ -25,11 +25,11 @@ from .._errors import (
     TopicTypeError,
 )
 from ..msg import Message, ServiceType
+from ..plan import reply_channel, request_channel
 from ..transport import QoS, Reader, Writer
 from ._executor import Executor
 from ._graph import Graph
 from ._log import node_logger
-from ._plan import reply_channel, request_channel
 
 M = TypeVar("M", bound=Message)
 _MISSING: Any = object()

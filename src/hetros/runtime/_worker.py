@@ -16,10 +16,10 @@ import threading
 from pathlib import Path
 from typing import Any
 
+from ..plan import Plan
 from ..transport import remove_session_segments
 from ._host import Host
 from ._log import setup_logging
-from ._plan import Plan
 
 
 def main(argv: list[str] | None = None) -> int:

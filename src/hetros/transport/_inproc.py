@@ -92,12 +92,6 @@ class InprocTopic:
                     mailbox.put(item, time.monotonic() + self.qos.publish_timeout, self._stop)
         return mailbox
 
-    def drop_reader(self, mailbox: Mailbox) -> None:
-        with self._lock:
-            if mailbox in self._mailboxes:
-                self._mailboxes.remove(mailbox)
-        mailbox.close()
-
     def open_writer(self) -> InprocWriter:
         return InprocWriter(self)
 

@@ -11,7 +11,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Literal
 
 MAX_DEPTH = 1_000_000
@@ -50,9 +50,6 @@ class QoS:
     @property
     def keeps_history(self) -> bool:
         return self.durability == "transient_local"
-
-    def with_(self, **changes: object) -> QoS:
-        return replace(self, **changes)  # type: ignore[arg-type]
 
     # Presets, named after what they are for.
     @classmethod

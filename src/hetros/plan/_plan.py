@@ -1,7 +1,7 @@
 """The architecture graph the runtime executes: computed once, before anything runs.
 
 The planner (``hetros.project``) produces a :class:`Plan`; the launcher and every
-worker process read the same plan (as JSON: no pickle crosses a process), so
+worker process (``hetros.runtime``) read the same plan (as JSON: no pickle crosses a process), so
 every process opens exactly the transports the plan names. There is no master
 and no discovery: this is ROS-lite's masterless static initialisation.
 """
@@ -15,7 +15,14 @@ from typing import Any, Literal
 from ..transport import QoS
 
 TransportKind = Literal["inproc", "shm"]
+# The process that runs ``hetros launch``: thread targets live in it.
+LAUNCHER = "launcher"
 ChannelKind = Literal["topic", "request", "reply"]
+
+
+def process_name(target: str, kind: str) -> str:
+    """The process a target's nodes run in: threads share the launcher's, the others run alone."""
+    return LAUNCHER if kind == "thread" else target
 
 
 @dataclass(frozen=True)
@@ -71,19 +78,16 @@ class Plan:
     channels: dict[str, ChannelPlan]
     edges: tuple[EdgePlan, ...]
 
-    def target_of(self, node: str) -> str:
-        return self.nodes[node].target
-
     def process_of(self, node: str) -> str:
         """Threads share the launcher's process (called 'launcher'); others run alone."""
         target = self.targets[self.nodes[node].target]
-        return "launcher" if target.kind == "thread" else target.name
+        return process_name(target.name, target.kind)
 
     def nodes_in(self, process: str) -> list[str]:
         return [n for n in self.nodes if self.process_of(n) == process]
 
     def processes(self) -> list[str]:
-        return sorted({self.process_of(n) for n in self.nodes} - {"launcher"})
+        return sorted({self.process_of(n) for n in self.nodes} - {LAUNCHER})
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=1, sort_keys=True)

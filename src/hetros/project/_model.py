@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .._errors import ProjectError
 from ..plan import LAUNCHER
+from ..transport import QoS
 
 
 class _Strict(BaseModel):
@@ -70,14 +71,6 @@ class NodeSpec(_Strict):
         return value
 
 
-class TopicSpec(_Strict):
-    reliability: Literal["reliable", "best_effort"] = "reliable"
-    history: Literal["keep_all", "keep_last"] = "keep_all"
-    depth: int = Field(default=10, ge=1, le=1_000_000)
-    durability: Literal["volatile", "transient_local"] = "volatile"
-    publish_timeout: float = Field(default=5.0, gt=0)
-
-
 class ExternalSpec(_Strict):
     ros2: dict[str, Any] | None = None
     ros1: dict[str, Any] | None = None
@@ -107,7 +100,7 @@ class Project(_Strict):
     shm_budget: int | str = "1GiB"
     targets: dict[str, TargetSpec] = Field(default_factory=lambda: {"main": TargetSpec(kind="thread")})
     nodes: dict[str, NodeSpec]
-    topics: dict[str, TopicSpec] = Field(default_factory=dict)
+    topics: dict[str, QoS] = Field(default_factory=dict)
     external: ExternalSpec | None = None
 
     @field_validator("shm_budget")

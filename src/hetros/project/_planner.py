@@ -242,7 +242,7 @@ def _check_shm_budget(project: LoadedProject, types: TypeRegistry, publishers: d
             continue
         typename = published[0][1]
         spec = model.topics.get(topic)
-        qos = QoS(**spec.model_dump()) if spec is not None else QoS()
+        qos = spec if spec is not None else QoS()
         try:
             size = flat_layout(types, typename).size
         except MessageError:
@@ -370,7 +370,7 @@ def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, 
     if existing is None:
         if kind == "topic":
             spec = project.model.topics.get(name)
-            qos = QoS(**spec.model_dump()) if spec is not None else QoS()
+            qos = spec if spec is not None else QoS()
         else:
             qos = SERVICE_QOS
         existing = ChannelPlan(name, typename, kind, qos, (), (), service)  # type: ignore[arg-type]

@@ -12,7 +12,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Annotated, Literal
+
+from pydantic import ConfigDict, Field
 
 MAX_DEPTH = 1_000_000
 Reliability = Literal["reliable", "best_effort"]
@@ -22,13 +24,19 @@ Durability = Literal["volatile", "transient_local"]
 
 @dataclass(frozen=True, kw_only=True)
 class QoS:
-    """Per-topic quality of service. Construct with keywords or use a preset."""
+    """Per-topic quality of service. Construct with keywords or use a preset.
+
+    The one definition: the project file's ``topics:`` entries are validated as this class.
+    """
+
+    __pydantic_config__ = ConfigDict(extra="forbid")
 
     reliability: Reliability = "reliable"
     history: History = "keep_all"
-    depth: int = 10
+    # Annotated bounds: the project file's errors then name the field (topics./x.depth)
+    depth: Annotated[int, Field(ge=1, le=MAX_DEPTH)] = 10
     durability: Durability = "volatile"
-    publish_timeout: float = 5.0
+    publish_timeout: Annotated[float, Field(gt=0)] = 5.0
 
     def __post_init__(self) -> None:
         if self.reliability not in ("reliable", "best_effort"):

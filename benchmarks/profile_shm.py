@@ -20,7 +20,7 @@ from hetros.bench._roles import HetrosEndpoint, _hetros_plan
 from hetros.msg import registry
 from hetros.runtime import Graph
 from hetros.transport import remove_session_segments
-from hetros.transport._shm import _without_arrays
+from hetros.transport.shm._endpoints import without_arrays
 
 N = 3000
 
@@ -57,7 +57,7 @@ def main() -> None:
         print(f"{size} B {kind:6} publish {send / N * 1e6:6.1f} us   take {take / N * 1e6:6.1f} us")
     types = registry()
     image = types.get("sensor_msgs/msg/Image")(data=np.zeros(4, np.uint8))
-    small = _without_arrays(image, [("data",)])
+    small = without_arrays(image, [("data",)])
     raw = types.serialize(small)
     print(f"rosbags serialize the non-array part   {per_call(lambda: types.serialize(small)):6.1f} us")
     decode = per_call(lambda: types.deserialize(raw, image.__msgtype__))

@@ -4,7 +4,7 @@ from ._base import Codec, Reader, Wake, Writer
 from ._codec import EnvelopeCodec, MessageCodec
 from ._inproc import InprocTopic, Mailbox
 from ._qos import DEFAULT_QOS, QoS
-from ._shm import (
+from .shm import (
     ShmDomain,
     ShmReader,
     ShmWriter,

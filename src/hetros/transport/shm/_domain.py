@@ -1,0 +1,184 @@
+"""One process' view of the shared-memory fabric of a launch, and the clean-up after it."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ..._errors import TransportError
+from .._base import Codec, Wake
+from .._qos import QoS
+from ._credits import pid_alive
+from ._endpoints import ShmReader, ShmWriter
+from ._events import (
+    BackChannel,
+    WakeChannel,
+    back_channel_name,
+    event_service,
+    raise_open_file_limit,
+    wake_channel_name,
+)
+from ._iceoryx import iox2
+from ._sample import (
+    MAX_SUBSCRIBER_SLOTS,
+    SHM_DIR,
+    segment_prefix,
+)
+from ._service import Service
+
+
+class ShmDomain:
+    """This process' view of the shared-memory fabric of one launch ("session")."""
+
+    def __init__(self, session: str, process_name: str) -> None:
+        raise_open_file_limit()
+        self.session = session
+        self.process_name = process_name
+        self._lock = threading.Lock()
+        self._node = (
+            iox2.NodeBuilder.new()
+            .name(iox2.NodeName.new(f"hetros-{session}-{process_name}"[:120]))
+            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
+            .create(iox2.ServiceType.Ipc)
+        )
+        self._services: dict[str, Service] = {}
+        self._readers: list[ShmReader] = []
+        self._channels: dict[str, WakeChannel] = {}
+        self._notifiers: dict[int, Any] = {}
+        self._back_notifiers: dict[str, Any] = {}
+        self._back: BackChannel | None = None
+        self._closed = False
+
+    def _service(self, topic: str, publisher_target: str, qos: QoS) -> Service:
+        key = f"{topic}@{publisher_target}"
+        with self._lock:
+            service = self._services.get(key)
+            if service is None:
+                service = Service(self, self._node, topic, publisher_target, qos)
+                self._services[key] = service
+            return service
+
+    def wake_channel(self, owner: str) -> WakeChannel:
+        """The wake channel of node ``owner`` in this process (created on first use)."""
+        with self._lock:
+            channel = self._channels.get(owner)
+            if channel is None:
+                channel = WakeChannel(self._node, self.session, owner)
+                self._channels[owner] = channel
+            return channel
+
+    def notify(self, key: int, event: int) -> None:
+        """Wake reader ``event`` of the node whose wake channel is ``key``."""
+        notifier = self._notifiers.get(key)
+        if notifier is None:
+            service = event_service(self._node, wake_channel_name(self.session, key), "wake channel of a subscriber")
+            notifier = service.notifier_builder().create()
+            self._notifiers[key] = notifier
+        notifier.notify_with_custom_event_id(iox2.EventId.new(event))
+
+    def notify_back(self, publisher_target: str, event: int) -> None:
+        """Tell the publishing process of a service that one of its subscribers took or joined."""
+        notifier = self._back_notifiers.get(publisher_target)
+        if notifier is None:
+            service = event_service(self._node, back_channel_name(self.session, publisher_target),
+                                     f"back channel of target {publisher_target!r}")
+            notifier = service.notifier_builder().create()
+            self._back_notifiers[publisher_target] = notifier
+        notifier.notify_with_custom_event_id(iox2.EventId.new(event))
+
+    def back_channel(self) -> BackChannel:
+        with self._lock:
+            if self._back is None:
+                self._back = BackChannel(self._node, self.session, self.process_name)
+            return self._back
+
+    def open_writer(self, topic: str, target: str, qos: QoS, codec: Codec, slot: int = 0) -> ShmWriter:
+        return ShmWriter(self._service(topic, target, qos), codec, slot)
+
+    def open_reader(
+        self,
+        topic: str,
+        publisher_targets: Sequence[str],
+        qos: QoS,
+        codec: Codec,
+        slot: int,
+        wake: Wake,
+        owner: str,
+    ) -> ShmReader:
+        """A reader in subscriber ``slot`` of the topic; ``wake`` runs when ``owner``'s wake channel fires."""
+        if not 0 <= slot < MAX_SUBSCRIBER_SLOTS:
+            raise TransportError(
+                f"subscriber slot of {topic} must be in 0..{MAX_SUBSCRIBER_SLOTS - 1}, not {slot!r}: "
+                f"a topic carries at most {MAX_SUBSCRIBER_SLOTS} cross-process subscribers"
+            )
+        services = [self._service(topic, target, qos) for target in publisher_targets]
+        reader = ShmReader(self, services, codec, slot, wake, self.wake_channel(owner))
+        self._readers.append(reader)
+        return reader
+
+    def close(self) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            services = list(self._services.values())
+            self._services.clear()
+            back, self._back = self._back, None
+        for reader in list(self._readers):
+            reader.close()
+        self._readers.clear()
+        if back is not None:
+            back.close()
+        for service in services:
+            service.close()
+        for channel in self._channels.values():
+            channel.close()
+        self._channels.clear()
+        self._notifiers.clear()
+        self._back_notifiers.clear()
+        # iceoryx2 removes a node's shared memory when its last handle is dropped
+        self._node = None
+
+
+def remove_session_segments(session: str) -> list[str]:
+    """Unlink every credits file of a session (the launcher calls it on the way out)."""
+    removed: list[str] = []
+    for path in SHM_DIR.glob(f"{segment_prefix(session)}*"):
+        _unlink(path, removed)
+    return removed
+
+
+def _unlink(path: Path, removed: list[str]) -> None:
+    try:
+        path.unlink()
+        removed.append(path.name)
+    except FileNotFoundError:
+        pass
+
+
+def cleanup_stale() -> list[str]:
+    """Remove what crashed launches left: dead iceoryx2 nodes and orphaned credits files."""
+    removed: list[str] = []
+    try:
+        states = iox2.Node.list(iox2.ServiceType.Ipc, iox2.config.global_config())
+    except Exception:
+        states = []
+    for state in states:
+        if type(state).__name__ != "Dead":
+            continue
+        view = state._0
+        details = view.details
+        if details is None or not details.name.as_str().startswith("hetros-"):
+            continue
+        try:
+            view.try_remove_stale_resources()
+            removed.append(details.name.as_str())
+        except Exception:
+            pass
+    for path in SHM_DIR.glob("hetros-*"):
+        owner = path.name.split("-")[1].split("x")[0] if path.name.count("-") >= 2 else ""
+        if owner.isdigit() and not pid_alive(int(owner)):
+            _unlink(path, removed)
+    return removed

@@ -1,0 +1,347 @@
+"""Writers and readers of one shared-memory topic."""
+
+from __future__ import annotations
+
+import ctypes
+import threading
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..._errors import SerializationError, TransportError
+from ...msg import Message, freeze, get_path, set_path
+from .._base import Codec, Reader, Wake, Writer
+from .._codec import MessageCodec
+from ._events import (
+    WakeChannel,
+    fd_hint,
+)
+from ._sample import (
+    BLOB,
+    BORROW_LIMIT,
+    HEADER,
+    INLINE_LIMIT,
+    LAYOUT_CDR,
+    LAYOUT_SPLIT,
+    LOAN_RESERVE,
+    LOSS_GRACE,
+    SPLIT,
+    align,
+    slot_memory,
+)
+from ._service import Service
+
+if TYPE_CHECKING:
+    from ._domain import ShmDomain
+
+
+
+@dataclass
+class _Loan:
+    sample: Any
+    memory: memoryview
+    arrays: list[tuple[int, tuple[str, ...], np.ndarray[Any, Any], int]]
+    small_at: int
+
+
+def _without_arrays(message: Any, paths: list[tuple[str, ...]]) -> Any:
+    """A shallow copy of ``message`` whose arrays at ``paths`` are empty (the original is untouched)."""
+
+    def shallow(msg: Any) -> Any:
+        cls = msg._thawed_class
+        clone = cls.__new__(cls)
+        for name in cls.__fieldnames__:
+            object.__setattr__(clone, name, getattr(msg, name))
+        return clone
+
+    root = shallow(message)
+    for path in paths:
+        holder = root
+        for name in path[:-1]:
+            child = shallow(getattr(holder, name))
+            object.__setattr__(holder, name, child)
+            holder = child
+        array = getattr(holder, path[-1])
+        object.__setattr__(holder, path[-1], array[:0])
+    return root
+
+
+class ShmWriter(Writer):
+    """Publishes into one service: arrays go into the slot as blobs (one copy, or none when loaned)."""
+
+    def __init__(self, service: Service, codec: Codec, slot: int) -> None:
+        self._service = service
+        self._codec = codec
+        self._slot = slot
+        self._loans: dict[int, _Loan] = {}
+        # variable-length arrays travel as blobs; fixed-size ones stay in the CDR part
+        self._arrays = [(index, field) for index, field in enumerate(codec.arrays) if field.length is None] \
+            if isinstance(codec, MessageCodec) else []
+        service.publisher()
+
+    def write(self, message: Any) -> None:
+        loan = self._loans.pop(id(message), None)
+        if loan is not None:
+            self._send_loan(message, loan)
+            return
+        size = HEADER.size + self._codec.size(message)
+        if self._arrays and size > INLINE_LIMIT:
+            # large arrays go as aligned blobs: only the small part needs zeroing
+            self._send_copy(message)
+            return
+        sample, memory = self._service.loan(size)
+        # rosbags' serializer leaves terminators and padding to a zeroed buffer
+        ctypes.memset(sample.payload_ptr + HEADER.size, 0, size - HEADER.size)
+        self._codec.encode_into(message, memory[HEADER.size:])
+        self._service.send(sample, memory, LAYOUT_CDR, self._slot)
+
+    def _place(self, plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]], reserve: int
+               ) -> tuple[Any, memoryview, int, list[tuple[int, tuple[str, ...], np.ndarray[Any, Any], int]]]:
+        """A slot with room for the small part and 64-byte aligned blobs; views on the blobs."""
+        table_end = HEADER.size + SPLIT.size + BLOB.size * len(plan)
+        small_at = align(table_end, 8) + 4
+        offset = align(small_at + reserve, 64)
+        offsets = []
+        for _index, _path, dtype, length in plan:
+            offsets.append(offset)
+            offset = align(offset + length * dtype.itemsize, 64)
+        sample, memory = self._service.loan(offset)
+        views = [(index, path, np.frombuffer(memory, dtype=dtype, count=length, offset=at), at)
+                 for (index, path, dtype, length), at in zip(plan, offsets, strict=True)]
+        return sample, memory, small_at, views
+
+    def _send_copy(self, message: Any) -> None:
+        plan = []
+        for index, field in self._arrays:
+            array = np.asarray(get_path(message, field.path))
+            if array.size:
+                plan.append((index, field.path, field.dtype, int(array.size)))
+        reserve = self._codec.size(_without_arrays(message, [path for _i, path, _d, _n in plan]))
+        sample, memory, small_at, views = self._place(plan, reserve)
+        for _index, path, view, _at in views:
+            np.copyto(view, get_path(message, path), casting="unsafe")
+        self._finish(message, _Loan(sample, memory, views, small_at))
+
+    def loan(self, sizes: dict[str, int]) -> Any:
+        """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""
+        codec = self._codec
+        if not isinstance(codec, MessageCodec):
+            raise TransportError("only topic messages can be loaned")
+        wanted = dict(sizes)
+        plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]] = []
+        for index, field in self._arrays:
+            length = wanted.pop(".".join(field.path), 0)
+            if length:
+                plan.append((index, field.path, field.dtype, length))
+        if wanted:
+            known = ", ".join(".".join(f.path) for _i, f in self._arrays) or "none"
+            raise TransportError(
+                f"{codec.typename} has no variable-length primitive array {', '.join(wanted)!s}; "
+                f"loan sizes can be given for: {known}"
+            )
+        sample, memory, small_at, views = self._place(plan, LOAN_RESERVE)
+        message = codec.cls()
+        for _index, path, view, _at in views:
+            set_path(message, path, view)
+        self._loans[id(message)] = _Loan(sample, memory, views, small_at)
+        return message
+
+    def _send_loan(self, message: Any, loan: _Loan) -> None:
+        for _index, path, array, _at in loan.arrays:
+            current = get_path(message, path)
+            if current is array:
+                continue
+            if not isinstance(current, np.ndarray) or current.size != array.size:
+                # the node replaced a loaned array with one of another size: send a plain copy
+                loan.arrays.clear()
+                self._send_copy(message)
+                return
+            np.copyto(array, current, casting="unsafe")
+        self._finish(message, loan)
+        for _index, path, array, _at in loan.arrays:
+            set_path(message, path, array[:0].copy())
+
+    def _finish(self, message: Any, loan: _Loan) -> None:
+        """Encode the small part, write the blob table and send the slot."""
+        codec = self._codec
+        memory = loan.memory
+        small_message = _without_arrays(message, [path for _i, path, _a, _at in loan.arrays])
+        small = codec.size(small_message)
+        if small > LOAN_RESERVE:
+            raise TransportError(
+                f"{getattr(codec, 'typename', 'message')}: {small} bytes besides its arrays exceed the "
+                f"{LOAN_RESERVE}-byte reserve of a shared-memory slot; shorten its strings"
+            )
+        memory[loan.small_at:loan.small_at + small] = bytes(small)
+        codec.encode_into(small_message, memory[loan.small_at:loan.small_at + small])
+        SPLIT.pack_into(memory, HEADER.size, small, len(loan.arrays))
+        for position, (index, _path, array, at) in enumerate(loan.arrays):
+            BLOB.pack_into(memory, HEADER.size + SPLIT.size + BLOB.size * position, index, loan.small_at,
+                           at, array.nbytes)
+        self._service.send(loan.sample, memory, LAYOUT_SPLIT, self._slot)
+
+    def close(self) -> None:
+        self._loans.clear()
+
+
+class _Borrowed:
+    """Counts a reader's samples still referenced by delivered messages."""
+
+    __slots__ = ("count", "lock")
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.lock = threading.Lock()
+
+
+class _Lease:
+    """Holds a received sample; it goes back to the publisher when no message refers to it."""
+
+    __slots__ = ("borrowed", "sample")
+
+    def __init__(self, sample: Any, borrowed: _Borrowed) -> None:
+        self.sample = sample
+        self.borrowed = borrowed
+        with borrowed.lock:
+            borrowed.count += 1
+
+    def __del__(self) -> None:
+        with self.borrowed.lock:
+            self.borrowed.count -= 1
+
+
+def _frozen(item: Any) -> Any:
+    """What a reader delivers is read-only: a message, or the message of a service envelope."""
+    if isinstance(item, Message):
+        freeze(item)
+    elif isinstance(item, tuple) and item and isinstance(item[-1], Message):
+        freeze(item[-1])
+    return item
+
+
+class _Port:
+    """One publishing target's service as seen by one reader."""
+
+    __slots__ = ("expected", "service", "subscriber", "suspect_since")
+
+    def __init__(self, service: Service, subscriber: Any, start: int) -> None:
+        self.service = service
+        self.subscriber = subscriber
+        self.expected = start + 1
+        self.suspect_since = 0.0
+
+
+class ShmReader(Reader):
+    """Takes from every publishing target's service of one topic.
+
+    Delivered primitive arrays are read-only views on the shared-memory slot; the slot
+    is returned when the last of them is gone (``msg.copy()`` keeps data longer).
+    """
+
+    def __init__(self, domain: ShmDomain, services: list[Service], codec: Codec, slot: int, wake: Wake,
+                 channel: WakeChannel) -> None:
+        self._domain = domain
+        self._codec = codec
+        self._slot = slot
+        self._closed = False
+        self._channel = channel
+        self._wake = wake
+        self.event = channel.register(wake)
+        self._ports: list[_Port] = []
+        self._next = 0
+        self._lock = threading.Lock()
+        self._borrowed = _Borrowed()
+        self.topic = services[0].topic if services else ""
+        for service in services:
+            subscriber, start = service.subscriber(slot, channel, self.event)
+            self._ports.append(_Port(service, subscriber, start))
+        wake()
+
+    # -- taking ----------------------------------------------------------------------------
+
+    def try_take(self) -> Any | None:
+        with self._lock:
+            for _ in range(len(self._ports)):
+                port = self._ports[self._next]
+                self._next = (self._next + 1) % len(self._ports)
+                service = port.service
+                sample = port.subscriber.receive()
+                if sample is None:
+                    if service.blocking:
+                        self._check_arrival(port)
+                    continue
+                size = sample.header.number_of_elements
+                memory = slot_memory(sample.payload_ptr, size, _Lease(sample, self._borrowed))
+                del sample
+                seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
+                if service.blocking and seq != port.expected and seq > port.expected:
+                    self._lost(port, seq - port.expected)
+                port.expected = seq + 1
+                if port.suspect_since:
+                    port.suspect_since = 0.0
+                    self._channel.suspect(self.event, False)
+                credits = service.credits
+                credits.set_taken(self._slot, seq)
+                if service.blocking and credits.waiting:
+                    self._domain.notify_back(service.target, credits.back_event)
+                if self._borrowed.count >= BORROW_LIMIT - 2:
+                    memory = memoryview(bytes(memory))
+                return _frozen(self._decode(memory.toreadonly(), layout))
+            return None
+
+    def _check_arrival(self, port: _Port) -> None:
+        """Nothing to receive: is that true, or did iceoryx2 fail to connect to the publisher?"""
+        published = port.service.credits.published
+        if published < port.expected:
+            if port.suspect_since:
+                port.suspect_since = 0.0
+                self._channel.suspect(self.event, False)
+            return
+        now = time.monotonic()
+        if not port.suspect_since:
+            port.suspect_since = now
+            self._channel.suspect(self.event, True)
+        elif now - port.suspect_since > LOSS_GRACE:
+            self._lost(port, published - port.expected + 1)
+
+    def _lost(self, port: _Port, count: int) -> None:
+        raise TransportError(
+            f"reliable topic {port.service.topic}: {count} message(s) from target {port.service.target!r} "
+            f"(from #{port.expected}) never reached this subscriber although the publisher sent them; "
+            f"iceoryx2 could not deliver them, most often because a process ran out of file descriptors "
+            f"({fd_hint()})"
+        )
+
+    def _decode(self, memory: memoryview, layout: int) -> Any:
+        if layout == LAYOUT_CDR:
+            return self._codec.decode(memory[HEADER.size:])
+        if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
+            raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")
+        small, count = SPLIT.unpack_from(memory, HEADER.size)
+        arrays = self._codec.arrays
+        blobs = [BLOB.unpack_from(memory, HEADER.size + SPLIT.size + BLOB.size * i) for i in range(count)]
+        small_at = blobs[0][1] if blobs else align(HEADER.size + SPLIT.size, 8) + 4
+        message = self._codec.decode(memory[small_at:small_at + small])
+        for index, _small_at, offset, nbytes in blobs:
+            if index >= len(arrays) or offset + nbytes > len(memory):
+                raise SerializationError(
+                    f"blob {index} at offset {offset} ({nbytes} bytes) does not fit a "
+                    f"{len(memory)}-byte sample of {self._codec.typename}"
+                )
+            field = arrays[index]
+            view = np.frombuffer(memory, dtype=field.dtype, count=nbytes // field.dtype.itemsize, offset=offset)
+            set_path(message, field.path, view)
+        return message
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self._channel.unregister(self.event, self._wake)
+        for port in self._ports:
+            port.service.credits.leave(self._slot)
+        self._ports.clear()
+
+

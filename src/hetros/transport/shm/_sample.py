@@ -1,0 +1,69 @@
+"""The layout of a shared-memory sample and the limits of a service (no iceoryx2 needed to test it)."""
+
+from __future__ import annotations
+
+import ctypes
+import struct
+from pathlib import Path
+
+from .._qos import QoS
+
+SHM_DIR = Path("/dev/shm")
+# Every sample: sequence number, publisher slot, layout, padding; then the message. With the
+# CDR layout the 4-byte encapsulation sits at 28..32 so the CDR body starts 8-byte aligned.
+HEADER = struct.Struct("<QII12x")
+LAYOUT_CDR = 0
+LAYOUT_SPLIT = 1
+# The split layout (loaned messages): small part as CDR, primitive arrays as separate blobs
+# at 64-byte aligned offsets, each named by its index in the type's array list.
+SPLIT = struct.Struct("<II")
+BLOB = struct.Struct("<IIQQ")
+LOAN_RESERVE = 4096
+# Plain messages up to this size are one contiguous CDR (one encode, arrays inline and read
+# in place as views); larger ones use the split layout, whose blobs need no zeroing.
+INLINE_LIMIT = 64 * 1024
+MAX_SUBSCRIBER_SLOTS = 32
+MAX_PUBLISHERS_PER_SERVICE = 8
+MAX_EVENT_PORTS = 256
+# iceoryx2's event latency grows with the id range (measured: 13 µs at 100, 25 µs at 4095,
+# 215 µs at 65535), so ids are few; readers beyond that share an id (a spurious wake-up
+# costs one empty receive).
+MAX_EVENT_ID = 255
+INTERRUPT_EVENT = 0
+BORROW_LIMIT = 16
+# A reader that sees published samples it cannot receive waits this long for a late connection
+# before it reports them lost.
+LOSS_GRACE = 0.5
+
+
+INITIAL_SLOT = 4096
+
+
+def reserved_bytes(qos: QoS, message_size: int | None) -> int:
+    """Shared memory one service of a topic reserves (iceoryx2 sizes it up front, sparse).
+
+    ``message_size`` is the CDR size of a fixed-size type, None when it varies: such slots
+    start at 4 KiB and grow by powers of two as larger messages come.
+    """
+    buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
+    history = qos.depth if qos.keeps_history else 0
+    samples = MAX_SUBSCRIBER_SLOTS * (buffer + BORROW_LIMIT) + history + 2
+    slot = HEADER.size + (message_size + 4 if message_size is not None else INITIAL_SLOT)
+    return samples * slot
+
+
+def segment_prefix(session: str) -> str:
+    return f"hetros-{session}-"
+
+
+def align(value: int, to: int) -> int:
+    return (value + to - 1) & -to
+
+
+def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
+    """Bytes at ``address`` as a memoryview that keeps ``keepalive`` alive while referenced."""
+    raw = (ctypes.c_uint8 * size).from_address(address)
+    raw._hetros_keepalive = keepalive  # type: ignore[attr-defined]
+    return memoryview(raw).cast("B")
+
+

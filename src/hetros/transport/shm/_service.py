@@ -1,0 +1,197 @@
+"""One (topic, publishing target) service: its data, its credits and who to wake."""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import threading
+import time
+from typing import TYPE_CHECKING, Any
+
+from ..._errors import PublishTimeoutError, ShutdownError, TransportError
+from .._qos import QoS
+from ._credits import Credits, pid_alive
+from ._events import (
+    WakeChannel,
+    fd_hint,
+)
+from ._iceoryx import iox2, log
+from ._sample import (
+    BORROW_LIMIT,
+    HEADER,
+    INITIAL_SLOT,
+    MAX_PUBLISHERS_PER_SERVICE,
+    MAX_SUBSCRIBER_SLOTS,
+    SHM_DIR,
+    segment_prefix,
+    slot_memory,
+)
+
+if TYPE_CHECKING:
+    from ._domain import ShmDomain
+
+
+class Service:
+    """One (topic, publishing target) service: the data, its credits, and who to wake."""
+
+    def __init__(self, domain: ShmDomain, node: Any, topic: str, target: str, qos: QoS) -> None:
+        self.domain = domain
+        self.topic = topic
+        self.target = target
+        self.qos = qos
+        digest = hashlib.sha1(f"{topic}@{target}".encode()).hexdigest()[:20]
+        base = f"hetros/{domain.session}/{digest}"
+        # keep_last: iceoryx2's own overflow keeps exactly the newest `depth`; keep_all: the
+        # credits bound the fill at `depth`, the slack absorbs a subscriber's join race.
+        self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
+        self.blocking = qos.blocks_publisher
+        self.room = 0
+        self.lock = threading.RLock()
+        self.space = threading.Condition(self.lock)
+        self._closed = False
+        try:
+            self.data = (
+                node.service_builder(iox2.ServiceName.new(base))
+                .publish_subscribe(iox2.Slice[ctypes.c_uint8])
+                .max_publishers(MAX_PUBLISHERS_PER_SERVICE)
+                .max_subscribers(MAX_SUBSCRIBER_SLOTS)
+                .subscriber_max_buffer_size(self.buffer)
+                .history_size(qos.depth if qos.keeps_history else 0)
+                .enable_safe_overflow(not qos.blocks_publisher)
+                .subscriber_max_borrowed_samples(BORROW_LIMIT)
+                .open_or_create()
+            )
+        except Exception as exc:  # iceoryx2 raises its own exception classes
+            raise TransportError(
+                f"cannot open the shared-memory service of {topic} (publisher target {target!r}): "
+                f"{type(exc).__name__}: {exc}; all endpoints of a topic must use the same QoS; {fd_hint()}"
+            ) from exc
+        self.credits = Credits(SHM_DIR / f"{segment_prefix(domain.session)}{digest}")
+        self._publisher: Any = None
+        self._wakes: list[tuple[int, int]] = []
+        self._wakes_version = -1
+        self.next_seq = 1
+
+    # -- publishing side -------------------------------------------------------------------
+
+    def publisher(self) -> Any:
+        with self.lock:
+            if self._publisher is None:
+                try:
+                    self._publisher = (
+                        self.data.publisher_builder()
+                        .initial_max_slice_len(INITIAL_SLOT)
+                        .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo)
+                        # hetros' credits do the blocking (with a timeout and crash detection);
+                        # iceoryx2's own retry would spin forever on a dead subscriber's full buffer
+                        .backpressure_strategy(iox2.BackpressureStrategy.DiscardData)
+                        .create()
+                    )
+                except Exception as exc:  # iceoryx2 raises its own exception classes
+                    raise TransportError(f"cannot create a shared-memory publisher on {self.topic}: "
+                                         f"{type(exc).__name__}: {exc}; {fd_hint()}") from exc
+                self.credits.back_event = self.domain.back_channel().register(self)
+                self.next_seq = self.credits.published + 1
+            return self._publisher
+
+    def subscriber_moved(self) -> None:
+        """A subscriber took or joined: recount the room, wake a blocked send, send history."""
+        with self.lock:
+            if self._closed:
+                return
+            if self.qos.keeps_history and self._publisher is not None:
+                self._publisher.update_connections()
+            self.room = 0
+            self.space.notify_all()
+
+    def wait_for_space(self, deadline: float) -> None:
+        """Block (with ``self.lock`` held) until every live blocking subscriber has room."""
+        published = self.next_seq - 1
+        credits = self.credits
+        while True:
+            blocked = credits.full_slots(published, self.qos.depth)
+            for index in list(blocked):
+                _taken, pid = credits.slot(index)
+                if not pid_alive(pid):
+                    log.warning(
+                        "topic %s: subscriber in process %d is gone (crashed or killed); "
+                        "publishing continues without it", self.topic, pid,
+                    )
+                    credits.leave(index)
+                    blocked.remove(index)
+            if not blocked:
+                credits.waiting = False
+                # until this many more sends, no FIFO can fill up: skip the scan until then
+                self.room = self.qos.depth - credits.max_fill(published)
+                return
+            if not credits.waiting:
+                credits.waiting = True
+                continue  # re-check after announcing: a take may have slipped in between
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                credits.waiting = False
+                raise PublishTimeoutError(
+                    f"publishing on {self.topic}: the subscriber in process {credits.slot(blocked[0])[1]} "
+                    f"kept its FIFO of depth {self.qos.depth} full for {self.qos.publish_timeout:g} s "
+                    "(reliable + keep_all blocks the publisher); make the subscriber faster, "
+                    "raise 'depth' or 'publish_timeout', or use keep_last"
+                )
+            if self._closed:
+                raise ShutdownError(f"publishing on {self.topic} interrupted by shutdown")
+            # short slices: a wake-up lost to store reordering costs at most one slice
+            self.space.wait(min(remaining, 0.01))
+
+    def loan(self, size: int) -> tuple[Any, memoryview]:
+        """A writable slot of ``size`` payload bytes (header included) and its memory."""
+        sample = self.publisher().loan_slice_uninit(size)
+        return sample, slot_memory(sample.payload_ptr, size, sample)
+
+    def send(self, sample: Any, memory: memoryview, layout: int, publisher_slot: int) -> None:
+        """Stamp the header and send; blocks first while a reliable keep_all FIFO is full."""
+        with self.lock:
+            if self.blocking:
+                if self.room <= 0:
+                    self.wait_for_space(time.monotonic() + self.qos.publish_timeout)
+                self.room -= 1
+            seq = self.next_seq
+            HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
+            ready = sample.assume_init()
+            try:
+                ready.send()
+            except iox2.SendError as exc:
+                raise TransportError(f"iceoryx2 could not send on {self.topic}: {exc}") from exc
+            self.next_seq = seq + 1
+            self.credits.published = seq
+            credits = self.credits
+            if credits.version != self._wakes_version:
+                self._wakes_version = credits.version
+                self._wakes = credits.subscribers()
+            for key, event in self._wakes:
+                self.domain.notify(key, event)
+
+    # -- subscribing side ------------------------------------------------------------------
+
+    def subscriber(self, slot: int, channel: WakeChannel, event: int) -> tuple[Any, int]:
+        """Join as subscriber ``slot``; returns the port and the last sequence number before the join."""
+        try:
+            subscriber = self.data.subscriber_builder().buffer_size(self.buffer).create()
+        except Exception as exc:  # iceoryx2 raises its own exception classes
+            raise TransportError(f"cannot subscribe to {self.topic} in shared memory: "
+                                 f"{type(exc).__name__}: {exc}; {fd_hint()}") from exc
+        published = self.credits.published
+        # a late joiner's FIFO starts with the history it is about to receive
+        start = published - min(published, self.qos.depth) if self.qos.keeps_history else published
+        self.credits.join(slot, start, channel.key, event)
+        if self.credits.back_event:
+            self.domain.notify_back(self.target, self.credits.back_event)
+        return subscriber, start
+
+    def close(self) -> None:
+        with self.lock:
+            self._closed = True
+            self.space.notify_all()
+        self._publisher = None
+        self.data = None
+        self.credits.close()
+
+

@@ -46,7 +46,7 @@ class _Loan:
     small_at: int
 
 
-def _without_arrays(message: Any, paths: list[tuple[str, ...]]) -> Any:
+def without_arrays(message: Any, paths: list[tuple[str, ...]]) -> Any:
     """A shallow copy of ``message`` whose arrays at ``paths`` are empty (the original is untouched)."""
 
     def shallow(msg: Any) -> Any:
@@ -118,7 +118,7 @@ class ShmWriter(Writer):
             array = np.asarray(get_path(message, field.path))
             if array.size:
                 plan.append((index, field.path, field.dtype, int(array.size)))
-        reserve = self._codec.size(_without_arrays(message, [path for _i, path, _d, _n in plan]))
+        reserve = self._codec.size(without_arrays(message, [path for _i, path, _d, _n in plan]))
         sample, memory, small_at, views = self._place(plan, reserve)
         for _index, path, view, _at in views:
             np.copyto(view, get_path(message, path), casting="unsafe")
@@ -167,7 +167,7 @@ class ShmWriter(Writer):
         """Encode the small part, write the blob table and send the slot."""
         codec = self._codec
         memory = loan.memory
-        small_message = _without_arrays(message, [path for _i, path, _a, _at in loan.arrays])
+        small_message = without_arrays(message, [path for _i, path, _a, _at in loan.arrays])
         small = codec.size(small_message)
         if small > LOAN_RESERVE:
             raise TransportError(

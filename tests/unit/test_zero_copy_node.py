@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hetros.interfaces.sensor_msgs.msg import Image
 
-from hetros import Node, ReadOnlyMessageError
+from hetros import Node, ReadOnlyMessageError, TransportError
 from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
 from hetros.runtime import Graph
 from hetros.transport import QoS, remove_session_segments
@@ -70,3 +70,30 @@ def test_plain_publish_and_callback_delivery(graphs: tuple[Graph, Graph]) -> Non
     graphs[1].shutdown()
     spinner.join(2)
     assert seen == [(1000, True), (2000, True), (3000, True)]
+
+
+def test_an_abandoned_loan_returns_its_slot(graphs: tuple[Graph, Graph]) -> None:
+    """Loans live on their message: dropping one gives the slot back (no dict keeps it)."""
+    import gc
+
+    first, second = graphs
+    second.prepare(["viewer"])
+    pub = Node("cam", first).create_publisher(Image, "/img")
+    for _ in range(50):
+        abandoned = pub.loan(data=1000)
+        del abandoned
+        gc.collect()
+    message = pub.loan(data=4)
+    message.data[:] = 9
+    pub.publish(message)
+
+
+def test_holding_too_many_loans_says_so(graphs: tuple[Graph, Graph]) -> None:
+    first, _second = graphs  # no subscriber running: publishing never blocks here
+    pub = Node("cam", first).create_publisher(Image, "/img")
+    held = [pub.loan(data=100) for _ in range(8)]
+    with pytest.raises(TransportError, match=r"holds at most 8 unpublished loans at once; publish the loaned"):
+        pub.loan(data=100)
+    for message in held:
+        pub.publish(message)
+    pub.publish(pub.loan(data=100))

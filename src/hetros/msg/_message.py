@@ -20,7 +20,9 @@ from .._errors import ReadOnlyMessageError
 class Message:
     """Base of all message classes; concrete classes are generated per type."""
 
-    __slots__ = ()
+    # the loan a transport handed out with this message: it lives and dies with the message,
+    # so an abandoned loan returns its slot when the message is garbage-collected
+    __slots__ = ("_hetros_loan",)
     __msgtype__: ClassVar[str] = ""
     __fieldnames__: ClassVar[tuple[str, ...]] = ()
     _frozen_class: ClassVar[type[Message]]

@@ -29,6 +29,7 @@ from ..transport import (
     Wake,
     WakeChannel,
     Writer,
+    has_loan,
 )
 
 log = logging.getLogger("hetros.graph")
@@ -51,13 +52,11 @@ class _FanoutWriter(Writer):
         self._types = types
         self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
         self._local = any(p is not self._shm for p in parts)
-        self._loaned: set[int] = set()
 
     def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
         """A message to fill in place: its arrays live in shared memory when a process reads it."""
         if self._shm is not None:
             message: Message = self._shm.loan(sizes)
-            self._loaned.add(id(message))
             return message
         message = cls()
         wanted = dict(sizes)
@@ -72,9 +71,7 @@ class _FanoutWriter(Writer):
         return message
 
     def write(self, message: Any) -> None:
-        loaned = id(message) in self._loaned
-        if loaned:
-            self._loaned.discard(id(message))
+        if self._shm is not None and has_loan(message):
             others = [part for part in self._parts if part is not self._shm]
             if others:
                 # the slot leaves with the shared-memory send: in-process readers get their own copy

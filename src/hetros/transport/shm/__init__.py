@@ -34,7 +34,7 @@ reserved); the message follows in the codec's format (CDR for messages).
 
 
 from ._domain import ShmDomain, cleanup_stale, remove_session_segments
-from ._endpoints import ShmReader, ShmWriter
+from ._endpoints import ShmReader, ShmWriter, has_loan
 from ._events import WakeChannel, raise_open_file_limit
 from ._sample import reserved_bytes
 
@@ -44,6 +44,7 @@ __all__ = [
     "ShmWriter",
     "WakeChannel",
     "cleanup_stale",
+    "has_loan",
     "raise_open_file_limit",
     "remove_session_segments",
     "reserved_bytes",

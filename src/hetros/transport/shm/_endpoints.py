@@ -18,6 +18,7 @@ from ._events import (
     WakeChannel,
     fd_hint,
 )
+from ._iceoryx import iox2
 from ._sample import (
     BLOB,
     BORROW_LIMIT,
@@ -40,10 +41,26 @@ if TYPE_CHECKING:
 
 @dataclass
 class _Loan:
+    """A slot handed out with a message by ``loan``; stored on the message itself."""
+
     sample: Any
     memory: memoryview
     arrays: list[tuple[int, tuple[str, ...], np.ndarray[Any, Any], int]]
     small_at: int
+    writer: ShmWriter | None = None
+
+
+def take_loan(message: Any, writer: ShmWriter | None = None) -> _Loan | None:
+    """Detach the loan of ``message`` (of ``writer``, when given); None when it has none."""
+    loan: _Loan | None = getattr(message, "_hetros_loan", None)
+    if loan is None or (writer is not None and loan.writer is not writer):
+        return None
+    object.__setattr__(message, "_hetros_loan", None)
+    return loan
+
+
+def has_loan(message: Any) -> bool:
+    return getattr(message, "_hetros_loan", None) is not None
 
 
 def without_arrays(message: Any, paths: list[tuple[str, ...]]) -> Any:
@@ -75,14 +92,13 @@ class ShmWriter(Writer):
         self._service = service
         self._codec = codec
         self._slot = slot
-        self._loans: dict[int, _Loan] = {}
         # variable-length arrays travel as blobs; fixed-size ones stay in the CDR part
         self._arrays = [(index, field) for index, field in enumerate(codec.arrays) if field.length is None] \
             if isinstance(codec, MessageCodec) else []
         service.publisher()
 
     def write(self, message: Any) -> None:
-        loan = self._loans.pop(id(message), None)
+        loan = take_loan(message, self)
         if loan is not None:
             self._send_loan(message, loan)
             return
@@ -145,7 +161,7 @@ class ShmWriter(Writer):
         message = codec.cls()
         for _index, path, view, _at in views:
             set_path(message, path, view)
-        self._loans[id(message)] = _Loan(sample, memory, views, small_at)
+        object.__setattr__(message, "_hetros_loan", _Loan(sample, memory, views, small_at, self))
         return message
 
     def _send_loan(self, message: Any, loan: _Loan) -> None:
@@ -183,7 +199,7 @@ class ShmWriter(Writer):
         self._service.send(loan.sample, memory, LAYOUT_SPLIT, self._slot)
 
     def close(self) -> None:
-        self._loans.clear()
+        return None
 
 
 class _Borrowed:
@@ -267,7 +283,11 @@ class ShmReader(Reader):
                 port = self._ports[self._next]
                 self._next = (self._next + 1) % len(self._ports)
                 service = port.service
-                sample = port.subscriber.receive()
+                try:
+                    sample = port.subscriber.receive()
+                except iox2.ReceiveError as exc:
+                    raise TransportError(f"cannot receive on {service.topic} from target {service.target!r}: "
+                                         f"{exc}; {fd_hint()}") from exc
                 if sample is None:
                     if service.blocking:
                         self._check_arrival(port)

@@ -111,16 +111,19 @@ class WakeChannel:
                 self._suspects.discard(event)
 
     def interrupt(self) -> None:
-        self._interrupter.notify_with_custom_event_id(iox2.EventId.new(INTERRUPT_EVENT))
+        self._interrupter.notify_with_custom_event_id(_INTERRUPT)
 
     def wait(self, timeout: float | None) -> None:
         """Block (without the GIL) until an event or ``timeout``; run the wake of each reader that fired."""
         if self._suspects:
             timeout = LOSS_GRACE if timeout is None else min(timeout, LOSS_GRACE)
-        if timeout is None:
-            fired = self._listener.blocking_wait()
-        else:
-            fired = self._listener.timed_wait(iox2.Duration.from_secs_f64(max(timeout, 0.0)))
+        try:
+            if timeout is None:
+                fired = self._listener.blocking_wait()
+            else:
+                fired = self._listener.timed_wait(iox2.Duration.from_secs_f64(max(timeout, 0.0)))
+        except iox2.ListenerWaitError as exc:
+            raise TransportError(f"waiting on the wake channel of node {self.owner!r} failed: {exc}") from exc
         events = {activation.id.as_value for activation in fired}
         with self._lock:
             events |= self._suspects
@@ -130,6 +133,9 @@ class WakeChannel:
 
     def close(self) -> None:
         self._listener = self._interrupter = self._service = None
+
+
+_INTERRUPT = iox2.EventId.new(INTERRUPT_EVENT)
 
 
 def wake_channel_name(session: str, key: int) -> str:

@@ -37,6 +37,8 @@ LOSS_GRACE = 0.5
 
 
 INITIAL_SLOT = 4096
+# unpublished loans one publisher may hold (a plain publish takes one for a moment too)
+MAX_LOANS = 8
 
 
 def reserved_bytes(qos: QoS, message_size: int | None) -> int:
@@ -47,7 +49,7 @@ def reserved_bytes(qos: QoS, message_size: int | None) -> int:
     """
     buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
     history = qos.depth if qos.keeps_history else 0
-    samples = MAX_SUBSCRIBER_SLOTS * (buffer + BORROW_LIMIT) + history + 2
+    samples = MAX_SUBSCRIBER_SLOTS * (buffer + BORROW_LIMIT) + history + MAX_LOANS
     slot = HEADER.size + (message_size + 4 if message_size is not None else INITIAL_SLOT)
     return samples * slot
 

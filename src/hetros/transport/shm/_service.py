@@ -20,6 +20,7 @@ from ._sample import (
     BORROW_LIMIT,
     HEADER,
     INITIAL_SLOT,
+    MAX_LOANS,
     MAX_PUBLISHERS_PER_SERVICE,
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
@@ -81,6 +82,7 @@ class Service:
                     self._publisher = (
                         self.data.publisher_builder()
                         .initial_max_slice_len(INITIAL_SLOT)
+                        .max_loaned_samples(MAX_LOANS)
                         .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo)
                         # hetros' credits do the blocking (with a timeout and crash detection);
                         # iceoryx2's own retry would spin forever on a dead subscriber's full buffer
@@ -143,7 +145,14 @@ class Service:
 
     def loan(self, size: int) -> tuple[Any, memoryview]:
         """A writable slot of ``size`` payload bytes (header included) and its memory."""
-        sample = self.publisher().loan_slice_uninit(size)
+        try:
+            sample = self.publisher().loan_slice_uninit(size)
+        except iox2.LoanError as exc:
+            raise TransportError(
+                f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "
+                f"at most {MAX_LOANS} unpublished loans at once; publish the loaned messages you hold, or "
+                "drop them (a dropped loan returns its slot when the message is garbage-collected)"
+            ) from exc
         return sample, slot_memory(sample.payload_ptr, size, sample)
 
     def send(self, sample: Any, memory: memoryview, layout: int, publisher_slot: int) -> None:

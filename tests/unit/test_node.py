@@ -218,3 +218,29 @@ def test_a_loaned_message_travels_without_a_copy_in_process(graph: Graph) -> Non
     assert not got.data.flags.writeable
     with pytest.raises(ReadOnlyMessageError):
         message.data = np.zeros(3, np.uint8)
+
+
+def test_the_read_only_promise_covers_lists_and_views_of_the_callers_memory(graph: Graph) -> None:
+    """What a subscriber holds cannot change under it: not through a list, not through a view."""
+    from hetros.interfaces.diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+    from hetros.interfaces.std_msgs.msg import UInt8MultiArray
+
+    node = Node("n", graph)
+    statuses = node.create_subscription(DiagnosticStatus, "/status")
+    node.create_publisher(DiagnosticStatus, "/status").publish(
+        DiagnosticStatus(name="arm", values=[KeyValue(key="t", value="20")]))
+    got = statuses.take(timeout=1.0)
+    assert got.values == [KeyValue(key="t", value="20")]
+    with pytest.raises(ReadOnlyMessageError):
+        got.values.append(KeyValue(key="x", value="y"))
+    with pytest.raises(ReadOnlyMessageError):
+        got.values[0] = KeyValue()
+    assert got.copy().values.append(KeyValue()) is None, "a copy is writable again"
+
+    frames = node.create_subscription(UInt8MultiArray, "/frames")
+    buffer = np.zeros(4, np.uint8)
+    view = buffer.view()
+    view.flags.writeable = False  # read-only, but the caller can still write through `buffer`
+    node.create_publisher(UInt8MultiArray, "/frames").publish(UInt8MultiArray(data=view))
+    buffer[:] = 5
+    assert frames.take(timeout=1.0).data.tolist() == [0, 0, 0, 0]

@@ -31,6 +31,7 @@ class Message:
     _array_names: ClassVar[tuple[str, ...]] = ()
     _nested_names: ClassVar[tuple[str, ...]] = ()
     _nested_list_names: ClassVar[tuple[str, ...]] = ()
+    _list_names: ClassVar[tuple[str, ...]] = ()
 
     @staticmethod
     def _hetros_validate(message: Any, where: str = "") -> None:
@@ -107,12 +108,39 @@ def _is_loaned(array: np.ndarray[Any, Any]) -> bool:
     return isinstance(base, memoryview) and isinstance(base.obj, LoanedBytes)
 
 
-def hand_over(message: Message, copy_arrays: bool) -> Message:
-    """Freeze ``message`` for delivery without taking the caller's arrays.
+def _callers(array: np.ndarray[Any, Any]) -> bool:
+    """Whether ``array`` is memory the caller can still write: writable, or a view on writable memory."""
+    if _is_loaned(array):
+        return False
+    if array.flags.writeable:
+        return True
+    base = array.base
+    while isinstance(base, np.ndarray):
+        if base.flags.writeable:
+            return True
+        base = base.base
+    return False
 
-    A writable array the caller owns is replaced by a read-only copy when ``copy_arrays``
-    (in-process subscribers will hold the very object) and left alone otherwise (the
-    transport copies it anyway). Loaned and already read-only arrays travel as they are.
+
+class FrozenList(list):  # type: ignore[type-arg]
+    """A list field of a read-only message: compares and reads like a list, refuses changes."""
+
+    __slots__ = ()
+
+    def _refuse(self, *_args: object, **_kwargs: object) -> Any:
+        raise ReadOnlyMessageError("this list belongs to a message that was handed over (published or "
+                                   "delivered); call msg.copy() to get a writable one")
+
+    append = extend = insert = remove = pop = clear = sort = reverse = _refuse
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
+
+
+def _seal(message: Message, callers: str) -> Message:
+    """Make ``message`` read-only in place: its class, nested messages, lists and arrays.
+
+    ``callers`` says what to do with arrays the caller can still write: ``"freeze"`` them
+    (they are hetros' own, e.g. decoded), ``"copy"`` them (in-process readers get the
+    very object) or ``"keep"`` them untouched (the transport copies them anyway).
     """
     cls = type(message)
     frozen = cls._frozen_class
@@ -120,39 +148,41 @@ def hand_over(message: Message, copy_arrays: bool) -> Message:
         return message
     for name in cls._array_names:
         value = getattr(message, name)
-        if type(value) is np.ndarray and value.flags.writeable:
-            if _is_loaned(value):
-                value.flags.writeable = False
-            elif copy_arrays:
-                value = value.copy()
-                value.flags.writeable = False
-                object.__setattr__(message, name, value)
+        if type(value) is not np.ndarray or not (value.flags.writeable or callers != "freeze"):
+            continue
+        if callers == "freeze" or _is_loaned(value):
+            value.flags.writeable = False
+        elif callers == "copy" and _callers(value):
+            value = value.copy()
+            value.flags.writeable = False
+            object.__setattr__(message, name, value)
     for name in cls._nested_names:
-        hand_over(getattr(message, name), copy_arrays)
+        _seal(getattr(message, name), callers)
     for name in cls._nested_list_names:
         for item in getattr(message, name):
-            hand_over(item, copy_arrays)
+            _seal(item, callers)
+    for name in cls._list_names:
+        value = getattr(message, name)
+        if type(value) is not FrozenList:
+            object.__setattr__(message, name, FrozenList(value))
     object.__setattr__(message, "__class__", frozen)
     return message
+
+
+def hand_over(message: Message, copy_arrays: bool) -> Message:
+    """Freeze ``message`` for delivery without taking the caller's arrays.
+
+    An array the caller can still write (writable, or a view on writable memory) is
+    replaced by a read-only copy when ``copy_arrays`` (in-process subscribers will hold the
+    very object) and left alone otherwise (the transport copies it anyway). Loaned arrays
+    and truly read-only ones travel as they are.
+    """
+    return _seal(message, "copy" if copy_arrays else "keep")
 
 
 def freeze(message: Message) -> Message:
-    """Make ``message`` read-only in place, including nested messages and arrays."""
-    cls = type(message)
-    frozen = cls._frozen_class
-    if cls is frozen:
-        return message
-    for name in cls._array_names:
-        value = getattr(message, name)
-        if type(value) is np.ndarray:
-            value.flags.writeable = False
-    for name in cls._nested_names:
-        freeze(getattr(message, name))
-    for name in cls._nested_list_names:
-        for item in getattr(message, name):
-            freeze(item)
-    object.__setattr__(message, "__class__", frozen)
-    return message
+    """Make ``message`` read-only in place, including nested messages, lists and arrays."""
+    return _seal(message, "freeze")
 
 
 def _thaw_value(value: object) -> object:
@@ -161,7 +191,7 @@ def _thaw_value(value: object) -> object:
     if isinstance(value, Message):
         return copy(value)
     if isinstance(value, list):
-        return [_thaw_value(v) for v in value]
+        return [_thaw_value(v) for v in value]  # a FrozenList thaws into a plain list
     return _copy.copy(value)
 
 

@@ -292,6 +292,8 @@ class TypeRegistry:
         cls._nested_names = tuple(a for a, d in kinds if d[0] == Nodetype.NAME)
         cls._nested_list_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
                                        and d[1][0][0] == Nodetype.NAME)
+        cls._list_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
+                                and a not in cls._array_names)
         setattr(cls, "_hetros_validate", staticmethod(self._lazy_validator(full, cls)))  # noqa: B010
         self._classes[full] = cls
         self.store.types[full] = cls

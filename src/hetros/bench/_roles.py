@@ -103,7 +103,9 @@ class HetrosEndpoint(Endpoint):
             msg = self.pub.loan(data=received.size)
             np.copyto(msg.data, received)
         else:
-            msg = self.Image(data=received.copy())
+            copied = received.copy()
+            copied.flags.writeable = False  # nobody can write it any more: handed over without another copy
+            msg = self.Image(data=copied)
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
         msg.height = seq & 0xFFFFFFFF
         msg.width = 1 if seq < 0 else 0
@@ -332,7 +334,10 @@ def open_endpoint(system: str, role: str, cfg: dict[str, Any]) -> Endpoint:
 
 
 def ping(endpoint: Endpoint, cfg: dict[str, Any]) -> dict[str, Any]:
-    payload = np.zeros(cfg["size"], dtype=np.uint8) if cfg["system"].startswith("hetros") else bytes(cfg["size"])
+    payload: Any = bytes(cfg["size"])
+    if cfg["system"].startswith("hetros"):
+        payload = np.zeros(cfg["size"], dtype=np.uint8)
+        payload.flags.writeable = False  # the same frame every time: nobody writes it
     deadline = time.monotonic() + cfg.get("connect_timeout", 30.0)
     while True:
         endpoint.send(time.monotonic_ns(), PROBE, payload)
@@ -431,9 +436,9 @@ def run_inproc(cfg: dict[str, Any]) -> dict[str, Any]:
     from hetros.runtime import Graph
 
     graph = Graph.standalone()
-    # loaned: in a process a loan travels with zero copies (plain publish copies the caller's array)
-    pinger = HetrosEndpoint("ping", graph, loaned=True)
-    echoer = HetrosEndpoint("echo", graph, loaned=True)
+    # plain publish of read-only arrays: in a process they travel with zero copies
+    pinger = HetrosEndpoint("ping", graph, loaned=False)
+    echoer = HetrosEndpoint("echo", graph, loaned=False)
     result: dict[str, Any] = {}
 
     def run_echo() -> None:

@@ -10,6 +10,7 @@ changing what another subscriber sees.
 from __future__ import annotations
 
 import copy as _copy
+import weakref
 from typing import Any, ClassVar
 
 import numpy as np
@@ -94,18 +95,29 @@ def copy(message: Message) -> Any:
     return cls(*values)
 
 
-class LoanedBytes(bytearray):
-    """The memory of an array that ``pub.loan()`` handed out: hetros owns it, so it travels uncopied."""
+# Arrays handed out by in-process loans, by id, each with a weak reference that removes it
+# when the array dies (so a recycled id never passes for a loan).
+_LOANED: dict[int, weakref.ref[np.ndarray[Any, Any]]] = {}
 
 
 def loaned_array(length: int, dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
-    """A zeroed array on hetros-owned memory, for a loan with no shared-memory slot behind it."""
-    return np.frombuffer(LoanedBytes(length * dtype.itemsize), dtype)
+    """A zeroed array hetros owns, for a loan with no shared-memory slot behind it.
+
+    np.zeros takes lazily zeroed pages, so a large loan costs nothing until it is written.
+    """
+    array: np.ndarray[Any, Any] = np.zeros(length, dtype)
+    key = id(array)
+
+    def forget(_ref: object) -> None:
+        _LOANED.pop(key, None)
+
+    _LOANED[key] = weakref.ref(array, forget)
+    return array
 
 
 def _is_loaned(array: np.ndarray[Any, Any]) -> bool:
-    base = array.base
-    return isinstance(base, memoryview) and isinstance(base.obj, LoanedBytes)
+    ref = _LOANED.get(id(array))
+    return ref is not None and ref() is array
 
 
 def _callers(array: np.ndarray[Any, Any]) -> bool:

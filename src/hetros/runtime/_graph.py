@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .._errors import TransportError, UndeclaredEndpointError
-from ..msg import Message, TypeRegistry, array_fields, freeze, hand_over, loaned_array, registry, set_path
+from ..msg import ArrayField, Message, TypeRegistry, array_fields, freeze, hand_over, loaned_array, registry, set_path
 from ..msg import copy as copy_message
 from ..plan import LAUNCHER, ChannelPlan, EdgePlan, Plan
 from ..transport import (
@@ -52,6 +52,7 @@ class _FanoutWriter(Writer):
         self._types = types
         self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
         self._local = any(p is not self._shm for p in parts)
+        self._fields: dict[str, list[ArrayField]] = {}
 
     def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
         """A message to fill in place: its arrays live in shared memory when a process reads it."""
@@ -60,7 +61,10 @@ class _FanoutWriter(Writer):
             return message
         message = cls()
         wanted = dict(sizes)
-        for field in array_fields(self._types, cls.__msgtype__):
+        fields = self._fields.get(cls.__msgtype__)
+        if fields is None:
+            fields = self._fields[cls.__msgtype__] = array_fields(self._types, cls.__msgtype__)
+        for field in fields:
             name = ".".join(field.path)
             length = wanted.pop(name, None)
             if length is not None and field.length is None:

@@ -74,10 +74,46 @@ def idle_cpu(period: float, seconds: float) -> dict[str, float]:
     return {"cpu_percent": 100.0 * cpu / wall, "ticks_per_s": ticks[0] / wall, "seconds": wall}
 
 
+def receiving_cpu(hz: float, seconds: float) -> dict[str, float]:
+    """A take-loop subscriber receiving ``hz`` messages/s from a timer node (one process, both counted)."""
+    from hetros import Node, ShutdownError
+    from hetros.msg import registry
+    from hetros.runtime import Graph
+
+    Int32 = registry().get("std_msgs/msg/Int32")
+    graph = Graph.standalone()
+    sub = Node("sub", graph).create_subscription(Int32, "/t")
+    publisher_node = Node("pub", graph)
+    pub = publisher_node.create_publisher(Int32, "/t")
+    publisher_node.create_timer(1.0 / hz, lambda: pub.publish(Int32(data=1)))
+    received = [0]
+
+    def take_loop() -> None:
+        try:
+            while True:
+                sub.take()
+                received[0] += 1
+        except ShutdownError:
+            return
+
+    taker = threading.Thread(target=take_loop)
+    taker.start()
+    threading.Timer(seconds, graph.shutdown).start()
+    time.sleep(0.2)
+    cpu0, wall0 = time.process_time(), time.monotonic()
+    publisher_node.spin()
+    cpu, wall = time.process_time() - cpu0, time.monotonic() - wall0
+    taker.join()
+    return {"cpu_percent": 100.0 * cpu / wall, "received_per_s": received[0] / wall, "seconds": wall}
+
+
 def main() -> None:
     system, role = sys.argv[1], sys.argv[2]
     if system == "cpu":
         print(json.dumps(idle_cpu(float(sys.argv[2]), float(sys.argv[3]))))
+        return
+    if system == "cpu-receiving":
+        print(json.dumps(receiving_cpu(float(sys.argv[2]), float(sys.argv[3]))))
         return
     cfg = json.loads(Path(sys.argv[3]).read_text())
     if cfg.get("fds"):

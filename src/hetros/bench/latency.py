@@ -280,8 +280,11 @@ class Bench:
 
     def idle_cpu(self, seconds: float) -> list[dict[str, Any]]:
         out = []
-        for label, period in (("node with a 100 Hz timer", 0.01), ("idle node (subscription, no traffic)", 0.0)):
-            proc = subprocess.run([sys.executable, "-m", "hetros.bench._throughput", "cpu", str(period),
+        cases = [("node with a 100 Hz timer", "cpu", 0.01), ("idle node (subscription, no traffic)", "cpu", 0.0),
+                 ("timer node publishing + take-loop subscriber, 100 Hz", "cpu-receiving", 100.0),
+                 ("timer node publishing + take-loop subscriber, 1 kHz", "cpu-receiving", 1000.0)]
+        for label, mode, value in cases:
+            proc = subprocess.run([sys.executable, "-m", "hetros.bench._throughput", mode, str(value),
                                    str(seconds)], capture_output=True, text=True, env=self.env, check=False,
                                   timeout=seconds + 60)
             if proc.returncode:

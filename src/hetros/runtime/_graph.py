@@ -29,6 +29,7 @@ from ..transport import (
     Wake,
     WakeChannel,
     Writer,
+    carried_message,
     has_loan,
 )
 
@@ -37,10 +38,9 @@ log = logging.getLogger("hetros.graph")
 
 def _hand_over(item: Any, copy_arrays: bool) -> Any:
     """Freeze a message (or a service envelope's message) on its way out; see ``msg.hand_over``."""
-    if isinstance(item, Message):
-        hand_over(item, copy_arrays)
-    elif isinstance(item, tuple) and item and isinstance(item[-1], Message):
-        hand_over(item[-1], copy_arrays)
+    message = carried_message(item)
+    if message is not None:
+        hand_over(message, copy_arrays)
     return item
 
 
@@ -201,8 +201,7 @@ class Graph:
         """The wake channel of ``node`` if any of its readers is fed from another process."""
         if self.plan is None:
             return None
-        if any(edge.transport == "shm" for (_, subscriber), edges in self._in.items() if subscriber == node
-               for edge in edges):
+        if any(edge.transport == "shm" and edge.subscriber == node for edge in self.plan.edges):
             return self._domain().wake_channel(node)
         return None
 

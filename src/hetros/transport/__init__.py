@@ -1,7 +1,7 @@
 """Transports: inproc (the object itself), shm (iceoryx2 shared memory)."""
 
 from ._base import Codec, Reader, Wake, Writer
-from ._codec import EnvelopeCodec, MessageCodec
+from ._codec import EnvelopeCodec, MessageCodec, carried_message
 from ._inproc import InprocTopic, Mailbox
 from ._qos import DEFAULT_QOS, QoS
 from .shm import (
@@ -31,6 +31,7 @@ __all__ = [
     "Wake",
     "WakeChannel",
     "Writer",
+    "carried_message",
     "cleanup_stale",
     "has_loan",
     "raise_open_file_limit",

@@ -44,6 +44,18 @@ class MessageCodec(Codec):
 _ENVELOPE = struct.Struct("<QH")
 
 
+def carried_message(item: Any) -> Message | None:
+    """The message an item on a channel carries: the item itself, or a service envelope's message.
+
+    Service channels move envelopes ``(request id, client name, message)`` (see EnvelopeCodec).
+    """
+    if isinstance(item, Message):
+        return item
+    if isinstance(item, tuple) and item and isinstance(item[-1], Message):
+        return item[-1]
+    return None
+
+
 class EnvelopeCodec(Codec):
     """A service request or reply: (request id, client name, message)."""
 

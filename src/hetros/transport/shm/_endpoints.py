@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..._errors import SerializationError, TransportError
-from ...msg import Message, freeze, get_path, set_path
+from ...msg import freeze, get_path, set_path
 from .._base import Codec, Reader, Wake, Writer
-from .._codec import MessageCodec
+from .._codec import MessageCodec, carried_message
 from ._events import (
     WakeChannel,
     fd_hint,
@@ -230,10 +230,9 @@ class _Lease:
 
 def _frozen(item: Any) -> Any:
     """What a reader delivers is read-only: a message, or the message of a service envelope."""
-    if isinstance(item, Message):
-        freeze(item)
-    elif isinstance(item, tuple) and item and isinstance(item[-1], Message):
-        freeze(item[-1])
+    message = carried_message(item)
+    if message is not None:
+        freeze(message)
     return item
 
 

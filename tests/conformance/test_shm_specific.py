@@ -191,3 +191,34 @@ def test_fixed_size_arrays_stay_inline(open_pair: Any) -> None:
     assert reader.try_take() == sent
     with pytest.raises(Exception, match="loan sizes can be given for: none"):
         writer.loan({"covariance": 36})
+
+
+def test_back_pressure_wakes_the_publisher_of_its_300th_service(shm_session: str) -> None:
+    """Back-channel event ids are bounded like wake ids: the 300th service of a process still wakes."""
+    publishing, subscribing = ShmDomain(shm_session, "a"), ShmDomain(shm_session, "b")
+    codec = MessageCodec(registry(), "std_msgs/msg/Int32")
+    cls = registry().get("std_msgs/msg/Int32")
+    qos = QoS(depth=1, publish_timeout=5.0)
+    try:
+        writers = [publishing.open_writer(f"/t{i}", "a", qos, codec) for i in range(300)]
+        for writer in writers[:-1]:
+            writer.write(cls(data=0))  # every service gets its publisher (and back-channel id)
+        reader = subscribing.open_reader("/t299", ["a"], qos, codec, 0, lambda: None, "sub")
+        writers[-1].write(cls(data=1))
+        done = threading.Event()
+
+        def second() -> None:
+            writers[-1].write(cls(data=2))  # blocks: the subscriber's FIFO of depth 1 is full
+            done.set()
+
+        blocked = threading.Thread(target=second)
+        blocked.start()
+        assert not done.wait(0.3), "the publisher must block on the full FIFO"
+        assert reader.try_take().data == 1
+        assert done.wait(2.0), "taking must wake the blocked publisher"
+        blocked.join()
+        assert reader.try_take().data == 2
+    finally:
+        subscribing.close()
+        publishing.close()
+        remove_session_segments(shm_session)

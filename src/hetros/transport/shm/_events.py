@@ -7,7 +7,8 @@ import itertools
 import os
 import resource
 import threading
-from typing import TYPE_CHECKING, Any
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from ..._errors import TransportError
 from .._base import Wake
@@ -68,6 +69,38 @@ def raise_open_file_limit() -> tuple[int, int]:
     return soft, hard
 
 
+T = TypeVar("T")
+
+
+class EventRoutes(Generic[T]):
+    """Event ids within iceoryx2's bound (1..MAX_EVENT_ID; 0 is the interrupt), each naming its targets.
+
+    Ids wrap past the bound, so one id may name several targets: a spurious wake-up of
+    the others costs one empty check, an id out of bounds would be an iceoryx2 error.
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._routes: dict[int, list[T]] = {}
+        self._ids = itertools.count(0)
+
+    def add(self, target: T) -> int:
+        with self._lock:
+            event = next(self._ids) % MAX_EVENT_ID + 1
+            self._routes.setdefault(event, []).append(target)
+            return event
+
+    def remove(self, event: int, target: T) -> None:
+        with self._lock:
+            targets = self._routes.get(event, [])
+            if target in targets:
+                targets.remove(target)
+
+    def targets(self, events: Iterable[int]) -> list[T]:
+        with self._lock:
+            return [target for event in events for target in self._routes.get(event, ())]
+
+
 class WakeChannel:
     """Where the readers of one node signal that data may be there: one wait covers them all.
 
@@ -83,23 +116,17 @@ class WakeChannel:
                                        f"wake channel of node {owner!r}")
         self._listener = self._service.listener_builder().create()
         self._interrupter = self._service.notifier_builder().create()
-        self._routes: dict[int, list[Wake]] = {}
+        self._routes: EventRoutes[Wake] = EventRoutes()
         self._suspects: set[int] = set()
         self._lock = threading.Lock()
-        self._ids = itertools.count(0)
 
     def register(self, wake: Wake) -> int:
         """An event id for one reader; ``wake`` runs (in the waiting thread) when it fires."""
-        with self._lock:
-            event = next(self._ids) % MAX_EVENT_ID + 1
-            self._routes.setdefault(event, []).append(wake)
-            return event
+        return self._routes.add(wake)
 
     def unregister(self, event: int, wake: Wake) -> None:
+        self._routes.remove(event, wake)
         with self._lock:
-            routes = self._routes.get(event, [])
-            if wake in routes:
-                routes.remove(wake)
             self._suspects.discard(event)
 
     def suspect(self, event: int, suspicious: bool) -> None:
@@ -127,8 +154,7 @@ class WakeChannel:
         events = {activation.id.as_value for activation in fired}
         with self._lock:
             events |= self._suspects
-            wakes = [wake for e in events for wake in self._routes.get(e, ())]
-        for wake in wakes:
+        for wake in self._routes.targets(events):
             wake()
 
     def close(self) -> None:
@@ -159,18 +185,13 @@ class BackChannel:
         self._service = event_service(node, back_channel_name(session, process), f"back channel of {process!r}")
         self._listener = self._service.listener_builder().create()
         self._interrupter = self._service.notifier_builder().create()
-        self._lock = threading.Lock()
-        self._services: dict[int, Service] = {}
-        self._ids = itertools.count(1)
+        self._services: EventRoutes[Service] = EventRoutes()
         self._closed = False
         self._thread = threading.Thread(target=self._watch, name="hetros-shm-back", daemon=True)
         self._thread.start()
 
     def register(self, service: Service) -> int:
-        with self._lock:
-            event = next(self._ids)
-            self._services[event] = service
-            return event
+        return self._services.add(service)
 
     def _watch(self) -> None:
         while not self._closed:
@@ -178,15 +199,12 @@ class BackChannel:
                 fired = self._listener.blocking_wait()
             except Exception:  # iceoryx2's wait failed: nothing left to watch
                 return
-            with self._lock:
-                services = [self._services.get(a.id.as_value) for a in fired]
-            for service in services:
-                if service is not None:
-                    service.subscriber_moved()
+            for service in self._services.targets({activation.id.as_value for activation in fired}):
+                service.subscriber_moved()
 
     def close(self) -> None:
         self._closed = True
-        self._interrupter.notify_with_custom_event_id(iox2.EventId.new(INTERRUPT_EVENT))
+        self._interrupter.notify_with_custom_event_id(_INTERRUPT)
         self._thread.join(timeout=2.0)
         self._listener = self._interrupter = self._service = None
 

@@ -20,7 +20,6 @@ from hetros.bench._roles import HetrosEndpoint, _hetros_plan
 from hetros.msg import registry
 from hetros.runtime import Graph
 from hetros.transport import remove_session_segments
-from hetros.transport.shm._endpoints import without_arrays
 
 N = 3000
 
@@ -56,12 +55,15 @@ def main() -> None:
         kind = "loaned" if loaned else "plain"
         print(f"{size} B {kind:6} publish {send / N * 1e6:6.1f} us   take {take / N * 1e6:6.1f} us")
     types = registry()
-    image = types.get("sensor_msgs/msg/Image")(data=np.zeros(4, np.uint8))
-    small = without_arrays(image, [("data",)])
-    raw = types.serialize(small)
-    print(f"rosbags serialize the non-array part   {per_call(lambda: types.serialize(small)):6.1f} us")
-    decode = per_call(lambda: types.deserialize(raw, image.__msgtype__))
-    print(f"rosbags deserialize the non-array part {decode:6.1f} us")
+    image = types.get("sensor_msgs/msg/Image")(data=np.zeros(size, np.uint8))
+    raw = types.serialize(image)
+    codec = types.codec("sensor_msgs/msg/Image")
+    buffer = memoryview(bytearray(len(raw)))
+    body = raw[4:].toreadonly()
+    print(f"{size} B Image: generated encode {per_call(lambda: codec.encode(image, buffer)):5.1f} us, "
+          f"decode {per_call(lambda: codec.decode(body)):5.1f} us; "
+          f"rosbags serialize {per_call(lambda: types.serialize(image)):5.1f} us, "
+          f"deserialize {per_call(lambda: types.deserialize(raw, image.__msgtype__)):5.1f} us")
     ping.close()
     echo.close()
     remove_session_segments(session)

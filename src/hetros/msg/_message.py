@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy as _copy
 import weakref
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -37,6 +38,9 @@ class Message:
     @staticmethod
     def _hetros_validate(message: Any, where: str = "") -> None:
         """Replaced per type by the registry's generated validator."""
+
+    # replaced per type by a generated sealer on first use (see _build_sealer)
+    _hetros_seal: ClassVar[Callable[[Message, int], Message]]
 
     def copy(self) -> Any:
         """Return a deep, writable copy (use it to keep a delivered message).
@@ -147,38 +151,56 @@ class FrozenList(list):  # type: ignore[type-arg]
     __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
 
 
-def _seal(message: Message, callers: str) -> Message:
-    """Make ``message`` read-only in place: its class, nested messages, lists and arrays.
+# What a sealer does with an array the caller can still write (see _seal_array)
+_FREEZE, _COPY, _KEEP = 0, 1, 2
 
-    ``callers`` says what to do with arrays the caller can still write: ``"freeze"`` them
-    (they are hetros' own, e.g. decoded), ``"copy"`` them (in-process readers get the
-    very object) or ``"keep"`` them untouched (the transport copies them anyway).
+
+def _seal_array(holder: Message, name: str, value: np.ndarray[Any, Any], callers: int) -> None:
+    """Seal one array field: ``_FREEZE`` it (hetros' own, e.g. decoded), ``_COPY`` it when the
+    caller can still write it (in-process readers get the very object), or ``_KEEP`` it (the
+    transport copies it anyway). Loaned arrays are frozen in every mode: they are hetros'."""
+    if callers == _FREEZE or _is_loaned(value):
+        value.flags.writeable = False
+    elif callers == _COPY and _callers(value):
+        value = value.copy()
+        value.flags.writeable = False
+        object.__setattr__(holder, name, value)
+
+
+def _build_sealer(cls: type[Message]) -> Callable[[Message, int], Message]:
+    """Straight-line code that seals one ``cls`` message in place (nested ones by their own sealer).
+
+    Sealing swaps the class for its read-only twin, seals nested messages, turns list fields
+    into FrozenLists and makes arrays read-only (per ``callers``, see ``_seal_array``).
     """
-    cls = type(message)
-    frozen = cls._frozen_class
-    if cls is frozen:
-        return message
+    lines = ["def seal(m, callers):", "    if type(m) is _F: return m"]
     for name in cls._array_names:
-        value = getattr(message, name)
-        if type(value) is not np.ndarray or not (value.flags.writeable or callers != "freeze"):
-            continue
-        if callers == "freeze" or _is_loaned(value):
-            value.flags.writeable = False
-        elif callers == "copy" and _callers(value):
-            value = value.copy()
-            value.flags.writeable = False
-            object.__setattr__(message, name, value)
+        lines += [f"    v = m.{name}",
+                  f"    if type(v) is _nd and (callers or v.flags.writeable): _seal_array(m, {name!r}, v, callers)"]
     for name in cls._nested_names:
-        _seal(getattr(message, name), callers)
+        lines += [f"    v = m.{name}", "    type(v)._hetros_seal(v, callers)"]
     for name in cls._nested_list_names:
-        for item in getattr(message, name):
-            _seal(item, callers)
+        lines += [f"    for v in m.{name}: type(v)._hetros_seal(v, callers)"]
     for name in cls._list_names:
-        value = getattr(message, name)
-        if type(value) is not FrozenList:
-            object.__setattr__(message, name, FrozenList(value))
-    object.__setattr__(message, "__class__", frozen)
-    return message
+        lines += [f"    v = m.{name}", f"    if type(v) is not _FL: _osa(m, {name!r}, _FL(v))"]
+    lines += ["    _osa(m, '__class__', _F)", "    return m"]
+    namespace: dict[str, Any] = {"_F": cls._frozen_class, "_nd": np.ndarray, "_FL": FrozenList,
+                                 "_osa": object.__setattr__, "_seal_array": _seal_array}
+    exec(compile("\n".join(lines), f"<hetros sealer {cls.__msgtype__}>", "exec"), namespace)
+    sealer: Callable[[Message, int], Message] = namespace["seal"]
+    return sealer
+
+
+def _first_seal(message: Message, callers: int) -> Message:
+    """Every class starts with this: it builds the class' sealer, installs it and seals."""
+    cls = type(message)._thawed_class
+    sealer = _build_sealer(cls)
+    cls._hetros_seal = staticmethod(sealer)
+    cls._frozen_class._hetros_seal = staticmethod(sealer)
+    return sealer(message, callers)
+
+
+Message._hetros_seal = staticmethod(_first_seal)
 
 
 def hand_over(message: Message, copy_arrays: bool) -> Message:
@@ -189,12 +211,12 @@ def hand_over(message: Message, copy_arrays: bool) -> Message:
     very object) and left alone otherwise (the transport copies it anyway). Loaned arrays
     and truly read-only ones travel as they are.
     """
-    return _seal(message, "copy" if copy_arrays else "keep")
+    return type(message)._hetros_seal(message, _COPY if copy_arrays else _KEEP)
 
 
 def freeze(message: Message) -> Message:
     """Make ``message`` read-only in place, including nested messages, lists and arrays."""
-    return _seal(message, "freeze")
+    return type(message)._hetros_seal(message, _FREEZE)
 
 
 def _thaw_value(value: object) -> object:

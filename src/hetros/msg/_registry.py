@@ -23,6 +23,7 @@ from rosbags.typesys import Stores, TypesysError, get_typestore
 from rosbags.typesys.store import Typestore
 
 from .._errors import DefinitionError, SerializationError, UnknownTypeError
+from ._cdr import CdrCodec, build_codec
 from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
 from ._message import FrozenMessage, Message
 from ._validate import Validator, build_validator, convert_array
@@ -84,6 +85,7 @@ class TypeRegistry:
         self.store.types = dict(self.store.types)
         self.store.fielddefs = dict(self.store.fielddefs)
         self._classes: dict[str, type[Message]] = {}
+        self._codecs: dict[str, CdrCodec] = {}
         self.services: dict[str, ServiceType] = {}
         self.actions: dict[str, ActionType] = {}
         self.sources: dict[str, str] = {}
@@ -189,6 +191,18 @@ class TypeRegistry:
                 f"unknown action type {name!r}: ship its .action in a package listed under 'messages:'"
             )
         return self.actions[full]
+
+    def codec(self, name: str) -> CdrCodec:
+        """The generated CDR codec of a message type (built on first use, then shared)."""
+        full = normalize_typename(name)
+        codec = self._codecs.get(full)
+        if codec is None:
+            self.get(full)
+            with self._lock:
+                codec = self._codecs.get(full)
+                if codec is None:
+                    codec = self._codecs[full] = build_codec(self, full)
+        return codec
 
     def names(self) -> list[str]:
         return sorted(self.store.fielddefs)

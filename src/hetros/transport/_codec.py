@@ -13,13 +13,17 @@ _CDR_LE = b"\x00\x01\x00\x00"
 
 
 class MessageCodec(Codec):
-    """CDR, little endian with the 4-byte encapsulation header: the ROS 2 wire format."""
+    """CDR, little endian with the 4-byte encapsulation header: the ROS 2 wire format.
+
+    The type's generated codec does the work (``msg.TypeRegistry.codec``); decoded
+    messages are read-only and their primitive arrays are views on the bytes.
+    """
 
     def __init__(self, registry: TypeRegistry, typename: str) -> None:
         self.typename = typename
         self._registry = registry
         self.cls = registry.get(typename)
-        self._msgdef = registry.store.get_msgdef(typename)
+        self._cdr = registry.codec(typename)
         self._arrays: list[ArrayField] | None = None
 
     @property
@@ -30,15 +34,29 @@ class MessageCodec(Codec):
         return self._arrays
 
     def size(self, message: Any) -> int:
-        return 4 + int(self._msgdef.getsize_cdr(0, message, self._registry.store))
+        return 4 + self._cdr.size(message)
 
     def encode_into(self, message: Any, buffer: memoryview) -> None:
         buffer[:4] = _CDR_LE
-        self._msgdef.serialize_cdr_le(buffer[4:], 0, message, self._registry.store)
+        self._cdr.encode(message, buffer[4:])
+
+    def lean_size(self, message: Any) -> int:
+        """The size with every variable-length primitive array (``arrays``) left empty."""
+        return 4 + self._cdr.size_lean(message)
+
+    def encode_lean_into(self, message: Any, buffer: memoryview) -> None:
+        """Encode with every variable-length primitive array left empty (they travel beside)."""
+        buffer[:4] = _CDR_LE
+        self._cdr.encode_lean(message, buffer[4:])
 
     def decode(self, data: memoryview) -> Message:
-        """Decode CDR; primitive arrays come out as read-only views on ``data`` (no copy)."""
-        return self._registry.deserialize(data, self.typename)
+        """Decode CDR into a read-only message; primitive arrays are views on ``data`` (no copy)."""
+        if len(data) < 4 or data[1] != 1:
+            raise SerializationError(
+                f"{self.typename}: {len(data)} bytes do not start with the little-endian CDR "
+                f"encapsulation 00 01 (got {bytes(data[:4]).hex(' ') or 'nothing'})"
+            )
+        return self._cdr.decode(data[4:])  # type: ignore[no-any-return]
 
 
 _ENVELOPE = struct.Struct("<QH")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import ctypes
 import threading
 import time
 from dataclasses import dataclass
@@ -11,9 +10,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..._errors import SerializationError, TransportError
-from ...msg import freeze, get_path, set_path
+from ...msg import get_path, set_path
 from .._base import Codec, Reader, Wake, Writer
-from .._codec import MessageCodec, carried_message
+from .._codec import MessageCodec
 from ._events import (
     WakeChannel,
     fd_hint,
@@ -63,26 +62,17 @@ def has_loan(message: Any) -> bool:
     return getattr(message, "_hetros_loan", None) is not None
 
 
-def without_arrays(message: Any, paths: list[tuple[str, ...]]) -> Any:
-    """A shallow copy of ``message`` whose arrays at ``paths`` are empty (the original is untouched)."""
+_EMPTY: dict[np.dtype[Any], np.ndarray[Any, Any]] = {}
 
-    def shallow(msg: Any) -> Any:
-        cls = msg._thawed_class
-        clone = cls.__new__(cls)
-        for name in cls.__fieldnames__:
-            object.__setattr__(clone, name, getattr(msg, name))
-        return clone
 
-    root = shallow(message)
-    for path in paths:
-        holder = root
-        for name in path[:-1]:
-            child = shallow(getattr(holder, name))
-            object.__setattr__(holder, name, child)
-            holder = child
-        array = getattr(holder, path[-1])
-        object.__setattr__(holder, path[-1], array[:0])
-    return root
+def _empty(dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
+    """A shared, read-only empty array: what a published loan's arrays become."""
+    array = _EMPTY.get(dtype)
+    if array is None:
+        array = np.empty(0, dtype)
+        array.flags.writeable = False
+        _EMPTY[dtype] = array
+    return array
 
 
 class ShmWriter(Writer):
@@ -108,8 +98,6 @@ class ShmWriter(Writer):
             self._send_copy(message)
             return
         sample, memory = self._service.loan(size)
-        # rosbags' serializer leaves terminators and padding to a zeroed buffer
-        ctypes.memset(sample.payload_ptr + HEADER.size, 0, size - HEADER.size)
         self._codec.encode_into(message, memory[HEADER.size:])
         self._service.send(sample, memory, LAYOUT_CDR, self._slot)
 
@@ -134,8 +122,8 @@ class ShmWriter(Writer):
             array = np.asarray(get_path(message, field.path))
             if array.size:
                 plan.append((index, field.path, field.dtype, int(array.size)))
-        reserve = self._codec.size(without_arrays(message, [path for _i, path, _d, _n in plan]))
-        sample, memory, small_at, views = self._place(plan, reserve)
+        assert isinstance(self._codec, MessageCodec)
+        sample, memory, small_at, views = self._place(plan, self._codec.lean_size(message))
         for _index, path, view, _at in views:
             np.copyto(view, get_path(message, path), casting="unsafe")
         self._finish(message, _Loan(sample, memory, views, small_at))
@@ -177,21 +165,20 @@ class ShmWriter(Writer):
             np.copyto(array, current, casting="unsafe")
         self._finish(message, loan)
         for _index, path, array, _at in loan.arrays:
-            set_path(message, path, array[:0].copy())
+            set_path(message, path, _empty(array.dtype))
 
     def _finish(self, message: Any, loan: _Loan) -> None:
         """Encode the small part, write the blob table and send the slot."""
         codec = self._codec
+        assert isinstance(codec, MessageCodec)
         memory = loan.memory
-        small_message = without_arrays(message, [path for _i, path, _a, _at in loan.arrays])
-        small = codec.size(small_message)
-        if small > LOAN_RESERVE:
+        small = codec.lean_size(message)
+        if loan.small_at + small > len(memory) or (loan.arrays and loan.small_at + small > loan.arrays[0][3]):
             raise TransportError(
-                f"{getattr(codec, 'typename', 'message')}: {small} bytes besides its arrays exceed the "
+                f"{codec.typename}: {small} bytes besides its arrays exceed the "
                 f"{LOAN_RESERVE}-byte reserve of a shared-memory slot; shorten its strings"
             )
-        memory[loan.small_at:loan.small_at + small] = bytes(small)
-        codec.encode_into(small_message, memory[loan.small_at:loan.small_at + small])
+        codec.encode_lean_into(message, memory[loan.small_at:loan.small_at + small])
         SPLIT.pack_into(memory, HEADER.size, small, len(loan.arrays))
         for position, (index, _path, array, at) in enumerate(loan.arrays):
             BLOB.pack_into(memory, HEADER.size + SPLIT.size + BLOB.size * position, index, loan.small_at,
@@ -226,14 +213,6 @@ class _Lease:
     def __del__(self) -> None:
         with self.borrowed.lock:
             self.borrowed.count -= 1
-
-
-def _frozen(item: Any) -> Any:
-    """What a reader delivers is read-only: a message, or the message of a service envelope."""
-    message = carried_message(item)
-    if message is not None:
-        freeze(message)
-    return item
 
 
 class _Port:
@@ -307,7 +286,7 @@ class ShmReader(Reader):
                     self._domain.notify_back(service.target, credits.back_event)
                 if self._borrowed.count >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))
-                return _frozen(self._decode(memory.toreadonly(), layout))
+                return self._decode(memory.toreadonly(), layout)
             return None
 
     def _check_arrival(self, port: _Port) -> None:

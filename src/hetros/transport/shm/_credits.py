@@ -65,6 +65,12 @@ class Credits:
     def published(self, seq: int) -> None:
         _WORD.pack_into(self._map, 0, seq)
 
+    def publish(self, seq: int) -> int:
+        """Record ``seq`` as published; returns ``version`` (so the publisher notices joins and leaves)."""
+        _WORD.pack_into(self._map, 0, seq)
+        version: int = _WORD.unpack_from(self._map, 16)[0]
+        return version
+
     @property
     def waiting(self) -> bool:
         return bool(_WORD.unpack_from(self._map, 8)[0])

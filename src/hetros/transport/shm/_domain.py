@@ -69,14 +69,14 @@ class ShmDomain:
                 self._channels[owner] = channel
             return channel
 
-    def notify(self, key: int, event: int) -> None:
-        """Wake reader ``event`` of the node whose wake channel is ``key``."""
+    def notifier(self, key: int, event: int) -> tuple[Any, Any]:
+        """How to wake reader ``event`` of the node whose wake channel is ``key``: call ``f(arg)``."""
         notifier = self._notifiers.get(key)
         if notifier is None:
             service = event_service(self._node, wake_channel_name(self.session, key), "wake channel of a subscriber")
             notifier = service.notifier_builder().create()
             self._notifiers[key] = notifier
-        notifier.notify_with_custom_event_id(iox2.EventId.new(event))
+        return notifier.notify_with_custom_event_id, iox2.EventId.new(event)
 
     def notify_back(self, publisher_target: str, event: int) -> None:
         """Tell the publishing process of a service that one of its subscribers took or joined."""

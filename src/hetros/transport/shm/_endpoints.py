@@ -189,30 +189,22 @@ class ShmWriter(Writer):
         return None
 
 
-class _Borrowed:
-    """Counts a reader's samples still referenced by delivered messages."""
-
-    __slots__ = ("count", "lock")
-
-    def __init__(self) -> None:
-        self.count = 0
-        self.lock = threading.Lock()
-
-
 class _Lease:
-    """Holds a received sample; it goes back to the publisher when no message refers to it."""
+    """Holds a received sample; it goes back to the publisher when no message refers to it.
+
+    ``borrowed`` has one entry per live lease (list append and pop are atomic, and a lease
+    may die in any thread).
+    """
 
     __slots__ = ("borrowed", "sample")
 
-    def __init__(self, sample: Any, borrowed: _Borrowed) -> None:
+    def __init__(self, sample: Any, borrowed: list[None]) -> None:
         self.sample = sample
         self.borrowed = borrowed
-        with borrowed.lock:
-            borrowed.count += 1
+        borrowed.append(None)
 
     def __del__(self) -> None:
-        with self.borrowed.lock:
-            self.borrowed.count -= 1
+        self.borrowed.pop()
 
 
 class _Port:
@@ -246,7 +238,7 @@ class ShmReader(Reader):
         self._ports: list[_Port] = []
         self._next = 0
         self._lock = threading.Lock()
-        self._borrowed = _Borrowed()
+        self._borrowed: list[None] = []
         self.topic = services[0].topic if services else ""
         for service in services:
             subscriber, start = service.subscriber(slot, channel, self.event)
@@ -284,7 +276,7 @@ class ShmReader(Reader):
                 credits.set_taken(self._slot, seq)
                 if service.blocking and credits.waiting:
                     self._domain.notify_back(service.target, credits.back_event)
-                if self._borrowed.count >= BORROW_LIMIT - 2:
+                if len(self._borrowed) >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))
                 return self._decode(memory.toreadonly(), layout)
             return None

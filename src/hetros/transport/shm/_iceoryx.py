@@ -12,4 +12,10 @@ iox2.set_log_level(iox2.LogLevel.Error)
 
 log = logging.getLogger("hetros.transport.shm")
 
-__all__ = ["iox2", "log"]
+# The binding's Python wrappers recheck the payload type on every call (~0.3 µs each). Every
+# hetros service carries byte slices, so the hot path calls the methods they wrap, when this
+# version of the binding has them (tests/conformance/test_shm_specific.py notices a rename).
+loan_slice = getattr(iox2.Publisher, "__loan_slice_uninit", iox2.Publisher.loan_slice_uninit)
+assume_init = getattr(iox2.SampleMutUninit, "__assume_init", iox2.SampleMutUninit.assume_init)
+
+__all__ = ["assume_init", "iox2", "loan_slice", "log"]

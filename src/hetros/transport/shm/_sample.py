@@ -5,6 +5,7 @@ from __future__ import annotations
 import ctypes
 import struct
 from pathlib import Path
+from typing import Any
 
 from .._qos import QoS
 
@@ -62,10 +63,22 @@ def align(value: int, to: int) -> int:
     return (value + to - 1) & -to
 
 
+_SLOT_TYPES: dict[int, Any] = {}
+
+
 def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
-    """Bytes at ``address`` as a memoryview that keeps ``keepalive`` alive while referenced."""
-    raw = (ctypes.c_uint8 * size).from_address(address)
-    raw._hetros_keepalive = keepalive  # type: ignore[attr-defined]
+    """Bytes at ``address`` as a memoryview that keeps ``keepalive`` alive while referenced.
+
+    Everything made from the view (slices, numpy arrays) refers to the ctypes object that
+    holds ``keepalive``: the sample goes back to iceoryx2 only when all of them are gone.
+    """
+    kind = _SLOT_TYPES.get(size)
+    if kind is None:
+        if len(_SLOT_TYPES) > 4096:  # sizes that keep changing must not grow the cache forever
+            _SLOT_TYPES.clear()
+        kind = _SLOT_TYPES[size] = type("Slot", (ctypes.c_uint8 * size,), {"__slots__": ("keepalive",)})
+    raw = kind.from_address(address)
+    raw.keepalive = keepalive
     return memoryview(raw).cast("B")
 
 

@@ -15,7 +15,7 @@ from ._events import (
     WakeChannel,
     fd_hint,
 )
-from ._iceoryx import iox2, log
+from ._iceoryx import assume_init, iox2, loan_slice, log
 from ._sample import (
     BORROW_LIMIT,
     HEADER,
@@ -69,7 +69,7 @@ class Service:
             ) from exc
         self.credits = Credits(SHM_DIR / f"{segment_prefix(domain.session)}{digest}")
         self._publisher: Any = None
-        self._wakes: list[tuple[int, int]] = []
+        self._wakes: list[tuple[Any, Any]] = []
         self._wakes_version = -1
         self.next_seq = 1
 
@@ -145,8 +145,11 @@ class Service:
 
     def loan(self, size: int) -> tuple[Any, memoryview]:
         """A writable slot of ``size`` payload bytes (header included) and its memory."""
+        publisher = self._publisher
+        if publisher is None:
+            publisher = self.publisher()
         try:
-            sample = self.publisher().loan_slice_uninit(size)
+            sample = loan_slice(publisher, size)
         except iox2.LoanError as exc:
             raise TransportError(
                 f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "
@@ -164,19 +167,17 @@ class Service:
                 self.room -= 1
             seq = self.next_seq
             HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
-            ready = sample.assume_init()
             try:
-                ready.send()
+                assume_init(sample).send()
             except iox2.SendError as exc:
                 raise TransportError(f"iceoryx2 could not send on {self.topic}: {exc}") from exc
             self.next_seq = seq + 1
-            self.credits.published = seq
-            credits = self.credits
-            if credits.version != self._wakes_version:
-                self._wakes_version = credits.version
-                self._wakes = credits.subscribers()
-            for key, event in self._wakes:
-                self.domain.notify(key, event)
+            version = self.credits.publish(seq)
+            if version != self._wakes_version:
+                self._wakes_version = version
+                self._wakes = [self.domain.notifier(key, event) for key, event in self.credits.subscribers()]
+            for notify, event_id in self._wakes:
+                notify(event_id)
 
     # -- subscribing side ------------------------------------------------------------------
 

@@ -26,7 +26,7 @@ from hetros.runtime import Graph
 from hetros.transport import remove_session_segments
 
 N = 1000
-ROUNDS = 25
+ROUNDS = int(os.environ.get("ROUNDS", "25"))
 
 
 def fastest_round(variants: dict[str, Callable[[], object]]) -> dict[str, float]:

@@ -104,8 +104,10 @@ class Credits:
         self.slots[index] = (0, 0, 0, 0)
         self.words[2] += 1
 
-    def set_taken(self, index: int, taken: int) -> None:
+    def set_taken(self, index: int, taken: int) -> bool:
+        """Record that subscriber ``index`` took up to ``taken``; returns ``waiting``."""
         _WORD.pack_into(self._map, 8 * (self.HEAD + _SLOT_WORDS * index), taken)
+        return bool(_WORD.unpack_from(self._map, 8)[0])
 
     def subscribers(self) -> list[tuple[int, int]]:
         """(wake channel key, event id) of every live subscriber slot."""

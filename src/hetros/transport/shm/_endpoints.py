@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+import struct
 import threading
 import time
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -29,6 +29,7 @@ from ._sample import (
     LOSS_GRACE,
     SPLIT,
     align,
+    blob_table,
     slot_memory,
 )
 from ._service import Service
@@ -38,15 +39,45 @@ if TYPE_CHECKING:
 
 
 
-@dataclass
+class _SlotPlan:
+    """Where the parts of a split message go in a slot: fixed by its array lengths, so cached.
+
+    The slot holds the header, the table (``SPLIT`` then one ``BLOB`` per array), the small
+    part (the CDR of the message with those arrays empty) at ``small_at`` with room until
+    the first blob, and each array at a 64-byte aligned offset. The table is packed once:
+    it names the small part's room rather than its size (CDR needs no end marker).
+    """
+
+    __slots__ = ("blobs", "room", "size", "small_at", "table")
+
+    def __init__(self, arrays: list[tuple[int, tuple[str, ...], np.dtype[Any], int]], reserve: int) -> None:
+        table_end = HEADER.size + SPLIT.size + BLOB.size * len(arrays)
+        self.small_at = align(table_end, 8) + 4
+        offset = align(self.small_at + reserve, 64)
+        self.room = offset - self.small_at
+        blobs = []
+        table = [SPLIT.pack(self.room, len(arrays))]
+        for index, path, dtype, length in arrays:
+            blobs.append((path, dtype, length, offset))
+            table.append(BLOB.pack(index, self.small_at, offset, length * dtype.itemsize))
+            offset = align(offset + length * dtype.itemsize, 64)
+        self.size = offset if arrays else self.small_at + self.room
+        self.blobs = tuple(blobs)
+        self.table = b"".join(table)
+
+
 class _Loan:
     """A slot handed out with a message by ``loan``; stored on the message itself."""
 
-    sample: Any
-    memory: memoryview
-    arrays: list[tuple[int, tuple[str, ...], np.ndarray[Any, Any], int]]
-    small_at: int
-    writer: ShmWriter | None = None
+    __slots__ = ("arrays", "memory", "plan", "sample", "writer")
+
+    def __init__(self, sample: Any, memory: memoryview, plan: _SlotPlan,
+                 arrays: list[tuple[tuple[str, ...], np.ndarray[Any, Any]]], writer: ShmWriter | None) -> None:
+        self.sample = sample
+        self.memory = memory
+        self.plan = plan
+        self.arrays = arrays
+        self.writer = writer
 
 
 def take_loan(message: Any, writer: ShmWriter | None = None) -> _Loan | None:
@@ -85,6 +116,7 @@ class ShmWriter(Writer):
         # variable-length arrays travel as blobs; fixed-size ones stay in the CDR part
         self._arrays = [(index, field) for index, field in enumerate(codec.arrays) if field.length is None] \
             if isinstance(codec, MessageCodec) else []
+        self._loan_plans: dict[tuple[tuple[str, int], ...], _SlotPlan] = {}
         service.publisher()
 
     def write(self, message: Any) -> None:
@@ -94,66 +126,71 @@ class ShmWriter(Writer):
             return
         size = HEADER.size + self._codec.size(message)
         if self._arrays and size > INLINE_LIMIT:
-            # large arrays go as aligned blobs: only the small part needs zeroing
             self._send_copy(message)
             return
         sample, memory = self._service.loan(size)
         self._codec.encode_into(message, memory[HEADER.size:])
         self._service.send(sample, memory, LAYOUT_CDR, self._slot)
 
-    def _place(self, plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]], reserve: int
-               ) -> tuple[Any, memoryview, int, list[tuple[int, tuple[str, ...], np.ndarray[Any, Any], int]]]:
-        """A slot with room for the small part and 64-byte aligned blobs; views on the blobs."""
-        table_end = HEADER.size + SPLIT.size + BLOB.size * len(plan)
-        small_at = align(table_end, 8) + 4
-        offset = align(small_at + reserve, 64)
-        offsets = []
-        for _index, _path, dtype, length in plan:
-            offsets.append(offset)
-            offset = align(offset + length * dtype.itemsize, 64)
-        sample, memory = self._service.loan(offset)
-        views = [(index, path, np.frombuffer(memory, dtype=dtype, count=length, offset=at), at)
-                 for (index, path, dtype, length), at in zip(plan, offsets, strict=True)]
-        return sample, memory, small_at, views
+    def _place(self, plan: _SlotPlan) -> tuple[Any, memoryview, list[tuple[tuple[str, ...], np.ndarray[Any, Any]]]]:
+        """A slot laid out by ``plan``, its table written, and views on its blobs."""
+        sample, memory = self._service.loan(plan.size)
+        memory[HEADER.size:HEADER.size + len(plan.table)] = plan.table
+        views = [(path, np.frombuffer(memory, dtype=dtype, count=length, offset=at))
+                 for path, dtype, length, at in plan.blobs]
+        return sample, memory, views
 
     def _send_copy(self, message: Any) -> None:
-        plan = []
+        """Large arrays go as aligned blobs (no zeroing, no CDR walk over them)."""
+        codec = self._codec
+        assert isinstance(codec, MessageCodec)
+        arrays = []
         for index, field in self._arrays:
             array = np.asarray(get_path(message, field.path))
             if array.size:
-                plan.append((index, field.path, field.dtype, int(array.size)))
-        assert isinstance(self._codec, MessageCodec)
-        sample, memory, small_at, views = self._place(plan, self._codec.lean_size(message))
-        for _index, path, view, _at in views:
+                arrays.append((index, field.path, field.dtype, int(array.size)))
+        plan = _SlotPlan(arrays, codec.lean_size(message))
+        sample, memory, views = self._place(plan)
+        for path, view in views:
             np.copyto(view, get_path(message, path), casting="unsafe")
-        self._finish(message, _Loan(sample, memory, views, small_at))
+        self._finish(message, _Loan(sample, memory, plan, views, None))
 
     def loan(self, sizes: dict[str, int]) -> Any:
         """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""
         codec = self._codec
         if not isinstance(codec, MessageCodec):
             raise TransportError("only topic messages can be loaned")
+        key = tuple(sizes.items())
+        plan = self._loan_plans.get(key)
+        if plan is None:
+            plan = self._loan_plan(codec, sizes)
+            if len(self._loan_plans) > 64:  # lengths that keep changing must not grow the cache forever
+                self._loan_plans.clear()
+            self._loan_plans[key] = plan
+        sample, memory, views = self._place(plan)
+        message = codec.cls()
+        for path, view in views:
+            set_path(message, path, view)
+        object.__setattr__(message, "_hetros_loan", _Loan(sample, memory, plan, views, self))
+        return message
+
+    def _loan_plan(self, codec: MessageCodec, sizes: dict[str, int]) -> _SlotPlan:
         wanted = dict(sizes)
-        plan: list[tuple[int, tuple[str, ...], np.dtype[Any], int]] = []
+        arrays: list[tuple[int, tuple[str, ...], np.dtype[Any], int]] = []
         for index, field in self._arrays:
             length = wanted.pop(".".join(field.path), 0)
             if length:
-                plan.append((index, field.path, field.dtype, length))
+                arrays.append((index, field.path, field.dtype, length))
         if wanted:
             known = ", ".join(".".join(f.path) for _i, f in self._arrays) or "none"
             raise TransportError(
                 f"{codec.typename} has no variable-length primitive array {', '.join(wanted)!s}; "
                 f"loan sizes can be given for: {known}"
             )
-        sample, memory, small_at, views = self._place(plan, LOAN_RESERVE)
-        message = codec.cls()
-        for _index, path, view, _at in views:
-            set_path(message, path, view)
-        object.__setattr__(message, "_hetros_loan", _Loan(sample, memory, views, small_at, self))
-        return message
+        return _SlotPlan(arrays, LOAN_RESERVE)
 
     def _send_loan(self, message: Any, loan: _Loan) -> None:
-        for _index, path, array, _at in loan.arrays:
+        for path, array in loan.arrays:
             current = get_path(message, path)
             if current is array:
                 continue
@@ -164,26 +201,25 @@ class ShmWriter(Writer):
                 return
             np.copyto(array, current, casting="unsafe")
         self._finish(message, loan)
-        for _index, path, array, _at in loan.arrays:
+        for path, array in loan.arrays:
             set_path(message, path, _empty(array.dtype))
 
     def _finish(self, message: Any, loan: _Loan) -> None:
-        """Encode the small part, write the blob table and send the slot."""
+        """Encode the small part into its room and send the slot."""
         codec = self._codec
         assert isinstance(codec, MessageCodec)
-        memory = loan.memory
-        small = codec.lean_size(message)
-        if loan.small_at + small > len(memory) or (loan.arrays and loan.small_at + small > loan.arrays[0][3]):
+        at, room = loan.plan.small_at, loan.plan.room
+        try:
+            codec.encode_lean_into(message, loan.memory[at:at + room])
+        except (struct.error, ValueError, IndexError):
+            small = codec.lean_size(message)
+            if small <= room:
+                raise
             raise TransportError(
-                f"{codec.typename}: {small} bytes besides its arrays exceed the "
-                f"{LOAN_RESERVE}-byte reserve of a shared-memory slot; shorten its strings"
-            )
-        codec.encode_lean_into(message, memory[loan.small_at:loan.small_at + small])
-        SPLIT.pack_into(memory, HEADER.size, small, len(loan.arrays))
-        for position, (index, _path, array, at) in enumerate(loan.arrays):
-            BLOB.pack_into(memory, HEADER.size + SPLIT.size + BLOB.size * position, index, loan.small_at,
-                           at, array.nbytes)
-        self._service.send(loan.sample, memory, LAYOUT_SPLIT, self._slot)
+                f"{codec.typename}: {small} bytes besides its arrays exceed the {room}-byte room "
+                "a loaned shared-memory slot keeps for them; shorten its strings or lists"
+            ) from None
+        self._service.send(loan.sample, loan.memory, LAYOUT_SPLIT, self._slot)
 
     def close(self) -> None:
         return None
@@ -272,10 +308,8 @@ class ShmReader(Reader):
                 if port.suspect_since:
                     port.suspect_since = 0.0
                     self._channel.suspect(self.event, False)
-                credits = service.credits
-                credits.set_taken(self._slot, seq)
-                if service.blocking and credits.waiting:
-                    self._domain.notify_back(service.target, credits.back_event)
+                if service.credits.set_taken(self._slot, seq) and service.blocking:
+                    self._domain.notify_back(service.target, service.credits.back_event)
                 if len(self._borrowed) >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))
                 return self._decode(memory.toreadonly(), layout)
@@ -309,12 +343,13 @@ class ShmReader(Reader):
             return self._codec.decode(memory[HEADER.size:])
         if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
             raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")
-        small, count = SPLIT.unpack_from(memory, HEADER.size)
+        room, count = SPLIT.unpack_from(memory, HEADER.size)
         arrays = self._codec.arrays
-        blobs = [BLOB.unpack_from(memory, HEADER.size + SPLIT.size + BLOB.size * i) for i in range(count)]
-        small_at = blobs[0][1] if blobs else align(HEADER.size + SPLIT.size, 8) + 4
-        message = self._codec.decode(memory[small_at:small_at + small])
-        for index, _small_at, offset, nbytes in blobs:
+        table = blob_table(count).unpack_from(memory, HEADER.size + SPLIT.size)
+        small_at = table[1] if count else align(HEADER.size + SPLIT.size, 8) + 4
+        message = self._codec.decode(memory[small_at:small_at + room])
+        for position in range(0, 4 * count, 4):
+            index, _small_at, offset, nbytes = table[position:position + 4]
             if index >= len(arrays) or offset + nbytes > len(memory):
                 raise SerializationError(
                     f"blob {index} at offset {offset} ({nbytes} bytes) does not fit a "

@@ -20,6 +20,15 @@ LAYOUT_SPLIT = 1
 SPLIT = struct.Struct("<II")
 BLOB = struct.Struct("<IIQQ")
 LOAN_RESERVE = 4096
+_BLOB_TABLES: dict[int, struct.Struct] = {}
+
+
+def blob_table(count: int) -> struct.Struct:
+    """``count`` BLOB entries as one struct (one unpack for the whole table)."""
+    table = _BLOB_TABLES.get(count)
+    if table is None:
+        table = _BLOB_TABLES[count] = struct.Struct("<" + BLOB.format[1:] * count)
+    return table
 # Plain messages up to this size are one contiguous CDR (one encode, arrays inline and read
 # in place as views); larger ones use the split layout, whose blobs need no zeroing.
 INLINE_LIMIT = 64 * 1024

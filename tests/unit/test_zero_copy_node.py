@@ -80,10 +80,10 @@ def test_an_abandoned_loan_returns_its_slot(graphs: tuple[Graph, Graph]) -> None
     second.prepare(["viewer"])
     pub = Node("cam", first).create_publisher(Image, "/img")
     for _ in range(50):
-        abandoned = pub.loan(data=1000)
+        abandoned = pub.loan(data=100_000)  # large: a slot loan (small ones live in process memory)
         del abandoned
         gc.collect()
-    message = pub.loan(data=4)
+    message = pub.loan(data=100_000)
     message.data[:] = 9
     pub.publish(message)
 
@@ -91,9 +91,25 @@ def test_an_abandoned_loan_returns_its_slot(graphs: tuple[Graph, Graph]) -> None
 def test_holding_too_many_loans_says_so(graphs: tuple[Graph, Graph]) -> None:
     first, _second = graphs  # no subscriber running: publishing never blocks here
     pub = Node("cam", first).create_publisher(Image, "/img")
-    held = [pub.loan(data=100) for _ in range(8)]
+    held = [pub.loan(data=100_000) for _ in range(8)]
     with pytest.raises(TransportError, match=r"holds at most 8 unpublished loans at once; publish the loaned"):
-        pub.loan(data=100)
+        pub.loan(data=100_000)
     for message in held:
         pub.publish(message)
-    pub.publish(pub.loan(data=100))
+    pub.publish(pub.loan(data=100_000))
+
+
+def test_small_loans_live_in_process_memory_and_travel_inline(graphs: tuple[Graph, Graph]) -> None:
+    """Below the inline limit a slot is not worth its bookkeeping: no slot is held per loan."""
+    first, second = graphs
+    second.prepare(["viewer"])
+    viewer = Node("viewer", second)
+    frames = viewer.create_subscription(Image, "/img")
+    pub = Node("cam", first).create_publisher(Image, "/img")
+    held = [pub.loan(data=3000) for _ in range(20)]  # more than a publisher's slot loans
+    for value, message in enumerate(held):
+        message.data[:] = value
+        pub.publish(message)
+        with pytest.raises(ValueError, match="read-only"):
+            message.data[0] = 1  # handed over
+        assert frames.take(timeout=2.0).data[0] == value

@@ -160,7 +160,7 @@ class Iceoryx2Endpoint(Endpoint):
         self.notifier = event(out_name).notifier_builder().create()
         self.listener = event(in_name).listener_builder().create()
         self.ports: list[Any] = [self.pub, self.sub, self.notifier, self.listener]
-        from hetros.runtime._node import AdaptiveSpin
+        from hetros.runtime._executor import AdaptiveSpin
 
         self.spin = AdaptiveSpin()  # the wait strategy of hetros' take: a like-for-like baseline
 

@@ -15,11 +15,42 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import os
 import threading
 import time
 from collections import deque
 from collections.abc import Callable
 from typing import Protocol
+
+
+class AdaptiveSpin:
+    """How long to wait awake before blocking: on a hot stream, about two message gaps.
+
+    A blocking wake-up of another CPU costs tens of microseconds here; it is worth
+    avoiding only when messages come about that often (a request/reply exchange, a
+    multi-kHz stream). A stream whose typical gap is longer than ``HOT`` never spins,
+    nor does one that went quiet: a 100 Hz or 1 kHz subscriber sleeps between messages.
+    """
+
+    HOT = 500e-6
+    LOW = 50e-6
+    HIGH = 1e-3
+
+    def __init__(self) -> None:
+        self.last = 0.0
+        self.gap = 0.0
+
+    def budget(self) -> float:
+        if self.gap > self.HOT or time.monotonic() - self.last > self.HOT:
+            return 0.0
+        return min(max(2.0 * self.gap, self.LOW), self.HIGH)
+
+    def arrived(self) -> None:
+        """Track the typical gap: it falls at once to a shorter gap and rises slowly on a longer one."""
+        now = time.monotonic()
+        gap = now - self.last
+        self.gap = gap if self.gap == 0.0 or gap < self.gap else 0.8 * self.gap + 0.2 * gap
+        self.last = now
 
 
 class Dispatchable(Protocol):
@@ -39,6 +70,10 @@ class WaitSource(Protocol):
         """Make a blocked ``wait`` return (from any thread)."""
         ...
 
+    def poll(self) -> None:
+        """Without blocking, run the wake function of each reader that has data now."""
+        ...
+
 
 class Executor:
     def __init__(self, stop: threading.Event, source: WaitSource | None = None) -> None:
@@ -52,6 +87,7 @@ class Executor:
         self._queued: set[int] = set()
         self._timers: list[tuple[float, int, Callable[[], float | None]]] = []
         self._counter = itertools.count()
+        self._spin = AdaptiveSpin()
         self.entities = 0
 
     @property
@@ -133,6 +169,27 @@ class Executor:
                 return True
             if entity is not None:
                 if entity.dispatch():
+                    self._spin.arrived()
                     self.notify(entity)
                 return True
-            self.wait(seen, wait)
+            if not self._spin_for_work(seen, wait):
+                self.wait(seen, wait)
+
+    def _spin_for_work(self, seen: int, wait: float | None) -> bool:
+        """On a hot stream, poll awake for a while instead of blocking; True when work came.
+
+        Polling a reader costs ~0.2 µs, a blocking wake-up of another CPU tens of
+        microseconds: it pays only when messages come about that often (see AdaptiveSpin).
+        """
+        budget = self._spin.budget()
+        if not budget:
+            return False
+        end = time.perf_counter() + (budget if wait is None else min(budget, wait))
+        source = self._source
+        while time.perf_counter() < end:
+            if source is not None:
+                source.poll()
+            if self._generation != seen or self._stop.is_set():
+                return True
+            os.sched_yield()  # lets a publishing thread of this process have the GIL
+        return False

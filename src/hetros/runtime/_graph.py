@@ -55,8 +55,9 @@ class _FanoutWriter(Writer):
         self._fields: dict[str, list[ArrayField]] = {}
 
     def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
-        """A message to fill in place: its arrays live in shared memory when a process reads it."""
-        if self._shm is not None:
+        """A message to fill in place: its arrays live in a shared-memory slot when a process
+        reads it and they are large; otherwise in memory hetros owns (sent inline)."""
+        if self._shm is not None and self._shm.slot_loan_pays(sizes):
             message: Message = self._shm.loan(sizes)
             return message
         message = cls()

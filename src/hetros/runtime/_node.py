@@ -27,42 +27,12 @@ from .._errors import (
 from ..msg import Message, ServiceType
 from ..plan import reply_channel, request_channel
 from ..transport import QoS, Reader, Writer
-from ._executor import Executor
+from ._executor import AdaptiveSpin, Executor
 from ._graph import Graph
 from ._log import node_logger
 
 M = TypeVar("M", bound=Message)
 _MISSING: Any = object()
-
-
-class AdaptiveSpin:
-    """How long to wait awake before blocking: on a hot stream, about two message gaps.
-
-    A blocking wake-up of another CPU costs tens of microseconds here; it is worth
-    avoiding only when messages come about that often (a request/reply exchange, a
-    multi-kHz stream). A stream whose typical gap is longer than ``HOT`` never spins,
-    nor does one that went quiet: a 100 Hz or 1 kHz subscriber sleeps between messages.
-    """
-
-    HOT = 500e-6
-    LOW = 50e-6
-    HIGH = 1e-3
-
-    def __init__(self) -> None:
-        self.last = 0.0
-        self.gap = 0.0
-
-    def budget(self) -> float:
-        if self.gap > self.HOT or time.monotonic() - self.last > self.HOT:
-            return 0.0
-        return min(max(2.0 * self.gap, self.LOW), self.HIGH)
-
-    def arrived(self) -> None:
-        """Track the typical gap: it falls at once to a shorter gap and rises slowly on a longer one."""
-        now = time.monotonic()
-        gap = now - self.last
-        self.gap = gap if self.gap == 0.0 or gap < self.gap else 0.8 * self.gap + 0.2 * gap
-        self.last = now
 
 
 def _typename(msg_type: type[Message]) -> str:

@@ -155,8 +155,15 @@ class ShmWriter(Writer):
             np.copyto(view, get_path(message, path), casting="unsafe")
         self._finish(message, _Loan(sample, memory, plan, views, None))
 
-    def loan(self, sizes: dict[str, int]) -> Any:
-        """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""
+    def slot_loan_pays(self, sizes: dict[str, int]) -> bool:
+        """Whether a loan of these array lengths should live in a slot (the split layout).
+
+        Below ``INLINE_LIMIT`` a loan is better made in process memory and sent inline: one
+        copy of a few kilobytes costs less than the split layout's bookkeeping.
+        """
+        return self._plan_for(sizes).size > INLINE_LIMIT
+
+    def _plan_for(self, sizes: dict[str, int]) -> _SlotPlan:
         codec = self._codec
         if not isinstance(codec, MessageCodec):
             raise TransportError("only topic messages can be loaned")
@@ -167,6 +174,13 @@ class ShmWriter(Writer):
             if len(self._loan_plans) > 64:  # lengths that keep changing must not grow the cache forever
                 self._loan_plans.clear()
             self._loan_plans[key] = plan
+        return plan
+
+    def loan(self, sizes: dict[str, int]) -> Any:
+        """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""
+        plan = self._plan_for(sizes)
+        assert isinstance(self._codec, MessageCodec)
+        codec = self._codec
         sample, memory, views = self._place(plan)
         message = codec.cls()
         for path, view in views:
@@ -270,8 +284,8 @@ class ShmReader(Reader):
         self._closed = False
         self._channel = channel
         self._wake = wake
-        self.event = channel.register(wake)
         self._ports: list[_Port] = []
+        self.event = channel.register(wake, self._pending)
         self._next = 0
         self._lock = threading.Lock()
         self._borrowed: list[None] = []
@@ -282,6 +296,10 @@ class ShmReader(Reader):
         wake()
 
     # -- taking ----------------------------------------------------------------------------
+
+    def _pending(self) -> bool:
+        """Whether a sample is waiting (without taking it)."""
+        return any(port.subscriber.has_samples() for port in self._ports)
 
     def try_take(self) -> Any | None:
         with self._lock:

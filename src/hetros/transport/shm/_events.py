@@ -7,7 +7,7 @@ import itertools
 import os
 import resource
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from ..._errors import TransportError
@@ -117,17 +117,28 @@ class WakeChannel:
         self._listener = self._service.listener_builder().create()
         self._interrupter = self._service.notifier_builder().create()
         self._routes: EventRoutes[Wake] = EventRoutes()
+        self._pollers: list[tuple[Callable[[], bool], Wake]] = []
         self._suspects: set[int] = set()
         self._lock = threading.Lock()
 
-    def register(self, wake: Wake) -> int:
-        """An event id for one reader; ``wake`` runs (in the waiting thread) when it fires."""
+    def register(self, wake: Wake, pending: Callable[[], bool]) -> int:
+        """An event id for one reader; ``wake`` runs (in the waiting thread) when it fires,
+        or when a ``poll`` finds ``pending()`` true."""
+        with self._lock:
+            self._pollers = [*self._pollers, (pending, wake)]
         return self._routes.add(wake)
 
     def unregister(self, event: int, wake: Wake) -> None:
         self._routes.remove(event, wake)
         with self._lock:
             self._suspects.discard(event)
+            self._pollers = [(p, w) for p, w in self._pollers if w is not wake]
+
+    def poll(self) -> None:
+        """Run the wake of every reader with data now (no system call: the spin of a hot node)."""
+        for pending, wake in self._pollers:
+            if pending():
+                wake()
 
     def suspect(self, event: int, suspicious: bool) -> None:
         """A reader saw published samples it could not receive: wake it again soon to recheck."""

@@ -72,7 +72,7 @@ def align(value: int, to: int) -> int:
     return (value + to - 1) & -to
 
 
-_SLOT_TYPES: dict[int, Any] = {}
+_SLOT_TYPES: dict[int, Any] = {}  # ctypes array types, by size
 
 
 def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
@@ -81,7 +81,7 @@ def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
     Everything made from the view (slices, numpy arrays) refers to the ctypes object that
     holds ``keepalive``: the sample goes back to iceoryx2 only when all of them are gone.
     """
-    kind = _SLOT_TYPES.get(size)
+    kind: Any = _SLOT_TYPES.get(size)
     if kind is None:
         if len(_SLOT_TYPES) > 4096:  # sizes that keep changing must not grow the cache forever
             _SLOT_TYPES.clear()

@@ -42,6 +42,10 @@ class Endpoint(ABC):
         """Send back a copy of what was received (the copy is part of the measurement)."""
         self.send(stamp, seq, bytes(received) if not isinstance(received, np.ndarray) else received.copy())
 
+    def payload(self, received: Any) -> Any:
+        """The received payload as a buffer (to read every byte of it)."""
+        return received
+
     def close(self) -> None:
         return None
 
@@ -91,6 +95,7 @@ class HetrosEndpoint(Endpoint):
     def send(self, stamp: int, seq: int, payload: Any) -> None:
         if self.loaned:
             msg = self.pub.loan(data=len(payload))
+            np.copyto(msg.data, payload)  # the data is written, as by any real producer
         else:
             msg = self.Image(data=payload)
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
@@ -185,6 +190,10 @@ class Iceoryx2Endpoint(Endpoint):
         ctypes.memmove(sample.payload_ptr, data.payload_ptr, size)
         sample.assume_init().send()
         self.notifier.notify()
+
+    def payload(self, received: Any) -> Any:
+        sample, size = received
+        return (ctypes.c_uint8 * (size - PREFIX.size)).from_address(sample.payload_ptr + PREFIX.size)
 
     def recv(self, timeout: float) -> tuple[int, int, Any] | None:
         deadline = time.monotonic() + timeout

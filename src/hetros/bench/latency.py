@@ -444,7 +444,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")
                 print(f"[bench] {system:16} {SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
         tp_seconds = 1.0 if args.quick else 3.0
-        for system in ("hetros-shm", "hetros-shm-loan", "mp-pipe"):
+        for system in ("hetros-shm", "hetros-shm-loan", "iceoryx2", "mp-pipe"):
             if system in systems:
                 for size in (64, 1024 * 1024):
                     run.throughput.append(bench.throughput(system, size, tp_seconds))

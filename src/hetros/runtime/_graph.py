@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .._errors import TransportError, UndeclaredEndpointError
-from ..msg import ArrayField, Message, TypeRegistry, array_fields, freeze, hand_over, loaned_array, registry, set_path
+from ..msg import COPY_ARRAYS, KEEP_ARRAYS, ArrayField, Message, TypeRegistry, array_fields, freeze, hand_over, loaned_array, registry, set_path
 from ..msg import copy as copy_message
 from ..plan import LAUNCHER, ChannelPlan, EdgePlan, Plan
 from ..transport import (
@@ -86,7 +86,10 @@ class _FanoutWriter(Writer):
             assert self._shm is not None
             self._shm.write(_hand_over(message, copy_arrays=False))
             return
-        _hand_over(message, copy_arrays=self._local)
+        if isinstance(message, Message):
+            type(message)._hetros_seal(message, COPY_ARRAYS if self._local else KEEP_ARRAYS)
+        else:
+            _hand_over(message, copy_arrays=self._local)
         for part in self._parts:
             part.write(message)
 

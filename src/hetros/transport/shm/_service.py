@@ -47,7 +47,7 @@ class Service:
         self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
         self.blocking = qos.blocks_publisher
         self.room = 0
-        self.lock = threading.RLock()
+        self.lock = threading.Lock()
         self.space = threading.Condition(self.lock)
         self._closed = False
         try:

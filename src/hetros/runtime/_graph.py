@@ -13,7 +13,19 @@ from collections.abc import Callable
 from typing import Any
 
 from .._errors import TransportError, UndeclaredEndpointError
-from ..msg import COPY_ARRAYS, KEEP_ARRAYS, ArrayField, Message, TypeRegistry, array_fields, freeze, hand_over, loaned_array, registry, set_path
+from ..msg import (
+    COPY_ARRAYS,
+    KEEP_ARRAYS,
+    ArrayField,
+    Message,
+    TypeRegistry,
+    array_fields,
+    freeze,
+    hand_over,
+    loaned_array,
+    registry,
+    set_path,
+)
 from ..msg import copy as copy_message
 from ..plan import LAUNCHER, ChannelPlan, EdgePlan, Plan
 from ..transport import (

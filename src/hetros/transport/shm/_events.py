@@ -169,6 +169,7 @@ class WakeChannel:
             wake()
 
     def close(self) -> None:
+        self._pollers = []
         self._listener = self._interrupter = self._service = None
 
 

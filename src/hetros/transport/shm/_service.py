@@ -201,6 +201,7 @@ class Service:
             self._closed = True
             self.space.notify_all()
         self._publisher = None
+        self._wakes = []  # they hold notifiers, and so other nodes' event services
         self.data = None
         self.credits.close()
 

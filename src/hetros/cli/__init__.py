@@ -51,8 +51,8 @@ def cmd_graph(args: argparse.Namespace) -> int:
 
 
 def cmd_launch(args: argparse.Namespace) -> int:
+    from ..launch import launch
     from ..project import plan_file
-    from ..runtime import launch
 
     plan = plan_file(args.project)
     result = launch(plan, duration=args.duration)

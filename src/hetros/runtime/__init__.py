@@ -1,8 +1,7 @@
-"""Runtime: node API, per-node executor, per-process graph, launcher."""
+"""Runtime: node API, per-node executor, per-process graph, the host of a process' nodes."""
 
 from ._graph import Graph
 from ._host import Host, resolve
-from ._launcher import Launcher, LaunchResult, launch
 from ._log import setup_logging
 from ._node import Client, Node, Publisher, Service, Subscription, Timer
 
@@ -10,14 +9,11 @@ __all__ = [
     "Client",
     "Graph",
     "Host",
-    "LaunchResult",
-    "Launcher",
     "Node",
     "Publisher",
     "Service",
     "Subscription",
     "Timer",
-    "launch",
     "resolve",
     "setup_logging",
 ]

@@ -26,9 +26,8 @@ from typing import IO, Any
 
 from .._errors import LaunchError
 from ..plan import LAUNCHER, Plan
+from ..runtime import Host, setup_logging
 from ..transport import cleanup_stale, remove_session_segments
-from ._host import Host
-from ._log import setup_logging
 
 log = logging.getLogger("hetros.launch")
 
@@ -66,7 +65,7 @@ class Launcher:
     def _spawn(self, target: str) -> _Child:
         assert self._plan_file is not None
         read_fd, write_fd = os.pipe()
-        cmd = [sys.executable, "-m", "hetros.runtime._worker", "--plan", str(self._plan_file),
+        cmd = [sys.executable, "-m", "hetros.launch._worker", "--plan", str(self._plan_file),
                "--target", target, "--session", self.session, "--status-fd", str(write_fd)]
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [self.plan.root, env.get("PYTHONPATH", "")]))

@@ -1,4 +1,4 @@
-"""Entry point of a process target: ``python -m hetros.runtime._worker``.
+"""Entry point of a process target: ``python -m hetros.launch._worker``.
 
 The launcher passes the plan as a JSON file (never pickle), talks over stdin
 ("go", "stop"; end of input means the launcher died, so the worker stops) and
@@ -17,9 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from ..plan import Plan
+from ..runtime import Host, setup_logging
 from ..transport import remove_session_segments
-from ._host import Host
-from ._log import setup_logging
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -135,6 +135,18 @@ def test_bounded_sequence_over_its_bound_is_refused(tmp_path: object) -> None:
         codec.decode(memoryview(data))
 
 
+def test_codecs_work_at_an_offset_of_a_larger_buffer() -> None:
+    """The transports encode and decode in place in a slot, after their own header."""
+    codec = TYPES.codec("sensor_msgs/msg/Image")
+    message = _image()
+    buffer = memoryview(bytearray(32 + len(IMAGE) + 8))
+    assert codec.encode(message, buffer, 32) == 32 + len(IMAGE)
+    assert bytes(buffer[32:32 + len(IMAGE)]) == IMAGE
+    assert codec.decode(buffer, 32, 32 + len(IMAGE)) == message
+    with pytest.raises(SerializationError, match="Image.data at offset 76 needs 3 bytes"):
+        codec.decode(buffer, 32, 32 + len(IMAGE) - 1)
+
+
 def test_strided_arrays_encode_like_their_contiguous_copy() -> None:
     """rosbags refuses strided float arrays; the generated codec writes them like a copy."""
     Floats = TYPES.get("std_msgs/msg/Float64MultiArray")

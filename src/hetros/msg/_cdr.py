@@ -46,8 +46,8 @@ _DTYPES = {
 }
 
 Size = Callable[[Any], int]
-Encode = Callable[[Any, memoryview], int]
-Decode = Callable[[memoryview], Any]
+Encode = Callable[..., int]
+Decode = Callable[..., Any]
 
 
 class UnsupportedType(Exception):
@@ -58,9 +58,11 @@ class UnsupportedType(Exception):
 class CdrCodec:
     """The CDR body (no encapsulation header) of one message type.
 
-    ``encode(message, buffer)`` writes into a writable byte memoryview of at least
-    ``size(message)`` bytes and returns the end; ``decode(buffer)`` returns a read-only
-    message whose primitive arrays are views on ``buffer``. The ``lean`` pair encodes
+    ``encode(message, buffer, pos=0)`` writes the body at ``pos`` of a writable byte
+    memoryview (``size(message)`` bytes) and returns its end; ``decode(buffer, pos=0,
+    end=len(buffer))`` returns a read-only message whose primitive arrays are views on
+    ``buffer``. CDR aligns relative to the body's start, the code to the buffer's: ``pos``
+    must be a multiple of 8 (pass a slice otherwise). The ``lean`` pair encodes
     every variable-length primitive array outside sequences of messages as empty (the
     shared-memory transport sends those arrays beside the body).
     """
@@ -126,7 +128,8 @@ class _Generator:
             body.walk(typename, root, short)
             body.flush()
             body.finish_objects()
-            head = f"def {name}(buf, pos, end):" if item else f"def {name}(buf):\n    pos = 0\n    end = len(buf)"
+            head = f"def {name}(buf, pos, end):" if item else \
+                f"def {name}(buf, pos=0, end=-1):\n    if end < 0:\n        end = len(buf)"
             tail = f"    return {root}, pos" if item else f"    return {root}"
         else:
             body.walk(typename, "m", short)
@@ -134,7 +137,7 @@ class _Generator:
             if self.mode == "size":
                 head = f"def {name}(m, pos):" if item else f"def {name}(m):\n    pos = 0"
             else:
-                head = f"def {name}(m, buf, pos):" if item else f"def {name}(m, buf):\n    pos = 0"
+                head = f"def {name}(m, buf, pos):" if item else f"def {name}(m, buf, pos=0):"
             tail = "    return pos"
         self.functions[name] = "\n".join([head, *body.lines, tail])
         return name
@@ -441,10 +444,10 @@ def reference_codec(types: TypeRegistry, typename: str) -> CdrCodec:
     def size(message: Any) -> int:
         return int(msgdef.getsize_cdr(0, message, store))
 
-    def encode(message: Any, buffer: memoryview) -> int:
-        end = size(message)
-        buffer[:end] = bytes(end)
-        return int(msgdef.serialize_cdr_le(buffer, 0, message, store))
+    def encode(message: Any, buffer: memoryview, pos: int = 0) -> int:
+        end = pos + size(message)
+        buffer[pos:end] = bytes(end - pos)
+        return int(msgdef.serialize_cdr_le(buffer, pos, message, store))
 
     def lean(message: Any) -> Any:
         from ._message import copy
@@ -454,12 +457,14 @@ def reference_codec(types: TypeRegistry, typename: str) -> CdrCodec:
             set_path(clone, path, get_path(clone, path)[:0])
         return clone
 
-    def decode(buffer: memoryview) -> Any:
+    def decode(buffer: memoryview, pos: int = 0, end: int = -1) -> Any:
+        if end >= 0:
+            buffer = buffer[:end]
         try:
-            message, _end = msgdef.deserialize_cdr_le(buffer, 0, msgdef.cls, store)
+            message, _end = msgdef.deserialize_cdr_le(buffer, pos, msgdef.cls, store)
         except Exception as exc:  # rosbags raises several kinds for bad bytes
             raise SerializationError(f"{len(buffer)} bytes do not decode as {typename}: {exc}") from exc
         return freeze(message)  # type: ignore[arg-type]
 
-    return CdrCodec(typename, size, encode, lambda m: size(lean(m)), lambda m, b: encode(lean(m), b), decode,
-                    generated=False)
+    return CdrCodec(typename, size, encode, lambda m: size(lean(m)), lambda m, b, p=0: encode(lean(m), b, p),
+                    decode, generated=False)

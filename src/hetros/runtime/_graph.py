@@ -149,6 +149,7 @@ class _Retained(Reader):
         self.inner = inner
         self.relay = relay
         self._release = release
+        self.try_take = inner.try_take  # type: ignore[method-assign]  # one call less per message
 
     def try_take(self) -> Any | None:
         return self.inner.try_take()
@@ -312,7 +313,7 @@ class Graph:
         channel = self.channel(name, node, "subscribe")
         if channel is None:
             effective = self.qos_of(name, qos)
-            return _MergedReader([self._inproc_topic(name, effective).open_reader(node, wake)])
+            return self._inproc_topic(name, effective).open_reader(node, wake)
         with self._lock:
             prepared = self._prepared.pop((name, node), None)
         if prepared is not None:
@@ -335,7 +336,7 @@ class Graph:
             slot = channel.subscribers.index(node)
             parts.append(self._domain().open_reader(name, remote, effective,
                                                     self._codec(typename, envelope), slot, wake, node))
-        return _MergedReader(parts)
+        return parts[0] if len(parts) == 1 else _MergedReader(parts)
 
     def close(self) -> None:
         self.shutdown()

@@ -40,14 +40,29 @@ class MessageCodec(Codec):
         buffer[:4] = _CDR_LE
         self._cdr.encode(message, buffer[4:])
 
+    def encode_at(self, message: Any, buffer: memoryview, at: int) -> None:
+        """Encapsulation at ``at``, the body after it (``at + 4`` must be a multiple of 8)."""
+        buffer[at:at + 4] = _CDR_LE
+        self._cdr.encode(message, buffer, at + 4)
+
+    def decode_at(self, buffer: memoryview, at: int, end: int) -> Message:
+        """Decode ``buffer[at:end]`` in place (``at + 4`` must be a multiple of 8)."""
+        if end - at < 4 or buffer[at + 1] != 1:
+            raise SerializationError(
+                f"{self.typename}: {end - at} bytes do not start with the little-endian CDR "
+                f"encapsulation 00 01 (got {bytes(buffer[at:at + 4]).hex(' ') or 'nothing'})"
+            )
+        return self._cdr.decode(buffer, at + 4, end)  # type: ignore[no-any-return]
+
     def lean_size(self, message: Any) -> int:
         """The size with every variable-length primitive array (``arrays``) left empty."""
         return 4 + self._cdr.size_lean(message)
 
-    def encode_lean_into(self, message: Any, buffer: memoryview) -> None:
-        """Encode with every variable-length primitive array left empty (they travel beside)."""
-        buffer[:4] = _CDR_LE
-        self._cdr.encode_lean(message, buffer[4:])
+    def encode_lean_at(self, message: Any, buffer: memoryview, at: int, end: int) -> None:
+        """Encode at ``at`` with every variable-length primitive array left empty (they travel
+        beside); raises ``ValueError`` when it does not fit before ``end``."""
+        buffer[at:at + 4] = _CDR_LE
+        self._cdr.encode_lean(message, buffer[:end], at + 4)  # the bound makes an overflow raise
 
     def decode(self, data: memoryview) -> Message:
         """Decode CDR into a read-only message; primitive arrays are views on ``data`` (no copy)."""

@@ -30,7 +30,7 @@ from ._sample import (
     SPLIT,
     align,
     blob_table,
-    slot_memory,
+    leased_memory,
 )
 from ._service import Service
 
@@ -117,6 +117,7 @@ class ShmWriter(Writer):
         self._arrays = [(index, field) for index, field in enumerate(codec.arrays) if field.length is None] \
             if isinstance(codec, MessageCodec) else []
         self._loan_plans: dict[tuple[tuple[str, int], ...], _SlotPlan] = {}
+        self._cdr = codec if isinstance(codec, MessageCodec) else None
         service.publisher()
 
     def write(self, message: Any) -> None:
@@ -129,7 +130,10 @@ class ShmWriter(Writer):
             self._send_copy(message)
             return
         sample, memory = self._service.loan(size)
-        self._codec.encode_into(message, memory[HEADER.size:])
+        if self._cdr is not None:
+            self._cdr.encode_at(message, memory, HEADER.size)
+        else:
+            self._codec.encode_into(message, memory[HEADER.size:])
         self._service.send(sample, memory, LAYOUT_CDR, self._slot)
 
     def _place(self, plan: _SlotPlan) -> tuple[Any, memoryview, list[tuple[tuple[str, ...], np.ndarray[Any, Any]]]]:
@@ -224,7 +228,7 @@ class ShmWriter(Writer):
         assert isinstance(codec, MessageCodec)
         at, room = loan.plan.small_at, loan.plan.room
         try:
-            codec.encode_lean_into(message, loan.memory[at:at + room])
+            codec.encode_lean_at(message, loan.memory, at, at + room)
         except (struct.error, ValueError, IndexError):
             small = codec.lean_size(message)
             if small <= room:
@@ -237,24 +241,6 @@ class ShmWriter(Writer):
 
     def close(self) -> None:
         return None
-
-
-class _Lease:
-    """Holds a received sample; it goes back to the publisher when no message refers to it.
-
-    ``borrowed`` has one entry per live lease (list append and pop are atomic, and a lease
-    may die in any thread).
-    """
-
-    __slots__ = ("borrowed", "sample")
-
-    def __init__(self, sample: Any, borrowed: list[None]) -> None:
-        self.sample = sample
-        self.borrowed = borrowed
-        borrowed.append(None)
-
-    def __del__(self) -> None:
-        self.borrowed.pop()
 
 
 class _Port:
@@ -289,6 +275,7 @@ class ShmReader(Reader):
         self._next = 0
         self._lock = threading.Lock()
         self._borrowed: list[None] = []
+        self._cdr = codec if isinstance(codec, MessageCodec) else None
         self.topic = services[0].topic if services else ""
         for service in services:
             subscriber, start = service.subscriber(slot, channel, self.event)
@@ -317,7 +304,7 @@ class ShmReader(Reader):
                         self._check_arrival(port)
                     continue
                 size = sample.header.number_of_elements
-                memory = slot_memory(sample.payload_ptr, size, _Lease(sample, self._borrowed))
+                memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed)
                 del sample
                 seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
                 if service.blocking and seq != port.expected and seq > port.expected:
@@ -358,6 +345,8 @@ class ShmReader(Reader):
 
     def _decode(self, memory: memoryview, layout: int) -> Any:
         if layout == LAYOUT_CDR:
+            if self._cdr is not None:
+                return self._cdr.decode_at(memory, HEADER.size, len(memory))
             return self._codec.decode(memory[HEADER.size:])
         if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
             raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")
@@ -365,7 +354,7 @@ class ShmReader(Reader):
         arrays = self._codec.arrays
         table = blob_table(count).unpack_from(memory, HEADER.size + SPLIT.size)
         small_at = table[1] if count else align(HEADER.size + SPLIT.size, 8) + 4
-        message = self._codec.decode(memory[small_at:small_at + room])
+        message = self._codec.decode_at(memory, small_at, small_at + room)
         for position in range(0, 4 * count, 4):
             index, _small_at, offset, nbytes = table[position:position + 4]
             if index >= len(arrays) or offset + nbytes > len(memory):

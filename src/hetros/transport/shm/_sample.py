@@ -73,6 +73,37 @@ def align(value: int, to: int) -> int:
 
 
 _SLOT_TYPES: dict[int, Any] = {}  # ctypes array types, by size
+_LEASE_TYPES: dict[int, Any] = {}
+
+
+class _Leased:
+    """Mixin of the ctypes view on a received sample: it holds the sample and counts itself.
+
+    ``borrowed`` has one entry per live view (list append and pop are atomic, and the last
+    reference to a view may go in any thread); iceoryx2 gets the sample back when it dies.
+    """
+
+    __slots__ = ()
+    sample: Any
+    borrowed: list[None]
+
+    def __del__(self) -> None:
+        self.borrowed.pop()
+
+
+def leased_memory(address: int, size: int, sample: object, borrowed: list[None]) -> memoryview:
+    """A received sample's bytes; the sample is released when nothing made from them is left."""
+    kind: Any = _LEASE_TYPES.get(size)
+    if kind is None:
+        if len(_LEASE_TYPES) > 4096:
+            _LEASE_TYPES.clear()
+        kind = _LEASE_TYPES[size] = type("Lease", (_Leased, ctypes.c_uint8 * size),
+                                         {"__slots__": ("borrowed", "sample")})
+    raw = kind.from_address(address)
+    raw.sample = sample
+    raw.borrowed = borrowed
+    borrowed.append(None)
+    return memoryview(raw).cast("B")
 
 
 def slot_memory(address: int, size: int, keepalive: object) -> memoryview:

@@ -10,7 +10,6 @@ changing what another subscriber sees.
 from __future__ import annotations
 
 import copy as _copy
-import weakref
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -99,29 +98,28 @@ def copy(message: Message) -> Any:
     return cls(*values)
 
 
-# Arrays handed out by in-process loans, by id, each with a weak reference that removes it
-# when the array dies (so a recycled id never passes for a loan).
-_LOANED: dict[int, weakref.ref[np.ndarray[Any, Any]]] = {}
+class LoanBuffer(bytearray):
+    """Memory of an in-process loan: an array whose base is one of these is hetros' own."""
+
+    __slots__ = ()
 
 
 def loaned_array(length: int, dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
     """A zeroed array hetros owns, for a loan with no shared-memory slot behind it.
 
-    np.zeros takes lazily zeroed pages, so a large loan costs nothing until it is written.
+    The buffer is zeroed lazily for large sizes (calloc), so a large loan costs nothing
+    until it is written; views of it count as loaned too.
     """
-    array: np.ndarray[Any, Any] = np.zeros(length, dtype)
-    key = id(array)
-
-    def forget(_ref: object) -> None:
-        _LOANED.pop(key, None)
-
-    _LOANED[key] = weakref.ref(array, forget)
-    return array
+    if not length:
+        return np.zeros(0, dtype)
+    return np.frombuffer(LoanBuffer(length * dtype.itemsize), dtype)
 
 
 def _is_loaned(array: np.ndarray[Any, Any]) -> bool:
-    ref = _LOANED.get(id(array))
-    return ref is not None and ref() is array
+    base: Any = array.base
+    while type(base) is np.ndarray:
+        base = base.base
+    return type(base) is memoryview and type(base.obj) is LoanBuffer
 
 
 def _callers(array: np.ndarray[Any, Any]) -> bool:

@@ -16,7 +16,6 @@ from .._errors import TransportError, UndeclaredEndpointError
 from ..msg import (
     COPY_ARRAYS,
     KEEP_ARRAYS,
-    ArrayField,
     Message,
     TypeRegistry,
     array_fields,
@@ -64,28 +63,39 @@ class _FanoutWriter(Writer):
         self._types = types
         self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
         self._local = any(p is not self._shm for p in parts)
-        self._fields: dict[str, list[ArrayField]] = {}
+        self._loans: dict[tuple[type[Message], tuple[tuple[str, int], ...]], Any] = {}
 
     def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
         """A message to fill in place: its arrays live in a shared-memory slot when a process
         reads it and they are large; otherwise in memory hetros owns (sent inline)."""
-        if self._shm is not None and self._shm.slot_loan_pays(sizes):
+        key = (cls, tuple(sizes.items()))
+        arrays = self._loans.get(key, False)
+        if arrays is False:
+            arrays = None if self._shm is not None and self._shm.slot_loan_pays(sizes) else \
+                self._arrays_of(cls, sizes)
+            if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
+                self._loans.clear()
+            self._loans[key] = arrays
+        if arrays is None:
+            assert self._shm is not None
             message: Message = self._shm.loan(sizes)
             return message
         message = cls()
+        for path, dtype, length in arrays:
+            set_path(message, path, loaned_array(length, dtype))
+        return message
+
+    def _arrays_of(self, cls: type[Message], sizes: dict[str, int]) -> list[tuple[tuple[str, ...], Any, int]]:
         wanted = dict(sizes)
-        fields = self._fields.get(cls.__msgtype__)
-        if fields is None:
-            fields = self._fields[cls.__msgtype__] = array_fields(self._types, cls.__msgtype__)
-        for field in fields:
-            name = ".".join(field.path)
-            length = wanted.pop(name, None)
+        arrays = []
+        for field in array_fields(self._types, cls.__msgtype__):
+            length = wanted.pop(".".join(field.path), None)
             if length is not None and field.length is None:
-                set_path(message, field.path, loaned_array(length, field.dtype))
+                arrays.append((field.path, field.dtype, length))
         if wanted:
             raise TransportError(f"{cls.__msgtype__} has no variable-length primitive array "
                                  f"{', '.join(wanted)}")
-        return message
+        return arrays
 
     def write(self, message: Any) -> None:
         if self._shm is not None and has_loan(message):

@@ -313,8 +313,12 @@ class ShmReader(Reader):
                 if port.suspect_since:
                     port.suspect_since = 0.0
                     self._channel.suspect(self.event, False)
-                if service.credits.set_taken(self._slot, seq) and service.blocking:
-                    self._domain.notify_back(service.target, service.credits.back_event)
+                credits = service.credits
+                # a blocked publisher is woken once its FIFO here is half empty, not per take:
+                # it then sends half a FIFO without waiting (one wake-up per depth/2 messages)
+                if credits.set_taken(self._slot, seq) and service.blocking and \
+                        credits.published - seq <= service.qos.depth // 2:
+                    self._domain.notify_back(service.target, credits.back_event)
                 if len(self._borrowed) >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))
                 return self._decode(memory.toreadonly(), layout)

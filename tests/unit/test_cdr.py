@@ -143,7 +143,7 @@ def test_codecs_work_at_an_offset_of_a_larger_buffer() -> None:
     assert codec.encode(message, buffer, 32) == 32 + len(IMAGE)
     assert bytes(buffer[32:32 + len(IMAGE)]) == IMAGE
     assert codec.decode(buffer, 32, 32 + len(IMAGE)) == message
-    with pytest.raises(SerializationError, match="Image.data at offset 76 needs 3 bytes"):
+    with pytest.raises(SerializationError, match=r"Image\.data at offset 76 needs 3 bytes"):
         codec.decode(buffer, 32, 32 + len(IMAGE) - 1)
 
 

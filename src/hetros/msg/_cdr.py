@@ -125,6 +125,7 @@ class _Generator:
         short = typename.rsplit("/", 1)[-1]
         if self.mode == "decode":
             root = body.new_object(typename)
+            body.emit(f"{root}._hetros_loan = None")
             body.walk(typename, root, short)
             body.flush()
             body.finish_objects()

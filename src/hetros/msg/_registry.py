@@ -285,7 +285,8 @@ class TypeRegistry:
         for cname, _ctype, cvalue in consts:
             lines.append(f"    {cname} = {cvalue!r}")
         lines.append(f"    def __init__(_m, {', '.join(params)}):" if params else "    def __init__(_m):")
-        lines.extend(body or ["        pass"])
+        lines.extend(body)
+        lines.append("        _m._hetros_loan = None")  # set, so the transport's check for a loan is cheap
         lines.append(f"class Frozen{short}(_FrozenMessage, {short}):")
         lines.append("    __slots__ = ()")
         try:

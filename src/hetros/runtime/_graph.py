@@ -69,16 +69,18 @@ class _FanoutWriter(Writer):
         """A message to fill in place: its arrays live in a shared-memory slot when a process
         reads it and they are large; otherwise in memory hetros owns (sent inline)."""
         key = (cls, tuple(sizes.items()))
-        arrays = self._loans.get(key, False)
-        if arrays is False:
-            arrays = None if self._shm is not None and self._shm.slot_loan_pays(sizes) else \
-                self._arrays_of(cls, sizes)
+        cached = self._loans.get(key)
+        if cached is None:
+            named = {name.replace("__", "."): length for name, length in sizes.items()}
+            in_slot = self._shm is not None and self._shm.slot_loan_pays(named)
+            cached = (named, None if in_slot else self._arrays_of(cls, named))
             if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
                 self._loans.clear()
-            self._loans[key] = arrays
+            self._loans[key] = cached
+        named, arrays = cached
         if arrays is None:
             assert self._shm is not None
-            message: Message = self._shm.loan(sizes)
+            message: Message = self._shm.loan(named)
             return message
         message = cls()
         for path, dtype, length in arrays:

@@ -79,14 +79,16 @@ class Publisher(Generic[M]):
         """A message to fill in place and publish without a copy.
 
         Give the length of each variable-length primitive array to fill (``data=640*480*3``);
-        fixed-size arrays are placed automatically. When a subscriber is in another process
-        the arrays live in the shared-memory slot that is then sent as it is. After
+        fixed-size arrays are placed automatically; a nested array is named with ``__``
+        (``header__...``). When a subscriber is in another process and the arrays are large
+        (over 64 KiB), they live in the shared-memory slot that is then sent as it is;
+        smaller ones live in memory hetros owns and are copied once into the slot. After
         ``publish`` the loaned message is handed over: its arrays are no longer yours.
         """
         loan = getattr(self._writer, "loan", None)
         if loan is None:
             return self.msg_type()
-        message: M = loan(self.msg_type, {k.replace("__", "."): v for k, v in sizes.items()})
+        message: M = loan(self.msg_type, sizes)
         return message
 
     def close(self) -> None:

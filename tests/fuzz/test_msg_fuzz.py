@@ -177,3 +177,35 @@ def _write(root: Path, files: dict[str, bytes]) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
     return package
+
+
+WIRE_TYPES = ["sensor_msgs/msg/Image", "sensor_msgs/msg/PointCloud2", "diagnostic_msgs/msg/DiagnosticArray",
+              "std_msgs/msg/Float64MultiArray", "geometry_msgs/msg/PoseWithCovarianceStamped"]
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+def test_damaged_wire_bytes_get_a_serialization_error_or_decode(types: TypeRegistry) -> None:
+    """Whatever the bytes, the generated decoder returns a message or raises SerializationError."""
+    from hetros import SerializationError
+
+    encoded = {}
+    for name in WIRE_TYPES:
+        message = random_message(types, name, random.Random(name))
+        encoded[name] = bytes(types.serialize(message))[4:]
+
+    @SETTINGS
+    @given(st.sampled_from(WIRE_TYPES),
+           st.lists(st.tuples(st.integers(0, 400), st.binary(min_size=1, max_size=4)), max_size=4),
+           st.integers(0, 600))
+    def case(name: str, edits: list[tuple[int, bytes]], cut: int) -> None:
+        data = bytearray(encoded[name])
+        for at, chunk in edits:
+            data[at:at + len(chunk)] = chunk
+        data = data[:cut] if cut < len(data) else data
+        try:
+            types.codec(name).decode(memoryview(bytes(data)))
+        except SerializationError:
+            pass
+
+    case()

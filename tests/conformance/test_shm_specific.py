@@ -222,3 +222,27 @@ def test_back_pressure_wakes_the_publisher_of_its_300th_service(shm_session: str
         subscribing.close()
         publishing.close()
         remove_session_segments(shm_session)
+
+
+@pytest.mark.parametrize(("layout", "body", "expected"), [
+    (0, b"\x00\x01\x00\x00" + b"\xff" * 6, r"Image\.header\.stamp\.sec at offset 32 needs 12 bytes, but the message "
+                                             r"ends at offset 38"),
+    (0, b"\x00\x01\x00\x00" + bytes(8) + b"\xff" * 4, r"Image\.header\.frame_id at offset 40 has length 4294967295"),
+    (0, b"\x01\x00\x00\x00", r"do not start with the little-endian CDR encapsulation 00 01"),
+    (1, (2**31).to_bytes(4, "little") + (1).to_bytes(4, "little") + bytes(32),
+     r"does not fit a 68-byte sample of sensor_msgs/msg/Image \(the table at offset 28 is damaged\)"),
+    (1, bytes(4) + (2**30).to_bytes(4, "little"), r"the table at offset 28 names 1073741824 arrays"),
+    (9, b"", r"unknown shared-memory layout 9 at offset 12 of the sample header"),
+])
+def test_damaged_samples_get_a_serialization_error(pair: Any, layout: int, body: bytes, expected: str) -> None:
+    """Bytes in shared memory are never trusted: a damaged sample is refused with its offset."""
+    from hetros import SerializationError
+    from hetros.transport.shm._sample import HEADER
+
+    writer, reader = pair
+    service = writer._service
+    sample, memory = service.loan(HEADER.size + len(body))
+    memory[HEADER.size:] = body
+    service.send(sample, memory, layout, 0)
+    with pytest.raises(SerializationError, match=expected):
+        reader.try_take()

@@ -306,6 +306,9 @@ class ShmReader(Reader):
                 size = sample.header.number_of_elements
                 memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed)
                 del sample
+                if size < HEADER.size:
+                    raise SerializationError(f"a {size}-byte sample on {service.topic} from target "
+                                             f"{service.target!r} is shorter than hetros' {HEADER.size}-byte header")
                 seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
                 if service.blocking and seq != port.expected and seq > port.expected:
                     self._lost(port, seq - port.expected)
@@ -354,10 +357,21 @@ class ShmReader(Reader):
             return self._codec.decode(memory[HEADER.size:])
         if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
             raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")
-        room, count = SPLIT.unpack_from(memory, HEADER.size)
         arrays = self._codec.arrays
+        if len(memory) < HEADER.size + SPLIT.size:
+            raise SerializationError(f"a {len(memory)}-byte sample of {self._codec.typename} is too short "
+                                     "for the split layout's table")
+        room, count = SPLIT.unpack_from(memory, HEADER.size)
+        if count > len(arrays) or HEADER.size + SPLIT.size + BLOB.size * count > len(memory):
+            raise SerializationError(f"the table at offset {HEADER.size} names {count} arrays; "
+                                     f"{self._codec.typename} has {len(arrays)} (the sample is damaged)")
         table = blob_table(count).unpack_from(memory, HEADER.size + SPLIT.size)
         small_at = table[1] if count else align(HEADER.size + SPLIT.size, 8) + 4
+        if small_at % 8 != 4 or small_at + room > len(memory):
+            raise SerializationError(
+                f"the small part at offset {small_at} ({room} bytes) does not fit a {len(memory)}-byte "
+                f"sample of {self._codec.typename} (the table at offset {HEADER.size} is damaged)"
+            )
         message = self._codec.decode_at(memory, small_at, small_at + room)
         for position in range(0, 4 * count, 4):
             index, _small_at, offset, nbytes = table[position:position + 4]

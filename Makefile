@@ -7,7 +7,12 @@ TSTAMP  := $(VENV)/.installed-test
 PYTHON  ?= python3
 
 BSTAMP  := $(VENV)/.installed-bench
-ROS_DEBS := ros-core python3-rospy python3-rostopic python3-std-msgs
+ROS_DEBS := ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-std-msgs
+# Debian's ROS 1 (rospy, the ros* tools): real peers for the tests and the benchmark, installed when we may
+define install_ros_debs
+	@if [ ! -x /usr/bin/rostopic ] && [ "$$(id -u)" = 0 ]; then \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(ROS_DEBS) > /dev/null; fi
+endef
 
 
 .PHONY: install install-examples install-test install-bench run test lint bench bench-quick clean
@@ -28,6 +33,7 @@ install-examples: | $(PY)
 
 $(TSTAMP): pyproject.toml | $(PY)
 	$(PIP) install --quiet -e '.[test]'
+	$(install_ros_debs)
 	touch $(STAMP) $@
 
 install-test: $(TSTAMP)
@@ -35,8 +41,7 @@ install-test: $(TSTAMP)
 # The benchmark's peers: pip extras, and Debian's rospy + rosmaster when we may install them.
 $(BSTAMP): pyproject.toml | $(PY)
 	$(PIP) install --quiet -e '.[bench]'
-	@if [ ! -x /usr/bin/rosmaster ] && [ "$$(id -u)" = 0 ]; then \
-		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(ROS_DEBS); fi
+	$(install_ros_debs)
 	touch $(STAMP) $@
 
 install-bench: $(BSTAMP)

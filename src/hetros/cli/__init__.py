@@ -130,6 +130,22 @@ def cmd_msg_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_master(args: argparse.Namespace) -> int:
+    import threading
+
+    from ..runtime import setup_logging
+    from ..transport.tcpros import Master
+
+    setup_logging()
+    master = Master(args.host, args.port)
+    print(f"ROS master at {master.uri} (ROS_MASTER_URI={master.uri}); Ctrl-C stops it", flush=True)
+    try:
+        threading.Event().wait()
+    finally:
+        master.close()
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     try:
         from ..bench.latency import main as latency
@@ -170,6 +186,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output")
     p.add_argument("--module", default="nodes", help="module holding the node functions")
     p.set_defaults(func=cmd_import)
+    p = sub.add_parser("master", help="run a ROS 1 master (master API + parameter server) for rospy/roscpp nodes")
+    p.add_argument("--port", type=int, default=11311)
+    p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1 only)")
+    p.set_defaults(func=cmd_master)
     bench = sub.add_parser("bench", help="benchmarks against the peers").add_subparsers(dest="bench", required=True)
     p = bench.add_parser("latency", help="latency, throughput and idle CPU against CycloneDDS, iceoryx2, ...")
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")

@@ -1,0 +1,67 @@
+"""The master's bookkeeping, call by call (the calls out to nodes are recorded, not made)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from hetros.transport.tcpros import MasterState
+
+
+@pytest.fixture
+def state() -> tuple[MasterState, list[tuple[str, str, tuple[Any, ...]]]]:
+    calls: list[tuple[str, str, tuple[Any, ...]]] = []
+    return MasterState("http://127.0.0.1:11311/", lambda api, method, args: calls.append((api, method, args))), calls
+
+
+def test_subscribers_learn_of_publishers_both_ways(state: Any) -> None:
+    master, calls = state
+    assert master.registerSubscriber("/b", "/t", "std_msgs/String", "http://b/") == (1, "Subscribed to [/t]", [])
+    code, _, subscribers = master.registerPublisher("/a", "/t", "std_msgs/String", "http://a/")
+    assert (code, subscribers) == (1, ["http://b/"])
+    assert calls == [("http://b/", "publisherUpdate", ("/master", "/t", ["http://a/"]))]
+    assert master.registerSubscriber("/c", "/t", "*", "http://c/")[2] == ["http://a/"]
+    assert master.unregisterPublisher("/a", "/t", "http://other/")[2] == 0  # not that registration
+    assert master.unregisterPublisher("/a", "/t", "http://a/")[2] == 1
+    assert calls[-1] == ("http://c/", "publisherUpdate", ("/master", "/t", []))
+    assert master.getTopicTypes("/x")[2] == [["/t", "std_msgs/String"]]
+
+
+def test_system_state_services_and_nodes(state: Any) -> None:
+    master, _calls = state
+    master.registerPublisher("/a", "/t", "std_msgs/String", "http://a/")
+    master.registerService("/a", "/srv", "rosrpc://a:1", "http://a/")
+    assert master.getSystemState("/x")[2] == [[["/t", ["/a"]]], [], [["/srv", ["/a"]]]]
+    assert master.lookupService("/x", "/srv")[2] == "rosrpc://a:1"
+    assert master.lookupService("/x", "/none")[0] == -1
+    assert master.lookupNode("/x", "/a")[2] == "http://a/"
+    assert master.lookupNode("/x", "/ghost") == (-1, "unknown node [/ghost]", "")
+
+
+def test_a_node_registered_again_replaces_the_old_one(state: Any) -> None:
+    master, calls = state
+    master.registerPublisher("/a", "/t", "std_msgs/String", "http://old/")
+    master.registerSubscriber("/a", "/u", "std_msgs/String", "http://new/")
+    assert ("http://old/", "shutdown") == calls[-1][:2]
+    assert master.getSystemState("/x")[2][0] == []  # the old process' publication is gone
+
+
+def test_parameters_resolve_search_and_notify(state: Any) -> None:
+    master, calls = state
+    assert master.setParam("/ns/node", "gain", 2.5)[0] == 1  # relative to the caller's namespace
+    assert master.getParam("/x", "/ns/gain") == (1, "Parameter [/ns/gain]", 2.5)
+    assert master.getParam("/x", "/missing")[0] == -1
+    master.setParam("/x", "/robot", {"arm": {"joints": 6}, "name": "r2"})
+    assert master.getParam("/x", "/robot/arm/joints")[2] == 6
+    assert sorted(master.getParamNames("/x")[2]) == ["/ns/gain", "/robot/arm/joints", "/robot/name"]
+    assert master.searchParam("/robot/arm/driver", "name") == (1, "Found [/robot/name]", "/robot/name")
+    assert master.searchParam("/a/b/c", "nothing")[0] == -1
+    assert master.subscribeParam("/n", "http://n/", "/robot/arm")[2] == {"joints": 6}
+    master.setParam("/x", "/robot/arm/joints", 7)
+    assert calls[-1] == ("http://n/", "paramUpdate", ("/master", "/robot/arm/", {"joints": 7}))
+    assert master.deleteParam("/x", "/robot/arm")[0] == 1
+    assert calls[-1] == ("http://n/", "paramUpdate", ("/master", "/robot/arm/", {}))
+    assert master.hasParam("/x", "/robot/arm")[2] is False
+    assert master.deleteParam("/x", "/robot/arm")[0] == -1
+    assert master.unsubscribeParam("/n", "http://n/", "/robot/arm")[2] == 1

@@ -13,6 +13,7 @@ one root and still tell the kinds apart::
     ├── ProjectError           the project file (YAML path)
     │   └── CheckError         `hetros check` found problems (carries all of them)
     ├── TransportError         moving messages
+    │   ├── ProtocolError         a peer broke its protocol (TCPROS header, frame; offset)
     │   ├── PublishTimeoutError   back-pressure outlasted the timeout
     │   └── TopicTypeError        a message of the wrong type for the topic
     ├── NodeError              the node API used wrongly
@@ -78,6 +79,11 @@ class CheckError(ProjectError):
 
 class TransportError(Error):
     """A transport failed to move a message."""
+
+
+class ProtocolError(TransportError):
+    """A peer sent bytes that break its protocol (a TCPROS header, a frame length); the
+    message names the peer and the offset. The connection is dropped, the node goes on."""
 
 
 class PublishTimeoutError(TransportError):

@@ -7,10 +7,11 @@ TSTAMP  := $(VENV)/.installed-test
 PYTHON  ?= python3
 
 BSTAMP  := $(VENV)/.installed-bench
-ROS_DEBS := ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-std-msgs
+ROS_DEBS := ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-std-msgs \
+            python3-sensor-msgs
 # Debian's ROS 1 (rospy, the ros* tools): real peers for the tests and the benchmark, installed when we may
 define install_ros_debs
-	@if [ ! -x /usr/bin/rostopic ] && [ "$$(id -u)" = 0 ]; then \
+	@if { [ ! -x /usr/bin/rostopic ] || [ ! -d /usr/lib/python3/dist-packages/sensor_msgs ]; } && [ "$$(id -u)" = 0 ]; then \
 		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(ROS_DEBS) > /dev/null; fi
 endef
 

@@ -1,0 +1,394 @@
+"""One process' presence in a ROS 1 graph: its slave API, its TCPROS publications and subscriptions.
+
+Registration stays in software and happens once (master API over XML-RPC, then
+``requestTopic`` and one connection header per connection); after that every message is
+one frame: a 4-byte little-endian length and the ROS 1 bytes, written with one vectored
+``sendmsg`` on a TCP_NODELAY socket. A peer that sends garbage is disconnected and logged;
+the node goes on. A master that is down is retried (logged); running connections survive
+the master going away, as in ROS 1.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import struct
+import threading
+import time
+import xmlrpc.client
+from collections.abc import Callable
+from socketserver import ThreadingMixIn
+from typing import Any
+from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
+
+from ..._errors import ProtocolError, SerializationError, TransportError
+from ._header import decode_header, encode_header, header_length, require
+from ._types import Ros1Type
+
+log = logging.getLogger("hetros.ros1")
+
+_FRAME = struct.Struct("<I")
+# a frame longer than this is refused (a garbage length must not become an allocation)
+MAX_FRAME = 1 << 30
+_CALL_TIMEOUT = 5.0
+
+
+class _Server(ThreadingMixIn, SimpleXMLRPCServer):
+    daemon_threads = True
+    allow_reuse_address = True
+
+
+class _Quiet(SimpleXMLRPCRequestHandler):
+    def log_message(self, format: str, *args: Any) -> None:
+        log.debug(format, *args)
+
+
+class _TimedTransport(xmlrpc.client.Transport):
+    def make_connection(self, host: Any) -> Any:
+        connection = super().make_connection(host)
+        connection.timeout = _CALL_TIMEOUT
+        return connection
+
+
+def _proxy(uri: str) -> Any:
+    return xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(), allow_none=True)
+
+
+def _receive_exactly(sock: socket.socket, size: int) -> bytes:
+    buffer = bytearray(size)
+    view = memoryview(buffer)
+    got = 0
+    while got < size:
+        count = sock.recv_into(view[got:], size - got)
+        if not count:
+            raise ConnectionError(f"connection closed after {got} of {size} bytes")
+        got += count
+    return bytes(buffer)
+
+
+def read_header(sock: socket.socket, peer: str) -> dict[str, str]:
+    length = header_length(_receive_exactly(sock, 4), peer)
+    return decode_header(_receive_exactly(sock, length), peer)
+
+
+def _configure(sock: socket.socket) -> None:
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+
+class Ros1Publication:
+    """A topic this process publishes to ROS 1 subscribers."""
+
+    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Type, latch: bool) -> None:
+        self.peer = peer
+        self.topic = topic
+        self.kind = kind
+        self.latch = latch
+        self._lock = threading.Lock()
+        self._connections: list[tuple[socket.socket, str]] = []
+        self._latched: bytes | None = None
+        self.sent = 0
+
+    def publish(self, message: Any) -> None:
+        """Serialize once, one vectored write per subscriber; a subscriber that went away is dropped."""
+        payload = self.kind.serialize(message)
+        frame = [_FRAME.pack(len(payload)), payload]
+        with self._lock:
+            if self.latch:
+                self._latched = payload
+            for sock, who in list(self._connections):
+                try:
+                    sock.sendmsg(frame)
+                except OSError as exc:
+                    log.info("ROS 1 subscriber %s of %s went away (%s)", who, self.topic, exc)
+                    self._drop(sock)
+            self.sent += 1
+
+    def _add(self, sock: socket.socket, who: str) -> None:
+        with self._lock:
+            if self._latched is not None:
+                sock.sendmsg([_FRAME.pack(len(self._latched)), self._latched])
+            self._connections.append((sock, who))
+
+    def _drop(self, sock: socket.socket) -> None:
+        self._connections = [(s, w) for s, w in self._connections if s is not sock]
+        sock.close()
+
+    @property
+    def subscribers(self) -> list[str]:
+        with self._lock:
+            return [who for _sock, who in self._connections]
+
+    def close(self) -> None:
+        with self._lock:
+            for sock, _who in self._connections:
+                sock.close()
+            self._connections.clear()
+
+
+class Ros1Subscription:
+    """A topic this process receives from ROS 1 publishers; ``callback`` runs per message."""
+
+    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Type, callback: Callable[[Any], None]) -> None:
+        self.peer = peer
+        self.topic = topic
+        self.kind = kind
+        self.callback = callback
+        self._lock = threading.Lock()
+        self._connections: dict[str, socket.socket] = {}
+        self.received = 0
+
+    def update(self, publishers: list[str]) -> None:
+        """Connect to new publishers (slave API URIs), drop those that left."""
+        with self._lock:
+            gone = [uri for uri in self._connections if uri not in publishers]
+            for uri in gone:
+                self._connections.pop(uri).close()
+            new = [uri for uri in publishers if uri not in self._connections and uri != self.peer.uri]
+        for uri in new:
+            threading.Thread(target=self._connect, args=(uri,), name=f"hetros-ros1-in {self.topic}",
+                             daemon=True).start()
+
+    def _connect(self, publisher: str) -> None:
+        try:
+            code, message, protocol = _proxy(publisher).requestTopic(self.peer.name, self.topic, [["TCPROS"]])
+            if code != 1 or not protocol or protocol[0] != "TCPROS":
+                log.warning("ROS 1 publisher %s refused %s over TCPROS: %s", publisher, self.topic, message)
+                return
+            _name, host, port = protocol
+            sock = socket.create_connection((host, int(port)), timeout=_CALL_TIMEOUT)
+        except (OSError, xmlrpc.client.Error, ValueError) as exc:
+            log.warning("cannot reach the ROS 1 publisher %s of %s: %s", publisher, self.topic, exc)
+            return
+        peer = f"ROS 1 publisher {publisher} of {self.topic}"
+        try:
+            _configure(sock)
+            sock.sendall(encode_header({
+                "callerid": self.peer.name, "topic": self.topic, "md5sum": self.kind.md5, "type": self.kind.name,
+                "message_definition": self.kind.definition, "tcp_nodelay": "1",
+            }))
+            fields = read_header(sock, peer)
+            require(fields, ("md5sum", "type"), peer)
+            if fields["md5sum"] not in (self.kind.md5, "*"):
+                raise ProtocolError(f"{self.topic}: {peer} sends {fields['type']} (md5 {fields['md5sum']}), this "
+                                    f"node expects {self.kind.name} (md5 {self.kind.md5})")
+            sock.settimeout(None)
+        except (OSError, ProtocolError) as exc:
+            log.error("%s", exc)
+            sock.close()
+            return
+        with self._lock:
+            self._connections[publisher] = sock
+        self._receive(sock, peer, publisher)
+
+    def _receive(self, sock: socket.socket, peer: str, publisher: str) -> None:
+        try:
+            while True:
+                (length,) = _FRAME.unpack(_receive_exactly(sock, 4))
+                if length > MAX_FRAME:
+                    raise ProtocolError(f"{peer}: a frame announces {length} bytes (more than {MAX_FRAME})")
+                message = self.kind.deserialize(_receive_exactly(sock, length))
+                self.received += 1
+                self.callback(message)
+        except (ProtocolError, SerializationError) as exc:
+            log.error("%s; disconnected", exc)
+        except OSError:
+            pass  # the publisher went away or we closed the connection
+        finally:
+            with self._lock:
+                if self._connections.get(publisher) is sock:
+                    del self._connections[publisher]
+            sock.close()
+
+    @property
+    def publishers(self) -> list[str]:
+        with self._lock:
+            return list(self._connections)
+
+    def close(self) -> None:
+        with self._lock:
+            for sock in self._connections.values():
+                sock.close()
+            self._connections.clear()
+
+
+class Ros1Peer:
+    """A ROS 1 node as other ROS 1 nodes see it: a name, a slave API, a TCPROS port."""
+
+    def __init__(self, name: str, master_uri: str, host: str = "127.0.0.1") -> None:
+        self.name = name if name.startswith("/") else "/" + name
+        self.master_uri = master_uri
+        self.host = host
+        self._master = _proxy(master_uri)
+        self._publications: dict[str, Ros1Publication] = {}
+        self._subscriptions: dict[str, Ros1Subscription] = {}
+        self._lock = threading.Lock()
+        self._closed = False
+        self._slave = _Server((host, 0), requestHandler=_Quiet, allow_none=True, logRequests=False)
+        self._slave.register_instance(_SlaveApi(self))
+        self.uri = f"http://{host}:{self._slave.server_address[1]}/"
+        self._tcpros = socket.create_server((host, 0))
+        self.tcpros_port = self._tcpros.getsockname()[1]
+        self._threads = [
+            threading.Thread(target=self._slave.serve_forever, name="hetros-ros1-slave", daemon=True),
+            threading.Thread(target=self._accept, name="hetros-ros1-accept", daemon=True),
+        ]
+        for thread in self._threads:
+            thread.start()
+
+    # -- master ----------------------------------------------------------------------------
+
+    def _call_master(self, method: str, *args: Any, retry_for: float = 30.0) -> Any:
+        """One master API call; a master that is down is retried with a log line, for ``retry_for`` s."""
+        deadline = time.monotonic() + retry_for
+        logged = False
+        while True:
+            try:
+                code, message, value = getattr(self._master, method)(self.name, *args)
+            except OSError as exc:
+                if time.monotonic() > deadline or self._closed:
+                    raise TransportError(f"the ROS master at {self.master_uri} is unreachable ({exc}); start "
+                                         "`hetros master` or roscore, or fix ROS_MASTER_URI") from None
+                if not logged:
+                    log.warning("ROS master at %s unreachable (%s); retrying", self.master_uri, exc)
+                    logged = True
+                time.sleep(0.5)
+                continue
+            if code != 1:
+                raise TransportError(f"the ROS master refused {method}{args[:2]}: {message}")
+            return value
+
+    # -- endpoints -------------------------------------------------------------------------
+
+    def advertise(self, topic: str, kind: Ros1Type, latch: bool = False) -> Ros1Publication:
+        publication = Ros1Publication(self, topic, kind, latch)
+        with self._lock:
+            self._publications[topic] = publication
+        self._call_master("registerPublisher", topic, kind.name, self.uri)
+        return publication
+
+    def subscribe(self, topic: str, kind: Ros1Type, callback: Callable[[Any], None]) -> Ros1Subscription:
+        subscription = Ros1Subscription(self, topic, kind, callback)
+        with self._lock:
+            self._subscriptions[topic] = subscription
+        publishers = self._call_master("registerSubscriber", topic, kind.name, self.uri)
+        subscription.update(list(publishers))
+        return subscription
+
+    # -- TCPROS server ---------------------------------------------------------------------
+
+    def _accept(self) -> None:
+        while not self._closed:
+            try:
+                sock, address = self._tcpros.accept()
+            except OSError:
+                return
+            threading.Thread(target=self._handshake, args=(sock, f"{address[0]}:{address[1]}"),
+                             name="hetros-ros1-handshake", daemon=True).start()
+
+    def _handshake(self, sock: socket.socket, address: str) -> None:
+        peer = f"ROS 1 connection from {address}"
+        try:
+            sock.settimeout(_CALL_TIMEOUT)
+            fields = read_header(sock, peer)
+            require(fields, ("callerid", "topic", "md5sum", "type"), peer)
+            peer = f"ROS 1 subscriber {fields['callerid']} ({address})"
+            with self._lock:
+                publication = self._publications.get(fields["topic"])
+            if publication is None:
+                raise ProtocolError(f"{peer} asked for {fields['topic']}, which this node does not publish")
+            kind = publication.kind
+            if fields["md5sum"] not in (kind.md5, "*"):
+                raise ProtocolError(f"{fields['topic']}: {peer} expects {fields['type']} (md5 {fields['md5sum']}), "
+                                    f"this node publishes {kind.name} (md5 {kind.md5})")
+            _configure(sock)
+            sock.sendall(encode_header({
+                "callerid": self.name, "md5sum": kind.md5, "type": kind.name, "topic": fields["topic"],
+                "message_definition": kind.definition, "latching": "1" if publication.latch else "0",
+            }))
+            sock.settimeout(None)
+            publication._add(sock, fields["callerid"])
+        except ProtocolError as exc:
+            log.error("%s; disconnected", exc)
+            try:
+                sock.sendall(encode_header({"error": str(exc)}))
+            except OSError:
+                pass
+            sock.close()
+        except OSError as exc:
+            log.info("%s: %s", peer, exc)
+            sock.close()
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        for topic, publication in list(self._publications.items()):
+            self._unregister("unregisterPublisher", topic)
+            publication.close()
+        for topic, subscription in list(self._subscriptions.items()):
+            self._unregister("unregisterSubscriber", topic)
+            subscription.close()
+        self._slave.shutdown()
+        self._slave.server_close()
+        self._tcpros.close()
+
+    def _unregister(self, method: str, topic: str) -> None:
+        try:
+            getattr(self._master, method)(self.name, topic, self.uri)
+        except (OSError, xmlrpc.client.Error):
+            pass  # a master that is gone has nothing to unregister
+
+
+class _SlaveApi:
+    """The slave API other ROS 1 nodes and tools call (each returns ``[code, message, value]``)."""
+
+    def __init__(self, peer: Ros1Peer) -> None:
+        self._peer = peer
+
+    def getMasterUri(self, caller_id: str) -> tuple[int, str, str]:
+        return 1, "", self._peer.master_uri
+
+    def getPid(self, caller_id: str) -> tuple[int, str, int]:
+        return 1, "", os.getpid()
+
+    def getSubscriptions(self, caller_id: str) -> tuple[int, str, list[list[str]]]:
+        return 1, "subscriptions", [[t, s.kind.name] for t, s in self._peer._subscriptions.items()]
+
+    def getPublications(self, caller_id: str) -> tuple[int, str, list[list[str]]]:
+        return 1, "publications", [[t, p.kind.name] for t, p in self._peer._publications.items()]
+
+    def getBusStats(self, caller_id: str) -> tuple[int, str, list[Any]]:
+        publishing = [[t, p.sent, []] for t, p in self._peer._publications.items()]
+        subscribing = [[t, []] for t in self._peer._subscriptions]
+        return 1, "bus stats", [publishing, subscribing, []]
+
+    def getBusInfo(self, caller_id: str) -> tuple[int, str, list[list[Any]]]:
+        info: list[list[Any]] = []
+        for topic, publication in self._peer._publications.items():
+            info += [[len(info), who, "o", "TCPROS", topic, True] for who in publication.subscribers]
+        for topic, subscription in self._peer._subscriptions.items():
+            info += [[len(info), uri, "i", "TCPROS", topic, True] for uri in subscription.publishers]
+        return 1, "bus info", info
+
+    def paramUpdate(self, caller_id: str, key: str, value: Any) -> tuple[int, str, int]:
+        return 1, "", 0
+
+    def publisherUpdate(self, caller_id: str, topic: str, publishers: list[str]) -> tuple[int, str, int]:
+        subscription = self._peer._subscriptions.get(topic)
+        if subscription is not None:
+            subscription.update(list(publishers))
+        return 1, "", 0
+
+    def requestTopic(self, caller_id: str, topic: str, protocols: list[list[Any]]) -> tuple[int, str, list[Any]]:
+        if topic not in self._peer._publications:
+            return -1, f"not a publisher of {topic}", []
+        if not any(p and p[0] == "TCPROS" for p in protocols):
+            return 0, "no supported protocol (only TCPROS)", []
+        return 1, "", ["TCPROS", self._peer.host, self._peer.tcpros_port]
+
+    def shutdown(self, caller_id: str, message: str = "") -> tuple[int, str, int]:
+        log.warning("ROS 1 node %s asked to shut down by %s: %s; leaving the ROS 1 graph",
+                    self._peer.name, caller_id, message)
+        threading.Thread(target=self._peer.close, name="hetros-ros1-shutdown", daemon=True).start()
+        return 1, "", 0

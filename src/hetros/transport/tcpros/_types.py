@@ -1,0 +1,179 @@
+"""hetros' message types (ROS 2's) as stock ROS 1 knows them: names, md5sums, definitions, bytes.
+
+The ROS 1 side uses ROS 1's own definitions (rosbags' ROS1_NOETIC store): they differ
+from ROS 2's (``std_msgs/Header`` has ``seq``; ``sensor_msgs/Image`` hashes to
+``060021388200f6f0f447d0fcd9c64743`` in ROS 1). Serialization, md5sums and full
+definitions come from rosbags. Between the two, fields map by name, recursively:
+
+- a ROS 1 field that ROS 2 lacks gets its zero value going out and is dropped coming in
+  (``Header.seq``; rospy numbers messages itself);
+- a ROS 2 field that ROS 1 lacks makes the type unmappable: refused when the type is
+  first used, naming the field;
+- ``time``/``duration`` are ``sec``/``nanosec`` on both sides.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from rosbags.interfaces import Nodetype
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+
+from ..._errors import SerializationError, UnknownTypeError
+from ...msg import TypeRegistry, freeze, normalize_typename
+
+Convert = Callable[[Any], Any]
+
+_store: Typestore | None = None
+_store_lock = threading.Lock()
+
+
+def ros1_store() -> Typestore:
+    """rosbags' ROS 1 (Noetic) definitions, loaded once per process."""
+    global _store
+    with _store_lock:
+        if _store is None:
+            _store = get_typestore(Stores.ROS1_NOETIC)
+        return _store
+
+
+def ros1_name(typename: str) -> str:
+    """``pkg/msg/Name`` -> ``pkg/Name`` (what ROS 1 puts in headers and on the master)."""
+    package, _kind, name = normalize_typename(typename).split("/")
+    return f"{package}/{name}"
+
+
+class Ros1Type:
+    """One message type as both sides know it, with the converters between them."""
+
+    def __init__(self, types: TypeRegistry, typename: str) -> None:
+        self.typename = normalize_typename(typename)
+        self.name = ros1_name(self.typename)
+        store = ros1_store()
+        if self.typename not in store.fielddefs:
+            raise UnknownTypeError(
+                f"{self.typename} has no ROS 1 definition (rosbags' ROS 1 Noetic store lacks it): a topic of this "
+                "type cannot be exported to ROS 1; add the ROS 1 package's .msg files or use another type"
+            )
+        self._types = types
+        self._store = store
+        self.definition, self.md5 = store.generate_msgdef(self.typename, ros_version=1)
+        self._outgoing = _converter(types, store, self.typename, outgoing=True)
+        self._incoming = _converter(types, store, self.typename, outgoing=False)
+
+    def serialize(self, message: Any) -> bytes:
+        """A hetros message as ROS 1 bytes (the payload of one TCPROS frame)."""
+        try:
+            return bytes(self._store.serialize_ros1(self._outgoing(message), self.typename))
+        except (ValueError, TypeError, OverflowError, AttributeError) as exc:
+            raise SerializationError(f"cannot serialize {self.typename} for ROS 1: {exc}") from exc
+
+    def deserialize(self, data: bytes | memoryview) -> Any:
+        """ROS 1 bytes as a read-only hetros message."""
+        try:
+            ros1 = self._store.deserialize_ros1(data, self.typename)
+        except Exception as exc:  # rosbags raises several kinds for bad bytes
+            raise SerializationError(f"{len(data)} bytes do not decode as ROS 1 {self.name}: {exc}") from exc
+        return freeze(self._incoming(ros1))
+
+
+def _converter(types: TypeRegistry, store: Typestore, typename: str, outgoing: bool) -> Convert:
+    """A function turning one side's message of ``typename`` into the other side's."""
+    ros1_fields = dict(store.fielddefs[typename][1])
+    ros2_defs = dict(types.store.fielddefs[typename][1])
+    ros2_cls = types.get(typename)
+    ros1_cls = store.types[typename]
+    by_lower = {name.lower(): name for name in ros1_fields}
+    ros2_fields: dict[str, Any] = {}
+    attrs: dict[str, str] = {}
+    for (name, desc), attr in zip(ros2_defs.items(), ros2_cls.__fieldnames__, strict=True):
+        # ROS 2 lower-cased some field names (CameraInfo's D, K, R, P): a unique match ignoring case
+        ros1 = name if name in ros1_fields else by_lower.get(name.lower())
+        if ros1 is None:
+            raise UnknownTypeError(f"{typename} cannot be mapped to ROS 1: its field {name!r} has no ROS 1 "
+                                   f"counterpart (ROS 1 has {', '.join(ros1_fields)})")
+        ros2_fields[ros1] = desc
+        attrs[ros1] = attr
+    plans: list[tuple[str, str, Convert | None, Any]] = []
+    for name, desc in ros1_fields.items():
+        if name in ros2_fields:
+            plans.append((name, attrs[name], _field_converter(types, store, desc, ros2_fields[name], outgoing,
+                                                            f"{typename}.{name}"), None))
+        else:
+            plans.append((name, "", None, _zero(store, desc)))
+
+    if outgoing:
+        def to_ros1(message: Any) -> Any:
+            values = {}
+            for name, attr, convert, zero in plans:
+                if not attr:
+                    values[name] = zero() if callable(zero) else zero
+                    continue
+                value = getattr(message, attr)
+                values[name] = convert(value) if convert else value
+            return ros1_cls(**values)
+
+        return to_ros1
+
+    def to_ros2(message: Any) -> Any:
+        values = {}
+        for name, attr, convert, _zero_value in plans:
+            if attr:
+                value = getattr(message, name)
+                values[attr] = convert(value) if convert else value
+        return ros2_cls(**values)
+
+    return to_ros2
+
+
+def _field_converter(types: TypeRegistry, store: Typestore, ros1: Any, ros2: Any, outgoing: bool,
+                     where: str) -> Convert | None:
+    kind1, arg1 = ros1
+    kind2, arg2 = ros2
+    if kind1 != kind2:
+        raise UnknownTypeError(f"{where} cannot be mapped to ROS 1: it is {_describe(ros2)} in ROS 2 "
+                               f"and {_describe(ros1)} in ROS 1")
+    if kind1 == Nodetype.BASE:
+        if arg1[0] != arg2[0] and {arg1[0], arg2[0]} - {"byte", "uint8", "char", "int8"}:
+            raise UnknownTypeError(f"{where} cannot be mapped to ROS 1: {arg2[0]} in ROS 2, {arg1[0]} in ROS 1")
+        return None
+    if kind1 == Nodetype.NAME:
+        if arg1 != arg2:
+            raise UnknownTypeError(f"{where} cannot be mapped to ROS 1: {arg2} in ROS 2, {arg1} in ROS 1")
+        return _converter(types, store, arg1, outgoing)
+    sub1, _length1 = arg1
+    sub2, _length2 = arg2
+    inner = _field_converter(types, store, sub1, sub2, outgoing, where + "[]")
+    if sub1[0] == Nodetype.BASE and sub1[1][0] != "string":
+        return None  # numpy arrays pass as they are
+    if inner is None:
+        return list
+    return lambda values: [inner(value) for value in values]
+
+
+def _zero(store: Typestore, desc: Any) -> Any:
+    kind, arg = desc
+    if kind == Nodetype.BASE:
+        return "" if arg[0] == "string" else (False if arg[0] == "bool" else 0)
+    if kind == Nodetype.NAME:
+        cls = store.types[arg]
+        fields = store.fielddefs[arg][1]
+        return lambda: cls(**{name: _value(_zero(store, sub)) for name, sub in fields})
+    sub, length = arg
+    if sub[0] == Nodetype.BASE and sub[1][0] != "string":
+        return lambda: np.zeros(length if kind == Nodetype.ARRAY else 0, np.uint8)
+    return list
+
+
+def _value(zero: Any) -> Any:
+    return zero() if callable(zero) else zero
+
+
+def _describe(desc: Any) -> str:
+    kind, arg = desc
+    return {Nodetype.BASE: f"a {arg[0]}" if kind == Nodetype.BASE else "", Nodetype.NAME: f"a {arg}",
+            Nodetype.ARRAY: "a fixed array", Nodetype.SEQUENCE: "a sequence"}.get(kind, str(kind))

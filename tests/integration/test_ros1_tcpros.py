@@ -1,0 +1,189 @@
+"""hetros' ROS 1 peer (slave API + TCPROS) against stock rospy nodes from Debian."""
+
+from __future__ import annotations
+
+import logging
+import socket
+import subprocess
+import textwrap
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from hetros.msg import registry
+from hetros.transport.tcpros import Ros1Peer, Ros1Type
+from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, free_port, needs_ros1
+
+pytestmark = needs_ros1
+
+TYPES = registry()
+String = TYPES.get("std_msgs/msg/String")
+Image = TYPES.get("sensor_msgs/msg/Image")
+
+# a stock rospy node that sends every image it gets back on another topic
+IMAGE_ECHO = textwrap.dedent("""
+    import rospy
+    from sensor_msgs.msg import Image
+    rospy.init_node("image_echo")
+    back = rospy.Publisher("/img_back", Image, queue_size=10)
+    rospy.Subscriber("/img_out", Image, back.publish)
+    rospy.spin()
+""")
+
+
+def _wait(condition: Any, seconds: float = 20.0) -> bool:
+    deadline = time.monotonic() + seconds
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.05)
+    return True
+
+
+def _spawn(script: str, tmp_path: Path, name: str, env: dict[str, str]) -> subprocess.Popen[str]:
+    path = tmp_path / f"{name}.py"
+    path.write_text(script)
+    return subprocess.Popen([ROS_PYTHON, str(path)], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True)
+
+
+def test_hetros_publishes_to_a_rospy_subscriber(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = master
+    peer = Ros1Peer("/hetros_talker", uri)
+    publication = peer.advertise("/chatter", Ros1Type(TYPES, "std_msgs/msg/String"))
+    stop = threading.Event()
+
+    def talk() -> None:
+        i = 0
+        while not stop.is_set():
+            publication.publish(String(data=f"hello {i}"))
+            i += 1
+            time.sleep(0.05)
+
+    talker = threading.Thread(target=talk, daemon=True)
+    talker.start()
+    try:
+        listener = _spawn(LISTENER, tmp_path, "listener", env)
+        out, _ = listener.communicate(timeout=40)
+        assert out.strip().startswith("got 5 hello "), out
+    finally:
+        stop.set()
+        talker.join()
+        peer.close()
+
+
+def test_hetros_receives_from_a_rospy_publisher(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = master
+    talker = _spawn(TALKER, tmp_path, "talker", env)
+    peer = Ros1Peer("/hetros_listener", uri)
+    got: list[Any] = []
+    try:
+        peer.subscribe("/chatter", Ros1Type(TYPES, "std_msgs/msg/String"), got.append)
+        assert _wait(lambda: len(got) >= 5), f"received {len(got)}"
+        assert got[-1].data.startswith("hello ") and got[-1].is_frozen
+    finally:
+        peer.close()
+        talker.terminate()
+        talker.wait(10)
+
+
+def test_an_image_with_a_header_round_trips_through_stock_rospy(master: tuple[str, dict[str, str]],
+                                                                tmp_path: Path) -> None:
+    """ROS 1's Header has seq and ROS 1's Image another md5: the mapping holds against the real thing."""
+    uri, env = master
+    echo = _spawn(IMAGE_ECHO, tmp_path, "image_echo", env)
+    peer = Ros1Peer("/hetros_camera", uri)
+    kind = Ros1Type(TYPES, "sensor_msgs/msg/Image")
+    assert kind.md5 == "060021388200f6f0f447d0fcd9c64743"
+    back: list[Any] = []
+    try:
+        peer.subscribe("/img_back", kind, back.append)
+        out = peer.advertise("/img_out", kind)
+        image = Image(height=2, width=3, encoding="rgb8", step=9, data=np.arange(18, dtype=np.uint8))
+        image.header.frame_id = "camera"
+        image.header.stamp.sec, image.header.stamp.nanosec = 7, 500
+        assert _wait(lambda: (out.publish(image), bool(back))[1], 30), "no image came back"
+        assert back[0] == image
+    finally:
+        peer.close()
+        echo.terminate()
+        echo.wait(10)
+
+
+def test_a_type_mismatch_is_refused_naming_both_types_and_md5s(master: tuple[str, dict[str, str]], tmp_path: Path,
+                                                               caplog: pytest.LogCaptureFixture) -> None:
+    uri, env = master
+    peer = Ros1Peer("/hetros_talker", uri)
+    publication = peer.advertise("/numbers", Ros1Type(TYPES, "std_msgs/msg/String"))
+    wrong = textwrap.dedent("""
+        import rospy, time
+        from std_msgs.msg import Int32
+        rospy.init_node("wrong_listener")
+        rospy.Subscriber("/numbers", Int32, lambda m: None)
+        time.sleep(4)
+    """)
+    with caplog.at_level(logging.ERROR, logger="hetros.ros1"):
+        listener = _spawn(wrong, tmp_path, "wrong", env)
+        assert _wait(lambda: "md5" in caplog.text, 30), caplog.text
+        listener.wait(30)
+    line = next(r.getMessage() for r in caplog.records if "md5" in r.getMessage())
+    assert "/numbers" in line and "std_msgs/Int32" in line and "std_msgs/String" in line
+    assert "da5909fbe378aeaf85e547e830cc1bb7" in line and Ros1Type(TYPES, "std_msgs/msg/String").md5 in line
+    publication.publish(String(data="still fine"))
+    peer.close()
+
+
+def test_a_peer_sending_garbage_is_dropped_and_the_node_goes_on(master: tuple[str, dict[str, str]], tmp_path: Path,
+                                                                 caplog: pytest.LogCaptureFixture) -> None:
+    uri, env = master
+    peer = Ros1Peer("/hetros_talker", uri)
+    publication = peer.advertise("/chatter", Ros1Type(TYPES, "std_msgs/msg/String"))
+    with caplog.at_level(logging.ERROR, logger="hetros.ros1"):
+        for junk in (b"\xff\xff\xff\xff", b"\x08\x00\x00\x00\x04\x00\x00\x00abcd", b"GET / HTTP/1.0\r\n\r\n"):
+            with socket.create_connection(("127.0.0.1", peer.tcpros_port)) as sock:
+                sock.sendall(junk)
+                sock.settimeout(5)
+                try:
+                    sock.recv(4096)
+                except OSError:
+                    pass
+    assert "announces 4294967295 bytes" in caplog.text
+    assert "is not name=value" in caplog.text
+    stop = threading.Event()
+
+    def talk() -> None:
+        while not stop.is_set():
+            publication.publish(String(data="hello after garbage"))
+            time.sleep(0.05)
+
+    thread = threading.Thread(target=talk, daemon=True)
+    thread.start()
+    try:
+        listener = _spawn(LISTENER, tmp_path, "listener", env)
+        out, _ = listener.communicate(timeout=40)
+        assert out.strip().startswith("got 5 hello after garbage"), out
+    finally:
+        stop.set()
+        thread.join()
+        peer.close()
+
+
+def test_a_master_that_is_down_at_start_is_retried(caplog: pytest.LogCaptureFixture) -> None:
+    from hetros.transport.tcpros import Master
+
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}/"
+    started: list[Master] = []
+    timer = threading.Timer(1.5, lambda: started.append(Master("127.0.0.1", port)))
+    with caplog.at_level(logging.WARNING, logger="hetros.ros1"):
+        peer = Ros1Peer("/early", uri)
+        timer.start()
+        peer.advertise("/t", Ros1Type(TYPES, "std_msgs/msg/String"))
+    assert f"ROS master at {uri} unreachable" in caplog.text and "retrying" in caplog.text
+    assert started and started[0].state.getSystemState("/x")[2][0] == [["/t", ["/early"]]]
+    peer.close()
+    started[0].close()

@@ -1,0 +1,94 @@
+"""Stock ROS 1 from Debian as a test peer: a running `hetros master` and rospy node scripts."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import textwrap
+import time
+import xmlrpc.client
+from collections.abc import Iterator
+
+import pytest
+
+ROS_PYTHON = "/usr/bin/python3"
+
+
+def _has_rospy() -> bool:
+    probe = "import rospy, rostopic, rosparam, rosservice, rosnode, sensor_msgs.msg"
+    try:
+        return subprocess.run([ROS_PYTHON, "-c", probe], capture_output=True, timeout=30, check=False).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+
+
+needs_ros1 = pytest.mark.skipif(not _has_rospy(), reason="Debian's python3-rospy and ROS tools are not installed "
+                                                          "(`make test` installs them when run as root)")
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def ros1_master() -> Iterator[tuple[str, dict[str, str]]]:
+    port = free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "hetros", "master", "--port", str(port)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    uri = f"http://127.0.0.1:{port}/"
+    deadline = time.monotonic() + 20
+    while True:
+        try:
+            xmlrpc.client.ServerProxy(uri).getPid("/test")
+            break
+        except OSError:
+            if time.monotonic() > deadline or proc.poll() is not None:
+                proc.kill()
+                raise AssertionError(f"hetros master did not come up: {proc.communicate()[0]}") from None
+            time.sleep(0.1)
+    env = dict(os.environ, ROS_MASTER_URI=uri, ROS_HOSTNAME="127.0.0.1", ROS_HOME="/tmp/hetros-test-ros-home")
+    env.pop("PYTHONPATH", None)
+    yield uri, env
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+TALKER = textwrap.dedent("""
+    import rospy
+    from std_msgs.msg import String
+    rospy.init_node("talker")
+    rospy.set_param("~rate", 20)
+    pub = rospy.Publisher("/chatter", String, queue_size=10)
+    rate = rospy.Rate(20)
+    i = 0
+    while not rospy.is_shutdown():
+        pub.publish(String(data="hello %d" % i))
+        i += 1
+        rate.sleep()
+""")
+
+LISTENER = textwrap.dedent("""
+    import sys, time, rospy
+    from std_msgs.msg import String
+    got = []
+    rospy.init_node("listener")
+    rospy.Subscriber("/chatter", String, lambda m: got.append(m.data))
+    start = time.time()
+    while len(got) < 5 and time.time() - start < 20:
+        time.sleep(0.05)
+    print("got", len(got), got[-1] if got else "")
+""")
+
+
+def run_ros(env: dict[str, str], *args: str, timeout: float = 30) -> str:
+    proc = subprocess.run(list(args), env=env, capture_output=True, text=True, timeout=timeout, check=False)
+    assert proc.returncode == 0, f"{' '.join(args)} failed: {proc.stdout}{proc.stderr}"
+    return proc.stdout
+
+

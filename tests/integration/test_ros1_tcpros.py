@@ -187,3 +187,19 @@ def test_a_master_that_is_down_at_start_is_retried(caplog: pytest.LogCaptureFixt
     assert started and started[0].state.getSystemState("/x")[2][0] == [["/t", ["/early"]]]
     peer.close()
     started[0].close()
+
+
+def test_the_readme_example_runs() -> None:
+    from hetros.transport.tcpros import Master
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    block = readme.split("## ROS 1", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    running = Master("127.0.0.1", free_port())
+    namespace: dict[str, Any] = {}
+    try:
+        exec(block.replace("http://127.0.0.1:11311/", running.uri), namespace)
+        assert namespace["chatter"].topic == "/chatter"
+    finally:
+        if "peer" in namespace:
+            namespace["peer"].close()
+        running.close()

@@ -82,7 +82,7 @@ LISTENER = textwrap.dedent("""
     start = time.time()
     while len(got) < 5 and time.time() - start < 20:
         time.sleep(0.05)
-    print("got", len(got), got[-1] if got else "")
+    print("got", min(len(got), 5), got[-1] if got else "")
 """)
 
 

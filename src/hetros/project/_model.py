@@ -71,9 +71,28 @@ class NodeSpec(_Strict):
         return value
 
 
+class Ros1Spec(_Strict):
+    """Topics shared with a ROS 1 graph through its master (``hetros master`` or roscore)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    # None: $ROS_MASTER_URI, else http://127.0.0.1:11311/
+    master: str | None = None
+    # the interface the bridge's slave API and TCPROS server listen on
+    host: str = "127.0.0.1"
+    export: list[str] = Field(default_factory=list)
+    import_: list[str] = Field(default_factory=list, alias="import")
+
+    @field_validator("master")
+    @classmethod
+    def _master(cls, value: str | None) -> str | None:
+        if value is not None and not (value.startswith("http://") and value.rstrip("/").rsplit(":", 1)[-1].isdigit()):
+            raise ValueError(f"master must be a URI like 'http://127.0.0.1:11311/', not {value!r}")
+        return value
+
+
 class ExternalSpec(_Strict):
     ros2: dict[str, Any] | None = None
-    ros1: dict[str, Any] | None = None
+    ros1: Ros1Spec | None = None
 
 
 _UNITS = {"": 1, "B": 1, "KIB": 1 << 10, "MIB": 1 << 20, "GIB": 1 << 30, "TIB": 1 << 40,

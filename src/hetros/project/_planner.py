@@ -10,9 +10,10 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .._errors import CheckError, DefinitionError, MessageError
+from .._errors import CheckError, DefinitionError, MessageError, UnknownTypeError
 from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
 from ..plan import (
+    LAUNCHER,
     ChannelPlan,
     EdgePlan,
     NodePlan,
@@ -23,7 +24,7 @@ from ..plan import (
     request_channel,
 )
 from ..transport import QoS, reserved_bytes
-from ._model import LoadedProject, load_project
+from ._model import LoadedProject, Ros1Spec, load_project
 from ._names import node_name_problem, topic_name_problem
 from ._scan import scan_file
 
@@ -79,9 +80,9 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                     f"{where('targets', tname, 'cpus', index)}: cpu {cpu} does not exist on this "
                     f"machine ({os.cpu_count()} CPUs: 0..{(os.cpu_count() or 1) - 1})"
                 )
-    if model.external is not None:
-        report.errors.append(f"{where('external')}: bridges to external ROS graphs are not implemented "
-                             "yet; remove the 'external' section")
+    if model.external is not None and model.external.ros2 is not None:
+        report.errors.append(f"{where('external', 'ros2')}: bridges to ROS 2 graphs are not implemented "
+                             "yet; remove the 'ros2' section")
 
     publishers: dict[str, list[tuple[str, str]]] = {}
     subscribers: dict[str, list[tuple[str, str]]] = {}
@@ -125,12 +126,15 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     for run, problem in _runnable_problems(project, list(runnable)).items():
         for nname in runnable.get(run, []):
             report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
+    ros1 = model.external.ros1 if model.external is not None else None
+    imported = set(ros1.import_) if ros1 is not None else set()
     for topic, subscribed in subscribers.items():
-        if topic not in publishers:
+        if topic not in publishers and topic not in imported:
             for nname, _ in subscribed:
                 report.errors.append(
                     f"{where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}; "
-                    "add a publisher under some node's 'publish' or remove this subscription"
+                    "add a publisher under some node's 'publish', import it from ROS 1 "
+                    "(external: ros1: import:) or remove this subscription"
                 )
     for topic in set(publishers) | set(subscribers):
         declared = {t for _, t in publishers.get(topic, []) + subscribers.get(topic, [])}
@@ -162,6 +166,8 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     _check_qos_compatibility(project, publishers, subscribers, report)
     _check_shm_budget(project, types, publishers, subscribers, report)
     _check_sources(project, report)
+    if model.external is not None and model.external.ros1 is not None:
+        _check_ros1(project, model.external.ros1, publishers, subscribers, types, report)
     return report
 
 
@@ -313,6 +319,54 @@ def _check_sources(project: LoadedProject, report: CheckReport) -> None:
                     )
 
 
+ROS1_BRIDGE = "hetros_ros1_bridge"
+
+
+def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, list[tuple[str, str]]],
+                subscribers: dict[str, list[tuple[str, str]]], types: TypeRegistry, report: CheckReport) -> None:
+    """Exported topics need hetros publishers, imported ones hetros subscribers; both a ROS 1 type."""
+    from ..transport.tcpros import Ros1Type
+
+    where = project.where
+    if ROS1_BRIDGE in project.model.nodes or ROS1_BRIDGE in project.model.targets:
+        report.errors.append(f"{where('nodes', ROS1_BRIDGE)}: {ROS1_BRIDGE!r} is reserved for the ROS 1 bridge; "
+                             "rename the node or target")
+    for section, attr, table, needs in (("export", "export", publishers, "publisher"),
+                                        ("import", "import_", subscribers, "subscriber")):
+        for index, topic in enumerate(getattr(spec, attr)):
+            here = where("external", "ros1", section, index)
+            endpoints = table.get(topic)
+            if not endpoints:
+                report.errors.append(f"{here}: {topic} has no hetros {needs} to {section} for; declare one "
+                                     f"under a node's {'publish' if needs == 'publisher' else 'subscribe'}")
+                continue
+            if topic in spec.export and topic in spec.import_:
+                report.errors.append(f"{here}: {topic} is both exported and imported (a loop); keep one")
+                continue
+            try:
+                Ros1Type(types, endpoints[0][1])
+            except (UnknownTypeError, DefinitionError) as exc:
+                report.errors.append(f"{here}: {exc}")
+
+
+def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
+    """The node that carries exported and imported topics across (in the launcher's process)."""
+    model = project.model
+    spec = model.external.ros1 if model.external is not None else None
+    if spec is None or not (spec.export or spec.import_):
+        return None
+    declared: dict[str, str] = {}
+    for node in model.nodes.values():
+        declared.update(node.types("publish"))
+        declared.update(node.types("subscribe"))
+    exports = {t: normalize_typename(declared[t]) for t in spec.export}
+    imports = {t: normalize_typename(declared[t]) for t in spec.import_}
+    parameters = {"master": spec.master or os.environ.get("ROS_MASTER_URI", "http://127.0.0.1:11311/"),
+                  "host": spec.host, "export": exports, "import": imports, "ros1_name": f"/{model.name}_hetros"}
+    return NodePlan(ROS1_BRIDGE, "hetros.launch._ros1_bridge:bridge", ROS1_BRIDGE, parameters,
+                    publish=imports, subscribe=exports)
+
+
 def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
     """Check, then compute the architecture graph. Raises CheckError with every problem."""
     types = types or registry()
@@ -323,12 +377,19 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
     process_of = {
         n: process_name(s.target, model.targets[s.target].kind) for n, s in model.nodes.items()
     }
+    bridge = _ros1_bridge(project)
     channels: dict[str, ChannelPlan] = {}
     for nname, spec in model.nodes.items():
         for topic, typename in spec.types("publish").items():
             _add(channels, topic, normalize_typename(typename), "topic", project, pub=nname)
         for topic, typename in spec.types("subscribe").items():
             _add(channels, topic, normalize_typename(typename), "topic", project, sub=nname)
+    if bridge is not None:
+        process_of[bridge.name] = LAUNCHER
+        for topic, typename in bridge.publish.items():
+            _add(channels, topic, typename, "topic", project, pub=bridge.name)
+        for topic, typename in bridge.subscribe.items():
+            _add(channels, topic, typename, "topic", project, sub=bridge.name)
     for nname, spec in model.nodes.items():
         for service, typename in spec.services.items():
             srv = normalize_typename(typename, "srv")
@@ -353,12 +414,13 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         name=model.name,
         root=str(project.root.resolve()),
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
-        targets={n: TargetPlan(n, t.kind, tuple(t.cpus)) for n, t in model.targets.items()},
+        targets={n: TargetPlan(n, t.kind, tuple(t.cpus)) for n, t in model.targets.items()}
+        | ({ROS1_BRIDGE: TargetPlan(ROS1_BRIDGE, "thread")} if bridge is not None else {}),
         nodes={
             n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts, s.required,
                         s.types("publish"), s.types("subscribe"), dict(s.services), dict(s.clients))
             for n, s in model.nodes.items()
-        },
+        } | ({ROS1_BRIDGE: bridge} if bridge is not None else {}),
         channels=channels,
         edges=edges,
     )

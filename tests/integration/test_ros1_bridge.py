@@ -1,0 +1,108 @@
+"""A project's topics exported to and imported from stock ROS 1 (rospy) through `external: ros1:`."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from hetros import CheckError
+from hetros.project import load_project, plan
+from tests.support.ros1 import LISTENER, ROS_PYTHON, needs_ros1
+
+NODES = textwrap.dedent('''
+    import time
+    from hetros.interfaces.std_msgs.msg import String
+
+    def talker(node):
+        pub = node.create_publisher(String, "/chatter")
+        i = 0
+        while not node.graph.stop.is_set():
+            pub.publish(String(data=f"hello {i}"))
+            i += 1
+            time.sleep(0.05)
+
+    def listener(node):
+        with open(node.get_parameter("out"), "a") as out:
+            for message in node.create_subscription(String, "/from_ros1"):
+                out.write(message.data + "\\n")
+                out.flush()
+''')
+
+ROS1_TALKER = textwrap.dedent("""
+    import rospy
+    from std_msgs.msg import String
+    rospy.init_node("ros1_talker")
+    pub = rospy.Publisher("/from_ros1", String, queue_size=10)
+    rate = rospy.Rate(20)
+    while not rospy.is_shutdown():
+        pub.publish(String(data="from ROS 1"))
+        rate.sleep()
+""")
+
+
+def _project(tmp_path: Path, external: str) -> Path:
+    (tmp_path / "nodes.py").write_text(NODES)
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+        name: bridge_demo
+        targets: {{main: {{kind: thread}}, worker: {{kind: process}}}}
+        nodes:
+          talker: {{run: nodes:talker, target: worker, publish: {{/chatter: std_msgs/msg/String}}}}
+          listener: {{run: nodes:listener, target: main, parameters: {{out: {tmp_path / "got.txt"}}},
+                     subscribe: {{/from_ros1: std_msgs/msg/String}}}}
+        external:
+        {textwrap.indent(external.strip(), "  ")}
+    """))
+    return tmp_path / "project.yaml"
+
+
+@needs_ros1
+def test_exported_and_imported_topics_reach_stock_rospy(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = master
+    project = _project(tmp_path, f"ros1: {{master: '{uri}', export: [/chatter], import: [/from_ros1]}}")
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "25"],
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    (tmp_path / "talker.py").write_text(ROS1_TALKER)
+    (tmp_path / "listener.py").write_text(LISTENER)
+    ros1_talker = subprocess.Popen([ROS_PYTHON, str(tmp_path / "talker.py")], env=env,
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        listened = subprocess.run([ROS_PYTHON, str(tmp_path / "listener.py")], env=env, capture_output=True,
+                                  text=True, timeout=60, check=False)
+        assert listened.stdout.startswith("got 5 hello "), listened.stdout + listened.stderr
+        deadline = time.monotonic() + 20
+        got = tmp_path / "got.txt"
+        while not (got.exists() and "from ROS 1" in got.read_text()) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert got.exists() and "from ROS 1" in got.read_text()
+    finally:
+        ros1_talker.terminate()
+        ros1_talker.wait(10)
+        launch.terminate()
+        out, _ = launch.communicate(timeout=30)
+    assert "ROS 1 bridge /bridge_demo_hetros" in out, out
+
+
+@pytest.mark.parametrize(("external", "expected"), [
+    ("ros1: {export: [/nothing]}", r"external\.ros1\.export\.0.*/nothing has no hetros publisher to export"),
+    ("ros1: {import: [/chatter]}", r"external\.ros1\.import\.0.*/chatter has no hetros subscriber to import"),
+    ("ros1: {master: 'localhost:11311'}", r"master must be a URI like 'http://127.0.0.1:11311/'"),
+    ("ros2: {}", r"external\.ros2.*bridges to ROS 2 graphs are not implemented yet"),
+])
+def test_bad_ros1_sections_are_refused_by_check(tmp_path: Path, external: str, expected: str) -> None:
+    project = _project(tmp_path, external)
+    with pytest.raises(Exception, match=expected):
+        plan(load_project(project))
+
+
+def test_a_type_ros1_does_not_know_is_refused_by_check(tmp_path: Path) -> None:
+    project = _project(tmp_path, "ros1: {export: [/chatter]}")
+    text = project.read_text().replace("/chatter: std_msgs/msg/String", "/chatter: example_interfaces/msg/String")
+    project.write_text(text)
+    with pytest.raises(CheckError, match=r"external\.ros1\.export\.0.*example_interfaces/msg/String has no ROS 1 "
+                                         r"definition"):
+        plan(load_project(project))

@@ -203,3 +203,59 @@ def test_the_readme_example_runs() -> None:
         if "peer" in namespace:
             namespace["peer"].close()
         running.close()
+
+
+ROS1_SERVER = textwrap.dedent("""
+    import rospy
+    from std_srvs.srv import SetBool, SetBoolResponse
+    rospy.init_node("ros1_server")
+    rospy.Service("/ros1_toggle", SetBool, lambda req: SetBoolResponse(success=req.data, message="ros1 %s" % req.data))
+    rospy.spin()
+""")
+
+ROS1_CLIENT = textwrap.dedent("""
+    import rospy
+    from std_srvs.srv import SetBool
+    rospy.wait_for_service("/hetros_toggle", 20)
+    proxy = rospy.ServiceProxy("/hetros_toggle", SetBool, persistent=True)
+    print(proxy(True).message, proxy(True).message)
+    try:
+        rospy.ServiceProxy("/hetros_toggle", SetBool)(False)
+    except rospy.ServiceException as exc:
+        print("refused:", exc)
+""")
+
+
+def test_services_both_ways_with_rospy(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    from hetros.transport.tcpros._types import Ros1ServiceType
+
+    uri, env = master
+    SetBool = TYPES.get_service("std_srvs/srv/SetBool")
+    kind = Ros1ServiceType(TYPES, "std_srvs/srv/SetBool")
+    server = _spawn(ROS1_SERVER, tmp_path, "server", env)
+    peer = Ros1Peer("/hetros_services", uri)
+
+    def toggle(request: Any) -> Any:
+        if not request.data:
+            raise ValueError("refusing false")
+        return SetBool.Response(success=True, message="hetros says yes")
+
+    try:
+        peer.advertise_service("/hetros_toggle", kind, toggle)
+        client = _spawn(ROS1_CLIENT, tmp_path, "client", env)
+        out, _ = client.communicate(timeout=60)
+        assert "hetros says yes hetros says yes" in out, out
+        assert "refused:" in out and "ValueError: refusing false" in out, out
+        assert _wait(lambda: "/ros1_toggle" in str(xmlrpc_state(uri)), 30)
+        response = peer.call_service("/ros1_toggle", kind, SetBool.Request(data=True))
+        assert (response.success, response.message) == (True, "ros1 True")
+    finally:
+        peer.close()
+        server.terminate()
+        server.wait(10)
+
+
+def xmlrpc_state(uri: str) -> Any:
+    import xmlrpc.client
+
+    return xmlrpc.client.ServerProxy(uri).getSystemState("/test")[2]

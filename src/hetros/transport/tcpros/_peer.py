@@ -22,9 +22,9 @@ from socketserver import ThreadingMixIn
 from typing import Any
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
-from ..._errors import ProtocolError, SerializationError, TransportError
+from ..._errors import ProtocolError, SerializationError, ServiceTimeoutError, TransportError
 from ._header import decode_header, encode_header, header_length, require
-from ._types import Ros1Type
+from ._types import Ros1ServiceType, Ros1Type
 
 log = logging.getLogger("hetros.ros1")
 
@@ -222,6 +222,7 @@ class Ros1Peer:
         self._master = _proxy(master_uri)
         self._publications: dict[str, Ros1Publication] = {}
         self._subscriptions: dict[str, Ros1Subscription] = {}
+        self._services: dict[str, tuple[Ros1ServiceType, Callable[[Any], Any]]] = {}
         self._lock = threading.Lock()
         self._closed = False
         self._slave = _Server((host, 0), requestHandler=_Quiet, allow_none=True, logRequests=False)
@@ -275,6 +276,42 @@ class Ros1Peer:
         subscription.update(list(publishers))
         return subscription
 
+    def advertise_service(self, service: str, kind: Ros1ServiceType, handler: Callable[[Any], Any]) -> None:
+        """Serve ``service`` to ROS 1 clients (ROSRPC): ``handler(request)`` returns the response."""
+        with self._lock:
+            self._services[service] = (kind, handler)
+        self._call_master("registerService", service, f"rosrpc://{self.host}:{self.tcpros_port}", self.uri)
+
+    def call_service(self, service: str, kind: Ros1ServiceType, request: Any, timeout: float = 10.0) -> Any:
+        """Call a ROS 1 service once (a fresh connection, as rospy's default) and return the response."""
+        uri = self._call_master("lookupService", service, retry_for=0.0)
+        host, _, port = str(uri).removeprefix("rosrpc://").rstrip("/").rpartition(":")
+        peer = f"ROS 1 service {service} at {uri}"
+        try:
+            with socket.create_connection((host, int(port)), timeout=timeout) as sock:
+                _configure(sock)
+                sock.sendall(encode_header({"callerid": self.name, "service": service, "md5sum": kind.md5,
+                                            "persistent": "0"}))
+                fields = read_header(sock, peer)
+                require(fields, ("md5sum",), peer)
+                if fields["md5sum"] not in (kind.md5, "*"):
+                    raise ProtocolError(f"{service}: {peer} serves {fields.get('type', '?')} (md5 {fields['md5sum']}), "
+                                        f"this node calls {kind.name} (md5 {kind.md5})")
+                payload = kind.request.serialize(request)
+                sock.sendmsg([_FRAME.pack(len(payload)), payload])
+                ok = _receive_exactly(sock, 1)[0]
+                (length,) = _FRAME.unpack(_receive_exactly(sock, 4))
+                if length > MAX_FRAME:
+                    raise ProtocolError(f"{peer}: a reply announces {length} bytes (more than {MAX_FRAME})")
+                body = _receive_exactly(sock, length)
+        except TimeoutError:
+            raise ServiceTimeoutError(f"ROS 1 service {service} did not answer within {timeout:g} s") from None
+        except OSError as exc:
+            raise TransportError(f"calling {peer} failed: {exc}") from None
+        if not ok:
+            raise TransportError(f"ROS 1 service {service} failed: {body.decode(errors='replace')}")
+        return kind.response.deserialize(body)
+
     # -- TCPROS server ---------------------------------------------------------------------
 
     def _accept(self) -> None:
@@ -291,6 +328,9 @@ class Ros1Peer:
         try:
             sock.settimeout(_CALL_TIMEOUT)
             fields = read_header(sock, peer)
+            if "service" in fields:
+                self._serve(sock, fields, address)
+                return
             require(fields, ("callerid", "topic", "md5sum", "type"), peer)
             peer = f"ROS 1 subscriber {fields['callerid']} ({address})"
             with self._lock:
@@ -308,7 +348,7 @@ class Ros1Peer:
             }))
             sock.settimeout(None)
             publication._add(sock, fields["callerid"])
-        except ProtocolError as exc:
+        except (ProtocolError, SerializationError) as exc:
             log.error("%s; disconnected", exc)
             try:
                 sock.sendall(encode_header({"error": str(exc)}))
@@ -317,6 +357,48 @@ class Ros1Peer:
             sock.close()
         except OSError as exc:
             log.info("%s: %s", peer, exc)
+            sock.close()
+
+    def _serve(self, sock: socket.socket, fields: dict[str, str], address: str) -> None:
+        """One ROSRPC connection: answer its header, then each request until the client closes."""
+        peer = f"ROS 1 client {fields.get('callerid', '?')} ({address})"
+        require(fields, ("callerid", "service", "md5sum"), peer)
+        service = fields["service"]
+        with self._lock:
+            entry = self._services.get(service)
+        if entry is None:
+            raise ProtocolError(f"{peer} asked for service {service}, which this node does not serve")
+        kind, handler = entry
+        if fields["md5sum"] not in (kind.md5, "*"):
+            raise ProtocolError(f"{service}: {peer} calls {fields.get('type', '?')} (md5 {fields['md5sum']}), "
+                                f"this node serves {kind.name} (md5 {kind.md5})")
+        _configure(sock)
+        sock.sendall(encode_header({"callerid": self.name, "md5sum": kind.md5, "type": kind.name,
+                                    "request_type": kind.request_name, "response_type": kind.response_name}))
+        if fields.get("probe") == "1":
+            sock.close()
+            return
+        sock.settimeout(None)
+        try:
+            while True:
+                try:
+                    prefix = _receive_exactly(sock, 4)
+                except ConnectionError:
+                    return  # the client is done
+                (length,) = _FRAME.unpack(prefix)
+                if length > MAX_FRAME:
+                    raise ProtocolError(f"{peer}: a request announces {length} bytes (more than {MAX_FRAME})")
+                request = kind.request.deserialize(_receive_exactly(sock, length))
+                try:
+                    payload = kind.response.serialize(handler(request))
+                    sock.sendmsg([b"\x01", _FRAME.pack(len(payload)), payload])
+                except (ProtocolError, OSError):
+                    raise
+                except Exception as exc:  # the handler's failure goes back to the caller, as in ROS 1
+                    log.error("service %s failed for %s: %s", service, peer, exc)
+                    text = f"{type(exc).__name__}: {exc}".encode()
+                    sock.sendmsg([b"\x00", _FRAME.pack(len(text)), text])
+        finally:
             sock.close()
 
     def close(self) -> None:
@@ -329,6 +411,11 @@ class Ros1Peer:
         for topic, subscription in list(self._subscriptions.items()):
             self._unregister("unregisterSubscriber", topic)
             subscription.close()
+        for service in list(self._services):
+            try:
+                self._master.unregisterService(self.name, service, f"rosrpc://{self.host}:{self.tcpros_port}")
+            except (OSError, xmlrpc.client.Error):
+                pass
         self._slave.shutdown()
         self._slave.server_close()
         self._tcpros.close()

@@ -14,6 +14,7 @@ definitions come from rosbags. Between the two, fields map by name, recursively:
 
 from __future__ import annotations
 
+import hashlib
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -27,6 +28,8 @@ from ..._errors import SerializationError, UnknownTypeError
 from ...msg import TypeRegistry, freeze, normalize_typename
 
 Convert = Callable[[Any], Any]
+# ROS 2 gives an empty message this field; ROS 1 has none
+_PLACEHOLDER = "structure_needs_at_least_one_member"
 
 _store: Typestore | None = None
 _store_lock = threading.Lock()
@@ -50,10 +53,10 @@ def ros1_name(typename: str) -> str:
 class Ros1Type:
     """One message type as both sides know it, with the converters between them."""
 
-    def __init__(self, types: TypeRegistry, typename: str) -> None:
+    def __init__(self, types: TypeRegistry, typename: str, store: Typestore | None = None) -> None:
         self.typename = normalize_typename(typename)
         self.name = ros1_name(self.typename)
-        store = ros1_store()
+        store = store or ros1_store()
         if self.typename not in store.fielddefs:
             raise UnknownTypeError(
                 f"{self.typename} has no ROS 1 definition (rosbags' ROS 1 Noetic store lacks it): a topic of this "
@@ -91,6 +94,8 @@ def _converter(types: TypeRegistry, store: Typestore, typename: str, outgoing: b
     ros2_fields: dict[str, Any] = {}
     attrs: dict[str, str] = {}
     for (name, desc), attr in zip(ros2_defs.items(), ros2_cls.__fieldnames__, strict=True):
+        if name == _PLACEHOLDER:
+            continue
         # ROS 2 lower-cased some field names (CameraInfo's D, K, R, P): a unique match ignoring case
         ros1 = name if name in ros1_fields else by_lower.get(name.lower())
         if ros1 is None:
@@ -177,3 +182,64 @@ def _describe(desc: Any) -> str:
     kind, arg = desc
     return {Nodetype.BASE: f"a {arg[0]}" if kind == Nodetype.BASE else "", Nodetype.NAME: f"a {arg}",
             Nodetype.ARRAY: "a fixed array", Nodetype.SEQUENCE: "a sequence"}.get(kind, str(kind))
+
+
+def md5_text(store: Typestore, typename: str) -> str:
+    """ROS 1's md5 text of a type: constants, then fields with nested types replaced by their md5.
+
+    ``md5(md5_text(...))`` is the type's md5sum; a service's md5sum hashes its request's text
+    followed by its response's. ``tests/unit/test_ros1_types.py`` holds it against rosbags' md5
+    of every ROS 1 type.
+    """
+    consts, fields = store.fielddefs[typename]
+    lines = [f"{kind} {name}={value}" for name, kind, value in consts]
+    for name, desc in fields:
+        if name == _PLACEHOLDER:
+            continue
+        lines.append(f"{_md5_field_type(store, desc)} {name}")
+    return "\n".join(lines)
+
+
+def _md5_field_type(store: Typestore, desc: Any) -> str:
+    kind, arg = desc
+    if kind == Nodetype.BASE:
+        base, bound = arg
+        return f"string<={bound}" if base == "string" and bound else base
+    if kind == Nodetype.NAME:
+        return _TIME_TYPES.get(arg) or hashlib.md5(md5_text(store, arg).encode()).hexdigest()
+    sub, length = arg
+    count = "" if not length else (str(length) if kind == Nodetype.ARRAY else f"<={length}")
+    if sub[0] == Nodetype.BASE:
+        return f"{_md5_field_type(store, sub)}[{count}]"
+    if sub[1] in _TIME_TYPES:
+        return f"{_TIME_TYPES[sub[1]]}[{count}]"
+    return _md5_field_type(store, sub)  # ROS 1 hashes an array of messages as the element's md5 alone
+
+
+_TIME_TYPES = {"builtin_interfaces/msg/Time": "time", "builtin_interfaces/msg/Duration": "duration"}
+
+
+class Ros1ServiceType:
+    """A hetros service type as ROS 1 knows it: request and response types and the service md5sum.
+
+    rosbags has no ROS 1 services, so the request and response are registered in a copy of
+    the ROS 1 store from hetros' definitions, their nested types resolved against ROS 1's.
+    """
+
+    def __init__(self, types: TypeRegistry, name: str) -> None:
+        service = types.get_service(name)
+        self.typename = service.name
+        self.name = ros1_name(normalize_typename(service.name, "srv"))
+        parts = {f"{self.typename}_Request": types.store.fielddefs[f"{self.typename}_Request"],
+                 f"{self.typename}_Response": types.store.fielddefs[f"{self.typename}_Response"]}
+        extended = get_typestore(Stores.ROS1_NOETIC)
+        try:
+            extended.register({part: fielddefs for part, fielddefs in parts.items()})
+        except Exception as exc:  # rosbags refuses definitions that name unknown ROS 1 types
+            raise UnknownTypeError(f"{self.typename} cannot be mapped to ROS 1: {exc}") from None
+        self.request = Ros1Type(types, f"{self.typename}_Request", extended)
+        self.response = Ros1Type(types, f"{self.typename}_Response", extended)
+        request, response = (md5_text(extended, part) for part in parts)
+        self.md5 = hashlib.md5((request + response).encode()).hexdigest()
+        self.request_name = f"{self.name}Request"
+        self.response_name = f"{self.name}Response"

@@ -1,0 +1,65 @@
+"""hetros types as ROS 1 knows them: md5sums, definitions, the field mapping, services."""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+import pytest
+
+from hetros import UnknownTypeError
+from hetros.msg import TypeRegistry
+from hetros.transport.tcpros import Ros1Type
+from hetros.transport.tcpros._types import Ros1ServiceType, md5_text, ros1_store
+
+TYPES = TypeRegistry()
+
+
+def test_md5_text_gives_rosbags_md5_for_every_ros1_type() -> None:
+    store = ros1_store()
+    for name in store.fielddefs:
+        assert hashlib.md5(md5_text(store, name).encode()).hexdigest() == store.generate_msgdef(
+            name, ros_version=1)[1], name
+
+
+@pytest.mark.parametrize(("typename", "md5"), [
+    ("std_msgs/msg/String", "992ce8a1687cec8c8bd883ec73ca41d1"),
+    ("sensor_msgs/msg/Image", "060021388200f6f0f447d0fcd9c64743"),
+    ("sensor_msgs/msg/CameraInfo", "c9a58c1b0b154e0e6da7578cb991d214"),
+    ("geometry_msgs/msg/Twist", "9f195f881246fdfa2798d1d3eebca84a"),
+])
+def test_message_md5s_are_stock_ros1s(typename: str, md5: str) -> None:
+    assert Ros1Type(TYPES, typename).md5 == md5
+
+
+@pytest.mark.parametrize(("service", "md5"), [
+    ("std_srvs/srv/SetBool", "09fb03525b03e7ea1fd3992bafd87e16"),
+    ("std_srvs/srv/Trigger", "937c9679a518e3a18d831e57125ea522"),
+    ("std_srvs/srv/Empty", "d41d8cd98f00b204e9800998ecf8427e"),
+    ("example_interfaces/srv/AddTwoInts", "6a2e34150c00229791cc89ff309fff21"),
+])
+def test_service_md5s_are_stock_ros1s(service: str, md5: str) -> None:
+    kind = Ros1ServiceType(TYPES, service)
+    assert kind.md5 == md5
+    request = TYPES.get_service(service).Request()
+    assert kind.request.deserialize(kind.request.serialize(request)) == request
+
+
+def test_header_seq_is_zero_going_out_and_dropped_coming_in() -> None:
+    kind = Ros1Type(TYPES, "std_msgs/msg/Header")
+    header = TYPES.get("std_msgs/msg/Header")(frame_id="map")
+    header.stamp.sec, header.stamp.nanosec = 3, 4
+    data = kind.serialize(header)
+    assert data[:12] == bytes(4) + (3).to_bytes(4, "little") + (4).to_bytes(4, "little")  # seq, secs, nsecs
+    assert kind.deserialize(data) == header
+
+
+def test_lower_cased_ros2_fields_map_to_ros1s_upper_case() -> None:
+    kind = Ros1Type(TYPES, "sensor_msgs/msg/CameraInfo")
+    info = TYPES.get("sensor_msgs/msg/CameraInfo")(d=np.array([0.1, 0.2]), distortion_model="plumb_bob")
+    assert kind.deserialize(kind.serialize(info)) == info
+
+
+def test_types_ros1_lacks_are_refused_naming_why() -> None:
+    with pytest.raises(UnknownTypeError, match=r"example_interfaces/msg/String has no ROS 1 definition"):
+        Ros1Type(TYPES, "example_interfaces/msg/String")

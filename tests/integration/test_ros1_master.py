@@ -8,6 +8,8 @@ import time
 import xmlrpc.client
 from pathlib import Path
 
+import pytest
+
 from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, needs_ros1, run_ros
 
 pytestmark = needs_ros1
@@ -68,3 +70,33 @@ def test_a_taken_port_is_refused_with_what_to_do(master: tuple[str, dict[str, st
     assert proc.returncode != 0
     assert f"cannot serve a ROS master on 127.0.0.1:{port}" in proc.stderr
     assert "choose another --port" in proc.stderr
+
+
+ROSOUT = Path("/usr/lib/rosout/rosout")
+LOGGER = """
+import rospy
+rospy.init_node("chatty")
+rate = rospy.Rate(10)
+while not rospy.is_shutdown():
+    rospy.loginfo("hello from rospy")
+    rate.sleep()
+"""
+
+
+def test_a_roscpp_node_works_against_hetros_master(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    """Debian's rosout is a roscpp node: it registers, subscribes to /rosout and republishes."""
+    if not ROSOUT.exists():
+        pytest.skip("Debian's rosout (roscpp) is not installed")
+    _uri, env = master
+    (tmp_path / "chatty.py").write_text(LOGGER)
+    rosout = subprocess.Popen([str(ROSOUT)], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    chatty = subprocess.Popen([ROS_PYTHON, str(tmp_path / "chatty.py")], env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        echoed = run_ros(env, "rostopic", "echo", "-n", "1", "/rosout_agg", timeout=60)
+        assert "hello from rospy" in echoed and "/chatty" in echoed
+        assert "/rosout" in run_ros(env, "rosnode", "list").split()
+    finally:
+        for proc in (chatty, rosout):
+            proc.terminate()
+            proc.wait(10)

@@ -106,3 +106,31 @@ def test_a_type_ros1_does_not_know_is_refused_by_check(tmp_path: Path) -> None:
     with pytest.raises(CheckError, match=r"external\.ros1\.export\.0.*example_interfaces/msg/String has no ROS 1 "
                                          r"definition"):
         plan(load_project(project))
+
+
+@needs_ros1
+def test_ros1_parameters_reach_node_get_parameter(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = master
+    from tests.support.ros1 import run_ros
+
+    run_ros(env, "rosparam", "set", "/robot/speed", "2.5")
+    run_ros(env, "rosparam", "set", "/reader/gain", "7")
+    (tmp_path / "params.py").write_text(textwrap.dedent('''
+        import json
+
+        def reader(node):
+            values = [node.get_parameter("/robot/speed"), node.get_parameter("~gain"),
+                      node.get_parameter("local"), node.get_parameter("missing", "fallback")]
+            with open(node.get_parameter("out"), "w") as out:
+                json.dump(values, out)
+    '''))
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+        name: params_demo
+        nodes:
+          reader: {{run: params:reader, target: main, parameters: {{local: 1, out: {tmp_path / "values.json"}}}}}
+        external:
+          ros1: {{master: '{uri}'}}
+    """))
+    done = subprocess.run([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"), "--duration", "5"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=60, check=False)
+    assert (tmp_path / "values.json").read_text() == "[2.5, 7, 1, \"fallback\"]", done.stdout + done.stderr

@@ -77,6 +77,8 @@ class Plan:
     nodes: dict[str, NodePlan]
     channels: dict[str, ChannelPlan]
     edges: tuple[EdgePlan, ...]
+    # the ROS 1 master of `external: ros1:` ("" without one): parameters not in the project come from it
+    ros1_master: str = ""
 
     def process_of(self, node: str) -> str:
         """Threads share the launcher's process (called 'launcher'); others run alone."""
@@ -110,6 +112,7 @@ class Plan:
                 for k, v in raw["channels"].items()
             },
             edges=tuple(EdgePlan(**e) for e in raw["edges"]),
+            ros1_master=raw.get("ros1_master", ""),
         )
 
 

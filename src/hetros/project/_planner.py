@@ -361,7 +361,7 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
         declared.update(node.types("subscribe"))
     exports = {t: normalize_typename(declared[t]) for t in spec.export}
     imports = {t: normalize_typename(declared[t]) for t in spec.import_}
-    parameters = {"master": spec.master or os.environ.get("ROS_MASTER_URI", "http://127.0.0.1:11311/"),
+    parameters = {"master": _ros1_master(project),
                   "host": spec.host, "export": exports, "import": imports, "ros1_name": f"/{model.name}_hetros"}
     return NodePlan(ROS1_BRIDGE, "hetros.launch._ros1_bridge:bridge", ROS1_BRIDGE, parameters,
                     publish=imports, subscribe=exports)
@@ -423,7 +423,15 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         } | ({ROS1_BRIDGE: bridge} if bridge is not None else {}),
         channels=channels,
         edges=edges,
+        ros1_master=_ros1_master(project),
     )
+
+
+def _ros1_master(project: LoadedProject) -> str:
+    external = project.model.external
+    if external is None or external.ros1 is None:
+        return ""
+    return external.ros1.master or os.environ.get("ROS_MASTER_URI", "http://127.0.0.1:11311/")
 
 
 def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, project: LoadedProject,

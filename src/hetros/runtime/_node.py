@@ -458,12 +458,23 @@ class Node:
     # -- parameters ------------------------------------------------------------------------
 
     def get_parameter(self, name: str, default: Any = _MISSING) -> Any:
+        """The project file's parameter ``name``; else, with ``external: ros1:``, the ROS 1 parameter
+        server's (``/global``, ``relative`` to ``/``, ``~private`` to this node); else ``default``."""
         if name in self._parameters:
             return self._parameters[name]
+        master = self.graph.plan.ros1_master if self.graph.plan is not None else ""
+        if master:
+            from ..transport.tcpros import get_ros1_parameter
+
+            try:
+                return get_ros1_parameter(master, "/" + self.name, name)
+            except KeyError:
+                pass
         if default is not _MISSING:
             return default
+        elsewhere = f" nor on the ROS 1 parameter server at {master}" if master else ""
         raise ParameterError(
-            f"node {self.name!r} has no parameter {name!r}: declare it under "
+            f"node {self.name!r} has no parameter {name!r}{elsewhere}: declare it under "
             f"nodes.{self.name}.parameters.{name} in the project file, or pass a default"
         )
 

@@ -55,6 +55,21 @@ def _proxy(uri: str) -> Any:
     return xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(), allow_none=True)
 
 
+def get_ros1_parameter(master_uri: str, caller_id: str, key: str) -> Any:
+    """A parameter from a ROS 1 parameter server (``~x`` is private to ``caller_id``); KeyError if unset."""
+    if key.startswith("~"):
+        key = caller_id.rstrip("/") + "/" + key[1:]
+    elif not key.startswith("/"):
+        key = "/" + key
+    try:
+        code, _message, value = _proxy(master_uri).getParam(caller_id, key)
+    except (OSError, xmlrpc.client.Error) as exc:
+        raise TransportError(f"the ROS master at {master_uri} is unreachable ({exc}); cannot read {key}") from None
+    if code != 1:
+        raise KeyError(key)
+    return value
+
+
 def _receive_exactly(sock: socket.socket, size: int) -> bytes:
     buffer = bytearray(size)
     view = memoryview(buffer)

@@ -134,3 +134,36 @@ def test_ros1_parameters_reach_node_get_parameter(master: tuple[str, dict[str, s
     done = subprocess.run([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"), "--duration", "5"],
                           cwd=tmp_path, capture_output=True, text=True, timeout=60, check=False)
     assert (tmp_path / "values.json").read_text() == "[2.5, 7, 1, \"fallback\"]", done.stdout + done.stderr
+
+
+@needs_ros1
+def test_a_transient_local_topic_is_latched_for_late_ros1_subscribers(master: tuple[str, dict[str, str]],
+                                                                       tmp_path: Path) -> None:
+    uri, env = master
+    from tests.support.ros1 import run_ros
+
+    (tmp_path / "mapper.py").write_text(textwrap.dedent('''
+        from hetros.interfaces.std_msgs.msg import String
+
+        def mapper(node):
+            node.create_publisher(String, "/map").publish(String(data="the map"))
+            node.spin()
+    '''))
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+        name: latch_demo
+        nodes:
+          mapper: {{run: mapper:mapper, target: main, publish: {{/map: std_msgs/msg/String}}}}
+        topics:
+          /map: {{durability: transient_local, depth: 1}}
+        external:
+          ros1: {{master: '{uri}', export: [/map]}}
+    """))
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"),
+                               "--duration", "30"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              text=True)
+    try:
+        time.sleep(4)  # published long before the ROS 1 subscriber exists
+        assert 'data: "the map"' in run_ros(env, "rostopic", "echo", "-n", "1", "/map", timeout=60)
+    finally:
+        launch.terminate()
+        launch.communicate(timeout=30)

@@ -20,8 +20,9 @@ def bridge(node: Node) -> None:
     try:
         exports: dict[str, str] = node.get_parameter("export")
         imports: dict[str, str] = node.get_parameter("import")
+        latched = set(node.get_parameter("latch", []))
         for topic, typename in exports.items():
-            outgoing = peer.advertise(topic, Ros1Type(types, typename))
+            outgoing = peer.advertise(topic, Ros1Type(types, typename), latch=topic in latched)
             node.create_subscription(types.get(typename), topic, outgoing.publish)
         for topic, typename in imports.items():
             publisher = node.create_publisher(types.get(typename), topic)

@@ -361,8 +361,10 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
         declared.update(node.types("subscribe"))
     exports = {t: normalize_typename(declared[t]) for t in spec.export}
     imports = {t: normalize_typename(declared[t]) for t in spec.import_}
-    parameters = {"master": _ros1_master(project),
-                  "host": spec.host, "export": exports, "import": imports, "ros1_name": f"/{model.name}_hetros"}
+    # ROS 1 latching is ROS 2's transient_local: a late subscriber gets the last message
+    latched = [t for t in spec.export if (q := model.topics.get(t)) is not None and q.keeps_history]
+    parameters = {"master": _ros1_master(project), "host": spec.host, "export": exports, "import": imports,
+                  "latch": latched, "ros1_name": f"/{model.name}_hetros"}
     return NodePlan(ROS1_BRIDGE, "hetros.launch._ros1_bridge:bridge", ROS1_BRIDGE, parameters,
                     publish=imports, subscribe=exports)
 

@@ -92,6 +92,9 @@ def test_exported_and_imported_topics_reach_stock_rospy(master: tuple[str, dict[
     ("ros1: {import: [/chatter]}", r"external\.ros1\.import\.0.*/chatter has no hetros subscriber to import"),
     ("ros1: {master: 'localhost:11311'}", r"master must be a URI like 'http://127.0.0.1:11311/'"),
     ("ros2: {}", r"external\.ros2.*bridges to ROS 2 graphs are not implemented yet"),
+    ("ros1: {export_services: [/none]}", r"external\.ros1\.export_services\.0.*/none has no hetros server to export"),
+    ("ros1: {import_services: [/none]}", r"external\.ros1\.import_services\.0.*/none has no hetros client to "
+                                         r"import"),
 ])
 def test_bad_ros1_sections_are_refused_by_check(tmp_path: Path, external: str, expected: str) -> None:
     project = _project(tmp_path, external)
@@ -167,3 +170,62 @@ def test_a_transient_local_topic_is_latched_for_late_ros1_subscribers(master: tu
     finally:
         launch.terminate()
         launch.communicate(timeout=30)
+
+
+SERVICE_NODES = textwrap.dedent('''
+    import time
+    from hetros.interfaces.std_srvs.srv import SetBool
+
+    def toggle(node):
+        node.create_service(SetBool, "/hetros_toggle",
+                            lambda request: SetBool.Response(success=request.data, message="hetros answers"))
+        node.spin()
+
+    def caller(node):
+        client = node.create_client(SetBool, "/ros1_toggle")
+        response = client.call(SetBool.Request(data=True), timeout=20.0)
+        with open(node.get_parameter("out"), "w") as out:
+            out.write(f"{response.success} {response.message}")
+        node.spin()
+''')
+
+
+@needs_ros1
+def test_services_are_exported_to_and_imported_from_ros1(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = master
+    from tests.integration.test_ros1_tcpros import ROS1_SERVER
+    from tests.support.ros1 import run_ros
+
+    (tmp_path / "services.py").write_text(SERVICE_NODES)
+    (tmp_path / "server.py").write_text(ROS1_SERVER)
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+        name: services_demo
+        targets: {{main: {{kind: thread}}, worker: {{kind: process}}}}
+        nodes:
+          toggle: {{run: services:toggle, target: worker, services: {{/hetros_toggle: std_srvs/srv/SetBool}}}}
+          caller: {{run: services:caller, target: main, parameters: {{out: {tmp_path / "answer.txt"}}},
+                   clients: {{/ros1_toggle: std_srvs/srv/SetBool}}}}
+        external:
+          ros1: {{master: '{uri}', export_services: [/hetros_toggle], import_services: [/ros1_toggle]}}
+    """))
+    server = subprocess.Popen([ROS_PYTHON, str(tmp_path / "server.py")], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+    run_ros(env, ROS_PYTHON, "-c", "import rospy; rospy.wait_for_service('/ros1_toggle', 20)")
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"),
+                               "--duration", "30"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              text=True)
+    try:
+        run_ros(env, ROS_PYTHON, "-c", "import rospy; rospy.wait_for_service('/hetros_toggle', 20)")
+        called = run_ros(env, "rosservice", "call", "/hetros_toggle", "data: true")
+        assert "success: True" in called and "hetros answers" in called
+        answer = tmp_path / "answer.txt"
+        deadline = time.monotonic() + 20
+        while not answer.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert answer.read_text() == "True ros1 True"
+    finally:
+        launch.terminate()
+        out, _ = launch.communicate(timeout=30)
+        server.terminate()
+        server.wait(10)
+    assert "exports /hetros_toggle, imports /ros1_toggle" in out, out

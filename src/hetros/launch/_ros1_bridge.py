@@ -8,9 +8,12 @@ ones come in on TCPROS and are published into the graph.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 from ..msg import registry
 from ..runtime import Node
-from ..transport.tcpros import Ros1Peer, Ros1Type
+from ..transport.tcpros import Ros1Peer, Ros1ServiceType, Ros1Type
 
 
 def bridge(node: Node) -> None:
@@ -27,8 +30,27 @@ def bridge(node: Node) -> None:
         for topic, typename in imports.items():
             publisher = node.create_publisher(types.get(typename), topic)
             peer.subscribe(topic, Ros1Type(types, typename), publisher.publish)
+        export_services: dict[str, str] = node.get_parameter("export_services", {})
+        import_services: dict[str, str] = node.get_parameter("import_services", {})
+        for service, typename in export_services.items():
+            client = node.create_client(types.get_service(typename), service)
+            peer.advertise_service(service, Ros1ServiceType(types, typename), client.call)
+        for service, typename in import_services.items():
+            node.create_service(types.get_service(typename), service,
+                                _forward(peer, service, Ros1ServiceType(types, typename)))
+        exported = [*exports, *export_services]
+        imported = [*imports, *import_services]
         node.log.info("ROS 1 bridge %s at %s: exports %s, imports %s", peer.name, peer.master_uri,
-                               ", ".join(exports) or "nothing", ", ".join(imports) or "nothing")
+                      ", ".join(exported) or "nothing", ", ".join(imported) or "nothing")
         node.spin()
     finally:
         peer.close()
+
+
+def _forward(peer: Ros1Peer, service: str, kind: Ros1ServiceType) -> Callable[[Any], Any]:
+    """A hetros service handler that calls the ROS 1 service of the same name."""
+
+    def call(request: Any) -> Any:
+        return peer.call_service(service, kind, request)
+
+    return call

@@ -81,6 +81,8 @@ class Ros1Spec(_Strict):
     host: str = "127.0.0.1"
     export: list[str] = Field(default_factory=list)
     import_: list[str] = Field(default_factory=list, alias="import")
+    export_services: list[str] = Field(default_factory=list)
+    import_services: list[str] = Field(default_factory=list)
 
     @field_validator("master")
     @classmethod

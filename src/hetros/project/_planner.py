@@ -142,8 +142,9 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             users = ", ".join(f"{n}: {t}" for n, t in publishers.get(topic, []) + subscribers.get(topic, []))
             report.errors.append(f"{where('nodes')}: topic {topic} is declared with different types "
                                  f"({users}); one topic carries one type")
+    imported_services = set(ros1.import_services) if ros1 is not None else set()
     for service, calling in clients.items():
-        if service not in servers:
+        if service not in servers and service not in imported_services:
             for nname, _ in calling:
                 report.errors.append(f"{where('nodes', nname, 'clients', service)}: no node serves "
                                      f"{service}; add it under some node's 'services'")
@@ -167,7 +168,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     _check_shm_budget(project, types, publishers, subscribers, report)
     _check_sources(project, report)
     if model.external is not None and model.external.ros1 is not None:
-        _check_ros1(project, model.external.ros1, publishers, subscribers, types, report)
+        _check_ros1(project, model.external.ros1, publishers, subscribers, servers, clients, types, report)
     return report
 
 
@@ -323,9 +324,11 @@ ROS1_BRIDGE = "hetros_ros1_bridge"
 
 
 def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, list[tuple[str, str]]],
-                subscribers: dict[str, list[tuple[str, str]]], types: TypeRegistry, report: CheckReport) -> None:
-    """Exported topics need hetros publishers, imported ones hetros subscribers; both a ROS 1 type."""
-    from ..transport.tcpros import Ros1Type
+                subscribers: dict[str, list[tuple[str, str]]], servers: dict[str, list[tuple[str, str]]],
+                clients: dict[str, list[tuple[str, str]]], types: TypeRegistry, report: CheckReport) -> None:
+    """Exported topics and services need hetros publishers or servers, imported ones subscribers
+    or clients; every type must be one ROS 1 can carry."""
+    from ..transport.tcpros import Ros1ServiceType, Ros1Type
 
     where = project.where
     if ROS1_BRIDGE in project.model.nodes or ROS1_BRIDGE in project.model.targets:
@@ -347,13 +350,31 @@ def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, li
                 Ros1Type(types, endpoints[0][1])
             except (UnknownTypeError, DefinitionError) as exc:
                 report.errors.append(f"{here}: {exc}")
+    for section, table, needs, other in (("export_services", servers, "server", clients),
+                                         ("import_services", clients, "client", servers)):
+        for index, service in enumerate(getattr(spec, section)):
+            here = where("external", "ros1", section, index)
+            endpoints = table.get(service)
+            if not endpoints:
+                report.errors.append(f"{here}: {service} has no hetros {needs} to "
+                                     f"{section.split('_')[0]} for; declare one under a node's "
+                                     f"{'services' if needs == 'server' else 'clients'}")
+                continue
+            if section == "import_services" and service in other:
+                report.errors.append(f"{here}: {service} is served by a hetros node already; import it from "
+                                     "ROS 1 or serve it here, not both")
+                continue
+            try:
+                Ros1ServiceType(types, endpoints[0][1])
+            except (UnknownTypeError, DefinitionError) as exc:
+                report.errors.append(f"{here}: {exc}")
 
 
 def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
     """The node that carries exported and imported topics across (in the launcher's process)."""
     model = project.model
     spec = model.external.ros1 if model.external is not None else None
-    if spec is None or not (spec.export or spec.import_):
+    if spec is None or not (spec.export or spec.import_ or spec.export_services or spec.import_services):
         return None
     declared: dict[str, str] = {}
     for node in model.nodes.values():
@@ -361,12 +382,19 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
         declared.update(node.types("subscribe"))
     exports = {t: normalize_typename(declared[t]) for t in spec.export}
     imports = {t: normalize_typename(declared[t]) for t in spec.import_}
+    served: dict[str, str] = {}
+    for node in model.nodes.values():
+        served.update(node.services)
+        served.update(node.clients)
+    export_services = {s: normalize_typename(served[s], "srv") for s in spec.export_services}
+    import_services = {s: normalize_typename(served[s], "srv") for s in spec.import_services}
     # ROS 1 latching is ROS 2's transient_local: a late subscriber gets the last message
     latched = [t for t in spec.export if (q := model.topics.get(t)) is not None and q.keeps_history]
     parameters = {"master": _ros1_master(project), "host": spec.host, "export": exports, "import": imports,
-                  "latch": latched, "ros1_name": f"/{model.name}_hetros"}
+                  "latch": latched, "ros1_name": f"/{model.name}_hetros",
+                  "export_services": export_services, "import_services": import_services}
     return NodePlan(ROS1_BRIDGE, "hetros.launch._ros1_bridge:bridge", ROS1_BRIDGE, parameters,
-                    publish=imports, subscribe=exports)
+                    publish=imports, subscribe=exports, services=import_services, clients=export_services)
 
 
 def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
@@ -380,29 +408,29 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         n: process_name(s.target, model.targets[s.target].kind) for n, s in model.nodes.items()
     }
     bridge = _ros1_bridge(project)
-    channels: dict[str, ChannelPlan] = {}
-    for nname, spec in model.nodes.items():
-        for topic, typename in spec.types("publish").items():
-            _add(channels, topic, normalize_typename(typename), "topic", project, pub=nname)
-        for topic, typename in spec.types("subscribe").items():
-            _add(channels, topic, normalize_typename(typename), "topic", project, sub=nname)
+    # every node's endpoints, the ROS 1 bridge's too: (name, publish, subscribe, services, clients)
+    endpoints = [(n, spec.types("publish"), spec.types("subscribe"), dict(spec.services), dict(spec.clients))
+                 for n, spec in model.nodes.items()]
     if bridge is not None:
         process_of[bridge.name] = LAUNCHER
-        for topic, typename in bridge.publish.items():
-            _add(channels, topic, typename, "topic", project, pub=bridge.name)
-        for topic, typename in bridge.subscribe.items():
-            _add(channels, topic, typename, "topic", project, sub=bridge.name)
-    for nname, spec in model.nodes.items():
-        for service, typename in spec.services.items():
+        endpoints.append((bridge.name, bridge.publish, bridge.subscribe, bridge.services, bridge.clients))
+    channels: dict[str, ChannelPlan] = {}
+    for nname, publish, subscribe, _services, _clients in endpoints:
+        for topic, typename in publish.items():
+            _add(channels, topic, normalize_typename(typename), "topic", project, pub=nname)
+        for topic, typename in subscribe.items():
+            _add(channels, topic, normalize_typename(typename), "topic", project, sub=nname)
+    for nname, _publish, _subscribe, services, clients in endpoints:
+        for service, typename in services.items():
             srv = normalize_typename(typename, "srv")
             _add(channels, request_channel(service), f"{srv}_Request", "request", project, sub=nname,
                  service=service)
-        for service, typename in spec.clients.items():
+        for service, typename in clients.items():
             srv = normalize_typename(typename, "srv")
             _add(channels, request_channel(service), f"{srv}_Request", "request", project, pub=nname,
                  service=service)
-    for nname, spec in model.nodes.items():
-        for service, typename in spec.clients.items():
+    for nname, _publish, _subscribe, _services, clients in endpoints:
+        for service, typename in clients.items():
             srv = normalize_typename(typename, "srv")
             server = channels[request_channel(service)].subscribers[0]
             name = reply_channel(service, nname)

@@ -2,7 +2,8 @@
 
 from ._master import DEFAULT_PORT, Master, MasterState
 from ._peer import Ros1Peer, Ros1Publication, Ros1Subscription, get_ros1_parameter
-from ._types import Ros1Type, ros1_name
+from ._types import Ros1ServiceType, Ros1Type, ros1_name
 
-__all__ = ["DEFAULT_PORT", "Master", "MasterState", "Ros1Peer", "Ros1Publication", "Ros1Subscription", "Ros1Type",
+__all__ = ["DEFAULT_PORT", "Master", "MasterState", "Ros1Peer", "Ros1Publication", "Ros1ServiceType",
+           "Ros1Subscription", "Ros1Type",
            "get_ros1_parameter", "ros1_name"]

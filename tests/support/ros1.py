@@ -34,10 +34,18 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
-def ros1_master() -> Iterator[tuple[str, dict[str, str]]]:
+ROSMASTER = "/usr/bin/rosmaster"
+
+
+def ros1_master(kind: str = "hetros") -> Iterator[tuple[str, dict[str, str]]]:
+    """A running master on a free port: ``hetros master``, or Debian's ``rosmaster``."""
     port = free_port()
-    proc = subprocess.Popen([sys.executable, "-m", "hetros", "master", "--port", str(port)],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    command = [sys.executable, "-m", "hetros", "master", "--port", str(port)] if kind == "hetros" else \
+        [ROS_PYTHON, ROSMASTER, "--core", "-p", str(port)]
+    ros_env = dict(os.environ, ROS_HOME="/tmp/hetros-test-ros-home")
+    ros_env.pop("PYTHONPATH", None)
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=ros_env if kind != "hetros" else None)
     uri = f"http://127.0.0.1:{port}/"
     deadline = time.monotonic() + 20
     while True:
@@ -47,7 +55,7 @@ def ros1_master() -> Iterator[tuple[str, dict[str, str]]]:
         except OSError:
             if time.monotonic() > deadline or proc.poll() is not None:
                 proc.kill()
-                raise AssertionError(f"hetros master did not come up: {proc.communicate()[0]}") from None
+                raise AssertionError(f"{kind} master did not come up: {proc.communicate()[0]}") from None
             time.sleep(0.1)
     env = dict(os.environ, ROS_MASTER_URI=uri, ROS_HOSTNAME="127.0.0.1", ROS_HOME="/tmp/hetros-test-ros-home")
     env.pop("PYTHONPATH", None)

@@ -61,8 +61,8 @@ def _project(tmp_path: Path, external: str) -> Path:
 
 
 @needs_ros1
-def test_exported_and_imported_topics_reach_stock_rospy(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
-    uri, env = master
+def test_exported_and_imported_topics_reach_stock_rospy(ros_master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = ros_master
     project = _project(tmp_path, f"ros1: {{master: '{uri}', export: [/chatter], import: [/from_ros1]}}")
     launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "25"],
                               cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -112,8 +112,8 @@ def test_a_type_ros1_does_not_know_is_refused_by_check(tmp_path: Path) -> None:
 
 
 @needs_ros1
-def test_ros1_parameters_reach_node_get_parameter(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
-    uri, env = master
+def test_ros1_parameters_reach_node_get_parameter(ros_master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = ros_master
     from tests.support.ros1 import run_ros
 
     run_ros(env, "rosparam", "set", "/robot/speed", "2.5")
@@ -140,9 +140,9 @@ def test_ros1_parameters_reach_node_get_parameter(master: tuple[str, dict[str, s
 
 
 @needs_ros1
-def test_a_transient_local_topic_is_latched_for_late_ros1_subscribers(master: tuple[str, dict[str, str]],
+def test_a_transient_local_topic_is_latched_for_late_ros1_subscribers(ros_master: tuple[str, dict[str, str]],
                                                                        tmp_path: Path) -> None:
-    uri, env = master
+    uri, env = ros_master
     from tests.support.ros1 import run_ros
 
     (tmp_path / "mapper.py").write_text(textwrap.dedent('''
@@ -191,9 +191,10 @@ SERVICE_NODES = textwrap.dedent('''
 
 
 @needs_ros1
-def test_services_are_exported_to_and_imported_from_ros1(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
-    uri, env = master
-    from tests.integration.test_ros1_tcpros import ROS1_SERVER
+def test_services_are_exported_to_and_imported_from_ros1(ros_master: tuple[str, dict[str, str]],
+                                                          tmp_path: Path) -> None:
+    uri, env = ros_master
+    from tests.interop.ros1.test_tcpros import ROS1_SERVER
     from tests.support.ros1 import run_ros
 
     (tmp_path / "services.py").write_text(SERVICE_NODES)

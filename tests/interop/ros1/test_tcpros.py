@@ -51,8 +51,8 @@ def _spawn(script: str, tmp_path: Path, name: str, env: dict[str, str]) -> subpr
                             text=True)
 
 
-def test_hetros_publishes_to_a_rospy_subscriber(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
-    uri, env = master
+def test_hetros_publishes_to_a_rospy_subscriber(ros_master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = ros_master
     peer = Ros1Peer("/hetros_talker", uri)
     publication = peer.advertise("/chatter", Ros1Type(TYPES, "std_msgs/msg/String"))
     stop = threading.Event()
@@ -76,8 +76,8 @@ def test_hetros_publishes_to_a_rospy_subscriber(master: tuple[str, dict[str, str
         peer.close()
 
 
-def test_hetros_receives_from_a_rospy_publisher(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
-    uri, env = master
+def test_hetros_receives_from_a_rospy_publisher(ros_master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+    uri, env = ros_master
     talker = _spawn(TALKER, tmp_path, "talker", env)
     peer = Ros1Peer("/hetros_listener", uri)
     got: list[Any] = []
@@ -91,10 +91,10 @@ def test_hetros_receives_from_a_rospy_publisher(master: tuple[str, dict[str, str
         talker.wait(10)
 
 
-def test_an_image_with_a_header_round_trips_through_stock_rospy(master: tuple[str, dict[str, str]],
+def test_an_image_with_a_header_round_trips_through_stock_rospy(ros_master: tuple[str, dict[str, str]],
                                                                 tmp_path: Path) -> None:
     """ROS 1's Header has seq and ROS 1's Image another md5: the mapping holds against the real thing."""
-    uri, env = master
+    uri, env = ros_master
     echo = _spawn(IMAGE_ECHO, tmp_path, "image_echo", env)
     peer = Ros1Peer("/hetros_camera", uri)
     kind = Ros1Type(TYPES, "sensor_msgs/msg/Image")
@@ -114,9 +114,9 @@ def test_an_image_with_a_header_round_trips_through_stock_rospy(master: tuple[st
         echo.wait(10)
 
 
-def test_a_type_mismatch_is_refused_naming_both_types_and_md5s(master: tuple[str, dict[str, str]], tmp_path: Path,
+def test_a_type_mismatch_is_refused_naming_both_types_and_md5s(ros_master: tuple[str, dict[str, str]], tmp_path: Path,
                                                                caplog: pytest.LogCaptureFixture) -> None:
-    uri, env = master
+    uri, env = ros_master
     peer = Ros1Peer("/hetros_talker", uri)
     publication = peer.advertise("/numbers", Ros1Type(TYPES, "std_msgs/msg/String"))
     wrong = textwrap.dedent("""
@@ -137,9 +137,9 @@ def test_a_type_mismatch_is_refused_naming_both_types_and_md5s(master: tuple[str
     peer.close()
 
 
-def test_a_peer_sending_garbage_is_dropped_and_the_node_goes_on(master: tuple[str, dict[str, str]], tmp_path: Path,
+def test_a_peer_sending_garbage_is_dropped_and_the_node_goes_on(ros_master: tuple[str, dict[str, str]], tmp_path: Path,
                                                                  caplog: pytest.LogCaptureFixture) -> None:
-    uri, env = master
+    uri, env = ros_master
     peer = Ros1Peer("/hetros_talker", uri)
     publication = peer.advertise("/chatter", Ros1Type(TYPES, "std_msgs/msg/String"))
     with caplog.at_level(logging.ERROR, logger="hetros.ros1"):
@@ -192,7 +192,7 @@ def test_a_master_that_is_down_at_start_is_retried(caplog: pytest.LogCaptureFixt
 def test_the_readme_example_runs() -> None:
     from hetros.transport.tcpros import Master
 
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    readme = (Path(__file__).resolve().parents[3] / "README.md").read_text()
     block = readme.split("## ROS 1", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
     running = Master("127.0.0.1", free_port())
     namespace: dict[str, Any] = {}
@@ -226,10 +226,10 @@ ROS1_CLIENT = textwrap.dedent("""
 """)
 
 
-def test_services_both_ways_with_rospy(master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
+def test_services_both_ways_with_rospy(ros_master: tuple[str, dict[str, str]], tmp_path: Path) -> None:
     from hetros.transport.tcpros._types import Ros1ServiceType
 
-    uri, env = master
+    uri, env = ros_master
     SetBool = TYPES.get_service("std_srvs/srv/SetBool")
     kind = Ros1ServiceType(TYPES, "std_srvs/srv/SetBool")
     server = _spawn(ROS1_SERVER, tmp_path, "server", env)

@@ -343,9 +343,6 @@ def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, li
                 report.errors.append(f"{here}: {topic} has no hetros {needs} to {section} for; declare one "
                                      f"under a node's {'publish' if needs == 'publisher' else 'subscribe'}")
                 continue
-            if topic in spec.export and topic in spec.import_:
-                report.errors.append(f"{here}: {topic} is both exported and imported (a loop); keep one")
-                continue
             try:
                 Ros1Type(types, endpoints[0][1])
             except (UnknownTypeError, DefinitionError) as exc:

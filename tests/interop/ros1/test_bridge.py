@@ -230,3 +230,42 @@ def test_services_are_exported_to_and_imported_from_ros1(ros_master: tuple[str, 
         server.terminate()
         server.wait(10)
     assert "exports /hetros_toggle, imports /ros1_toggle" in out, out
+
+
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+
+
+@needs_ros1
+def test_the_talker_listener_example_joins_ros1_both_ways(master: tuple[str, dict[str, str]]) -> None:
+    from tests.support.ros1 import run_ros
+
+    _uri, env = master
+    example = EXAMPLES / "talker_listener"
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", "project_ros1.yaml", "--duration", "30"],
+                              cwd=example, env=dict(env, PYTHONPATH=""), stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+    try:
+        assert 'data: "hello world' in run_ros(env, "rostopic", "echo", "-n", "2", "/chatter", timeout=60)
+        run_ros(env, "rostopic", "pub", "-1", "/chatter", "std_msgs/String", "data: from stock ROS 1", timeout=60)
+        time.sleep(1)
+    finally:
+        launch.terminate()
+        out, _ = launch.communicate(timeout=30)
+    assert "I heard: [from stock ROS 1]" in out, out
+
+
+@needs_ros1
+def test_the_set_bool_example_answers_rosservice(master: tuple[str, dict[str, str]]) -> None:
+    from tests.support.ros1 import run_ros
+
+    _uri, env = master
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", "project_ros1.yaml", "--duration", "30"],
+                              cwd=EXAMPLES / "set_bool", env=dict(env, PYTHONPATH=""), stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+    try:
+        run_ros(env, ROS_PYTHON, "-c", "import rospy; rospy.wait_for_service('/set_bool', 30)", timeout=60)
+        answered = run_ros(env, "rosservice", "call", "/set_bool", "true")
+        assert "success: True" in answered and "set to True" in answered
+    finally:
+        launch.terminate()
+        launch.communicate(timeout=30)

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import socket
 import subprocess
 import textwrap
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +46,25 @@ def _wait(condition: Any, seconds: float = 20.0) -> bool:
     return True
 
 
+@contextlib.contextmanager
+def _talking(publication: Any, text: str) -> Iterator[None]:
+    """Publish ``text`` every 50 ms from a thread while the block runs."""
+    stop = threading.Event()
+
+    def talk() -> None:
+        while not stop.is_set():
+            publication.publish(String(data=text))
+            time.sleep(0.05)
+
+    thread = threading.Thread(target=talk, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+
+
 def _spawn(script: str, tmp_path: Path, name: str, env: dict[str, str]) -> subprocess.Popen[str]:
     path = tmp_path / f"{name}.py"
     path.write_text(script)
@@ -55,24 +76,11 @@ def test_hetros_publishes_to_a_rospy_subscriber(ros_master: tuple[str, dict[str,
     uri, env = ros_master
     peer = Ros1Peer("/hetros_talker", uri)
     publication = peer.advertise("/chatter", Ros1Type(TYPES, "std_msgs/msg/String"))
-    stop = threading.Event()
-
-    def talk() -> None:
-        i = 0
-        while not stop.is_set():
-            publication.publish(String(data=f"hello {i}"))
-            i += 1
-            time.sleep(0.05)
-
-    talker = threading.Thread(target=talk, daemon=True)
-    talker.start()
     try:
-        listener = _spawn(LISTENER, tmp_path, "listener", env)
-        out, _ = listener.communicate(timeout=40)
-        assert out.strip().startswith("got 5 hello "), out
+        with _talking(publication, "hello"):
+            out, _ = _spawn(LISTENER, tmp_path, "listener", env).communicate(timeout=40)
+        assert out.strip() == "got 5 hello", out
     finally:
-        stop.set()
-        talker.join()
         peer.close()
 
 
@@ -153,22 +161,11 @@ def test_a_peer_sending_garbage_is_dropped_and_the_node_goes_on(ros_master: tupl
                     pass
     assert "announces 4294967295 bytes" in caplog.text
     assert "is not name=value" in caplog.text
-    stop = threading.Event()
-
-    def talk() -> None:
-        while not stop.is_set():
-            publication.publish(String(data="hello after garbage"))
-            time.sleep(0.05)
-
-    thread = threading.Thread(target=talk, daemon=True)
-    thread.start()
     try:
-        listener = _spawn(LISTENER, tmp_path, "listener", env)
-        out, _ = listener.communicate(timeout=40)
+        with _talking(publication, "hello after garbage"):
+            out, _ = _spawn(LISTENER, tmp_path, "listener", env).communicate(timeout=40)
         assert out.strip().startswith("got 5 hello after garbage"), out
     finally:
-        stop.set()
-        thread.join()
         peer.close()
 
 

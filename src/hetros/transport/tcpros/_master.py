@@ -19,11 +19,10 @@ import socket
 import threading
 import xmlrpc.client
 from collections.abc import Callable
-from socketserver import ThreadingMixIn
 from typing import Any
-from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 from ..._errors import TransportError
+from ._xmlrpc import proxy, serve
 
 log = logging.getLogger("hetros.master")
 
@@ -32,16 +31,6 @@ DEFAULT_PORT = 11311
 _CALL_TIMEOUT = 2.0
 
 Reply = tuple[int, str, Any]
-
-
-class _Server(ThreadingMixIn, SimpleXMLRPCServer):
-    daemon_threads = True
-    allow_reuse_address = True
-
-
-class _Quiet(SimpleXMLRPCRequestHandler):
-    def log_message(self, format: str, *args: Any) -> None:
-        log.debug(format, *args)
 
 
 def _namespace(name: str) -> str:
@@ -340,7 +329,7 @@ class Master:
 
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT) -> None:
         try:
-            self._server = _Server((host, port), requestHandler=_Quiet, allow_none=True, logRequests=False)
+            self._server = serve(host, port)
         except OSError as exc:
             raise TransportError(
                 f"cannot serve a ROS master on {host}:{port}: {exc.strerror or exc}; is another roscore or "
@@ -351,7 +340,7 @@ class Master:
         self.uri = f"http://{shown}:{bound_port}/"
         self._calls: queue.Queue[tuple[str, str, tuple[Any, ...]] | None] = queue.Queue()
         self.state = MasterState(self.uri, lambda api, method, args: self._calls.put((api, method, args)))
-        self._server.register_instance(self.state)
+        self._server.register_instance(self.state)  # made after binding: the URI names the bound port
         self._threads = [threading.Thread(target=self._server.serve_forever, name="hetros-master", daemon=True),
                          threading.Thread(target=self._call_nodes, name="hetros-master-calls", daemon=True)]
         for thread in self._threads:
@@ -362,8 +351,7 @@ class Master:
         while (call := self._calls.get()) is not None:
             api, method, args = call
             try:
-                proxy = xmlrpc.client.ServerProxy(api, transport=_TimedTransport(), allow_none=True)
-                getattr(proxy, method)(*args)
+                getattr(proxy(api, _CALL_TIMEOUT), method)(*args)
             except (OSError, xmlrpc.client.Error) as exc:
                 log.debug("%s on %s failed: %s", method, api, exc)
 
@@ -373,12 +361,3 @@ class Master:
         self._calls.put(None)
         for thread in self._threads:
             thread.join(timeout=_CALL_TIMEOUT + 1)
-
-
-class _TimedTransport(xmlrpc.client.Transport):
-    """xmlrpc.client with a timeout per connection (its default waits forever)."""
-
-    def make_connection(self, host: Any) -> Any:
-        connection = super().make_connection(host)
-        connection.timeout = _CALL_TIMEOUT
-        return connection

@@ -18,41 +18,18 @@ import threading
 import time
 import xmlrpc.client
 from collections.abc import Callable
-from socketserver import ThreadingMixIn
 from typing import Any
-from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 from ..._errors import ProtocolError, SerializationError, ServiceTimeoutError, TransportError
 from ._header import decode_header, encode_header, header_length, require
 from ._types import Ros1ServiceType, Ros1Type
+from ._xmlrpc import CALL_TIMEOUT, proxy, serve
 
 log = logging.getLogger("hetros.ros1")
 
 _FRAME = struct.Struct("<I")
 # a frame longer than this is refused (a garbage length must not become an allocation)
 MAX_FRAME = 1 << 30
-_CALL_TIMEOUT = 5.0
-
-
-class _Server(ThreadingMixIn, SimpleXMLRPCServer):
-    daemon_threads = True
-    allow_reuse_address = True
-
-
-class _Quiet(SimpleXMLRPCRequestHandler):
-    def log_message(self, format: str, *args: Any) -> None:
-        log.debug(format, *args)
-
-
-class _TimedTransport(xmlrpc.client.Transport):
-    def make_connection(self, host: Any) -> Any:
-        connection = super().make_connection(host)
-        connection.timeout = _CALL_TIMEOUT
-        return connection
-
-
-def _proxy(uri: str) -> Any:
-    return xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(), allow_none=True)
 
 
 def get_ros1_parameter(master_uri: str, caller_id: str, key: str) -> Any:
@@ -62,7 +39,7 @@ def get_ros1_parameter(master_uri: str, caller_id: str, key: str) -> Any:
     elif not key.startswith("/"):
         key = "/" + key
     try:
-        code, _message, value = _proxy(master_uri).getParam(caller_id, key)
+        code, _message, value = proxy(master_uri).getParam(caller_id, key)
     except (OSError, xmlrpc.client.Error) as exc:
         raise TransportError(f"the ROS master at {master_uri} is unreachable ({exc}); cannot read {key}") from None
     if code != 1:
@@ -166,12 +143,12 @@ class Ros1Subscription:
 
     def _connect(self, publisher: str) -> None:
         try:
-            code, message, protocol = _proxy(publisher).requestTopic(self.peer.name, self.topic, [["TCPROS"]])
+            code, message, protocol = proxy(publisher).requestTopic(self.peer.name, self.topic, [["TCPROS"]])
             if code != 1 or not protocol or protocol[0] != "TCPROS":
                 log.warning("ROS 1 publisher %s refused %s over TCPROS: %s", publisher, self.topic, message)
                 return
             _name, host, port = protocol
-            sock = socket.create_connection((host, int(port)), timeout=_CALL_TIMEOUT)
+            sock = socket.create_connection((host, int(port)), timeout=CALL_TIMEOUT)
         except (OSError, xmlrpc.client.Error, ValueError) as exc:
             log.warning("cannot reach the ROS 1 publisher %s of %s: %s", publisher, self.topic, exc)
             return
@@ -234,14 +211,13 @@ class Ros1Peer:
         self.name = name if name.startswith("/") else "/" + name
         self.master_uri = master_uri
         self.host = host
-        self._master = _proxy(master_uri)
+        self._master = proxy(master_uri)
         self._publications: dict[str, Ros1Publication] = {}
         self._subscriptions: dict[str, Ros1Subscription] = {}
         self._services: dict[str, tuple[Ros1ServiceType, Callable[[Any], Any]]] = {}
         self._lock = threading.Lock()
         self._closed = False
-        self._slave = _Server((host, 0), requestHandler=_Quiet, allow_none=True, logRequests=False)
-        self._slave.register_instance(_SlaveApi(self))
+        self._slave = serve(host, 0, _SlaveApi(self))
         self.uri = f"http://{host}:{self._slave.server_address[1]}/"
         self._tcpros = socket.create_server((host, 0))
         self.tcpros_port = self._tcpros.getsockname()[1]
@@ -341,7 +317,7 @@ class Ros1Peer:
     def _handshake(self, sock: socket.socket, address: str) -> None:
         peer = f"ROS 1 connection from {address}"
         try:
-            sock.settimeout(_CALL_TIMEOUT)
+            sock.settimeout(CALL_TIMEOUT)
             fields = read_header(sock, peer)
             if "service" in fields:
                 self._serve(sock, fields, address)

@@ -256,3 +256,41 @@ def xmlrpc_state(uri: str) -> Any:
     import xmlrpc.client
 
     return xmlrpc.client.ServerProxy(uri).getSystemState("/test")[2]
+
+
+def test_running_connections_survive_the_master_going_away(tmp_path: Path) -> None:
+    """As in ROS 1: the master is needed to connect, not to keep talking."""
+    from tests.support.ros1 import ros1_master
+
+    masters = ros1_master()
+    uri, env = next(masters)
+    peer = Ros1Peer("/hetros_talker", uri)
+    publication = peer.advertise("/chatter", Ros1Type(TYPES, "std_msgs/msg/String"))
+    counter = textwrap.dedent("""
+        import sys, time, rospy
+        from std_msgs.msg import String
+        got = []
+        rospy.init_node("counter")
+        rospy.Subscriber("/chatter", String, lambda m: got.append(m.data))
+        while not got:
+            time.sleep(0.05)
+        print("connected", flush=True)
+        sys.stdin.readline()  # the test stops the master here
+        before = len(got)
+        time.sleep(2)
+        print("after", len(got) - before, flush=True)
+    """)
+    listener = subprocess.Popen([ROS_PYTHON, "-c", counter], env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
+    try:
+        with _talking(publication, "still here"):
+            assert listener.stdout is not None and listener.stdin is not None
+            assert listener.stdout.readline().strip() == "connected"
+            next(masters, None)  # stops the master
+            listener.stdin.write("\n")
+            listener.stdin.flush()
+            out, _ = listener.communicate(timeout=30)
+        assert out.startswith("after ") and int(out.split()[1]) > 10, out
+    finally:
+        listener.kill()
+        peer.close()

@@ -18,7 +18,7 @@ import pytest
 
 from hetros.msg import registry
 from hetros.transport.tcpros import Ros1Peer, Ros1Type
-from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, free_port, needs_ros1
+from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, free_port, needs_ros1, run_ros
 
 pytestmark = needs_ros1
 
@@ -79,7 +79,17 @@ def test_hetros_publishes_to_a_rospy_subscriber(ros_master: tuple[str, dict[str,
     try:
         with _talking(publication, "hello"):
             out, _ = _spawn(LISTENER, tmp_path, "listener", env).communicate(timeout=40)
+            info = run_ros(env, "rosnode", "info", "/hetros_talker")
+            try:
+                subprocess.run(["rostopic", "hz", "-w", "5", "/chatter"], env=env, capture_output=True, text=True,
+                               timeout=6, check=False)
+                rate = ""
+            except subprocess.TimeoutExpired as expired:  # rostopic hz runs until stopped
+                rate = expired.stdout.decode() if isinstance(expired.stdout, bytes) else (expired.stdout or "")
         assert out.strip() == "got 5 hello", out
+        assert "/chatter [std_msgs/String]" in info and "Pid:" in info, info
+        rates = [float(line.split(":")[1]) for line in rate.splitlines() if line.startswith("average rate:")]
+        assert rates and 10 < rates[-1] < 25, rate  # published every 50 ms
     finally:
         peer.close()
 

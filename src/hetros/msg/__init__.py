@@ -2,13 +2,11 @@
 
 from ._definitions import find_packages, read_package
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
-from ._message import COPY_ARRAYS, KEEP_ARRAYS, FrozenMessage, Message, copy, freeze, hand_over, loaned_array
+from ._message import FrozenMessage, Message, copy, freeze, hand_over, loaned_array
 from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
 from ._validate import convert_array, validate
 
 __all__ = [
-    "COPY_ARRAYS",
-    "KEEP_ARRAYS",
     "ActionType",
     "ArrayField",
     "FlatLayout",

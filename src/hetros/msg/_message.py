@@ -151,7 +151,6 @@ class FrozenList(list):  # type: ignore[type-arg]
 
 # What a sealer does with an array the caller can still write (see _seal_array)
 _FREEZE, _COPY, _KEEP = 0, 1, 2
-COPY_ARRAYS, KEEP_ARRAYS = _COPY, _KEEP
 
 
 def _seal_array(holder: Message, name: str, value: np.ndarray[Any, Any], callers: int) -> None:

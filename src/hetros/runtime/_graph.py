@@ -14,8 +14,6 @@ from typing import Any
 
 from .._errors import TransportError, UndeclaredEndpointError
 from ..msg import (
-    COPY_ARRAYS,
-    KEEP_ARRAYS,
     Message,
     TypeRegistry,
     array_fields,
@@ -110,10 +108,7 @@ class _FanoutWriter(Writer):
             assert self._shm is not None
             self._shm.write(_hand_over(message, copy_arrays=False))
             return
-        if isinstance(message, Message):
-            type(message)._hetros_seal(message, COPY_ARRAYS if self._local else KEEP_ARRAYS)
-        else:
-            _hand_over(message, copy_arrays=self._local)
+        _hand_over(message, copy_arrays=self._local)
         for part in self._parts:
             part.write(message)
 

@@ -47,12 +47,15 @@ class MessageCodec(Codec):
 
     def decode_at(self, buffer: memoryview, at: int, end: int) -> Message:
         """Decode ``buffer[at:end]`` in place (``at + 4`` must be a multiple of 8)."""
+        self._check_encapsulation(buffer, at, end)
+        return self._cdr.decode(buffer, at + 4, end)  # type: ignore[no-any-return]
+
+    def _check_encapsulation(self, buffer: memoryview, at: int, end: int) -> None:
         if end - at < 4 or buffer[at + 1] != 1:
             raise SerializationError(
                 f"{self.typename}: {end - at} bytes do not start with the little-endian CDR "
-                f"encapsulation 00 01 (got {bytes(buffer[at:at + 4]).hex(' ') or 'nothing'})"
+                f"encapsulation 00 01 (got {bytes(buffer[at:min(at + 4, end)]).hex(' ') or 'nothing'})"
             )
-        return self._cdr.decode(buffer, at + 4, end)  # type: ignore[no-any-return]
 
     def lean_size(self, message: Any) -> int:
         """The size with every variable-length primitive array (``arrays``) left empty."""
@@ -66,11 +69,7 @@ class MessageCodec(Codec):
 
     def decode(self, data: memoryview) -> Message:
         """Decode CDR into a read-only message; primitive arrays are views on ``data`` (no copy)."""
-        if len(data) < 4 or data[1] != 1:
-            raise SerializationError(
-                f"{self.typename}: {len(data)} bytes do not start with the little-endian CDR "
-                f"encapsulation 00 01 (got {bytes(data[:4]).hex(' ') or 'nothing'})"
-            )
+        self._check_encapsulation(data, 0, len(data))
         return self._cdr.decode(data[4:])  # type: ignore[no-any-return]
 
 

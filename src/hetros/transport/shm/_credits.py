@@ -61,10 +61,6 @@ class Credits:
         value: int = _WORD.unpack_from(self._map, 0)[0]
         return value
 
-    @published.setter
-    def published(self, seq: int) -> None:
-        _WORD.pack_into(self._map, 0, seq)
-
     def publish(self, seq: int) -> int:
         """Record ``seq`` as published; returns ``version`` (so the publisher notices joins and leaves)."""
         _WORD.pack_into(self._map, 0, seq)

@@ -20,15 +20,6 @@ LAYOUT_SPLIT = 1
 SPLIT = struct.Struct("<II")
 BLOB = struct.Struct("<IIQQ")
 LOAN_RESERVE = 4096
-_BLOB_TABLES: dict[int, struct.Struct] = {}
-
-
-def blob_table(count: int) -> struct.Struct:
-    """``count`` BLOB entries as one struct (one unpack for the whole table)."""
-    table = _BLOB_TABLES.get(count)
-    if table is None:
-        table = _BLOB_TABLES[count] = struct.Struct("<" + BLOB.format[1:] * count)
-    return table
 # Plain messages up to this size are one contiguous CDR (one encode, arrays inline and read
 # in place as views); larger ones use the split layout, whose blobs need no zeroing.
 INLINE_LIMIT = 64 * 1024
@@ -68,12 +59,34 @@ def segment_prefix(session: str) -> str:
     return f"hetros-{session}-"
 
 
+_BLOB_TABLES: dict[int, struct.Struct] = {}
+
+
+def blob_table(count: int) -> struct.Struct:
+    """``count`` BLOB entries as one struct (one unpack for the whole table)."""
+    table = _BLOB_TABLES.get(count)
+    if table is None:
+        table = _BLOB_TABLES[count] = struct.Struct("<" + BLOB.format[1:] * count)
+    return table
+
+
 def align(value: int, to: int) -> int:
     return (value + to - 1) & -to
 
 
-_SLOT_TYPES: dict[int, Any] = {}  # ctypes array types, by size
+# ctypes array types with room for what keeps a sample alive, by size
+_SLOT_TYPES: dict[int, Any] = {}
 _LEASE_TYPES: dict[int, Any] = {}
+
+
+def _sized(cache: dict[int, Any], size: int, mixins: tuple[type, ...], slots: tuple[str, ...]) -> Any:
+    """The ctypes byte array type of ``size`` with ``slots`` (cached; types are costly to make)."""
+    kind = cache.get(size)
+    if kind is None:
+        if len(cache) > 4096:  # sizes that keep changing must not grow the cache forever
+            cache.clear()
+        kind = cache[size] = type("Slot", (*mixins, ctypes.c_uint8 * size), {"__slots__": slots})
+    return kind
 
 
 class _Leased:
@@ -93,13 +106,7 @@ class _Leased:
 
 def leased_memory(address: int, size: int, sample: object, borrowed: list[None]) -> memoryview:
     """A received sample's bytes; the sample is released when nothing made from them is left."""
-    kind: Any = _LEASE_TYPES.get(size)
-    if kind is None:
-        if len(_LEASE_TYPES) > 4096:
-            _LEASE_TYPES.clear()
-        kind = _LEASE_TYPES[size] = type("Lease", (_Leased, ctypes.c_uint8 * size),
-                                         {"__slots__": ("borrowed", "sample")})
-    raw = kind.from_address(address)
+    raw = _sized(_LEASE_TYPES, size, (_Leased,), ("borrowed", "sample")).from_address(address)
     raw.sample = sample
     raw.borrowed = borrowed
     borrowed.append(None)
@@ -112,12 +119,7 @@ def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
     Everything made from the view (slices, numpy arrays) refers to the ctypes object that
     holds ``keepalive``: the sample goes back to iceoryx2 only when all of them are gone.
     """
-    kind: Any = _SLOT_TYPES.get(size)
-    if kind is None:
-        if len(_SLOT_TYPES) > 4096:  # sizes that keep changing must not grow the cache forever
-            _SLOT_TYPES.clear()
-        kind = _SLOT_TYPES[size] = type("Slot", (ctypes.c_uint8 * size,), {"__slots__": ("keepalive",)})
-    raw = kind.from_address(address)
+    raw = _sized(_SLOT_TYPES, size, (), ("keepalive",)).from_address(address)
     raw.keepalive = keepalive
     return memoryview(raw).cast("B")
 

@@ -59,6 +59,21 @@ def _receive_exactly(sock: socket.socket, size: int) -> bytes:
     return bytes(buffer)
 
 
+def _same_type(name: str, peer: str, fields: dict[str, str], kind: str, md5: str) -> None:
+    """Refuse a peer whose md5sum differs (``*`` matches any), naming both types and md5s."""
+    if fields["md5sum"] not in (md5, "*"):
+        raise ProtocolError(f"{name}: {peer} has {fields.get('type', '?')} (md5 {fields['md5sum']}), "
+                            f"this node has {kind} (md5 {md5})")
+
+
+def _frame_length(prefix: bytes, peer: str) -> int:
+    """The length a frame announces, refused above ``MAX_FRAME`` (garbage must not become an allocation)."""
+    (length,) = _FRAME.unpack(prefix)
+    if length > MAX_FRAME:
+        raise ProtocolError(f"{peer}: a frame announces {length} bytes (more than {MAX_FRAME})")
+    return int(length)
+
+
 def read_header(sock: socket.socket, peer: str) -> dict[str, str]:
     length = header_length(_receive_exactly(sock, 4), peer)
     return decode_header(_receive_exactly(sock, length), peer)
@@ -161,9 +176,7 @@ class Ros1Subscription:
             }))
             fields = read_header(sock, peer)
             require(fields, ("md5sum", "type"), peer)
-            if fields["md5sum"] not in (self.kind.md5, "*"):
-                raise ProtocolError(f"{self.topic}: {peer} sends {fields['type']} (md5 {fields['md5sum']}), this "
-                                    f"node expects {self.kind.name} (md5 {self.kind.md5})")
+            _same_type(self.topic, peer, fields, self.kind.name, self.kind.md5)
             sock.settimeout(None)
         except (OSError, ProtocolError) as exc:
             log.error("%s", exc)
@@ -176,9 +189,7 @@ class Ros1Subscription:
     def _receive(self, sock: socket.socket, peer: str, publisher: str) -> None:
         try:
             while True:
-                (length,) = _FRAME.unpack(_receive_exactly(sock, 4))
-                if length > MAX_FRAME:
-                    raise ProtocolError(f"{peer}: a frame announces {length} bytes (more than {MAX_FRAME})")
+                length = _frame_length(_receive_exactly(sock, 4), peer)
                 message = self.kind.deserialize(_receive_exactly(sock, length))
                 self.received += 1
                 self.callback(message)
@@ -221,6 +232,7 @@ class Ros1Peer:
         self.uri = f"http://{host}:{self._slave.server_address[1]}/"
         self._tcpros = socket.create_server((host, 0))
         self.tcpros_port = self._tcpros.getsockname()[1]
+        self._rosrpc_uri = f"rosrpc://{host}:{self.tcpros_port}"
         self._threads = [
             threading.Thread(target=self._slave.serve_forever, name="hetros-ros1-slave", daemon=True),
             threading.Thread(target=self._accept, name="hetros-ros1-accept", daemon=True),
@@ -271,7 +283,7 @@ class Ros1Peer:
         """Serve ``service`` to ROS 1 clients (ROSRPC): ``handler(request)`` returns the response."""
         with self._lock:
             self._services[service] = (kind, handler)
-        self._call_master("registerService", service, f"rosrpc://{self.host}:{self.tcpros_port}", self.uri)
+        self._call_master("registerService", service, self._rosrpc_uri, self.uri)
 
     def call_service(self, service: str, kind: Ros1ServiceType, request: Any, timeout: float = 10.0) -> Any:
         """Call a ROS 1 service once (a fresh connection, as rospy's default) and return the response."""
@@ -285,16 +297,11 @@ class Ros1Peer:
                                             "persistent": "0"}))
                 fields = read_header(sock, peer)
                 require(fields, ("md5sum",), peer)
-                if fields["md5sum"] not in (kind.md5, "*"):
-                    raise ProtocolError(f"{service}: {peer} serves {fields.get('type', '?')} (md5 {fields['md5sum']}), "
-                                        f"this node calls {kind.name} (md5 {kind.md5})")
+                _same_type(service, peer, fields, kind.name, kind.md5)
                 payload = kind.request.serialize(request)
                 sock.sendmsg([_FRAME.pack(len(payload)), payload])
                 ok = _receive_exactly(sock, 1)[0]
-                (length,) = _FRAME.unpack(_receive_exactly(sock, 4))
-                if length > MAX_FRAME:
-                    raise ProtocolError(f"{peer}: a reply announces {length} bytes (more than {MAX_FRAME})")
-                body = _receive_exactly(sock, length)
+                body = _receive_exactly(sock, _frame_length(_receive_exactly(sock, 4), peer))
         except TimeoutError:
             raise ServiceTimeoutError(f"ROS 1 service {service} did not answer within {timeout:g} s") from None
         except OSError as exc:
@@ -329,9 +336,7 @@ class Ros1Peer:
             if publication is None:
                 raise ProtocolError(f"{peer} asked for {fields['topic']}, which this node does not publish")
             kind = publication.kind
-            if fields["md5sum"] not in (kind.md5, "*"):
-                raise ProtocolError(f"{fields['topic']}: {peer} expects {fields['type']} (md5 {fields['md5sum']}), "
-                                    f"this node publishes {kind.name} (md5 {kind.md5})")
+            _same_type(fields['topic'], peer, fields, kind.name, kind.md5)
             _configure(sock)
             sock.sendall(encode_header({
                 "callerid": self.name, "md5sum": kind.md5, "type": kind.name, "topic": fields["topic"],
@@ -360,9 +365,7 @@ class Ros1Peer:
         if entry is None:
             raise ProtocolError(f"{peer} asked for service {service}, which this node does not serve")
         kind, handler = entry
-        if fields["md5sum"] not in (kind.md5, "*"):
-            raise ProtocolError(f"{service}: {peer} calls {fields.get('type', '?')} (md5 {fields['md5sum']}), "
-                                f"this node serves {kind.name} (md5 {kind.md5})")
+        _same_type(service, peer, fields, kind.name, kind.md5)
         _configure(sock)
         sock.sendall(encode_header({"callerid": self.name, "md5sum": kind.md5, "type": kind.name,
                                     "request_type": kind.request_name, "response_type": kind.response_name}))
@@ -376,10 +379,7 @@ class Ros1Peer:
                     prefix = _receive_exactly(sock, 4)
                 except ConnectionError:
                     return  # the client is done
-                (length,) = _FRAME.unpack(prefix)
-                if length > MAX_FRAME:
-                    raise ProtocolError(f"{peer}: a request announces {length} bytes (more than {MAX_FRAME})")
-                request = kind.request.deserialize(_receive_exactly(sock, length))
+                request = kind.request.deserialize(_receive_exactly(sock, _frame_length(prefix, peer)))
                 try:
                     payload = kind.response.serialize(handler(request))
                     sock.sendmsg([b"\x01", _FRAME.pack(len(payload)), payload])
@@ -397,23 +397,20 @@ class Ros1Peer:
             return
         self._closed = True
         for topic, publication in list(self._publications.items()):
-            self._unregister("unregisterPublisher", topic)
+            self._unregister("unregisterPublisher", topic, self.uri)
             publication.close()
         for topic, subscription in list(self._subscriptions.items()):
-            self._unregister("unregisterSubscriber", topic)
+            self._unregister("unregisterSubscriber", topic, self.uri)
             subscription.close()
         for service in list(self._services):
-            try:
-                self._master.unregisterService(self.name, service, f"rosrpc://{self.host}:{self.tcpros_port}")
-            except (OSError, xmlrpc.client.Error):
-                pass
+            self._unregister("unregisterService", service, self._rosrpc_uri)
         self._slave.shutdown()
         self._slave.server_close()
         self._tcpros.close()
 
-    def _unregister(self, method: str, topic: str) -> None:
+    def _unregister(self, method: str, name: str, api: str) -> None:
         try:
-            getattr(self._master, method)(self.name, topic, self.uri)
+            getattr(self._master, method)(self.name, name, api)
         except (OSError, xmlrpc.client.Error):
             pass  # a master that is gone has nothing to unregister
 

@@ -16,6 +16,7 @@ from ._plan import (
     process_name,
     reply_channel,
     request_channel,
+    service_of,
 )
 
 __all__ = [
@@ -30,4 +31,5 @@ __all__ = [
     "process_name",
     "reply_channel",
     "request_channel",
+    "service_of",
 ]

@@ -77,13 +77,22 @@ class Plan:
     nodes: dict[str, NodePlan]
     channels: dict[str, ChannelPlan]
     edges: tuple[EdgePlan, ...]
-    # the ROS 1 master of `external: ros1:` ("" without one): parameters not in the project come from it
+    # the ROS 1 master of `external: ros1:` or `kind: ros1` targets ("" without either): parameters
+    # not in the project come from it
     ros1_master: str = ""
+    # the interface ROS 1 nodes' slave APIs and TCPROS servers listen on
+    ros1_host: str = "127.0.0.1"
+    # the QoS of the topics of `kind: ros1` nodes (they are not hetros channels)
+    ros1_qos: dict[str, QoS] = field(default_factory=dict)
 
     def process_of(self, node: str) -> str:
         """Threads share the launcher's process (called 'launcher'); others run alone."""
         target = self.targets[self.nodes[node].target]
         return process_name(target.name, target.kind)
+
+    def speaks_ros1(self, node: str) -> bool:
+        """A node of a ``kind: ros1`` target: all its endpoints are ROS 1's (TCPROS, ROSRPC)."""
+        return self.targets[self.nodes[node].target].kind == "ros1"
 
     def nodes_in(self, process: str) -> list[str]:
         return [n for n in self.nodes if self.process_of(n) == process]
@@ -113,12 +122,26 @@ class Plan:
             },
             edges=tuple(EdgePlan(**e) for e in raw["edges"]),
             ros1_master=raw.get("ros1_master", ""),
+            ros1_host=raw.get("ros1_host", "127.0.0.1"),
+            ros1_qos={k: QoS(**v) for k, v in raw.get("ros1_qos", {}).items()},
         )
 
 
+_REQUEST = "/_request"
+_REPLY = "/_reply/"
+
+
 def request_channel(service: str) -> str:
-    return f"{service}/_request"
+    return f"{service}{_REQUEST}"
 
 
 def reply_channel(service: str, client: str) -> str:
-    return f"{service}/_reply/{client}"
+    return f"{service}{_REPLY}{client}"
+
+
+def service_of(channel: str) -> tuple[str, str]:
+    """``(service, client)`` of a reply channel, ``(service, "")`` of a request channel."""
+    if channel.endswith(_REQUEST):
+        return channel.removesuffix(_REQUEST), ""
+    service, _, client = channel.partition(_REPLY)
+    return service, client

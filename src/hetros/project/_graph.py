@@ -32,6 +32,13 @@ def describe(plan: Plan) -> str:
         q = plan.channels[edge.channel].qos
         lines.append(f"  {edge.publisher} -> {edge.subscriber}  {edge.channel}  via {edge.transport}"
                      f"  ({q.reliability}, {q.history}, depth {q.depth})")
+    for name, node in plan.nodes.items():
+        if not plan.speaks_ros1(name):
+            continue
+        for what, table in (("publishes", node.publish), ("subscribes", node.subscribe),
+                            ("serves", node.services), ("calls", node.clients)):
+            for endpoint, typename in table.items():
+                lines.append(f"  {name} {what} {endpoint} [{typename}]  via tcpros (ROS 1 master {plan.ros1_master})")
     return "\n".join(lines)
 
 

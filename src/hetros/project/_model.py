@@ -18,7 +18,7 @@ class _Strict(BaseModel):
 
 
 class TargetSpec(_Strict):
-    kind: Literal["thread", "process", "fpga", "host"]
+    kind: Literal["thread", "process", "ros1", "fpga", "host"]
     cpus: list[int] = Field(default_factory=list)
     clock_mhz: float | None = None
     sim: str | None = None

@@ -84,6 +84,10 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
         report.errors.append(f"{where('external', 'ros2')}: bridges to ROS 2 graphs are not implemented "
                              "yet; remove the 'ros2' section")
 
+    speaks_ros1 = _ros1_nodes(project)
+    if ROS1_BRIDGE in model.nodes or ROS1_BRIDGE in model.targets:
+        report.errors.append(f"{where('nodes', ROS1_BRIDGE)}: {ROS1_BRIDGE!r} is reserved for the ROS 1 bridge; "
+                             "rename the node or target")
     publishers: dict[str, list[tuple[str, str]]] = {}
     subscribers: dict[str, list[tuple[str, str]]] = {}
     servers: dict[str, list[tuple[str, str]]] = {}
@@ -131,6 +135,8 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     for topic, subscribed in subscribers.items():
         if topic not in publishers and topic not in imported:
             for nname, _ in subscribed:
+                if nname in speaks_ros1:
+                    continue  # a ROS 1 node's topic may come from any ROS 1 publisher
                 report.errors.append(
                     f"{where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}; "
                     "add a publisher under some node's 'publish', import it from ROS 1 "
@@ -146,6 +152,8 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     for service, calling in clients.items():
         if service not in servers and service not in imported_services:
             for nname, _ in calling:
+                if nname in speaks_ros1:
+                    continue  # a ROS 1 node may call any ROS 1 service
                 report.errors.append(f"{where('nodes', nname, 'clients', service)}: no node serves "
                                      f"{service}; add it under some node's 'services'")
     for service, serving in servers.items():
@@ -165,7 +173,13 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
                                    "behaves like keep_last with this depth")
     _check_qos_compatibility(project, publishers, subscribers, report)
-    _check_shm_budget(project, types, publishers, subscribers, report)
+
+    def hetros_side(table: dict[str, list[tuple[str, str]]]) -> dict[str, list[tuple[str, str]]]:
+        return {k: kept for k, v in table.items() if (kept := [e for e in v if e[0] not in speaks_ros1])}
+
+    _check_shm_budget(project, types, hetros_side(publishers), hetros_side(subscribers), report)
+    if speaks_ros1:
+        _check_ros1_nodes(project, speaks_ros1, types, report)
     _check_sources(project, report)
     if model.external is not None and model.external.ros1 is not None:
         _check_ros1(project, model.external.ros1, publishers, subscribers, servers, clients, types, report)
@@ -323,6 +337,46 @@ def _check_sources(project: LoadedProject, report: CheckReport) -> None:
 ROS1_BRIDGE = "hetros_ros1_bridge"
 
 
+def _ros1_nodes(project: LoadedProject) -> set[str]:
+    """The nodes of ``kind: ros1`` targets: ROS 1 nodes, outside the hetros channels."""
+    targets = project.model.targets
+    return {n for n, spec in project.model.nodes.items()
+            if spec.target in targets and targets[spec.target].kind == "ros1"}
+
+
+def _check_ros1_nodes(project: LoadedProject, nodes: set[str], types: TypeRegistry, report: CheckReport) -> None:
+    """Every endpoint of a ROS 1 node must have a type ROS 1 can carry."""
+    from ..transport.tcpros import Ros1ServiceType, Ros1Type
+
+    for nname in sorted(nodes):
+        spec = project.model.nodes[nname]
+        for section, make in (("publish", Ros1Type), ("subscribe", Ros1Type), ("services", Ros1ServiceType),
+                              ("clients", Ros1ServiceType)):
+            for endpoint, typename in spec.types(section).items():
+                try:
+                    make(types, normalize_typename(typename, "msg" if make is Ros1Type else "srv"))
+                except MessageError as exc:
+                    report.errors.append(f"{project.where('nodes', nname, section, endpoint)}: node {nname} runs "
+                                         f"on a ROS 1 target, so {endpoint} must be a ROS 1 type: {exc}")
+
+
+def _shared_with_ros1(project: LoadedProject) -> dict[str, list[str]]:
+    """What hetros nodes share with ``kind: ros1`` nodes, which the bridge then carries
+    (``export``: hetros publishes or serves it, ``import``: a ROS 1 node does)."""
+    ros1 = _ros1_nodes(project)
+    nodes = project.model.nodes
+
+    def endpoints(section: str, in_ros1: bool) -> set[str]:
+        return {e for n, spec in nodes.items() if (n in ros1) == in_ros1 for e in getattr(spec, section)}
+
+    return {
+        "export": sorted(endpoints("publish", False) & endpoints("subscribe", True)),
+        "import": sorted(endpoints("publish", True) & endpoints("subscribe", False)),
+        "export_services": sorted(endpoints("services", False) & endpoints("clients", True)),
+        "import_services": sorted(endpoints("services", True) & endpoints("clients", False)),
+    }
+
+
 def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, list[tuple[str, str]]],
                 subscribers: dict[str, list[tuple[str, str]]], servers: dict[str, list[tuple[str, str]]],
                 clients: dict[str, list[tuple[str, str]]], types: TypeRegistry, report: CheckReport) -> None:
@@ -331,9 +385,6 @@ def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, li
     from ..transport.tcpros import Ros1ServiceType, Ros1Type
 
     where = project.where
-    if ROS1_BRIDGE in project.model.nodes or ROS1_BRIDGE in project.model.targets:
-        report.errors.append(f"{where('nodes', ROS1_BRIDGE)}: {ROS1_BRIDGE!r} is reserved for the ROS 1 bridge; "
-                             "rename the node or target")
     for section, attr, table, needs in (("export", "export", publishers, "publisher"),
                                         ("import", "import_", subscribers, "subscriber")):
         for index, topic in enumerate(getattr(spec, attr)):
@@ -371,23 +422,29 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
     """The node that carries exported and imported topics across (in the launcher's process)."""
     model = project.model
     spec = model.external.ros1 if model.external is not None else None
-    if spec is None or not (spec.export or spec.import_ or spec.export_services or spec.import_services):
+    shared = _shared_with_ros1(project)
+    if spec is not None:
+        for key, listed in (("export", spec.export), ("import", spec.import_),
+                            ("export_services", spec.export_services), ("import_services", spec.import_services)):
+            shared[key] = sorted(set(shared[key]) | set(listed))
+    if not any(shared.values()):
         return None
     declared: dict[str, str] = {}
     for node in model.nodes.values():
         declared.update(node.types("publish"))
         declared.update(node.types("subscribe"))
-    exports = {t: normalize_typename(declared[t]) for t in spec.export}
-    imports = {t: normalize_typename(declared[t]) for t in spec.import_}
+    exports = {t: normalize_typename(declared[t]) for t in shared["export"]}
+    imports = {t: normalize_typename(declared[t]) for t in shared["import"]}
     served: dict[str, str] = {}
     for node in model.nodes.values():
         served.update(node.services)
         served.update(node.clients)
-    export_services = {s: normalize_typename(served[s], "srv") for s in spec.export_services}
-    import_services = {s: normalize_typename(served[s], "srv") for s in spec.import_services}
+    export_services = {s: normalize_typename(served[s], "srv") for s in shared["export_services"]}
+    import_services = {s: normalize_typename(served[s], "srv") for s in shared["import_services"]}
     # ROS 1 latching is ROS 2's transient_local: a late subscriber gets the last message
-    latched = [t for t in spec.export if (q := model.topics.get(t)) is not None and q.keeps_history]
-    parameters = {"master": _ros1_master(project), "host": spec.host, "export": exports, "import": imports,
+    latched = [t for t in exports if (q := model.topics.get(t)) is not None and q.keeps_history]
+    host = spec.host if spec is not None else "127.0.0.1"
+    parameters = {"master": _ros1_master(project), "host": host, "export": exports, "import": imports,
                   "latch": latched, "ros1_name": f"/{model.name}_hetros",
                   "export_services": export_services, "import_services": import_services}
     return NodePlan(ROS1_BRIDGE, "hetros.launch._ros1_bridge:bridge", ROS1_BRIDGE, parameters,
@@ -405,9 +462,11 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         n: process_name(s.target, model.targets[s.target].kind) for n, s in model.nodes.items()
     }
     bridge = _ros1_bridge(project)
-    # every node's endpoints, the ROS 1 bridge's too: (name, publish, subscribe, services, clients)
+    speaks_ros1 = _ros1_nodes(project)
+    # every hetros node's endpoints, the ROS 1 bridge's too (ROS 1 nodes' endpoints are ROS 1's):
+    # (name, publish, subscribe, services, clients)
     endpoints = [(n, spec.types("publish"), spec.types("subscribe"), dict(spec.services), dict(spec.clients))
-                 for n, spec in model.nodes.items()]
+                 for n, spec in model.nodes.items() if n not in speaks_ros1]
     if bridge is not None:
         process_of[bridge.name] = LAUNCHER
         endpoints.append((bridge.name, bridge.publish, bridge.subscribe, bridge.services, bridge.clients))
@@ -451,14 +510,18 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         channels=channels,
         edges=edges,
         ros1_master=_ros1_master(project),
+        ros1_host=external.ros1.host if (external := model.external) is not None and external.ros1 else "127.0.0.1",
+        ros1_qos={t: q for t, q in model.topics.items()
+                  if any(t in model.nodes[n].publish or t in model.nodes[n].subscribe for n in speaks_ros1)},
     )
 
 
 def _ros1_master(project: LoadedProject) -> str:
     external = project.model.external
-    if external is None or external.ros1 is None:
+    spec = external.ros1 if external is not None else None
+    if spec is None and not _ros1_nodes(project):
         return ""
-    return external.ros1.master or os.environ.get("ROS_MASTER_URI", "http://127.0.0.1:11311/")
+    return (spec.master if spec is not None else None) or os.environ.get("ROS_MASTER_URI", "http://127.0.0.1:11311/")
 
 
 def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, project: LoadedProject,

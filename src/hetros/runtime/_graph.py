@@ -24,7 +24,7 @@ from ..msg import (
     set_path,
 )
 from ..msg import copy as copy_message
-from ..plan import LAUNCHER, ChannelPlan, EdgePlan, Plan
+from ..plan import LAUNCHER, ChannelPlan, EdgePlan, Plan, request_channel, service_of
 from ..transport import (
     DEFAULT_QOS,
     Codec,
@@ -40,6 +40,15 @@ from ..transport import (
     Writer,
     carried_message,
     has_loan,
+)
+from ..transport.tcpros import (
+    Ros1Peer,
+    Ros1ServiceCaller,
+    Ros1ServiceServer,
+    Ros1ServiceType,
+    Ros1Type,
+    Ros1Writer,
+    open_ros1_reader,
 )
 
 log = logging.getLogger("hetros.graph")
@@ -189,6 +198,7 @@ class Graph:
         self._codecs: dict[tuple[str, bool], Codec] = {}
         self._stop_hooks: list[Callable[[], None]] = []
         self._prepared: dict[tuple[str, str], _Retained] = {}
+        self._ros1: _Ros1Nodes | None = None
         # the plan's edges, by (channel, publisher) and (channel, subscriber): the runtime wires
         # what they say and never works the transport out again
         self._out: dict[tuple[str, str], list[EdgePlan]] = {}
@@ -211,6 +221,15 @@ class Graph:
                     reader = self._open_reader(channel, node, channel.type, relay, None,
                                                envelope=channel.kind != "topic")
                     self._prepared[(channel.name, node)] = _Retained(reader, relay, self._give_back(channel.name, node))
+        for node in nodes:
+            spec = self.plan.nodes[node]
+            if self.plan.speaks_ros1(node):
+                wanted = [(topic, False) for topic in spec.subscribe]
+                wanted += [(request_channel(service), True) for service in spec.services]
+                for name, envelope in wanted:
+                    relay = _Relay()
+                    reader = self._ros1_nodes().open_reader(name, node, relay, envelope=envelope)
+                    self._prepared[(name, node)] = _Retained(reader, relay, self._give_back(name, node))
 
     def _give_back(self, channel: str, node: str) -> Callable[[_Retained], None]:
         def release(reader: _Retained) -> None:
@@ -300,8 +319,20 @@ class Graph:
             self._codecs[key] = codec
         return codec
 
+    def _ros1_nodes(self) -> _Ros1Nodes:
+        with self._lock:
+            if self._ros1 is None:
+                assert self.plan is not None
+                self._ros1 = _Ros1Nodes(self.plan, self.types, self.stop)
+            return self._ros1
+
+    def _speaks_ros1(self, node: str) -> bool:
+        return self.plan is not None and node in self.plan.nodes and self.plan.speaks_ros1(node)
+
     def open_writer(self, name: str, node: str, typename: str, *, qos: QoS | None = None,
                     envelope: bool = False) -> Writer:
+        if self._speaks_ros1(node):
+            return self._ros1_nodes().open_writer(name, node, envelope=envelope)
         channel = self.channel(name, node, "publish")
         effective = self.qos_of(name, qos)
         if channel is None:
@@ -317,8 +348,9 @@ class Graph:
 
     def open_reader(self, name: str, node: str, typename: str, wake: Wake, *,
                     qos: QoS | None = None, envelope: bool = False) -> Reader:
-        channel = self.channel(name, node, "subscribe")
-        if channel is None:
+        ros1 = self._speaks_ros1(node)
+        channel = None if ros1 else self.channel(name, node, "subscribe")
+        if channel is None and not ros1:
             effective = self.qos_of(name, qos)
             return self._inproc_topic(name, effective).open_reader(node, wake)
         with self._lock:
@@ -327,6 +359,8 @@ class Graph:
             prepared.relay.target = wake
             wake()
             return prepared
+        if channel is None:
+            return self._ros1_nodes().open_reader(name, node, wake, envelope=envelope)
         return self._open_reader(channel, node, typename, wake, qos, envelope=envelope)
 
     def _open_reader(self, channel: ChannelPlan, node: str, typename: str, wake: Wake,
@@ -354,5 +388,92 @@ class Graph:
             reader.inner.close()
         with self._lock:
             domain, self._shm = self._shm, None
+            ros1, self._ros1 = self._ros1, None
         if domain is not None:
             domain.close()
+        if ros1 is not None:
+            ros1.close()
+
+
+class _Ros1Nodes:
+    """The ROS 1 presence of this process' ``kind: ros1`` nodes: one ROS 1 node (slave API,
+    TCPROS server) per hetros node, registered with the plan's master under ``/<node>``."""
+
+    _SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
+
+    def __init__(self, plan: Plan, types: TypeRegistry, stop: threading.Event) -> None:
+        self._plan = plan
+        self._types = types
+        self._stop = stop
+        self._lock = threading.Lock()
+        self._peers: dict[str, Ros1Peer] = {}
+        self._servers: dict[tuple[str, str], Ros1ServiceServer] = {}
+        self._callers: dict[tuple[str, str], Ros1ServiceCaller] = {}
+
+    def _peer(self, node: str) -> Ros1Peer:
+        with self._lock:
+            peer = self._peers.get(node)
+            if peer is None:
+                peer = Ros1Peer(node, self._plan.ros1_master, self._plan.ros1_host)
+                self._peers[node] = peer
+            return peer
+
+    def _declared(self, node: str, section: str, name: str) -> str:
+        spec = self._plan.nodes[node]
+        table: dict[str, str] = getattr(spec, section)
+        if name not in table:
+            raise UndeclaredEndpointError(
+                f"ROS 1 node {node!r} creates a {section} endpoint on {name!r} that the project file "
+                f"does not declare: add it under nodes.{node}.{section}"
+            )
+        return table[name]
+
+    def _qos(self, topic: str) -> QoS:
+        return self._plan.ros1_qos.get(topic, DEFAULT_QOS)
+
+    def _caller(self, node: str, service: str) -> Ros1ServiceCaller:
+        typename = self._declared(node, "clients", service)
+        with self._lock:
+            caller = self._callers.get((node, service))
+        if caller is None:
+            caller = Ros1ServiceCaller(self._peer(node), service, Ros1ServiceType(self._types, typename),
+                                       self._SERVICE_QOS)
+            with self._lock:
+                caller = self._callers.setdefault((node, service), caller)
+        return caller
+
+    def open_writer(self, name: str, node: str, *, envelope: bool) -> Writer:
+        if not envelope:
+            typename = self._declared(node, "publish", name)
+            latch = self._qos(name).keeps_history
+            return Ros1Writer(self._peer(node).advertise(name, Ros1Type(self._types, typename), latch=latch))
+        service, client = service_of(name)
+        if client:
+            server = self._servers.get((node, service))
+            if server is None:
+                raise UndeclaredEndpointError(f"ROS 1 node {node!r} replies on {service}, which it does not serve")
+            return server.writer
+        return self._caller(node, service).writer
+
+    def open_reader(self, name: str, node: str, wake: Wake, *, envelope: bool) -> Reader:
+        if not envelope:
+            typename = self._declared(node, "subscribe", name)
+            kind = Ros1Type(self._types, typename)
+            return open_ros1_reader(self._peer(node), name, kind, self._qos(name), wake, self._stop)
+        service, client = service_of(name)
+        if not client:
+            kind_name = self._declared(node, "services", service)
+            server = Ros1ServiceServer(self._peer(node), service, Ros1ServiceType(self._types, kind_name),
+                                       self._SERVICE_QOS, wake, self._stop)
+            self._servers[(node, service)] = server
+            return server.reader
+        return self._caller(node, service).attach(wake)
+
+    def close(self) -> None:
+        with self._lock:
+            callers, self._callers = list(self._callers.values()), {}
+            peers, self._peers = list(self._peers.values()), {}
+        for caller in callers:
+            caller.close()
+        for peer in peers:
+            peer.close()

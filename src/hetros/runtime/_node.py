@@ -307,7 +307,11 @@ class Client:
                 if envelope is None:
                     return
                 future = self._pending.pop(envelope[0], None)
-            if future is not None and not future.done():
+            if future is None or future.done():
+                continue
+            if isinstance(envelope[2], BaseException):  # a transport that could not deliver the call says why
+                future.set_exception(envelope[2])
+            else:
                 future.set_result(envelope[2])
 
     def call_async(self, request: Any) -> Future[Any]:

@@ -1,9 +1,24 @@
 """ROS 1 interoperability: the master, the slave API, TCPROS connections and the type mapping."""
 
+from ._endpoints import ROSRPC_CLIENT, Ros1ServiceCaller, Ros1ServiceServer, Ros1Writer, open_ros1_reader
 from ._master import DEFAULT_PORT, Master, MasterState
 from ._peer import Ros1Peer, Ros1Publication, Ros1Subscription, get_ros1_parameter
 from ._types import Ros1ServiceType, Ros1Type, ros1_name
 
-__all__ = ["DEFAULT_PORT", "Master", "MasterState", "Ros1Peer", "Ros1Publication", "Ros1ServiceType",
-           "Ros1Subscription", "Ros1Type",
-           "get_ros1_parameter", "ros1_name"]
+__all__ = [
+    "DEFAULT_PORT",
+    "ROSRPC_CLIENT",
+    "Master",
+    "MasterState",
+    "Ros1Peer",
+    "Ros1Publication",
+    "Ros1ServiceCaller",
+    "Ros1ServiceServer",
+    "Ros1ServiceType",
+    "Ros1Subscription",
+    "Ros1Type",
+    "Ros1Writer",
+    "get_ros1_parameter",
+    "open_ros1_reader",
+    "ros1_name",
+]

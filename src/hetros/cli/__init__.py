@@ -149,12 +149,15 @@ def cmd_master(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     try:
         from ..bench.latency import main as latency
+        from ..bench.ros1 import main as ros1
     except ImportError as exc:
         print(f"the benchmark needs the bench extra: pip install -e '.[bench]' ({exc})", file=sys.stderr)
         return EXIT_ERROR
     forwarded = ["--quick"] if args.quick else []
     if args.out:
         forwarded += ["--out", args.out]
+    if args.bench == "ros1":
+        return ros1(forwarded)
     if args.systems:
         forwarded += ["--systems", args.systems]
     return latency(forwarded)
@@ -195,6 +198,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.add_argument("--systems", help="comma-separated subset")
+    p.set_defaults(func=cmd_bench)
+    p = bench.add_parser("ros1", help="one-way latency over TCPROS: rospy and hetros nodes, both ways")
+    p.add_argument("--quick", action="store_true", help="fewer repetitions")
+    p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
     msg = sub.add_parser("msg", help="message types").add_subparsers(dest="msg_command", required=True)
     p = msg.add_parser("show", help="print a type's full definition")

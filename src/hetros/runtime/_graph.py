@@ -414,7 +414,7 @@ class _Ros1Nodes:
         with self._lock:
             peer = self._peers.get(node)
             if peer is None:
-                peer = Ros1Peer(node, self._plan.ros1_master, self._plan.ros1_host)
+                peer = Ros1Peer(node, self._plan.ros1_master, self._plan.ros1_host, self._stop)
                 self._peers[node] = peer
             return peer
 

@@ -207,8 +207,12 @@ class Subscription(Generic[M]):
                 return
 
     def close(self) -> None:
+        """Stop receiving; a closed callback no longer keeps the node spinning after its function returns."""
         if self._reader is not None:
             self._reader.close()
+            self._reader = None
+            if self.callback is not None:
+                self.node.executor.entities -= 1
 
 
 class Timer:
@@ -218,6 +222,7 @@ class Timer:
         self.period = period
         self.callback = callback
         self.cancelled = False
+        self._node = node
         self._due = time.monotonic() + period
         node.executor.add_timer(self._due, self._fire)
 
@@ -232,7 +237,9 @@ class Timer:
         return None if self.cancelled else self._due
 
     def cancel(self) -> None:
-        self.cancelled = True
+        if not self.cancelled:
+            self.cancelled = True
+            self._node.executor.entities -= 1
 
 
 class Service:
@@ -247,6 +254,7 @@ class Service:
         self._request_type = _typename(srv_type.Request)
         self._response_type = _typename(srv_type.Response)
         self._replies: dict[str, Writer] = {}
+        self._closed = False
         self.stats = HandlingStats()
         self._reader = node.graph.open_reader(
             request_channel(name), node.name, self._request_type,
@@ -273,7 +281,10 @@ class Service:
         return True
 
     def close(self) -> None:
-        self._reader.close()
+        if not self._closed:
+            self._closed = True
+            self._reader.close()
+            self.node.executor.entities -= 1
 
 
 class Client:

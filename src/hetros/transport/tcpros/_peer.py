@@ -20,6 +20,8 @@ import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from ..._errors import ProtocolError, SerializationError, ServiceTimeoutError, TransportError
 from ._header import decode_header, encode_header, header_length, require
 from ._types import Ros1ServiceType, Ros1Type
@@ -28,8 +30,47 @@ from ._xmlrpc import CALL_TIMEOUT, proxy, serve
 log = logging.getLogger("hetros.ros1")
 
 _FRAME = struct.Struct("<I")
-# a frame longer than this is refused (a garbage length must not become an allocation)
+# a frame longer than this is refused
 MAX_FRAME = 1 << 30
+# connections accepted but not yet past their header; beyond them a new one waits a second, then is closed
+MAX_HANDSHAKES = 64
+
+
+class _Throttled:
+    """Log lines about misbehaving peers, at most ``burst`` per ``period`` seconds.
+
+    A flood of bad connections must not become a flood of log lines (a blocked log pipe
+    would stall every thread that logs); what is not printed is counted and summarized.
+    """
+
+    def __init__(self, burst: int = 20, period: float = 10.0) -> None:
+        self._burst = burst
+        self._period = period
+        self._lock = threading.Lock()
+        self._start = time.monotonic()
+        self._count = 0
+        self._unlogged = 0
+
+    def __call__(self, level: int, text: str, *args: Any) -> None:
+        with self._lock:
+            now = time.monotonic()
+            unlogged = 0
+            if now - self._start > self._period:
+                unlogged, self._unlogged = self._unlogged, 0
+                self._start, self._count = now, 0
+            logged = self._count < self._burst
+            if logged:
+                self._count += 1
+            else:
+                self._unlogged += 1
+        if unlogged:
+            log.warning("%d more ROS 1 connection problems in the last %.0f s were not logged", unlogged,
+                        self._period)
+        if logged:
+            log.log(level, text, *args)
+
+
+_refused = _Throttled()
 
 
 def get_ros1_parameter(master_uri: str, caller_id: str, key: str) -> Any:
@@ -47,16 +88,31 @@ def get_ros1_parameter(master_uri: str, caller_id: str, key: str) -> Any:
     return value
 
 
-def _receive_exactly(sock: socket.socket, size: int) -> bytes:
-    buffer = bytearray(size)
-    view = memoryview(buffer)
-    got = 0
+# frames up to this size are read into a fresh bytes object; larger ones into untouched memory
+_SMALL = 1 << 16
+
+
+def _receive_exactly(sock: socket.socket, size: int) -> bytes | memoryview:
+    """``size`` bytes from ``sock``. A large frame lands in memory the kernel maps page by page as
+    bytes arrive: a peer whose length prefix lies costs what it sent, not what it announced."""
+    if size <= _SMALL:
+        data = sock.recv(size, socket.MSG_WAITALL)
+        if len(data) == size:
+            return data
+        if not data:
+            raise ConnectionError(f"connection closed after 0 of {size} bytes")
+        view = memoryview(bytearray(size))
+        view[:len(data)] = data
+        got = len(data)
+    else:
+        view = memoryview(np.empty(size, np.uint8))
+        got = 0
     while got < size:
         count = sock.recv_into(view[got:], size - got)
         if not count:
             raise ConnectionError(f"connection closed after {got} of {size} bytes")
         got += count
-    return bytes(buffer)
+    return view
 
 
 def _same_type(name: str, peer: str, fields: dict[str, str], kind: str, md5: str) -> None:
@@ -66,7 +122,7 @@ def _same_type(name: str, peer: str, fields: dict[str, str], kind: str, md5: str
                             f"this node has {kind} (md5 {md5})")
 
 
-def _frame_length(prefix: bytes, peer: str) -> int:
+def _frame_length(prefix: bytes | memoryview, peer: str) -> int:
     """The length a frame announces, refused above ``MAX_FRAME`` (garbage must not become an allocation)."""
     (length,) = _FRAME.unpack(prefix)
     if length > MAX_FRAME:
@@ -75,8 +131,8 @@ def _frame_length(prefix: bytes, peer: str) -> int:
 
 
 def read_header(sock: socket.socket, peer: str) -> dict[str, str]:
-    length = header_length(_receive_exactly(sock, 4), peer)
-    return decode_header(_receive_exactly(sock, length), peer)
+    length = header_length(bytes(_receive_exactly(sock, 4)), peer)
+    return decode_header(bytes(_receive_exactly(sock, length)), peer)
 
 
 def _configure(sock: socket.socket) -> None:
@@ -194,7 +250,7 @@ class Ros1Subscription:
                 self.received += 1
                 self.callback(message)
         except (ProtocolError, SerializationError) as exc:
-            log.error("%s; disconnected", exc)
+            _refused(logging.ERROR, "%s; disconnected", exc)
         except OSError:
             pass  # the publisher went away or we closed the connection
         finally:
@@ -218,7 +274,8 @@ class Ros1Subscription:
 class Ros1Peer:
     """A ROS 1 node as other ROS 1 nodes see it: a name, a slave API, a TCPROS port."""
 
-    def __init__(self, name: str, master_uri: str, host: str = "127.0.0.1") -> None:
+    def __init__(self, name: str, master_uri: str, host: str = "127.0.0.1",
+                 stop: threading.Event | None = None) -> None:
         self.name = name if name.startswith("/") else "/" + name
         self.master_uri = master_uri
         self.host = host
@@ -228,6 +285,8 @@ class Ros1Peer:
         self._services: dict[str, tuple[Ros1ServiceType, Callable[[Any], Any]]] = {}
         self._lock = threading.Lock()
         self._closed = False
+        self._stop = stop
+        self._handshakes = threading.BoundedSemaphore(MAX_HANDSHAKES)
         self._slave = serve(host, 0, _SlaveApi(self))
         self.uri = f"http://{host}:{self._slave.server_address[1]}/"
         self._tcpros = socket.create_server((host, 0))
@@ -250,7 +309,7 @@ class Ros1Peer:
             try:
                 code, message, value = getattr(self._master, method)(self.name, *args)
             except OSError as exc:
-                if time.monotonic() > deadline or self._closed:
+                if time.monotonic() > deadline or self._closed or (self._stop is not None and self._stop.is_set()):
                     raise TransportError(f"the ROS master at {self.master_uri} is unreachable ({exc}); start "
                                          "`hetros master` or roscore, or fix ROS_MASTER_URI") from None
                 if not logged:
@@ -307,7 +366,7 @@ class Ros1Peer:
         except OSError as exc:
             raise TransportError(f"calling {peer} failed: {exc}") from None
         if not ok:
-            raise TransportError(f"ROS 1 service {service} failed: {body.decode(errors='replace')}")
+            raise TransportError(f"ROS 1 service {service} failed: {bytes(body).decode(errors='replace')}")
         return kind.response.deserialize(body)
 
     # -- TCPROS server ---------------------------------------------------------------------
@@ -318,16 +377,35 @@ class Ros1Peer:
                 sock, address = self._tcpros.accept()
             except OSError:
                 return
+            if not self._handshakes.acquire(timeout=1.0):
+                _refused(logging.WARNING, "%s: %d connections are still introducing themselves; dropped one "
+                         "from %s:%s", self.name, MAX_HANDSHAKES, *address[:2])
+                sock.close()
+                continue
             threading.Thread(target=self._handshake, args=(sock, f"{address[0]}:{address[1]}"),
                              name="hetros-ros1-handshake", daemon=True).start()
 
     def _handshake(self, sock: socket.socket, address: str) -> None:
         peer = f"ROS 1 connection from {address}"
+        introduced = threading.Event()
+
+        def done() -> None:
+            """The header exchange is over: free its slot (a persistent service connection lives on)."""
+            if not introduced.is_set():
+                introduced.set()
+                self._handshakes.release()
+
+        try:
+            self._introduce(sock, address, peer, done)
+        finally:
+            done()
+
+    def _introduce(self, sock: socket.socket, address: str, peer: str, done: Callable[[], None]) -> None:
         try:
             sock.settimeout(CALL_TIMEOUT)
             fields = read_header(sock, peer)
             if "service" in fields:
-                self._serve(sock, fields, address)
+                self._serve(sock, fields, address, done)
                 return
             require(fields, ("callerid", "topic", "md5sum", "type"), peer)
             peer = f"ROS 1 subscriber {fields['callerid']} ({address})"
@@ -345,17 +423,17 @@ class Ros1Peer:
             sock.settimeout(None)
             publication._add(sock, fields["callerid"])
         except (ProtocolError, SerializationError) as exc:
-            log.error("%s; disconnected", exc)
+            _refused(logging.ERROR, "%s; disconnected", exc)
             try:
                 sock.sendall(encode_header({"error": str(exc)}))
             except OSError:
                 pass
             sock.close()
         except OSError as exc:
-            log.info("%s: %s", peer, exc)
+            _refused(logging.INFO, "%s: %s", peer, exc)
             sock.close()
 
-    def _serve(self, sock: socket.socket, fields: dict[str, str], address: str) -> None:
+    def _serve(self, sock: socket.socket, fields: dict[str, str], address: str, done: Callable[[], None]) -> None:
         """One ROSRPC connection: answer its header, then each request until the client closes."""
         peer = f"ROS 1 client {fields.get('callerid', '?')} ({address})"
         require(fields, ("callerid", "service", "md5sum"), peer)
@@ -372,13 +450,15 @@ class Ros1Peer:
         if fields.get("probe") == "1":
             sock.close()
             return
-        sock.settimeout(None)
+        done()
         try:
             while True:
+                sock.settimeout(None)  # a persistent client may be quiet for long between calls
                 try:
                     prefix = _receive_exactly(sock, 4)
                 except ConnectionError:
                     return  # the client is done
+                sock.settimeout(CALL_TIMEOUT)  # but a request it started must arrive in time
                 request = kind.request.deserialize(_receive_exactly(sock, _frame_length(prefix, peer)))
                 try:
                     payload = kind.response.serialize(handler(request))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import threading
 import xmlrpc.client
 from socketserver import ThreadingMixIn
 from typing import Any
@@ -13,12 +14,54 @@ log = logging.getLogger("hetros.ros1")
 CALL_TIMEOUT = 5.0
 
 
+# no ROS 1 call comes near this; a larger (or unparseable) Content-Length is refused before reading
+MAX_BODY = 32 << 20
+# requests served at once; a connection beyond them waits a second for a slot, then is closed
+MAX_CONCURRENT = 64
+# a request whose headers and body do not arrive within this is dropped (slowloris)
+REQUEST_TIMEOUT = 10.0
+
+
 class _Threaded(ThreadingMixIn, SimpleXMLRPCServer):
     daemon_threads = True
     allow_reuse_address = True
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._slots = threading.BoundedSemaphore(MAX_CONCURRENT)
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """One thread per request, at most ``MAX_CONCURRENT`` at once."""
+        if not self._slots.acquire(timeout=1.0):
+            log.warning("XML-RPC server at %s:%s busy with %d requests; dropped a connection from %s",
+                        *self.server_address[:2], MAX_CONCURRENT, client_address)
+            self.shutdown_request(request)
+            return
+        threading.Thread(target=self._serve_one, args=(request, client_address), daemon=True,
+                         name="hetros-xmlrpc").start()
+
+    def _serve_one(self, request: Any, client_address: Any) -> None:
+        try:
+            self.process_request_thread(request, client_address)
+        finally:
+            self._slots.release()
+
 
 class _Quiet(SimpleXMLRPCRequestHandler):
+    timeout = REQUEST_TIMEOUT
+
+    def do_POST(self) -> None:
+        """Refuse a body that is too large or whose length is not a number before reading any of it."""
+        length = self.headers.get("content-length", "")
+        if not (length.isdigit() and int(length) <= MAX_BODY):
+            log.info("XML-RPC request from %s refused: Content-Length %r (must be 0..%d)", self.client_address,
+                     length, MAX_BODY)
+            self.send_error(413 if length.isdigit() else 411, "Content-Length must be a number up to "
+                                                              f"{MAX_BODY} bytes")
+            self.close_connection = True
+            return
+        super().do_POST()
+
     def log_message(self, format: str, *args: Any) -> None:
         log.debug(format, *args)
 

@@ -1,0 +1,193 @@
+"""ROS 1 benchmark: one-way latency over TCPROS between rospy and hetros nodes, both ways.
+
+    python benchmarks/ros1.py [--quick] [--out DIR]      (or: hetros bench ros1)
+
+Four pairs, sender -> receiver, in one run through one Debian rosmaster, the sender pinned
+to CPU 0 and the receiver to CPU 1: rospy -> rospy, rospy -> hetros, hetros -> rospy and
+hetros -> hetros. hetros's side is what a user writes: nodes on ``kind: ros1`` targets
+started by ``hetros launch``, the receiver a subscription callback that publishes the data
+back. One-way latency is measured by the receiver (the sender's stamp in the payload, one
+monotonic clock); the round trip by the sender. Prints markdown tables, writes JSON lines
+and a PNG plot. Report ratios, not absolute numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt
+
+SIZES = [4, 3 * 1024, 192 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
+PAIRS = [("rospy", "rospy"), ("rospy", "hetros"), ("hetros", "rospy"), ("hetros", "hetros")]
+ROSPY_PEER = Path(__file__).resolve().parent / "_rospy_peer.py"
+
+
+def pair_name(sender: str, receiver: str) -> str:
+    return f"{sender}->{receiver}"
+
+
+class Ros1Bench(Bench):
+    def run_ros1_pair(self, sender: str, receiver: str, size: int) -> Result:
+        name = pair_name(sender, receiver)
+        cfg, path = self.config(name, size)
+        path.write_text(json.dumps(cfg))
+        cpus = self.cpus or []
+        nodes: dict[str, dict[str, Any]] = {}
+        procs: list[subprocess.Popen[str]] = []
+        for role, kind, cpu in (("echo", receiver, cpus[1:2]), ("ping", sender, cpus[0:1])):
+            if kind == "hetros":
+                nodes[role] = {"cpus": cpu, "parameters": {"size": size, "warmup": cfg["warmup"],
+                                                           "reps": cfg["reps"], "out": cfg[f"{role}_out"]}}
+        project = self.tmp / f"{name}-{size}.yaml"
+        project.write_text(_project(nodes))
+        if nodes:
+            procs.append(subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(project)],
+                                          env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True))
+        for role, kind in (("echo", receiver), ("ping", sender)):
+            if kind == "rospy":
+                procs.append(subprocess.Popen(["/usr/bin/python3", str(ROSPY_PEER), role, str(path)], env=self.env,
+                                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True))
+        errors = _wait_all(procs, timeout=600)
+        if errors:
+            return Result(name, size, error="\n".join(errors))
+        try:
+            rtt = json.loads(Path(cfg["ping_out"]).read_text())["rtt_ns"]
+            one_way = json.loads(Path(cfg["echo_out"]).read_text())["one_way_ns"]
+        except (OSError, ValueError, KeyError) as exc:
+            return Result(name, size, error=f"no result: {exc}")
+        return Result(name, size, Stats.of(one_way), Stats.of(rtt))
+
+
+def _wait_all(procs: list[subprocess.Popen[str]], timeout: float) -> list[str]:
+    """Wait for every process; the first that fails (or the timeout) stops the others. Their errors."""
+    deadline = time.monotonic() + timeout
+    while any(p.poll() is None for p in procs):
+        if time.monotonic() > deadline or any(p.returncode not in (None, 0) for p in procs):
+            for proc in procs:
+                if proc.poll() is None:
+                    proc.kill()
+            break
+        time.sleep(0.05)
+    return [(p.communicate()[1] or "").strip()[-400:] or f"exit code {p.returncode}"
+            for p in procs if p.wait() != 0]
+
+
+def _project(nodes: dict[str, dict[str, Any]]) -> str:
+    """A project with the hetros roles, each alone on a ``kind: ros1`` target pinned to its CPU."""
+    lines = ["name: bench_ros1", "targets:"]
+    lines += [f"  {role}: {{kind: ros1, cpus: {spec['cpus']}}}" for role, spec in nodes.items()]
+    lines.append("nodes:")
+    topics = {"ping": ("/bench_send", "/bench_recv"), "echo": ("/bench_recv", "/bench_send")}
+    for role, spec in nodes.items():
+        out, into = topics[role]
+        lines += [f"  {role}:", f"    run: hetros.bench._ros1_nodes:{role}", f"    target: {role}",
+                  "    required: true", f"    publish: {{{out}: std_msgs/msg/UInt8MultiArray}}",
+                  f"    subscribe: {{{into}: std_msgs/msg/UInt8MultiArray}}",
+                  f"    parameters: {json.dumps(spec['parameters'])}"]
+    lines.append("topics:")
+    lines += [f"  {topic}: {{reliability: reliable, history: keep_last, depth: 16}}"
+              for topic in ("/bench_send", "/bench_recv")]
+    return "\n".join(lines) + "\n"
+
+
+def render(results: list[Result], sizes: list[int], missing: str) -> str:
+    by = {(r.system, r.size): r for r in results}
+    names = [pair_name(*pair) for pair in PAIRS]
+
+    def stat(size: int, name: str) -> str:
+        r = by.get((name, size))
+        if r is None or r.one_way is None:
+            return "err" if r is not None and r.error else "-"
+        return f"{fmt(r.one_way.p50)} ({fmt(r.one_way.p99)})"
+
+    def speedup(size: int, name: str) -> str:
+        base, r = by.get(("rospy->rospy", size)), by.get((name, size))
+        if base is None or r is None or base.one_way is None or r.one_way is None:
+            return "-"
+        return f"{base.one_way.p50 / r.one_way.p50:.2f}x"
+
+    lines: list[str] = []
+    _table(lines, "One-way latency over TCPROS, sender -> receiver, p50 µs (p99)", names, sizes, stat)
+    _table(lines, "Speed-up over rospy -> rospy (rospy p50 / pair p50; target: hetros -> hetros >= 2x, "
+                  "every pair with hetros >= 1x)", names[1:], sizes, speedup)
+    if missing:
+        lines += ["", f"Missing: {missing}"]
+    errors = [r for r in results if r.error]
+    if errors:
+        lines += ["", "### Errors", ""]
+        lines += [f"- {r.system} at {SIZE_LABELS.get(r.size, r.size)}: {r.error.splitlines()[-1][:200]}"
+                  for r in errors]
+    return "\n".join(lines)
+
+
+def plot(results: list[Result], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for sender, receiver in PAIRS:
+        name = pair_name(sender, receiver)
+        points = [(r.size, r.one_way.p50) for r in results if r.system == name and r.one_way is not None]
+        if points:
+            ax.plot(*zip(*points, strict=True), "-o" if "hetros" in name else "--.", label=name)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("payload bytes")
+    ax.set_ylabel("µs, p50")
+    ax.set_title("one-way latency over TCPROS")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="fewer repetitions")
+    parser.add_argument("--out", default="out/bench", help="folder for ros1.jsonl, ros1.md, ros1.png")
+    args = parser.parse_args(argv)
+    cpus = None if (os.cpu_count() or 1) < 2 else [0, 1]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    bench = Ros1Bench(out, args.quick, cpus)
+    results: list[Result] = []
+    missing = bench.available("rospy")
+    try:
+        if missing:
+            print(f"[bench] rospy: missing: {missing}", flush=True)
+        else:
+            for sender, receiver in PAIRS:
+                for size in SIZES:
+                    result = bench.run_ros1_pair(sender, receiver, size)
+                    results.append(result)
+                    status = result.error.splitlines()[-1][:120] if result.error else (
+                        f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")
+                    print(f"[bench] {result.system:16} {SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
+    finally:
+        bench.close()
+    report = render(results, SIZES, missing)
+    print()
+    print(report)
+    (out / "ros1.md").write_text(report + "\n")
+    with (out / "ros1.jsonl").open("w") as handle:
+        for r in results:
+            handle.write(json.dumps({"pair": r.system, "size": r.size, "error": r.error,
+                                     "one_way_us": r.one_way.__dict__ if r.one_way else None,
+                                     "rtt_us": r.rtt.__dict__ if r.rtt else None}) + "\n")
+    if results:
+        plot(results, out / "ros1.png")
+    print(f"\nwrote {out / 'ros1.md'}, {out / 'ros1.jsonl'}, {out / 'ros1.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,4 +1,4 @@
-"""Malformed input, 10,400 connections of it, against a running hetros ROS 1 node and `hetros master`.
+"""Malformed input, 10,350 connections of it, against a running hetros ROS 1 node and `hetros master`.
 
 The node runs on a `kind: ros1` target under `hetros launch`: it publishes /chatter and
 serves /set_bool. Each hypothesis example opens one connection and sends one bad input:
@@ -34,7 +34,7 @@ from hetros.transport.tcpros import Ros1Peer, Ros1ServiceType, Ros1Type
 from hetros.transport.tcpros._header import encode_header
 from tests.support.ros1 import free_port
 
-EXAMPLES = 2600  # per phase; four phases
+EXAMPLES = 3400  # per fuzzed phase; three of them, then 150 slowloris connections
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, database=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 NODES = textwrap.dedent('''

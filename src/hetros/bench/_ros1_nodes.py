@@ -10,12 +10,14 @@ from __future__ import annotations
 import json
 import struct
 import time
+from typing import Any
 
 import numpy as np
 
-from ..interfaces.std_msgs.msg import UInt8MultiArray
+from ..msg import registry
 from ..runtime import Node
 
+UInt8MultiArray = registry().get("std_msgs/msg/UInt8MultiArray")
 PREFIX = struct.Struct("<qq")
 PROBE = -1
 STOP = -2
@@ -65,7 +67,7 @@ def echo(node: Node) -> None:
     one_way: list[int] = []
     stopped = []
 
-    def answer(message: UInt8MultiArray) -> None:
+    def answer(message: Any) -> None:
         arrival = time.monotonic_ns()
         stamp, seq = PREFIX.unpack_from(message.data)
         if seq == STOP:

@@ -105,7 +105,7 @@ def _receive_exactly(sock: socket.socket, size: int) -> bytes | memoryview:
         view[:len(data)] = data
         got = len(data)
     else:
-        view = memoryview(np.empty(size, np.uint8))
+        view = memoryview(np.empty(size, np.uint8).data)
         got = 0
     while got < size:
         count = sock.recv_into(view[got:], size - got)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -10,6 +11,7 @@ import textwrap
 import time
 import xmlrpc.client
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -26,6 +28,28 @@ def _has_rospy() -> bool:
 
 needs_ros1 = pytest.mark.skipif(not _has_rospy(), reason="Debian's python3-rospy and ROS tools are not installed "
                                                           "(`make test` installs them when run as root)")
+
+
+def _has_roscpp() -> bool:
+    try:
+        flags = subprocess.run(["pkg-config", "--exists", "roscpp"], capture_output=True, timeout=30, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return flags.returncode == 0 and shutil.which("g++") is not None and os.path.exists("/usr/include/std_srvs")
+
+
+needs_roscpp = pytest.mark.skipif(not _has_roscpp(), reason="Debian's libroscpp-dev, libstd-srvs-dev, g++ or "
+                                                            "pkg-config is missing (`make test` installs them as root)")
+
+
+def compile_roscpp(source: Path, binary: Path) -> Path:
+    """Build a roscpp node as a ROS 1 user would (g++ and Debian's roscpp)."""
+    flags = subprocess.run(["pkg-config", "--cflags", "--libs", "roscpp"], capture_output=True, text=True,
+                           check=True).stdout.split()
+    built = subprocess.run(["g++", "-O1", "-o", str(binary), str(source), *flags], capture_output=True, text=True,
+                           timeout=300, check=False)
+    assert built.returncode == 0, f"compiling {source} failed: {built.stderr}"
+    return binary
 
 
 def free_port() -> int:

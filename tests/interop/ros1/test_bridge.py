@@ -12,7 +12,7 @@ import pytest
 
 from hetros import CheckError
 from hetros.project import load_project, plan
-from tests.support.ros1 import LISTENER, ROS_PYTHON, needs_ros1
+from tests.support.ros1 import LISTENER, ROS_PYTHON, compile_roscpp, needs_ros1, needs_roscpp, run_ros
 
 NODES = textwrap.dedent('''
     import time
@@ -266,6 +266,24 @@ def test_the_set_bool_example_answers_rosservice(master: tuple[str, dict[str, st
         run_ros(env, ROS_PYTHON, "-c", "import rospy; rospy.wait_for_service('/set_bool', 30)", timeout=60)
         answered = run_ros(env, "rosservice", "call", "/set_bool", "true")
         assert "success: True" in answered and "set to True" in answered
+    finally:
+        launch.terminate()
+        launch.communicate(timeout=30)
+
+
+@needs_ros1
+@needs_roscpp
+def test_the_set_bool_example_answers_a_compiled_roscpp_client(master: tuple[str, dict[str, str]],
+                                                               tmp_path: Path) -> None:
+    _uri, env = master
+    client = compile_roscpp(EXAMPLES / "set_bool" / "set_bool_client.cpp", tmp_path / "set_bool_client")
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", "project_ros1.yaml", "--duration", "30"],
+                              cwd=EXAMPLES / "set_bool", env=dict(env, PYTHONPATH=""), stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+    try:
+        # (roscpp logs its waiting to stdout too: the answer is the last line)
+        assert run_ros(env, str(client), "true", timeout=60).splitlines()[-1] == "success=true message=set to True"
+        assert run_ros(env, str(client), "false", timeout=60).splitlines()[-1] == "success=false message=set to False"
     finally:
         launch.terminate()
         launch.communicate(timeout=30)

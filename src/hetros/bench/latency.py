@@ -405,15 +405,20 @@ def plot(run: Run, systems: list[str], path: Path) -> None:
         if rtts:
             axes[1].plot(*zip(*rtts, strict=True), style, label=system)
     for ax, title in zip(axes, ("one-way latency, p50", "round trip with copy, mean"), strict=True):
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("payload bytes")
-        ax.set_ylabel("µs")
-        ax.set_title(title)
-        ax.grid(True, which="both", alpha=0.3)
+        log_axes(ax, title, "µs")
     axes[0].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
+
+
+def log_axes(ax: Any, title: str, unit: str) -> None:
+    """Payload size against time, both logarithmic: how every latency plot here looks."""
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("payload bytes")
+    ax.set_ylabel(unit)
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt
+from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt, log_axes
 
 SIZES = [4, 3 * 1024, 192 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
 PAIRS = [("rospy", "rospy"), ("rospy", "hetros"), ("hetros", "rospy"), ("hetros", "hetros")]
@@ -139,12 +139,7 @@ def plot(results: list[Result], path: Path) -> None:
         points = [(r.size, r.one_way.p50) for r in results if r.system == name and r.one_way is not None]
         if points:
             ax.plot(*zip(*points, strict=True), "-o" if "hetros" in name else "--.", label=name)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("payload bytes")
-    ax.set_ylabel("µs, p50")
-    ax.set_title("one-way latency over TCPROS")
-    ax.grid(True, which="both", alpha=0.3)
+    log_axes(ax, "one-way latency over TCPROS", "µs, p50")
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -39,29 +39,21 @@ NODES = textwrap.dedent('''
         for message in node.create_subscription(String, "/echoed"):
             _write(node, "sink " + message.data)
 
-    def caller(node):
-        client = node.create_client(SetBool, "/set_bool")
+    def _call_forever(node, client, request, tag):
         while node.ok():
             try:
-                reply = client.call(SetBool.Request(data=True), timeout=2.0)
+                reply = client.call(request, timeout=5.0)
             except Exception as exc:
-                _write(node, f"caller error {type(exc).__name__}")
-                node.sleep(0.3)
-                continue
-            _write(node, f"caller {reply.success} {reply.message}")
+                _write(node, f"{tag} error {type(exc).__name__}: {exc}")
+            else:
+                _write(node, f"{tag} {reply.success} {reply.message}")
             node.sleep(0.3)
 
+    def caller(node):
+        _call_forever(node, node.create_client(SetBool, "/set_bool"), SetBool.Request(data=True), "caller")
+
     def asker(node):
-        client = node.create_client(Trigger, "/trigger")
-        while node.ok():
-            try:
-                reply = client.call(Trigger.Request(), timeout=5.0)
-            except Exception as exc:
-                _write(node, f"asker error {type(exc).__name__}: {exc}")
-                node.sleep(0.3)
-                continue
-            _write(node, f"asker {reply.success} {reply.message}")
-            node.sleep(0.3)
+        _call_forever(node, node.create_client(Trigger, "/trigger"), Trigger.Request(), "asker")
 ''')
 
 TRIGGER_SERVER = textwrap.dedent("""

@@ -64,7 +64,7 @@ class _Throttled:
             else:
                 self._unlogged += 1
         if unlogged:
-            log.warning("%d more ROS 1 connection problems in the last %.0f s were not logged", unlogged,
+            log.warning("%d more ROS 1 connection problems in the last %g s were not logged", unlogged,
                         self._period)
         if logged:
             log.log(level, text, *args)

@@ -25,6 +25,7 @@ STOP = -2
 
 def ping(node: Node) -> None:
     size, warmup, reps = (int(node.get_parameter(k)) for k in ("size", "warmup", "reps"))
+    gap = float(node.get_parameter("gap_s", 0.0))
     publisher = node.create_publisher(UInt8MultiArray, "/bench_send")
     replies = node.create_subscription(UInt8MultiArray, "/bench_recv")
     buffer = np.zeros(PREFIX.size + size, np.uint8)
@@ -55,6 +56,8 @@ def ping(node: Node) -> None:
             pass
         if seq >= warmup:
             rtt.append(time.monotonic_ns() - start)
+        if gap:
+            time.sleep(gap)
     send(STOP)
     time.sleep(0.2)
     with open(node.get_parameter("out"), "w") as out:

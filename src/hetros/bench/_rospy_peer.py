@@ -68,6 +68,8 @@ def main():
                     break
             if seq >= cfg["warmup"]:
                 rtt.append(time.monotonic_ns() - start)
+            if cfg.get("gap_s"):
+                time.sleep(cfg["gap_s"])
         send(time.monotonic_ns(), STOP, b"")
         time.sleep(0.2)
         result["rtt_ns"] = rtt

@@ -1,6 +1,6 @@
 """ROS 1 benchmark: one-way latency over TCPROS between rospy and hetros nodes, both ways.
 
-    python benchmarks/ros1.py [--quick] [--out DIR]      (or: hetros bench ros1)
+    python benchmarks/ros1.py [--quick] [--gap-ms MS] [--out DIR]      (or: hetros bench ros1)
 
 Four pairs, sender -> receiver, in one run through one Debian rosmaster, the sender pinned
 to CPU 0 and the receiver to CPU 1: rospy -> rospy, rospy -> hetros, hetros -> rospy and
@@ -34,16 +34,17 @@ def pair_name(sender: str, receiver: str) -> str:
 
 
 class Ros1Bench(Bench):
-    def run_ros1_pair(self, sender: str, receiver: str, size: int) -> Result:
+    def run_ros1_pair(self, sender: str, receiver: str, size: int, gap: float = 0.0) -> Result:
         name = pair_name(sender, receiver)
         cfg, path = self.config(name, size)
+        cfg["gap_s"] = gap
         path.write_text(json.dumps(cfg))
         cpus = self.cpus or []
         nodes: dict[str, dict[str, Any]] = {}
         procs: list[subprocess.Popen[str]] = []
         for role, kind, cpu in (("echo", receiver, cpus[1:2]), ("ping", sender, cpus[0:1])):
             if kind == "hetros":
-                nodes[role] = {"cpus": cpu, "parameters": {"size": size, "warmup": cfg["warmup"],
+                nodes[role] = {"cpus": cpu, "parameters": {"size": size, "warmup": cfg["warmup"], "gap_s": gap,
                                                            "reps": cfg["reps"], "out": cfg[f"{role}_out"]}}
         project = self.tmp / f"{name}-{size}.yaml"
         project.write_text(_project(nodes))
@@ -149,6 +150,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="fewer repetitions")
     parser.add_argument("--out", default="out/bench", help="folder for ros1.jsonl, ros1.md, ros1.png")
+    parser.add_argument("--gap-ms", type=float, default=0.0,
+                        help="pause of the sender after each reply: 0 (default) measures back-to-back exchanges, "
+                             "a few ms isolated messages (every receiver then wakes from idle)")
     args = parser.parse_args(argv)
     cpus = None if (os.cpu_count() or 1) < 2 else [0, 1]
     out = Path(args.out)
@@ -162,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             for sender, receiver in PAIRS:
                 for size in SIZES:
-                    result = bench.run_ros1_pair(sender, receiver, size)
+                    result = bench.run_ros1_pair(sender, receiver, size, args.gap_ms / 1000.0)
                     results.append(result)
                     status = result.error.splitlines()[-1][:120] if result.error else (
                         f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")

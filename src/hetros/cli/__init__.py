@@ -157,7 +157,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.out:
         forwarded += ["--out", args.out]
     if args.bench == "ros1":
-        return ros1(forwarded)
+        return ros1([*forwarded, "--gap-ms", str(args.gap_ms)])
     if args.systems:
         forwarded += ["--systems", args.systems]
     return latency(forwarded)
@@ -201,6 +201,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("ros1", help="one-way latency over TCPROS: rospy and hetros nodes, both ways")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")
+    p.add_argument("--gap-ms", type=float, default=0.0, help="sender's pause after each reply (isolated messages)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
     msg = sub.add_parser("msg", help="message types").add_subparsers(dest="msg_command", required=True)

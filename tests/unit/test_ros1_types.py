@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import random
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from hetros import UnknownTypeError
 from hetros.msg import TypeRegistry
 from hetros.transport.tcpros import Ros1Type
 from hetros.transport.tcpros._types import Ros1ServiceType, md5_text, ros1_store
+from tests.support.messages import random_message
 
 TYPES = TypeRegistry()
 
@@ -63,3 +65,31 @@ def test_lower_cased_ros2_fields_map_to_ros1s_upper_case() -> None:
 def test_types_ros1_lacks_are_refused_naming_why() -> None:
     with pytest.raises(UnknownTypeError, match=r"example_interfaces/msg/String has no ROS 1 definition"):
         Ros1Type(TYPES, "example_interfaces/msg/String")
+
+
+def _direct(name: str) -> bool:
+    try:
+        return Ros1Type(TYPES, name).direct
+    except UnknownTypeError:
+        return False  # ROS 1 lacks it, or it cannot be mapped
+
+
+DIRECT = [name for name in TYPES.names() if "/msg/" in name and name in ros1_store().fielddefs and _direct(name)]
+
+
+def test_most_types_need_no_conversion_and_mapped_ones_keep_it() -> None:
+    assert {"std_msgs/msg/String", "std_msgs/msg/UInt8MultiArray", "geometry_msgs/msg/Twist"} <= set(DIRECT)
+    assert not Ros1Type(TYPES, "sensor_msgs/msg/Image").direct  # Header.seq
+    assert not Ros1Type(TYPES, "sensor_msgs/msg/CameraInfo").direct  # d vs D
+
+
+@pytest.mark.parametrize("typename", DIRECT)
+def test_direct_types_give_the_bytes_of_the_conversion_path(typename: str) -> None:
+    """Without conversion, hetros messages become the same ROS 1 bytes and come back equal."""
+    kind = Ros1Type(TYPES, typename)
+    rng = random.Random(typename)
+    for _ in range(3):
+        message = random_message(TYPES, typename, rng)
+        slow = bytes(ros1_store().serialize_ros1(kind._outgoing(message), typename))
+        assert kind.serialize(message) == slow
+        assert kind.deserialize(slow) == message

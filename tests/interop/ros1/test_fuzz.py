@@ -155,7 +155,10 @@ def _exchange(address: tuple[str, int], data: bytes, hang_up: bool) -> bytes:
             return b""  # the server closed early: what we want
         if hang_up:
             return b""
-        sock.shutdown(socket.SHUT_WR)
+        try:
+            sock.shutdown(socket.SHUT_WR)
+        except OSError:
+            return b""  # the server refused and reset the connection already
         got = b""
         deadline = time.monotonic() + 2
         try:

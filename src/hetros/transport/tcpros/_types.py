@@ -67,21 +67,43 @@ class Ros1Type:
         self.definition, self.md5 = store.generate_msgdef(self.typename, ros_version=1)
         self._outgoing = _converter(types, store, self.typename, outgoing=True)
         self._incoming = _converter(types, store, self.typename, outgoing=False)
+        # the same definition on both sides (same md5, same attribute names all the way down):
+        # hetros messages go to and from ROS 1 bytes as they are, with no conversion
+        self.direct = (types.store.generate_msgdef(self.typename, ros_version=1)[1] == self.md5
+                       and _same_names(types, self.typename))
+        self._codec = types.store if self.direct else store
 
     def serialize(self, message: Any) -> bytes:
         """A hetros message as ROS 1 bytes (the payload of one TCPROS frame)."""
         try:
-            return bytes(self._store.serialize_ros1(self._outgoing(message), self.typename))
+            ros1 = message if self.direct else self._outgoing(message)
+            return bytes(self._codec.serialize_ros1(ros1, self.typename))
         except (ValueError, TypeError, OverflowError, AttributeError) as exc:
             raise SerializationError(f"cannot serialize {self.typename} for ROS 1: {exc}") from exc
 
     def deserialize(self, data: bytes | memoryview) -> Any:
         """ROS 1 bytes as a read-only hetros message."""
         try:
-            ros1 = self._store.deserialize_ros1(data, self.typename)
+            decoded: Any = self._codec.deserialize_ros1(data, self.typename)
         except Exception as exc:  # rosbags raises several kinds for bad bytes
             raise SerializationError(f"{len(data)} bytes do not decode as ROS 1 {self.name}: {exc}") from exc
-        return freeze(self._incoming(ros1))
+        return freeze(decoded if self.direct else self._incoming(decoded))
+
+
+def _same_names(types: TypeRegistry, typename: str) -> bool:
+    """Whether every field of ``typename``, nested ones too, has its definition's name as attribute
+    and no ``byte``/``char`` (signed in ROS 1, an octet in ROS 2: the same md5, other values)."""
+    fields = types.store.fielddefs[typename][1]
+    names = tuple(name for name, _ in fields)
+    if names != tuple(types.get(typename).__fieldnames__) or _PLACEHOLDER in names:
+        return False
+    for _name, desc in fields:
+        element: Any = desc[1][0] if desc[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE) else desc
+        if element[0] == Nodetype.BASE and element[1][0] in ("byte", "char"):
+            return False
+        if element[0] == Nodetype.NAME and not _same_names(types, str(element[1])):
+            return False
+    return True
 
 
 def _converter(types: TypeRegistry, store: Typestore, typename: str, outgoing: bool) -> Convert:

@@ -65,3 +65,22 @@ def test_parameters_resolve_search_and_notify(state: Any) -> None:
     assert master.hasParam("/x", "/robot/arm")[2] is False
     assert master.deleteParam("/x", "/robot/arm")[0] == -1
     assert master.unsubscribeParam("/n", "http://n/", "/robot/arm")[2] == 1
+
+
+def test_calls_with_wrong_arguments_are_refused_before_they_reach_the_state() -> None:
+    import xmlrpc.client
+
+    from hetros.transport.tcpros import Master
+
+    master = Master("127.0.0.1", 0)
+    try:
+        api = xmlrpc.client.ServerProxy(master.uri, allow_none=True)
+        assert api.registerPublisher("/n", None, "std_msgs/String", "http://127.0.0.1:1/")[:2] == \
+            [-1, "registerPublisher: topic must be a string, not NoneType"]
+        assert api.registerPublisher("/n", 7, "std_msgs/String", "http://127.0.0.1:1/")[0] == -1
+        assert api.registerPublisher("/n")[0] == -1  # too few arguments
+        with pytest.raises(xmlrpc.client.Fault, match="not supported"):
+            api._forget("/n")
+        assert api.getSystemState("/n") == [1, "current system state", [[], [], []]]
+    finally:
+        master.close()

@@ -22,7 +22,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..._errors import TransportError
-from ._xmlrpc import proxy, serve
+from ._xmlrpc import proxy, register, serve
 
 log = logging.getLogger("hetros.master")
 
@@ -340,7 +340,7 @@ class Master:
         self.uri = f"http://{shown}:{bound_port}/"
         self._calls: queue.Queue[tuple[str, str, tuple[Any, ...]] | None] = queue.Queue()
         self.state = MasterState(self.uri, lambda api, method, args: self._calls.put((api, method, args)))
-        self._server.register_instance(self.state)  # made after binding: the URI names the bound port
+        register(self._server, self.state)  # made after binding: the URI names the bound port
         self._threads = [threading.Thread(target=self._server.serve_forever, name="hetros-master", daemon=True),
                          threading.Thread(target=self._call_nodes, name="hetros-master-calls", daemon=True)]
         for thread in self._threads:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import logging
 import threading
 import xmlrpc.client
@@ -72,8 +73,38 @@ def serve(host: str, port: int, api: object | None = None) -> SimpleXMLRPCServer
     Raises OSError when the address cannot be bound."""
     server = _Threaded((host, port), requestHandler=_Quiet, allow_none=True, logRequests=False)
     if api is not None:
-        server.register_instance(api)
+        register(server, api)
     return server
+
+
+def register(server: SimpleXMLRPCServer, api: object) -> None:
+    """Serve ``api``'s public methods, each call checked against the method's signature first."""
+    server.register_instance(_Checked(api))
+
+
+class _Checked:
+    """Calls reach the API only with the arguments its signature names, strings where it says ``str``
+    and lists where it says ``list``: a wrong call is answered with ROS 1's error code (-1) and never
+    reaches (or corrupts) the state behind the API."""
+
+    def __init__(self, api: object) -> None:
+        self._api = api
+
+    def _dispatch(self, method: str, params: tuple[Any, ...]) -> Any:
+        function = None if method.startswith("_") else getattr(self._api, method, None)
+        if not callable(function):
+            raise xmlrpc.client.Fault(1, f"method {method!r} is not supported")
+        try:
+            bound = inspect.signature(function).bind(*params)
+        except TypeError as exc:
+            return -1, f"{method}: {exc}", 0
+        for name, value in bound.arguments.items():
+            expected = str(function.__annotations__.get(name, ""))
+            if expected == "str" and not isinstance(value, str):
+                return -1, f"{method}: {name} must be a string, not {type(value).__name__}", 0
+            if expected.startswith("list") and not isinstance(value, list):
+                return -1, f"{method}: {name} must be a list, not {type(value).__name__}", 0
+        return function(*params)
 
 
 class _TimedTransport(xmlrpc.client.Transport):

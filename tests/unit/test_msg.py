@@ -95,6 +95,7 @@ def test_user_package_srv_and_action_split(tmp_path: Path) -> None:
         ({"msg/Bad.msg": "in$t b\n"}, "Bad.msg:1", "not a valid field type"),
         ({"msg/Bad.msg": "int32 9lives\n"}, "Bad.msg:1", "not a valid field name"),
         ({"msg/Bad.msg": "int32<=5 a\n"}, "Bad.msg:1", "only strings take"),
+        ({"msg/Bad.msg": "int32 a\nwstring b\n"}, "Bad.msg:2", "wstring is not supported"),
         ({"msg/Bad.msg": "int32 a\nNoSuch b\n"}, "Bad.msg:2", "unknown field type 'my_pkg/msg/NoSuch'"),
         ({"srv/Bad.srv": "int32 a\n"}, "Bad.srv:1", "exactly 1 '---' separator"),
         ({"action/Bad.action": "int32 a\n---\nint32 b\n"}, "Bad.action:3", "exactly 2 '---'"),

@@ -150,6 +150,9 @@ def lint_lines(lines: list[str], path: str, first_line: int, package: str
         if not match:
             raise DefinitionError(path, lineno, f"{typetok!r} is not a valid field type")
         base = match.group("base")
+        if base == "wstring":
+            raise DefinitionError(path, lineno, "wstring is not supported in .msg files here (rosbags, which "
+                                  "hetros builds types with, reads it as a message type); use string (UTF-8)")
         if match.group("bound") and base not in {"string", "wstring"}:
             raise DefinitionError(path, lineno, f"only strings take a '<=N' bound, not {base!r}")
         if match.group("upper") and not match.group("size"):

@@ -6,6 +6,7 @@ Neither depends on the other: both depend on this package.
 
 from ._plan import (
     LAUNCHER,
+    SERVICE_QOS,
     ChannelKind,
     ChannelPlan,
     EdgePlan,
@@ -21,6 +22,7 @@ from ._plan import (
 
 __all__ = [
     "LAUNCHER",
+    "SERVICE_QOS",
     "ChannelKind",
     "ChannelPlan",
     "EdgePlan",

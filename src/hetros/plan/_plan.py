@@ -15,6 +15,9 @@ from typing import Any, Literal
 from ..transport import QoS
 
 TransportKind = Literal["inproc", "shm"]
+# Both directions of every service, whatever carries them: deep enough for bursts of calls,
+# patient enough for a slow handler.
+SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
 # The process that runs ``hetros launch``: thread targets live in it.
 LAUNCHER = "launcher"
 ChannelKind = Literal["topic", "request", "reply"]

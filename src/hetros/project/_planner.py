@@ -14,6 +14,7 @@ from .._errors import CheckError, DefinitionError, MessageError, UnknownTypeErro
 from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
 from ..plan import (
     LAUNCHER,
+    SERVICE_QOS,
     ChannelPlan,
     EdgePlan,
     NodePlan,
@@ -28,7 +29,6 @@ from ._model import LoadedProject, Ros1Spec, load_project
 from ._names import node_name_problem, topic_name_problem
 from ._scan import scan_file
 
-SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
 _NOT_YET = {
     "fpga": "hardware (fpga) targets are not implemented yet; map the node to a thread or process target",
     "host": "remote host targets are not implemented yet; map the node to a thread or process target",

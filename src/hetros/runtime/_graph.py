@@ -24,7 +24,7 @@ from ..msg import (
     set_path,
 )
 from ..msg import copy as copy_message
-from ..plan import LAUNCHER, ChannelPlan, EdgePlan, Plan, request_channel, service_of
+from ..plan import LAUNCHER, SERVICE_QOS, ChannelPlan, EdgePlan, Plan, request_channel, service_of
 from ..transport import (
     DEFAULT_QOS,
     Codec,
@@ -349,10 +349,11 @@ class Graph:
     def open_reader(self, name: str, node: str, typename: str, wake: Wake, *,
                     qos: QoS | None = None, envelope: bool = False) -> Reader:
         ros1 = self._speaks_ros1(node)
-        channel = None if ros1 else self.channel(name, node, "subscribe")
-        if channel is None and not ros1:
-            effective = self.qos_of(name, qos)
-            return self._inproc_topic(name, effective).open_reader(node, wake)
+        channel = None
+        if not ros1:
+            channel = self.channel(name, node, "subscribe")
+            if channel is None:
+                return self._inproc_topic(name, self.qos_of(name, qos)).open_reader(node, wake)
         with self._lock:
             prepared = self._prepared.pop((name, node), None)
         if prepared is not None:
@@ -399,7 +400,6 @@ class _Ros1Nodes:
     """The ROS 1 presence of this process' ``kind: ros1`` nodes: one ROS 1 node (slave API,
     TCPROS server) per hetros node, registered with the plan's master under ``/<node>``."""
 
-    _SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
 
     def __init__(self, plan: Plan, types: TypeRegistry, stop: threading.Event) -> None:
         self._plan = plan
@@ -437,7 +437,7 @@ class _Ros1Nodes:
             caller = self._callers.get((node, service))
         if caller is None:
             caller = Ros1ServiceCaller(self._peer(node), service, Ros1ServiceType(self._types, typename),
-                                       self._SERVICE_QOS)
+                                       SERVICE_QOS)
             with self._lock:
                 caller = self._callers.setdefault((node, service), caller)
         return caller
@@ -464,7 +464,7 @@ class _Ros1Nodes:
         if not client:
             kind_name = self._declared(node, "services", service)
             server = Ros1ServiceServer(self._peer(node), service, Ros1ServiceType(self._types, kind_name),
-                                       self._SERVICE_QOS, wake, self._stop)
+                                       SERVICE_QOS, wake, self._stop)
             self._servers[(node, service)] = server
             return server.reader
         return self._caller(node, service).attach(wake)

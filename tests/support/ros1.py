@@ -61,6 +61,23 @@ def free_port() -> int:
 ROSMASTER = "/usr/bin/rosmaster"
 
 
+def stop(proc: subprocess.Popen[str], grace: float = 15) -> str:
+    """Terminate a peer and return what it printed.
+
+    The output is drained while waiting: a chatty rospy node blocked on a full stdout pipe
+    cannot finish its shutdown, and a slow one on a loaded machine is killed after ``grace``
+    rather than failing the test that was only cleaning up.
+    """
+    if proc.poll() is None:
+        proc.terminate()
+    try:
+        out = proc.communicate(timeout=grace)[0]
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out = proc.communicate()[0]
+    return out or ""
+
+
 def ros1_master(kind: str = "hetros") -> Iterator[tuple[str, dict[str, str]]]:
     """A running master on a free port: ``hetros master``, or Debian's ``rosmaster``."""
     port = free_port()
@@ -84,11 +101,7 @@ def ros1_master(kind: str = "hetros") -> Iterator[tuple[str, dict[str, str]]]:
     env = dict(os.environ, ROS_MASTER_URI=uri, ROS_HOSTNAME="127.0.0.1", ROS_HOME="/tmp/hetros-test-ros-home")
     env.pop("PYTHONPATH", None)
     yield uri, env
-    proc.terminate()
-    try:
-        proc.wait(10)
-    except subprocess.TimeoutExpired:
-        proc.kill()
+    stop(proc)
 
 
 TALKER = textwrap.dedent("""

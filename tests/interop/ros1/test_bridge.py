@@ -12,7 +12,7 @@ import pytest
 
 from hetros import CheckError
 from hetros.project import load_project, plan
-from tests.support.ros1 import LISTENER, ROS_PYTHON, compile_roscpp, needs_ros1, needs_roscpp, run_ros
+from tests.support.ros1 import LISTENER, ROS_PYTHON, compile_roscpp, needs_ros1, needs_roscpp, run_ros, stop
 
 NODES = textwrap.dedent('''
     import time
@@ -80,10 +80,8 @@ def test_exported_and_imported_topics_reach_stock_rospy(ros_master: tuple[str, d
             time.sleep(0.1)
         assert got.exists() and "from ROS 1" in got.read_text()
     finally:
-        ros1_talker.terminate()
-        ros1_talker.wait(10)
-        launch.terminate()
-        out, _ = launch.communicate(timeout=30)
+        stop(ros1_talker)
+        out = stop(launch, 30)
     assert "ROS 1 bridge /bridge_demo_hetros" in out, out
 
 
@@ -168,8 +166,7 @@ def test_a_transient_local_topic_is_latched_for_late_ros1_subscribers(ros_master
         time.sleep(4)  # published long before the ROS 1 subscriber exists
         assert 'data: "the map"' in run_ros(env, "rostopic", "echo", "-n", "1", "/map", timeout=60)
     finally:
-        launch.terminate()
-        launch.communicate(timeout=30)
+        stop(launch, 30)
 
 
 SERVICE_NODES = textwrap.dedent('''
@@ -225,10 +222,8 @@ def test_services_are_exported_to_and_imported_from_ros1(ros_master: tuple[str, 
             time.sleep(0.1)
         assert answer.read_text() == "True ros1 True"
     finally:
-        launch.terminate()
-        out, _ = launch.communicate(timeout=30)
-        server.terminate()
-        server.wait(10)
+        out = stop(launch, 30)
+        stop(server)
     assert "exports /hetros_toggle, imports /ros1_toggle" in out, out
 
 
@@ -249,8 +244,7 @@ def test_the_talker_listener_example_joins_ros1_both_ways(master: tuple[str, dic
         run_ros(env, "rostopic", "pub", "-1", "/chatter", "std_msgs/String", "data: from stock ROS 1", timeout=60)
         time.sleep(1)
     finally:
-        launch.terminate()
-        out, _ = launch.communicate(timeout=30)
+        out = stop(launch, 30)
     assert "I heard: [from stock ROS 1]" in out, out
 
 
@@ -267,8 +261,7 @@ def test_the_set_bool_example_answers_rosservice(master: tuple[str, dict[str, st
         answered = run_ros(env, "rosservice", "call", "/set_bool", "true")
         assert "success: True" in answered and "set to True" in answered
     finally:
-        launch.terminate()
-        launch.communicate(timeout=30)
+        stop(launch, 30)
 
 
 @needs_ros1
@@ -285,5 +278,4 @@ def test_the_set_bool_example_answers_a_compiled_roscpp_client(master: tuple[str
         assert run_ros(env, str(client), "true", timeout=60).splitlines()[-1] == "success=true message=set to True"
         assert run_ros(env, str(client), "false", timeout=60).splitlines()[-1] == "success=false message=set to False"
     finally:
-        launch.terminate()
-        launch.communicate(timeout=30)
+        stop(launch, 30)

@@ -8,7 +8,7 @@ import textwrap
 import time
 from pathlib import Path
 
-from tests.support.ros1 import ROS_PYTHON, needs_ros1
+from tests.support.ros1 import ROS_PYTHON, needs_ros1, stop
 
 WIDTH, HEIGHT = 2048, 1024  # rgb8: 6 MiB
 # the same pixels on both sides, cheap to make in plain Python: a repeated digest
@@ -90,6 +90,5 @@ def test_a_6_mib_image_crosses_both_ways_byte_identical(master: tuple[str, dict[
             time.sleep(0.1)
         assert got.read_text().splitlines()[0] == f"1024 2048 rgb8 0 6144 rospy_cam 7.000000089 {pixels}"
     finally:
-        launch.terminate()
-        output = launch.communicate(timeout=30)[0]
+        output = stop(launch, 30)
     assert "Traceback" not in output, output

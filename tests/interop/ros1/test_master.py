@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, needs_ros1, run_ros
+from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, needs_ros1, run_ros, stop
 
 pytestmark = needs_ros1
 
@@ -40,8 +40,7 @@ def test_rospy_nodes_and_ros_tools_work_against_hetros_master(master: tuple[str,
         assert state[0] == 1
         assert ["/chatter", ["/talker"]] in state[2][0]
     finally:
-        talker.terminate()
-        talker.wait(10)
+        stop(talker)
 
 
 def test_a_node_registered_again_under_its_name_shuts_the_old_one_down(master: tuple[str, dict[str, str]],
@@ -58,8 +57,7 @@ def test_a_node_registered_again_under_its_name_shuts_the_old_one_down(master: t
         assert second.poll() is None
     finally:
         for proc in (first, second):
-            proc.terminate()
-            proc.wait(10)
+            stop(proc)
 
 
 def test_a_taken_port_is_refused_with_what_to_do(master: tuple[str, dict[str, str]]) -> None:
@@ -98,5 +96,4 @@ def test_a_roscpp_node_works_against_hetros_master(master: tuple[str, dict[str, 
         assert "/rosout" in run_ros(env, "rosnode", "list").split()
     finally:
         for proc in (chatty, rosout):
-            proc.terminate()
-            proc.wait(10)
+            stop(proc)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from hetros.project import load_project, plan
 from hetros.project._graph import describe
-from tests.support.ros1 import ROS_PYTHON, needs_ros1, run_ros
+from tests.support.ros1 import ROS_PYTHON, needs_ros1, run_ros, stop
 
 NODES = textwrap.dedent('''
     from hetros.interfaces.std_msgs.msg import String
@@ -129,8 +129,7 @@ def test_ros1_targets_talk_to_stock_ros1_and_to_hetros_nodes(ros_master: tuple[s
         called = run_ros(env, ROS_PYTHON, "/usr/bin/rosservice", "call", "/set_bool", "false")
         assert "success: False" in called and "set to False" in called
     finally:
-        launch.terminate()
         trigger.terminate()
-        output = launch.communicate(timeout=30)[0]
-        trigger.wait(10)
+        output = stop(launch, 30)
+        stop(trigger)
     assert "Traceback" not in output, output

@@ -18,7 +18,7 @@ import pytest
 
 from hetros.msg import registry
 from hetros.transport.tcpros import Ros1Peer, Ros1Type
-from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, free_port, needs_ros1, run_ros
+from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, free_port, needs_ros1, run_ros, stop
 
 pytestmark = needs_ros1
 
@@ -105,8 +105,7 @@ def test_hetros_receives_from_a_rospy_publisher(ros_master: tuple[str, dict[str,
         assert got[-1].data.startswith("hello ") and got[-1].is_frozen
     finally:
         peer.close()
-        talker.terminate()
-        talker.wait(10)
+        stop(talker)
 
 
 def test_an_image_with_a_header_round_trips_through_stock_rospy(ros_master: tuple[str, dict[str, str]],
@@ -128,8 +127,7 @@ def test_an_image_with_a_header_round_trips_through_stock_rospy(ros_master: tupl
         assert back[0] == image
     finally:
         peer.close()
-        echo.terminate()
-        echo.wait(10)
+        stop(echo)
 
 
 def test_a_type_mismatch_is_refused_naming_both_types_and_md5s(ros_master: tuple[str, dict[str, str]], tmp_path: Path,
@@ -258,8 +256,7 @@ def test_services_both_ways_with_rospy(ros_master: tuple[str, dict[str, str]], t
         assert (response.success, response.message) == (True, "ros1 True")
     finally:
         peer.close()
-        server.terminate()
-        server.wait(10)
+        stop(server)
 
 
 def xmlrpc_state(uri: str) -> Any:

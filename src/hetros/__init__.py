@@ -3,10 +3,13 @@ processes pinned to cores, hardware or other machines, with a statically planned
 data distribution service underneath."""
 
 from ._errors import (
+    ActionError,
+    ActionTimeoutError,
     CheckError,
     DefinitionError,
     Error,
     FieldValueError,
+    GoalRejectedError,
     LaunchError,
     MessageError,
     NodeError,
@@ -25,17 +28,36 @@ from ._errors import (
     UnknownTypeError,
 )
 from .msg import Message
-from .runtime import Client, Node, Publisher, Service, Subscription, Timer
+from .runtime import (
+    ActionClient,
+    ActionServer,
+    Client,
+    ClientGoalHandle,
+    GoalStatus,
+    Node,
+    Publisher,
+    ServerGoalHandle,
+    Service,
+    Subscription,
+    Timer,
+)
 from .transport import QoS
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "ActionClient",
+    "ActionError",
+    "ActionServer",
+    "ActionTimeoutError",
     "CheckError",
     "Client",
+    "ClientGoalHandle",
     "DefinitionError",
     "Error",
     "FieldValueError",
+    "GoalRejectedError",
+    "GoalStatus",
     "LaunchError",
     "Message",
     "MessageError",
@@ -49,6 +71,7 @@ __all__ = [
     "QoS",
     "ReadOnlyMessageError",
     "SerializationError",
+    "ServerGoalHandle",
     "Service",
     "ServiceTimeoutError",
     "ShutdownError",

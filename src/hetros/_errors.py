@@ -20,7 +20,10 @@ one root and still tell the kinds apart::
     │   ├── UndeclaredEndpointError  an endpoint the project file does not declare
     │   ├── ParameterError     a parameter missing or of the wrong type
     │   ├── TakeTimeoutError   sub.take(timeout=) saw no message in time
-    │   └── ServiceTimeoutError   a service call got no reply in time
+    │   ├── ServiceTimeoutError   a service call got no reply in time
+    │   └── ActionError        an action goal that cannot go on (its cause named)
+    │       ├── GoalRejectedError   the server rejected the goal
+    │       └── ActionTimeoutError  no answer, goal or result in time
     ├── ShutdownError          a blocking call interrupted by graph shutdown
     └── LaunchError            starting or supervising the graph
 """
@@ -112,6 +115,18 @@ class TakeTimeoutError(NodeError, TimeoutError):
 
 class ServiceTimeoutError(NodeError, TimeoutError):
     """A service call got no reply within its timeout."""
+
+
+class ActionError(NodeError):
+    """An action goal that cannot go on: its server went away, it already ended, the graph stopped."""
+
+
+class GoalRejectedError(ActionError):
+    """The action server rejected the goal."""
+
+
+class ActionTimeoutError(ActionError, TimeoutError):
+    """An action's answer, goal or result did not come in time."""
 
 
 class ShutdownError(Error):

@@ -113,7 +113,7 @@ class Launcher:
         except KeyboardInterrupt:
             pass
         finally:
-            unclean = self._shutdown()
+            unclean = self._shutdown(result.reason)
             if in_main:
                 for sig, handler in previous.items():
                     signal.signal(sig, handler)
@@ -193,7 +193,9 @@ class Launcher:
                                      f"died: {cause}; shutting the graph down\n")
                     sys.stderr.flush()
                     self.failures.append(event["target"])
-                    return LaunchResult(1, self.failures, f"target {event['target']} died")
+                    nodes = ", ".join(n for n, spec in self.plan.nodes.items() if spec.target == event["target"])
+                    return LaunchResult(1, self.failures, f"target {event['target']} died ({cause}; it ran "
+                                                          f"node(s) {nodes})")
             elif kind == "local_done":
                 running.discard(LAUNCHER)
             elif kind == "node_done" and self.plan.nodes[event["node"]].required:
@@ -213,12 +215,19 @@ class Launcher:
         except (BrokenPipeError, OSError, ValueError):
             pass
 
-    def _shutdown(self) -> list[str]:
-        """Stop everything in order; return the targets and nodes that had to be abandoned or killed."""
+    def _shutdown(self, reason: str) -> list[str]:
+        """Stop everything in order; return the targets and nodes that had to be abandoned or killed.
+
+        Every process learns why (``Graph.stop_reason``), so a call interrupted by the shutdown
+        can say what it was waiting for and what went away.
+        """
+        reason = " ".join(reason.split())
+        if self.host is not None:
+            self.host.graph.stop_reason = reason
         self.stop.set()
         for child in self.children.values():
             child.stopping = True
-            self._send(child, "stop")
+            self._send(child, f"stop {reason}")
         stuck: list[str] = []
         if self.host is not None:
             stuck = self.host.stop(timeout=5.0)

@@ -64,7 +64,8 @@ def main(argv: list[str] | None = None) -> int:
         for line in sys.stdin:
             if line.strip() == "go":
                 host.start()
-            elif line.strip() == "stop":
+            elif line.split(" ", 1)[0].strip() == "stop":
+                host.graph.stop_reason = line[4:].strip()
                 break
         else:
             orphaned.set()  # end of input without "stop": the launcher died

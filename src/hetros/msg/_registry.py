@@ -142,15 +142,21 @@ class TypeRegistry:
                     service, self.get(f"{service}_Request"), self.get(f"{service}_Response")
                 )
             for action in pkg.actions:
+                send_goal, get_result = (
+                    ServiceType(f"{action}_{part}", self.get(f"{action}_{part}_Request"),
+                                self.get(f"{action}_{part}_Response"))
+                    for part in ("SendGoal", "GetResult")
+                )
+                # an action's endpoints are services and topics (``hetros.plan.action_endpoints``)
+                self.services[send_goal.name] = send_goal
+                self.services[get_result.name] = get_result
                 self.actions[action] = ActionType(
                     action,
                     self.get(f"{action}_Goal"),
                     self.get(f"{action}_Result"),
                     self.get(f"{action}_Feedback"),
-                    ServiceType(f"{action}_SendGoal", self.get(f"{action}_SendGoal_Request"),
-                                self.get(f"{action}_SendGoal_Response")),
-                    ServiceType(f"{action}_GetResult", self.get(f"{action}_GetResult_Request"),
-                                self.get(f"{action}_GetResult_Response")),
+                    send_goal,
+                    get_result,
                     self.get(f"{action}_FeedbackMessage"),
                 )
 

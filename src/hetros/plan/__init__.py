@@ -5,6 +5,7 @@ Neither depends on the other: both depend on this package.
 """
 
 from ._plan import (
+    ACTION_PREFIX,
     LAUNCHER,
     SERVICE_QOS,
     ChannelKind,
@@ -14,6 +15,8 @@ from ._plan import (
     Plan,
     TargetPlan,
     TransportKind,
+    action_endpoints,
+    action_topic_qos,
     process_name,
     reply_channel,
     request_channel,
@@ -21,6 +24,7 @@ from ._plan import (
 )
 
 __all__ = [
+    "ACTION_PREFIX",
     "LAUNCHER",
     "SERVICE_QOS",
     "ChannelKind",
@@ -30,6 +34,8 @@ __all__ = [
     "Plan",
     "TargetPlan",
     "TransportKind",
+    "action_endpoints",
+    "action_topic_qos",
     "process_name",
     "reply_channel",
     "request_channel",

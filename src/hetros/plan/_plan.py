@@ -48,6 +48,11 @@ class NodePlan:
     subscribe: dict[str, str] = field(default_factory=dict)
     services: dict[str, str] = field(default_factory=dict)
     clients: dict[str, str] = field(default_factory=dict)
+    # name -> action type; their services and topics are in the four tables above too
+    actions: dict[str, str] = field(default_factory=dict)
+    action_clients: dict[str, str] = field(default_factory=dict)
+    # action name -> how many of its goals execute at once
+    max_goals: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -140,6 +145,32 @@ def request_channel(service: str) -> str:
 
 def reply_channel(service: str, client: str) -> str:
     return f"{service}{_REPLY}{client}"
+
+
+ACTION_PREFIX = "/_action/"
+# ROS 2's action QoS: feedback reliable and ordered (here keep_all, deep enough for bursts);
+# status latched, one array holding every goal's state, so a late client sees the current one
+ACTION_TOPIC_QOS = {"feedback": QoS(depth=100), "status": QoS.latched(1)}
+
+
+def action_endpoints(action: str, typename: str) -> tuple[dict[str, str], dict[str, str]]:
+    """An action's three services and two topics, named as ROS 2 names them.
+
+    ``(services, topics)``, each name -> type; the server serves and publishes them, the
+    client calls and subscribes. Everything below the node API sees only services and
+    topics, so every transport carries actions without knowing them.
+    """
+    base = action.rstrip("/") + ACTION_PREFIX
+    services = {f"{base}send_goal": f"{typename}_SendGoal", f"{base}cancel_goal": "action_msgs/srv/CancelGoal",
+                f"{base}get_result": f"{typename}_GetResult"}
+    topics = {f"{base}feedback": f"{typename}_FeedbackMessage", f"{base}status": "action_msgs/msg/GoalStatusArray"}
+    return services, topics
+
+
+def action_topic_qos(topic: str) -> QoS | None:
+    """The default QoS of an action's feedback or status topic (None for any other topic)."""
+    _, sep, part = topic.rpartition(ACTION_PREFIX)
+    return ACTION_TOPIC_QOS.get(part) if sep else None
 
 
 def service_of(channel: str) -> tuple[str, str]:

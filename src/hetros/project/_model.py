@@ -8,9 +8,13 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from .._errors import ProjectError
-from ..plan import LAUNCHER
+from .._errors import MessageError, ProjectError
+from ..msg import normalize_typename
+from ..plan import ACTION_PREFIX, LAUNCHER, action_endpoints
 from ..transport import QoS
+
+# goals an action server executes at once unless the project file says otherwise
+DEFAULT_MAX_GOALS = 8
 
 
 class _Strict(BaseModel):
@@ -41,6 +45,13 @@ class EndpointSpec(_Strict):
     durability: Literal["volatile", "transient_local"] | None = None
 
 
+class ActionSpec(_Strict):
+    """An action server with a bound on the goals it executes at once (the rest wait, accepted)."""
+
+    type: str
+    max_goals: int = Field(default=DEFAULT_MAX_GOALS, ge=1, le=1024)
+
+
 class NodeSpec(_Strict):
     run: str
     target: str
@@ -48,15 +59,41 @@ class NodeSpec(_Strict):
     subscribe: dict[str, str | EndpointSpec] = Field(default_factory=dict)
     services: dict[str, str] = Field(default_factory=dict)
     clients: dict[str, str] = Field(default_factory=dict)
+    actions: dict[str, str | ActionSpec] = Field(default_factory=dict)
+    action_clients: dict[str, str] = Field(default_factory=dict)
     parameters: dict[str, Any] = Field(default_factory=dict)
     restart: Literal["never", "on-failure"] = "never"
     required: bool = False
     max_restarts: int = Field(default=3, ge=0)
 
     def types(self, section: str) -> dict[str, str]:
-        """Endpoint name -> type name for publish/subscribe/services/clients."""
-        table: dict[str, str | EndpointSpec] = getattr(self, section)
-        return {k: (v if isinstance(v, str) else v.type) for k, v in table.items()}
+        """Endpoint name -> type name for a section, its actions' services and topics included.
+
+        An action server serves three services and publishes two topics, a client the other
+        way round (``action_endpoints``): from here on they are plain endpoints.
+        """
+        table: dict[str, str | EndpointSpec | ActionSpec] = getattr(self, section)
+        out = {k: (v if isinstance(v, str) else v.type) for k, v in table.items()}
+        if section in _DERIVED:
+            actions, part = _DERIVED[section]
+            for action, typename in self.types(actions).items():
+                try:
+                    full = normalize_typename(typename, "action")
+                except MessageError:
+                    continue  # `hetros check` reports the action's type, once
+                out.update(action_endpoints(action, full)[part])
+        return out
+
+    def action_of(self, section: str, endpoint: str) -> tuple[str, str] | None:
+        """``(actions section, action)`` when ``endpoint`` of ``section`` belongs to an action."""
+        actions, _part = _DERIVED.get(section, ("", 0))
+        for action in getattr(self, actions, {}):
+            if endpoint.startswith(action.rstrip("/") + ACTION_PREFIX):
+                return actions, action
+        return None
+
+    def max_goals(self) -> dict[str, int]:
+        return {k: DEFAULT_MAX_GOALS if isinstance(v, str) else v.max_goals for k, v in self.actions.items()}
 
     def endpoint(self, section: str, name: str) -> EndpointSpec | None:
         value = getattr(self, section).get(name)
@@ -69,6 +106,11 @@ class NodeSpec(_Strict):
         if not sep or not module or not attr:
             raise ValueError(f"run must be 'module:function_or_class', not {value!r}")
         return value
+
+
+# which actions' endpoints each section holds: (actions section, 0 = services / 1 = topics)
+_DERIVED = {"services": ("actions", 0), "publish": ("actions", 1),
+            "clients": ("action_clients", 0), "subscribe": ("action_clients", 1)}
 
 
 class Ros1Spec(_Strict):
@@ -159,6 +201,10 @@ class LoadedProject:
         line = self._lines.get(key)
         dotted = ".".join(str(p) for p in yaml_path)
         return f"{self.path}:{line}: {dotted}" if line else f"{self.path}: {dotted}"
+
+
+_SPECS = {"EndpointSpec", "ActionSpec"}
+_UNION_TAGS = _SPECS | {"str"}
 
 
 # A project file lists nodes and topics; one whose aliases expand past this many YAML nodes
@@ -265,8 +311,14 @@ def load_project(path: str | Path) -> LoadedProject:
     except ValidationError as exc:
         loaded = LoadedProject(Project.model_construct(name="?", nodes={}), path, lines)
         problems = []
-        for error in exc.errors():
-            loc = [str(p) for p in error["loc"]]
+        errors = exc.errors()
+        # a value that is neither a type name nor a mapping fails both branches of the union: name
+        # the branch that was meant (the mapping's, when the value is one)
+        branches = {tuple(map(str, e["loc"][:-2])) for e in errors if len(e["loc"]) > 1 and e["loc"][-2] in _SPECS}
+        for error in errors:
+            loc = [str(p) for p in error["loc"] if p not in _UNION_TAGS]
+            if error["loc"] and error["loc"][-1] == "str" and tuple(map(str, error["loc"][:-1])) in branches:
+                continue
             message = error["msg"]
             if error["type"] == "extra_forbidden":
                 message = f"unknown key {loc[-1]!r}; check its spelling against the documented keys"

@@ -13,6 +13,7 @@ from pathlib import Path
 from .._errors import CheckError, DefinitionError, MessageError, UnknownTypeError
 from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
 from ..plan import (
+    ACTION_PREFIX,
     LAUNCHER,
     SERVICE_QOS,
     ChannelPlan,
@@ -20,12 +21,13 @@ from ..plan import (
     NodePlan,
     Plan,
     TargetPlan,
+    action_topic_qos,
     process_name,
     reply_channel,
     request_channel,
 )
 from ..transport import QoS, reserved_bytes
-from ._model import LoadedProject, Ros1Spec, load_project
+from ._model import LoadedProject, NodeSpec, Ros1Spec, load_project
 from ._names import node_name_problem, topic_name_problem
 from ._scan import scan_file
 
@@ -93,6 +95,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     servers: dict[str, list[tuple[str, str]]] = {}
     clients: dict[str, list[tuple[str, str]]] = {}
     runnable: dict[str, list[str]] = {}
+    derived: set[str] = set()  # the services and topics of actions: checked as actions
     for nname, spec in model.nodes.items():
         if spec.target not in model.targets:
             report.errors.append(
@@ -110,9 +113,14 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             )
         else:
             runnable.setdefault(spec.run, []).append(nname)
+        _check_actions(project, nname, spec, types, report)
         for section, table, kind in (("publish", publishers, "msg"), ("subscribe", subscribers, "msg"),
                                      ("services", servers, "srv"), ("clients", clients, "srv")):
             for endpoint, typename in spec.types(section).items():
+                if spec.action_of(section, endpoint) is not None:
+                    derived.add(endpoint)
+                    table.setdefault(endpoint, []).append((nname, normalize_typename(typename, kind)))
+                    continue
                 problem = topic_name_problem(endpoint)
                 if problem:
                     report.errors.append(f"{where('nodes', nname, section, endpoint)}: {endpoint!r} {problem}")
@@ -132,7 +140,10 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
     ros1 = model.external.ros1 if model.external is not None else None
     imported = set(ros1.import_) if ros1 is not None else set()
+    _check_action_pairs(project, report)
     for topic, subscribed in subscribers.items():
+        if topic in derived:
+            continue
         if topic not in publishers and topic not in imported:
             for nname, _ in subscribed:
                 if nname in speaks_ros1:
@@ -142,7 +153,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                     "add a publisher under some node's 'publish', import it from ROS 1 "
                     "(external: ros1: import:) or remove this subscription"
                 )
-    for topic in set(publishers) | set(subscribers):
+    for topic in (set(publishers) | set(subscribers)) - derived:
         declared = {t for _, t in publishers.get(topic, []) + subscribers.get(topic, [])}
         if len(declared) > 1:
             users = ", ".join(f"{n}: {t}" for n, t in publishers.get(topic, []) + subscribers.get(topic, []))
@@ -150,6 +161,8 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                                  f"({users}); one topic carries one type")
     imported_services = set(ros1.import_services) if ros1 is not None else set()
     for service, calling in clients.items():
+        if service in derived:
+            continue
         if service not in servers and service not in imported_services:
             for nname, _ in calling:
                 if nname in speaks_ros1:
@@ -157,6 +170,8 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                 report.errors.append(f"{where('nodes', nname, 'clients', service)}: no node serves "
                                      f"{service}; add it under some node's 'services'")
     for service, serving in servers.items():
+        if service in derived:
+            continue
         if len(serving) > 1:
             report.errors.append(f"{where('nodes', serving[1][0], 'services', service)}: {service} is "
                                  f"already served by {serving[0][0]}; a service has one server")
@@ -184,6 +199,58 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     if model.external is not None and model.external.ros1 is not None:
         _check_ros1(project, model.external.ros1, publishers, subscribers, servers, clients, types, report)
     return report
+
+
+def _check_actions(project: LoadedProject, nname: str, spec: NodeSpec, types: TypeRegistry,
+                   report: CheckReport) -> None:
+    where = project.where
+    for section in ("actions", "action_clients"):
+        for action, typename in spec.types(section).items():
+            problem = topic_name_problem(action)
+            if problem:
+                report.errors.append(f"{where('nodes', nname, section, action)}: {action!r} {problem}")
+            elif ACTION_PREFIX in action + "/":
+                report.errors.append(f"{where('nodes', nname, section, action)}: an action name cannot contain "
+                                     f"{ACTION_PREFIX.rstrip('/')!r} (hetros puts the action's own services there)")
+            try:
+                types.get_action(normalize_typename(typename, "action"))
+            except MessageError as exc:
+                report.errors.append(f"{where('nodes', nname, section, action)}: {exc}")
+            if spec.target in project.model.targets and project.model.targets[spec.target].kind == "ros1":
+                report.errors.append(f"{where('nodes', nname, section, action)}: actions on a 'kind: ros1' target "
+                                     "(actionlib) are not supported yet; put the node on a thread or process "
+                                     "target")
+
+
+def _check_action_pairs(project: LoadedProject, report: CheckReport) -> None:
+    """One server per action, a server for every client, one type per action."""
+    where = project.where
+    servers: dict[str, list[tuple[str, str]]] = {}
+    for nname, spec in project.model.nodes.items():
+        for action, typename in spec.types("actions").items():
+            servers.setdefault(action, []).append((nname, typename))
+    for action, serving in servers.items():
+        if len(serving) > 1:
+            report.errors.append(f"{where('nodes', serving[1][0], 'actions', action)}: action {action} is already "
+                                 f"served by {serving[0][0]}; an action has one server")
+    for nname, spec in project.model.nodes.items():
+        for action, typename in spec.types("action_clients").items():
+            if action not in servers:
+                report.errors.append(f"{where('nodes', nname, 'action_clients', action)}: no node serves action "
+                                     f"{action}; add it under some node's 'actions'")
+                continue
+            mine = _action_type_or_raw(typename)
+            theirs = _action_type_or_raw(servers[action][0][1])
+            if mine != theirs:
+                report.errors.append(f"{where('nodes', nname, 'action_clients', action)}: {action} is served by "
+                                     f"{servers[action][0][0]} as {theirs}, not {mine}; one action has one type")
+
+
+def _action_type_or_raw(typename: str) -> str:
+    try:
+        return normalize_typename(typename, "action")
+    except MessageError:
+        return typename
 
 
 _PROBE = """
@@ -437,8 +504,8 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
     imports = {t: normalize_typename(declared[t]) for t in shared["import"]}
     served: dict[str, str] = {}
     for node in model.nodes.values():
-        served.update(node.services)
-        served.update(node.clients)
+        served.update(node.types("services"))
+        served.update(node.types("clients"))
     export_services = {s: normalize_typename(served[s], "srv") for s in shared["export_services"]}
     import_services = {s: normalize_typename(served[s], "srv") for s in shared["import_services"]}
     # ROS 1 latching is ROS 2's transient_local: a late subscriber gets the last message
@@ -465,7 +532,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
     speaks_ros1 = _ros1_nodes(project)
     # every hetros node's endpoints, the ROS 1 bridge's too (ROS 1 nodes' endpoints are ROS 1's):
     # (name, publish, subscribe, services, clients)
-    endpoints = [(n, spec.types("publish"), spec.types("subscribe"), dict(spec.services), dict(spec.clients))
+    endpoints = [(n, spec.types("publish"), spec.types("subscribe"), spec.types("services"), spec.types("clients"))
                  for n, spec in model.nodes.items() if n not in speaks_ros1]
     if bridge is not None:
         process_of[bridge.name] = LAUNCHER
@@ -504,7 +571,10 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         | ({ROS1_BRIDGE: TargetPlan(ROS1_BRIDGE, "thread")} if bridge is not None else {}),
         nodes={
             n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts, s.required,
-                        s.types("publish"), s.types("subscribe"), dict(s.services), dict(s.clients))
+                        s.types("publish"), s.types("subscribe"), s.types("services"), s.types("clients"),
+                        {a: normalize_typename(t, "action") for a, t in s.types("actions").items()},
+                        {a: normalize_typename(t, "action") for a, t in s.types("action_clients").items()},
+                        s.max_goals())
             for n, s in model.nodes.items()
         } | ({ROS1_BRIDGE: bridge} if bridge is not None else {}),
         channels=channels,
@@ -530,7 +600,7 @@ def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, 
     if existing is None:
         if kind == "topic":
             spec = project.model.topics.get(name)
-            qos = spec if spec is not None else QoS()
+            qos = spec if spec is not None else action_topic_qos(name) or QoS()
         else:
             qos = SERVICE_QOS
         existing = ChannelPlan(name, typename, kind, qos, (), (), service)  # type: ignore[arg-type]

@@ -190,6 +190,9 @@ class Graph:
         self.process = process
         self.session = session
         self.stop = stop or threading.Event()
+        # why the graph stopped, when the launcher said ("target sorter died (...)"): interrupted
+        # waits name it
+        self.stop_reason = ""
         self.types = types or registry()
         self._lock = threading.Lock()
         self._inproc: dict[str, InprocTopic] = {}

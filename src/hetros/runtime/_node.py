@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
-from typing import Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from .._errors import (
     NodeError,
@@ -24,12 +24,15 @@ from .._errors import (
     TakeTimeoutError,
     TopicTypeError,
 )
-from ..msg import Message, ServiceType
+from ..msg import ActionType, Message, ServiceType
 from ..plan import reply_channel, request_channel
 from ..transport import QoS, Reader, Writer
 from ._executor import AdaptiveSpin, Executor
 from ._graph import Graph
 from ._log import node_logger
+
+if TYPE_CHECKING:
+    from ._action import ActionClient, ActionServer, ServerGoalHandle
 
 M = TypeVar("M", bound=Message)
 _MISSING: Any = object()
@@ -346,7 +349,9 @@ class Client:
             if future.done():
                 return future.result()
             if self.node.graph.stop.is_set():
-                raise ShutdownError(f"call to {self.name} interrupted: the graph is shutting down")
+                reason = self.node.graph.stop_reason
+                raise ShutdownError(f"call to {self.name} interrupted: the graph is shutting down"
+                                    + (f" because {reason}" if reason else ""))
             left = deadline - time.monotonic()
             if left <= 0:
                 with self._lock:
@@ -375,8 +380,11 @@ class Node:
         self._parameters = dict(parameters or {})
         if self.graph.plan is not None and name in self.graph.plan.nodes and parameters is None:
             self._parameters = dict(self.graph.plan.nodes[name].parameters)
-        self._closables: list[Publisher[Any] | Subscription[Any] | Service | Client] = []
+        self._closables: list[Publisher[Any] | Subscription[Any] | Service | Client | ActionServer
+                              | ActionClient] = []
         self.clients: dict[str, Client] = {}
+        self.action_servers: dict[str, ActionServer] = {}
+        self.action_clients: dict[str, ActionClient] = {}
 
     # -- endpoints -------------------------------------------------------------------------
 
@@ -413,6 +421,38 @@ class Node:
         self._check_declared_type(request_channel(name), _typename(srv_type.Request))
         client = Client(self, srv_type, name)
         self.clients[name] = client
+        self._closables.append(client)
+        return client
+
+    def create_action_server(self, action_type: ActionType, name: str,
+                             execute: Callable[[ServerGoalHandle], Any] | None = None, *,
+                             goal_callback: Callable[[Any], bool] | None = None,
+                             cancel_callback: Callable[[ServerGoalHandle], bool] | None = None,
+                             max_goals: int | None = None) -> ActionServer:
+        """Serve an action; without ``execute`` the node takes goals itself (``server.take_goal()``).
+
+        ``goal_callback(goal)`` and ``cancel_callback(goal_handle)`` decide whether to accept
+        (both accept everything by default); ``max_goals`` (else the project file's, else 8)
+        bounds how many ``execute`` calls run at once.
+        """
+        from ._action import ActionServer
+
+        if name in self.action_servers:
+            raise NodeError(f"node {self.name!r} already serves action {name}")
+        server = ActionServer(self, action_type, name, execute, goal_callback=goal_callback,
+                              cancel_callback=cancel_callback, max_goals=max_goals)
+        self.executor.entities += 1
+        self.action_servers[name] = server
+        self._closables.append(server)
+        return server
+
+    def create_action_client(self, action_type: ActionType, name: str) -> ActionClient:
+        from ._action import ActionClient
+
+        if name in self.action_clients:
+            raise NodeError(f"node {self.name!r} already has a client of action {name}; reuse it")
+        client = ActionClient(self, action_type, name)
+        self.action_clients[name] = client
         self._closables.append(client)
         return client
 

@@ -72,7 +72,8 @@ def client(node: Node) -> None:
     for run in range(node.get_parameter("runs", 3)):
         values = rng.integers(0, 2**32, size, dtype=np.uint32)
         progress: list[int] = []
-        goal = sort.send_goal(Sort.Goal(unsorted=values), feedback_cb=lambda f: progress.append(f.passes_done))
+        goal = sort.send_goal(Sort.Goal(unsorted=values),
+                              feedback_cb=lambda f, seen=progress: seen.append(f.passes_done))
         result = goal.result(timeout=60.0)
         if goal.status != GoalStatus.SUCCEEDED or not np.array_equal(result.sorted, np.sort(values)):
             raise ValueError(f"run {run}: the sorter's result ({goal.status.name}) differs from numpy.sort")

@@ -43,6 +43,15 @@ def test_sorting_matches_numpy_in_both_mappings(project: str) -> None:
     assert len(re.findall(r"run \d: 2048 numbers sorted correctly", result.stderr)) == 5
 
 
+@pytest.mark.parametrize("project", ["project.yaml", "project_threads.yaml"])
+def test_sort_action_matches_numpy_in_both_mappings_and_styles(project: str) -> None:
+    """Processes with a callback server; threads with ReconROS's take-goal server."""
+    result = launch(EXAMPLES / "sort_action" / project)
+    assert result.returncode == 0, result.stderr
+    assert len(re.findall(r"run \d: 2048 numbers sorted correctly, 8 feedback messages in order",
+                          result.stderr)) == 3
+
+
 @pytest.mark.parametrize("size", [0, 1, 2, 3, 17, 2048])
 def test_odd_even_transposition_sort(size: int) -> None:
     sort = load("sorting").odd_even_transposition_sort  # type: ignore[attr-defined]

@@ -3,8 +3,8 @@
 * ROS-lite's map file: YAML entries with name, cluster, publish, publish_type,
   subscribe, subscribe_type; each cluster becomes a process target.
 * ReconROS' configuration file: ``[ResourceGroup@Name]`` sections whose
-  rosnode/roscpp, rosmsg, rossrvmsg, rossub, rospub, rossrvs and rossrv entries
-  declare nodes and endpoints; each resource group becomes a process target.
+  rosnode/roscpp, rosmsg, rossrvmsg, rosactionmsg, rossub, rospub, rossrvs, rossrv,
+  rosactions and rosactionc entries declare nodes and endpoints; each resource group becomes a process target.
 """
 
 from __future__ import annotations
@@ -117,7 +117,7 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
             target = group.lower()
             targets.setdefault(target, {"kind": "process"})
             nodes[name] = {"run": f"{module}:{name}", "target": target}
-        elif kind in ("rosmsg", "rosmg", "rossrvmsg"):
+        elif kind in ("rosmsg", "rosmg", "rossrvmsg", "rosactionmsg"):
             need(4)
             messages[var] = f"{fields[1]}/{fields[2]}/{fields[3]}"
         elif kind in ("rossub", "rospub"):
@@ -127,6 +127,10 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
         elif kind in ("rossrvs", "rossrv"):
             need(4)
             section_name = "services" if kind == "rossrvs" else "clients"
+            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
+        elif kind in ("rosactions", "rosactionc"):
+            need(4)
+            section_name = "actions" if kind == "rosactions" else "action_clients"
             node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
         else:
             continue

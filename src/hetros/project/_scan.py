@@ -16,6 +16,8 @@ _KINDS = {
     "create_subscription": "subscribe",
     "create_service": "services",
     "create_client": "clients",
+    "create_action_server": "actions",
+    "create_action_client": "action_clients",
 }
 
 
@@ -26,7 +28,7 @@ class ScannedNode:
     source: str
     line: int
     endpoints: dict[str, dict[str, str]] = field(
-        default_factory=lambda: {"publish": {}, "subscribe": {}, "services": {}, "clients": {}}
+        default_factory=lambda: {kind: {} for kind in _KINDS.values()}
     )
 
 

@@ -237,7 +237,7 @@ class ActionServer:
     def _serve(self) -> None:
         handlers = {"send_goal": self._on_send_goal, "cancel_goal": self._on_cancel,
                     "get_result": self._on_get_result}
-        while not self._closed:
+        while True:
             idle = True
             for part, reader in self._requests.items():
                 envelope = reader.try_take()
@@ -483,7 +483,12 @@ class ActionServer:
             return list(self._goals.values())
 
     def close(self) -> None:
-        """Ask executing goals to cancel, give them a moment, abort what is left, then stop serving."""
+        """Ask executing goals to cancel, give them a moment, abort what is left, then stop serving.
+
+        When the node failed and the graph stops for it, unfinished goals are left unanswered:
+        their clients then fail with the graph's stop reason ("node sorter failed"), which says
+        more than an aborted status would.
+        """
         with self._lock:
             if self._closed:
                 return
@@ -499,12 +504,19 @@ class ActionServer:
         with self._lock:
             for handle in self._goals.values():
                 if handle.is_active:
+                    if self.node.failing:
+                        handle._waiting.clear()
                     self._finish(handle, ABORTED, None)
             try:
                 self._publish_status()
             except Exception:
                 log.debug("action %s: final status not sent", self.name, exc_info=True)
         self._helper.close()
+        try:
+            if not self.node.failing:
+                self._serve()  # requests that came in meanwhile: results are answered, new goals rejected
+        except Exception:
+            log.debug("action %s: last requests not answered", self.name, exc_info=True)
         for reader in self._requests.values():
             reader.close()
         self.node.executor.entities -= 1

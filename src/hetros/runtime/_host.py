@@ -89,6 +89,7 @@ class NodeThread:
                 self.on_failure(self.spec.name, traceback.format_exc(), restart)
                 if not restart:
                     self.failed = True
+                    node.failing = True
                     return
                 restarts += 1
                 node_logger(self.spec.name).warning(

@@ -384,6 +384,9 @@ class Node:
                               | ActionClient] = []
         self.clients: dict[str, Client] = {}
         self.action_servers: dict[str, ActionServer] = {}
+        # set when the node raised and the graph will stop for it: what it leaves unfinished is
+        # then explained by the graph's stop reason rather than answered
+        self.failing = False
         self.action_clients: dict[str, ActionClient] = {}
 
     # -- endpoints -------------------------------------------------------------------------

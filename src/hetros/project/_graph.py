@@ -8,12 +8,20 @@ import sys
 from pathlib import Path
 
 from .._errors import Error
-from ..plan import Plan
+from ..plan import ACTION_PREFIX, Plan
 
 
 def describe(plan: Plan) -> str:
     lines = [f"project {plan.name}", "", "computation graph (nodes and topics):"]
+    for name, node in plan.nodes.items():
+        for action, typename in node.actions.items():
+            callers = [n for n, other in plan.nodes.items() if action in other.action_clients]
+            lines.append(f"  action {action} [{typename}]  {', '.join(callers) or '(no client)'} -> {name}  "
+                         f"(up to {node.max_goals.get(action, 1)} goals at once; its services and topics "
+                         f"under {action.rstrip('/')}{ACTION_PREFIX})")
     for channel in plan.channels.values():
+        if ACTION_PREFIX in channel.name:
+            continue
         if channel.kind == "topic":
             lines.append(f"  {channel.name} [{channel.type}]  {', '.join(channel.publishers)} -> "
                          f"{', '.join(channel.subscribers) or '(no subscriber)'}")

@@ -8,11 +8,12 @@ PYTHON  ?= python3
 
 BSTAMP  := $(VENV)/.installed-bench
 ROS_DEBS := ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-std-msgs \
-            python3-sensor-msgs python3-std-srvs libroscpp-dev libstd-srvs-dev g++ pkg-config
+            python3-sensor-msgs python3-std-srvs python3-actionlib libroscpp-dev libstd-srvs-dev g++ pkg-config
 # Debian's ROS 1 (rospy, the ros* tools): real peers for the tests and the benchmark, installed when we may
 define install_ros_debs
 	@if { [ ! -x /usr/bin/rostopic ] || [ ! -d /usr/lib/python3/dist-packages/std_srvs ] || \
-	      [ ! -f /usr/include/std_srvs/SetBool.h ] || ! command -v g++ > /dev/null; } && [ "$$(id -u)" = 0 ]; then \
+	      [ ! -f /usr/include/std_srvs/SetBool.h ] || [ ! -d /usr/lib/python3/dist-packages/actionlib ] || \
+	      ! command -v g++ > /dev/null; } && [ "$$(id -u)" = 0 ]; then \
 		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(ROS_DEBS) > /dev/null; fi
 endef
 
@@ -33,7 +34,7 @@ install: $(STAMP)
 install-examples: | $(PY)
 	$(PIP) install --quiet -e '.[examples]'
 
-$(TSTAMP): pyproject.toml | $(PY)
+$(TSTAMP): pyproject.toml Makefile | $(PY)
 	$(PIP) install --quiet -e '.[test]'
 	$(install_ros_debs)
 	touch $(STAMP) $@
@@ -41,7 +42,7 @@ $(TSTAMP): pyproject.toml | $(PY)
 install-test: $(TSTAMP)
 
 # The benchmark's peers: pip extras, and Debian's rospy + rosmaster when we may install them.
-$(BSTAMP): pyproject.toml | $(PY)
+$(BSTAMP): pyproject.toml Makefile | $(PY)
 	$(PIP) install --quiet -e '.[bench]'
 	$(install_ros_debs)
 	touch $(STAMP) $@

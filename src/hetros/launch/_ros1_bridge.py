@@ -3,7 +3,8 @@
 The planner adds it (``external: ros1:``) to the launcher's process as an ordinary node,
 so inside the graph the lean transports stay: only this node speaks TCPROS. Exported
 topics reach it like any subscription and go out once per ROS 1 subscriber; imported
-ones come in on TCPROS and are published into the graph.
+ones come in on TCPROS and are published into the graph. Actions cross as actionlib's five
+topics (``_ros1_actions``).
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from typing import Any
 
 from ..msg import registry
 from ..runtime import Node
-from ..transport.tcpros import Ros1Peer, Ros1ServiceType, Ros1Type
+from ..transport.tcpros import Ros1ActionType, Ros1Peer, Ros1ServiceType, Ros1Type
+from ._ros1_actions import ExportedAction, ImportedAction
 
 
 def bridge(node: Node) -> None:
@@ -41,8 +43,14 @@ def bridge(node: Node) -> None:
         for service, typename in import_services.items():
             node.create_service(types.get_service(typename), service,
                                 _forward(peer, service, Ros1ServiceType(types, typename)))
-        exported = [*exports, *export_services]
-        imported = [*imports, *import_services]
+        export_actions: dict[str, str] = node.get_parameter("export_actions", {})
+        import_actions: dict[str, str] = node.get_parameter("import_actions", {})
+        for action, typename in export_actions.items():
+            ExportedAction(node, peer, types.get_action(typename), action, Ros1ActionType(types, typename))
+        for action, typename in import_actions.items():
+            ImportedAction(node, peer, types.get_action(typename), action, Ros1ActionType(types, typename))
+        exported = [*exports, *export_services, *export_actions]
+        imported = [*imports, *import_services, *import_actions]
         node.log.info("ROS 1 bridge %s at %s: exports %s, imports %s", peer.name, peer.master_uri,
                       ", ".join(exported) or "nothing", ", ".join(imported) or "nothing")
         node.spin()

@@ -125,6 +125,9 @@ class Ros1Spec(_Strict):
     import_: list[str] = Field(default_factory=list, alias="import")
     export_services: list[str] = Field(default_factory=list)
     import_services: list[str] = Field(default_factory=list)
+    # hetros action servers offered to actionlib clients; actionlib servers offered to hetros clients
+    export_actions: list[str] = Field(default_factory=list)
+    import_actions: list[str] = Field(default_factory=list)
 
     @field_validator("master")
     @classmethod

@@ -21,6 +21,7 @@ from ..plan import (
     NodePlan,
     Plan,
     TargetPlan,
+    action_endpoints,
     action_topic_qos,
     process_name,
     reply_channel,
@@ -140,7 +141,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
     ros1 = model.external.ros1 if model.external is not None else None
     imported = set(ros1.import_) if ros1 is not None else set()
-    _check_action_pairs(project, report)
+    _check_action_pairs(project, set(ros1.import_actions) if ros1 is not None else set(), report)
     for topic, subscribed in subscribers.items():
         if topic in derived:
             continue
@@ -222,8 +223,8 @@ def _check_actions(project: LoadedProject, nname: str, spec: NodeSpec, types: Ty
                                      "target")
 
 
-def _check_action_pairs(project: LoadedProject, report: CheckReport) -> None:
-    """One server per action, a server for every client, one type per action."""
+def _check_action_pairs(project: LoadedProject, imported: set[str], report: CheckReport) -> None:
+    """One server per action, a server (here or imported from ROS 1) for every client, one type per action."""
     where = project.where
     servers: dict[str, list[tuple[str, str]]] = {}
     for nname, spec in project.model.nodes.items():
@@ -235,6 +236,8 @@ def _check_action_pairs(project: LoadedProject, report: CheckReport) -> None:
                                  f"served by {serving[0][0]}; an action has one server")
     for nname, spec in project.model.nodes.items():
         for action, typename in spec.types("action_clients").items():
+            if action in imported and action not in servers:
+                continue
             if action not in servers:
                 report.errors.append(f"{where('nodes', nname, 'action_clients', action)}: no node serves action "
                                      f"{action}; add it under some node's 'actions'")
@@ -483,6 +486,31 @@ def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, li
                 Ros1ServiceType(types, endpoints[0][1])
             except (UnknownTypeError, DefinitionError) as exc:
                 report.errors.append(f"{here}: {exc}")
+    _check_ros1_actions(project, spec, types, report)
+
+
+def _check_ros1_actions(project: LoadedProject, spec: Ros1Spec, types: TypeRegistry, report: CheckReport) -> None:
+    """Exported actions need a hetros server, imported ones hetros clients and no hetros server."""
+    from ..transport.tcpros import Ros1ActionType
+
+    servers = {a: t for node in project.model.nodes.values() for a, t in node.types("actions").items()}
+    clients = {a: t for node in project.model.nodes.values() for a, t in node.types("action_clients").items()}
+    for section, needs, table in (("export_actions", "server", servers), ("import_actions", "client", clients)):
+        for index, action in enumerate(getattr(spec, section)):
+            here = project.where("external", "ros1", section, index)
+            if section == "import_actions" and action in servers:
+                report.errors.append(f"{here}: {action} is served by a hetros node already; import it from ROS 1 "
+                                     "or serve it here, not both")
+                continue
+            if action not in table:
+                report.errors.append(f"{here}: {action} has no hetros action {needs} to {section.split('_')[0]} "
+                                     f"for; declare one under a node's "
+                                     f"{'actions' if needs == 'server' else 'action_clients'}")
+                continue
+            try:
+                Ros1ActionType(types, normalize_typename(table[action], "action"))
+            except MessageError as exc:
+                report.errors.append(f"{here}: {exc}")
 
 
 def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
@@ -492,8 +520,9 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
     shared = _shared_with_ros1(project)
     if spec is not None:
         for key, listed in (("export", spec.export), ("import", spec.import_),
-                            ("export_services", spec.export_services), ("import_services", spec.import_services)):
-            shared[key] = sorted(set(shared[key]) | set(listed))
+                            ("export_services", spec.export_services), ("import_services", spec.import_services),
+                            ("export_actions", spec.export_actions), ("import_actions", spec.import_actions)):
+            shared[key] = sorted(set(shared.get(key, ())) | set(listed))
     if not any(shared.values()):
         return None
     declared: dict[str, str] = {}
@@ -508,14 +537,31 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
         served.update(node.types("clients"))
     export_services = {s: normalize_typename(served[s], "srv") for s in shared["export_services"]}
     import_services = {s: normalize_typename(served[s], "srv") for s in shared["import_services"]}
+    acted: dict[str, str] = {}
+    for node in model.nodes.values():
+        acted.update(node.types("actions"))
+        acted.update(node.types("action_clients"))
+    export_actions = {a: normalize_typename(acted[a], "action") for a in shared.get("export_actions", ())}
+    import_actions = {a: normalize_typename(acted[a], "action") for a in shared.get("import_actions", ())}
+    # the bridge is a client of exported actions and the server of imported ones
+    publish, subscribe = dict(imports), dict(exports)
+    services, clients = dict(import_services), dict(export_services)
+    for actions, (calls, hears) in ((export_actions, (clients, subscribe)), (import_actions, (services, publish))):
+        for action, typename in actions.items():
+            derived_services, derived_topics = action_endpoints(action, typename)
+            calls.update(derived_services)
+            hears.update(derived_topics)
     # ROS 1 latching is ROS 2's transient_local: a late subscriber gets the last message
     latched = [t for t in exports if (q := model.topics.get(t)) is not None and q.keeps_history]
     host = spec.host if spec is not None else "127.0.0.1"
     parameters = {"master": _ros1_master(project), "host": host, "export": exports, "import": imports,
                   "latch": latched, "ros1_name": f"/{model.name}_hetros",
-                  "export_services": export_services, "import_services": import_services}
+                  "export_services": export_services, "import_services": import_services,
+                  "export_actions": export_actions, "import_actions": import_actions}
     return NodePlan(ROS1_BRIDGE, "hetros.launch._ros1_bridge:bridge", ROS1_BRIDGE, parameters,
-                    publish=imports, subscribe=exports, services=import_services, clients=export_services)
+                    publish=publish, subscribe=subscribe, services=services, clients=clients,
+                    actions=import_actions, action_clients=export_actions,
+                    max_goals=dict.fromkeys(import_actions, 64))
 
 
 def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:

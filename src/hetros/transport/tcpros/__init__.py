@@ -1,5 +1,6 @@
 """ROS 1 interoperability: the master, the slave API, TCPROS connections and the type mapping."""
 
+from ._actions import Ros1ActionType
 from ._endpoints import ROSRPC_CLIENT, Ros1ServiceCaller, Ros1ServiceServer, Ros1Writer, open_ros1_reader
 from ._master import DEFAULT_PORT, Master, MasterState
 from ._peer import Ros1Peer, Ros1Publication, Ros1Subscription, get_ros1_parameter
@@ -10,6 +11,7 @@ __all__ = [
     "ROSRPC_CLIENT",
     "Master",
     "MasterState",
+    "Ros1ActionType",
     "Ros1Peer",
     "Ros1Publication",
     "Ros1ServiceCaller",

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..._errors import ProtocolError, SerializationError, ServiceTimeoutError, TransportError
 from ._header import decode_header, encode_header, header_length, require
-from ._types import Ros1ServiceType, Ros1Type
+from ._types import Ros1Kind, Ros1ServiceType
 from ._xmlrpc import CALL_TIMEOUT, proxy, serve
 
 log = logging.getLogger("hetros.ros1")
@@ -142,7 +142,7 @@ def _configure(sock: socket.socket) -> None:
 class Ros1Publication:
     """A topic this process publishes to ROS 1 subscribers."""
 
-    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Type, latch: bool) -> None:
+    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Kind, latch: bool) -> None:
         self.peer = peer
         self.topic = topic
         self.kind = kind
@@ -192,7 +192,7 @@ class Ros1Publication:
 class Ros1Subscription:
     """A topic this process receives from ROS 1 publishers; ``callback`` runs per message."""
 
-    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Type, callback: Callable[[Any], None]) -> None:
+    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Kind, callback: Callable[[Any], None]) -> None:
         self.peer = peer
         self.topic = topic
         self.kind = kind
@@ -323,14 +323,14 @@ class Ros1Peer:
 
     # -- endpoints -------------------------------------------------------------------------
 
-    def advertise(self, topic: str, kind: Ros1Type, latch: bool = False) -> Ros1Publication:
+    def advertise(self, topic: str, kind: Ros1Kind, latch: bool = False) -> Ros1Publication:
         publication = Ros1Publication(self, topic, kind, latch)
         with self._lock:
             self._publications[topic] = publication
         self._call_master("registerPublisher", topic, kind.name, self.uri)
         return publication
 
-    def subscribe(self, topic: str, kind: Ros1Type, callback: Callable[[Any], None]) -> Ros1Subscription:
+    def subscribe(self, topic: str, kind: Ros1Kind, callback: Callable[[Any], None]) -> Ros1Subscription:
         subscription = Ros1Subscription(self, topic, kind, callback)
         with self._lock:
             self._subscriptions[topic] = subscription

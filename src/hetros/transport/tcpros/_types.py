@@ -17,7 +17,7 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from rosbags.interfaces import Nodetype
@@ -50,6 +50,18 @@ def ros1_name(typename: str) -> str:
     return f"{package}/{name}"
 
 
+class Ros1Kind(Protocol):
+    """What a TCPROS connection needs of a message type: its ROS 1 name, md5sum, definition, codec."""
+
+    name: str
+    md5: str
+    definition: str
+
+    def serialize(self, message: Any) -> bytes: ...
+
+    def deserialize(self, data: bytes | memoryview) -> Any: ...
+
+
 class Ros1Type:
     """One message type as both sides know it, with the converters between them."""
 
@@ -80,6 +92,18 @@ class Ros1Type:
             return bytes(self._codec.serialize_ros1(ros1, self.typename))
         except (ValueError, TypeError, OverflowError, AttributeError) as exc:
             raise SerializationError(f"cannot serialize {self.typename} for ROS 1: {exc}") from exc
+
+    def to_ros1(self, message: Any) -> Any:
+        """A hetros message as a ROS 1 object of the store (to embed in a ROS 1 wrapper message)."""
+        return self._outgoing(message)
+
+    def from_ros1(self, message: Any) -> Any:
+        """A ROS 1 object of the store as a read-only hetros message."""
+        return freeze(self._incoming(message))
+
+    def empty(self) -> Any:
+        """A hetros message of this type with every field at its default."""
+        return self._types.get(self.typename)()
 
     def deserialize(self, data: bytes | memoryview) -> Any:
         """ROS 1 bytes as a read-only hetros message."""

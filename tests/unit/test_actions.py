@@ -287,3 +287,24 @@ def test_init_and_reconros_import_pick_up_actions(tmp_path: Path) -> None:
     data = import_reconros(cfg)
     assert data["nodes"]["sorter"]["actions"] == {"/sort": "sorter_msgs/action/Sort"}
     assert data["nodes"]["caller"]["action_clients"] == {"/sort": "sorter_msgs/action/Sort"}
+
+
+def test_a_goal_sent_and_awaited_inside_a_callback_completes(graph: Graph) -> None:
+    """As with service calls: the client waits on its own replies, not on the node's callback queue."""
+    from hetros.interfaces.std_msgs.msg import Int32
+
+    _pair(graph, lambda goal: Fibonacci.Result(sequence=[goal.request.order * 2]))
+    node = Node("caller", graph)
+    client = node.create_action_client(Fibonacci, "/fib")
+    results: list[list[int]] = []
+
+    def on_trigger(message: Any) -> None:
+        goal = client.send_goal(Fibonacci.Goal(order=message.data))
+        results.append([int(v) for v in goal.result(timeout=5).sequence])
+
+    node.create_subscription(Int32, "/trigger", on_trigger)
+    spinner = threading.Thread(target=node.spin, daemon=True)
+    spinner.start()
+    trigger = Node("trigger", graph).create_publisher(Int32, "/trigger")
+    trigger.publish(Int32(data=21))
+    _until(lambda: results == [[42]])

@@ -24,6 +24,7 @@ one root and still tell the kinds apart::
     │   └── ActionError        an action goal that cannot go on (its cause named)
     │       ├── GoalRejectedError   the server rejected the goal
     │       └── ActionTimeoutError  no answer, goal or result in time
+    ├── HardwareError          an fpga target's topic network cannot be built as asked
     ├── ShutdownError          a blocking call interrupted by graph shutdown
     └── LaunchError            starting or supervising the graph
 """
@@ -127,6 +128,10 @@ class GoalRejectedError(ActionError):
 
 class ActionTimeoutError(ActionError, TimeoutError):
     """An action's answer, goal or result did not come in time."""
+
+
+class HardwareError(Error):
+    """An fpga target's topic network, message layout or tool run cannot be done as asked."""
 
 
 class ShutdownError(Error):

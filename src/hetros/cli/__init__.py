@@ -9,7 +9,7 @@ from pathlib import Path
 
 import yaml
 
-from .._errors import CheckError, Error
+from .._errors import CheckError, Error, HardwareError
 from ..msg import registry
 
 EXIT_ERROR = 1
@@ -46,6 +46,22 @@ def cmd_graph(args: argparse.Namespace) -> int:
     print(describe(plan))
     if args.out:
         for path in write_graph(plan, Path(args.out)):
+            print(f"wrote {path}")
+    return 0
+
+
+def cmd_hw_build(args: argparse.Namespace) -> int:
+    from ..hw import build_target
+    from ..project import plan_file
+
+    plan = plan_file(args.project)
+    fpga = [t.name for t in plan.targets.values() if t.kind == "fpga"]
+    targets = [args.target] if args.target else fpga
+    if not targets:
+        raise HardwareError(f"{args.project} has no fpga target: add one (targets: {{fpga0: {{kind: fpga}}}}) and "
+                            "put the nodes of a topic on it")
+    for target in targets:
+        for path in build_target(plan, target, Path(args.output), registry()):
             print(f"wrote {path}")
     return 0
 
@@ -204,6 +220,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gap-ms", type=float, default=0.0, help="sender's pause after each reply (isolated messages)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
+    hw = sub.add_parser("hw", help="fpga targets: topic networks as RTL").add_subparsers(dest="hw", required=True)
+    p = hw.add_parser("build", help="write an fpga target's topic network as Verilog, with a JSON manifest")
+    p.add_argument("project")
+    p.add_argument("-o", "--output", required=True, help="folder for <top>.v and <top>.json")
+    p.add_argument("--target", help="the fpga target (default: every one)")
+    p.set_defaults(func=cmd_hw_build)
     msg = sub.add_parser("msg", help="message types").add_subparsers(dest="msg_command", required=True)
     p = msg.add_parser("show", help="print a type's full definition")
     p.add_argument("type")

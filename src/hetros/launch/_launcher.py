@@ -256,4 +256,9 @@ class Launcher:
 
 
 def launch(plan: Plan, *, duration: float | None = None) -> LaunchResult:
+    fpga = sorted({spec.target for spec in plan.nodes.values() if plan.targets[spec.target].kind == "fpga"})
+    if fpga:
+        raise LaunchError(f"target(s) {', '.join(fpga)} are fpga targets: running their nodes needs hardware "
+                          "implementations and co-simulation (FPGA part 2, not built yet); `hetros hw build` "
+                          "generates their topic networks as Verilog today")
     return Launcher(plan, duration=duration).run()

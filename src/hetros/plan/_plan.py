@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 from ..transport import QoS
 
-TransportKind = Literal["inproc", "shm"]
+TransportKind = Literal["inproc", "shm", "hw"]
 # Both directions of every service, whatever carries them: deep enough for bursts of calls,
 # patient enough for a slow handler.
 SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
@@ -33,6 +33,10 @@ class TargetPlan:
     name: str
     kind: str
     cpus: tuple[int, ...] = ()
+    # fpga targets: the topic network's clock and stream width, and the device
+    clock_mhz: float = 100.0
+    data_width: int = 64
+    part: str = ""
 
 
 @dataclass(frozen=True)
@@ -118,7 +122,9 @@ class Plan:
             name=raw["name"],
             root=raw["root"],
             message_paths=tuple(raw["message_paths"]),
-            targets={k: TargetPlan(v["name"], v["kind"], tuple(v["cpus"])) for k, v in raw["targets"].items()},
+            targets={k: TargetPlan(v["name"], v["kind"], tuple(v["cpus"]), v.get("clock_mhz", 100.0),
+                                   v.get("data_width", 64), v.get("part", ""))
+                     for k, v in raw["targets"].items()},
             nodes={k: NodePlan(**v) for k, v in raw["nodes"].items()},
             channels={
                 k: ChannelPlan(

@@ -35,11 +35,15 @@ def describe(plan: Plan) -> str:
             continue
         where = "threads of the launcher" if target.kind == "thread" else (
             f"own process, cpus {list(target.cpus)}" if target.cpus else "own process")
+        if target.kind == "fpga":
+            where = (f"{target.part or 'any part'}, topic network at {target.clock_mhz:g} MHz, "
+                     f"{target.data_width}-bit AXI-Stream")
         lines.append(f"  target {target.name} ({target.kind}: {where}): {', '.join(members)}")
     for edge in plan.edges:
         q = plan.channels[edge.channel].qos
-        lines.append(f"  {edge.publisher} -> {edge.subscriber}  {edge.channel}  via {edge.transport}"
-                     f"  ({q.reliability}, {q.history}, depth {q.depth})")
+        how = (f"FIFO of {q.hw_fifo} beats" if q.hw_fifo else "no FIFO") if edge.transport == "hw" else \
+            f"{q.reliability}, {q.history}, depth {q.depth}"
+        lines.append(f"  {edge.publisher} -> {edge.subscriber}  {edge.channel}  via {edge.transport}  ({how})")
     for name, node in plan.nodes.items():
         if not plan.speaks_ros1(name):
             continue

@@ -24,7 +24,10 @@ class _Strict(BaseModel):
 class TargetSpec(_Strict):
     kind: Literal["thread", "process", "ros1", "fpga", "host"]
     cpus: list[int] = Field(default_factory=list)
-    clock_mhz: float | None = None
+    # fpga: the clock of the generated topic network, the stream width, the device
+    clock_mhz: float | None = Field(default=None, gt=0)
+    data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8)
+    part: str | None = None
     sim: str | None = None
     address: str | None = None
 

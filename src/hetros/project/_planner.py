@@ -21,6 +21,7 @@ from ..plan import (
     NodePlan,
     Plan,
     TargetPlan,
+    TransportKind,
     action_endpoints,
     action_topic_qos,
     process_name,
@@ -33,7 +34,6 @@ from ._names import node_name_problem, topic_name_problem
 from ._scan import scan_file
 
 _NOT_YET = {
-    "fpga": "hardware (fpga) targets are not implemented yet; map the node to a thread or process target",
     "host": "remote host targets are not implemented yet; map the node to a thread or process target",
 }
 
@@ -189,6 +189,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
                                    "behaves like keep_last with this depth")
     _check_qos_compatibility(project, publishers, subscribers, report)
+    _check_hardware_topics(project, publishers, subscribers, types, report)
 
     def hetros_side(table: dict[str, list[tuple[str, str]]]) -> dict[str, list[tuple[str, str]]]:
         return {k: kept for k, v in table.items() if (kept := [e for e in v if e[0] not in speaks_ros1])}
@@ -200,6 +201,60 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     if model.external is not None and model.external.ros1 is not None:
         _check_ros1(project, model.external.ros1, publishers, subscribers, servers, clients, types, report)
     return report
+
+
+_HW_QOS = {"reliability": "reliable", "history": "keep_all", "durability": "volatile"}
+
+
+def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tuple[str, str]]],
+                           subscribers: dict[str, list[tuple[str, str]]], types: TypeRegistry,
+                           report: CheckReport) -> None:
+    """A topic is a hardware topic when all its endpoints sit on one fpga target; say why when not."""
+    from ..hw import stream_problem
+
+    model = project.model
+    where = project.where
+    fpga = {t for t, spec in model.targets.items() if spec.kind == "fpga"}
+    for nname, spec in model.nodes.items():
+        if spec.target in fpga:
+            for section in ("services", "clients", "actions", "action_clients"):
+                for name in getattr(spec, section):
+                    report.errors.append(f"{where('nodes', nname, section, name)}: {section} of a node on an fpga "
+                                         "target need a hardware/software gateway (FPGA part 2, not built yet); "
+                                         "move the node to a thread or process target")
+    for topic in sorted(set(publishers) | set(subscribers)):
+        endpoints = publishers.get(topic, []) + subscribers.get(topic, [])
+        placed = {n: model.nodes[n].target for n, _ in endpoints if n in model.nodes}
+        on_fpga = {n: t for n, t in placed.items() if t in fpga}
+        qos = model.topics.get(topic)
+        if not on_fpga:
+            if qos is not None and qos.hw_fifo is not None:
+                report.warnings.append(f"{where('topics', topic, 'hw_fifo')}: {topic} is not a hardware topic (no "
+                                       "endpoint on an fpga target), so hw_fifo has no effect")
+            continue
+        software = {n: t for n, t in placed.items() if t not in fpga}
+        if software or len(set(on_fpga.values())) > 1:
+            hardware = ", ".join(f"{n} on {t}" for n, t in on_fpga.items())
+            other = ", ".join(f"{n} on {t}" for n, t in software.items()) or "others on another fpga target"
+            report.errors.append(f"{where('nodes')}: topic {topic} is not a hardware topic: {hardware} but {other}; "
+                                 "an edge between hardware and software (or two fpga targets) needs a gateway "
+                                 "(FPGA part 2, not built yet): put all its endpoints on one fpga target or none")
+            continue
+        if qos is not None:
+            for key, wanted in _HW_QOS.items():
+                if getattr(qos, key) != wanted:
+                    report.errors.append(f"{where('topics', topic, key)}: {topic} is a hardware topic, which is "
+                                         f"reliable, keep_all and volatile (an AXI-Stream network with "
+                                         f"back-pressure), not {key} {getattr(qos, key)}; remove the setting")
+        node, typename = endpoints[0]
+        try:
+            problem = stream_problem(types, typename)
+        except MessageError:
+            continue  # an unknown type is reported where it is declared
+        if problem:
+            section = "publish" if topic in publishers else "subscribe"
+            report.errors.append(f"{where('nodes', node, section, topic)}: {topic} [{typename}] cannot be a "
+                                 f"hardware topic: {problem}")
 
 
 def _check_actions(project: LoadedProject, nname: str, spec: NodeSpec, types: TypeRegistry,
@@ -605,15 +660,21 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
             name = reply_channel(service, nname)
             _add(channels, name, f"{srv}_Response", "reply", project, pub=server, service=service)
             _add(channels, name, f"{srv}_Response", "reply", project, sub=nname, service=service)
-    edges = tuple(
-        EdgePlan(c.name, p, s, "inproc" if process_of[p] == process_of[s] else "shm")
-        for c in channels.values() for p in c.publishers for s in c.subscribers
-    )
+    fpga_of = {n: s.target for n, s in model.nodes.items() if model.targets[s.target].kind == "fpga"}
+
+    def transport(publisher: str, subscriber: str) -> TransportKind:
+        if publisher in fpga_of:
+            return "hw"  # check: a topic with an endpoint on an fpga target has all of them on it
+        return "inproc" if process_of[publisher] == process_of[subscriber] else "shm"
+
+    edges = tuple(EdgePlan(c.name, p, s, transport(p, s))
+                  for c in channels.values() for p in c.publishers for s in c.subscribers)
     return Plan(
         name=model.name,
         root=str(project.root.resolve()),
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
-        targets={n: TargetPlan(n, t.kind, tuple(t.cpus)) for n, t in model.targets.items()}
+        targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "")
+                 for n, t in model.targets.items()}
         | ({ROS1_BRIDGE: TargetPlan(ROS1_BRIDGE, "thread")} if bridge is not None else {}),
         nodes={
             n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts, s.required,

@@ -37,6 +37,8 @@ class QoS:
     depth: Annotated[int, Field(ge=1, le=MAX_DEPTH)] = 10
     durability: Durability = "volatile"
     publish_timeout: Annotated[float, Field(gt=0)] = 5.0
+    # a hardware topic's FIFO in front of each subscriber, in beats (fpga targets only; none by default)
+    hw_fifo: Annotated[int, Field(ge=3, le=1 << 20)] | None = None
 
     def __post_init__(self) -> None:
         if self.reliability not in ("reliable", "best_effort"):
@@ -47,6 +49,9 @@ class QoS:
             raise ValueError(f"durability must be 'volatile' or 'transient_local', not {self.durability!r}")
         if not isinstance(self.depth, int) or not 1 <= self.depth <= MAX_DEPTH:
             raise ValueError(f"depth must be an integer from 1 to {MAX_DEPTH:,}, not {self.depth!r}")
+        if self.hw_fifo is not None and not (isinstance(self.hw_fifo, int) and 3 <= self.hw_fifo <= 1 << 20):
+            raise ValueError(f"hw_fifo must be 3 to {1 << 20:,} beats (a FIFO of 2 runs at half rate), "
+                             f"not {self.hw_fifo!r}")
         if not self.publish_timeout > 0:
             raise ValueError(f"publish_timeout must be positive seconds, not {self.publish_timeout!r}")
 

@@ -1,0 +1,22 @@
+"""Hardware: fpga targets' topic networks as Amaranth components, their beats, Verilog and reports.
+
+A topic whose publishers and subscribers all sit on one fpga target is a hardware topic
+(fpgaDDS): an AXI-Stream network of wiring, a round-robin arbiter, a broadcast and FIFOs,
+generated from the plan. Amaranth is imported only when a network is built.
+"""
+
+from pathlib import Path
+
+from ..msg import TypeRegistry
+from ..plan import Plan
+from ._beats import BeatCodec, Beats, from_beats, stream_problem, to_beats
+
+
+def build_target(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path, Path]:
+    """Write the Verilog top and JSON manifest of ``target``'s topic network into ``out``."""
+    from ._build import build
+
+    return build(plan, target, out, types)
+
+
+__all__ = ["BeatCodec", "Beats", "build_target", "from_beats", "stream_problem", "to_beats"]

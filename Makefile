@@ -7,12 +7,13 @@ TSTAMP  := $(VENV)/.installed-test
 PYTHON  ?= python3
 
 BSTAMP  := $(VENV)/.installed-bench
-ROS_DEBS := ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-std-msgs \
+# plus Icarus Verilog, which runs the fpga targets' exported Verilog
+ROS_DEBS := iverilog ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-std-msgs \
             python3-sensor-msgs python3-std-srvs python3-actionlib libroscpp-dev libstd-srvs-dev g++ pkg-config
 # Debian's ROS 1 (rospy, the ros* tools): real peers for the tests and the benchmark, installed when we may
 define install_ros_debs
 	@if { [ ! -x /usr/bin/rostopic ] || [ ! -d /usr/lib/python3/dist-packages/std_srvs ] || \
-	      [ ! -f /usr/include/std_srvs/SetBool.h ] || [ ! -d /usr/lib/python3/dist-packages/actionlib ] || \
+	      [ ! -f /usr/include/std_srvs/SetBool.h ] || [ ! -d /usr/lib/python3/dist-packages/actionlib ] || ! command -v iverilog > /dev/null || \
 	      ! command -v g++ > /dev/null; } && [ "$$(id -u)" = 0 ]; then \
 		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(ROS_DEBS) > /dev/null; fi
 endef

@@ -7,6 +7,7 @@ import random
 import shutil
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -195,3 +196,84 @@ def test_hw_build_writes_axi_stream_ports_and_a_manifest_that_yosys_reads_back(t
     check = subprocess.run([yosys, "-q", "-p", "read_verilog hetros_fpga0.v; hierarchy -check -top hetros_fpga0; "
                             "proc; stat"], cwd=out, capture_output=True, text=True, timeout=600, check=False)
     assert check.returncode == 0, check.stdout + check.stderr
+
+
+# -- the exported Verilog under Icarus, reports -------------------------------------------------
+
+needs_icarus = pytest.mark.skipif(shutil.which("iverilog") is None,
+                                  reason="Icarus Verilog is not installed (`make test` installs it when run as root)")
+
+
+@pytest.mark.rtl
+@needs_icarus
+@pytest.mark.parametrize(("publishers", "subscribers", "fifo"), [(1, 1, None), (2, 3, None), (2, 3, 4), (4, 4, 3)])
+def test_the_exported_verilog_passes_the_same_scoreboard_in_the_same_cycles(
+        publishers: int, subscribers: int, fifo: int | None) -> None:
+    from hetros.hw._rtl import simulate_verilog
+
+    sent = _messages(publishers, 10, seed=publishers + 7 * subscribers)
+    amaranth = simulate(TopicNetwork(publishers, subscribers, 64, fifo), sent, idle=0.3, stall=0.4, seed=11)
+    icarus = simulate_verilog(publishers, subscribers, 64, fifo, sent, idle=amaranth.idle, stall=amaranth.stall)
+    check_delivery(sent, icarus)
+    assert icarus.received == amaranth.received
+    assert icarus.done_at == amaranth.done_at and icarus.cycles == amaranth.cycles
+
+
+@pytest.mark.rtl
+@needs_icarus
+def test_transfer_time_is_simulated_a_beat_per_cycle_in_both_simulators() -> None:
+    from hetros.hw._report import transfer_cycles
+
+    for size in (1, 8, 9, 3072):
+        beats = -(-size // 8)
+        assert transfer_cycles(1, 1, 64, None, size, "icarus") == (beats, "icarus")
+        assert transfer_cycles(1, 1, 64, None, size, "amaranth") == (beats, "amaranth")
+    # a FIFO adds its fill latency, a broadcast none
+    assert transfer_cycles(1, 3, 64, None, 3072, "icarus")[0] == 384
+    assert transfer_cycles(1, 2, 64, 8, 3072, "icarus")[0] == transfer_cycles(1, 2, 64, 8, 3072, "amaranth")[0]
+
+
+@pytest.mark.rtl
+def test_yosys_estimates_a_fifo_in_block_ram_and_wiring_as_nothing() -> None:
+    from hetros.hw._report import synthesize
+
+    wiring = synthesize(1, 1, 64, None)
+    assert wiring.luts == 0 and wiring.ffs == 0 and wiring.bram36 == 0
+    buffered = synthesize(1, 1, 64, 512)
+    assert buffered.bram36 >= 1 and buffered.ffs > 0
+
+
+def test_reconros_hardware_threads_and_hw_topics_land_on_one_fpga_target(tmp_path: Path) -> None:
+    from hetros.project import import_reconros
+
+    cfg = tmp_path / "build.cfg"
+    cfg.write_text(textwrap.dedent("""
+        [General]
+        TargetPart = xczu7ev-ffvc1156-2-e
+        SystemClock = System
+        [Clock@System]
+        ClockFreq = 150000000
+        [ResourceGroup@Producer]
+        frame = rosmsg, sensor_msgs, msg, Image
+        node_1 = rosnode, "producer"
+        out = rospub, node_1, frame, "fast"
+        [ResourceGroup@Consumer]
+        node_1 = rosnode, "consumer"
+        in = rossub, node_1, sensor_msgs/Image, "fast", 10000, hw
+        [ResourceGroup@Software]
+        node_1 = rosnode, "logger"
+        in = rossub, node_1, sensor_msgs/Image, "/other", 10000
+        [ReconosThread@Producer]
+        HwSource = hls
+        ResourceGroup = Producer
+        [ROSGateway@Gateway]
+        HWTopic = "fast"
+    """))
+    data = import_reconros(cfg)
+    assert data["targets"]["fpga"] == {"kind": "fpga", "clock_mhz": 150.0, "part": "xczu7ev-ffvc1156-2-e"}
+    assert data["nodes"]["producer"]["target"] == data["nodes"]["consumer"]["target"] == "fpga"
+    assert data["nodes"]["consumer"]["subscribe"] == {"/fast": "sensor_msgs/msg/Image"}
+    assert data["nodes"]["logger"]["target"] == "software"
+    with pytest.raises(Exception, match="is neither a message defined earlier"):
+        cfg.write_text("[ResourceGroup@G]\nnode_1 = rosnode, \"n\"\nx = rossub, node_1, nothing, \"t\"\n")
+        import_reconros(cfg)

@@ -11,6 +11,7 @@ import yaml
 
 from .._errors import CheckError, Error, HardwareError
 from ..msg import registry
+from ..plan import Plan
 
 EXIT_ERROR = 1
 
@@ -52,17 +53,48 @@ def cmd_graph(args: argparse.Namespace) -> int:
 
 def cmd_hw_build(args: argparse.Namespace) -> int:
     from ..hw import build_target
+
+    plan, targets = _fpga_targets(args)
+    for target in targets:
+        for path in build_target(plan, target, Path(args.output), registry()):
+            print(f"wrote {path}")
+    return 0
+
+
+def _fpga_targets(args: argparse.Namespace) -> tuple[Plan, list[str]]:
     from ..project import plan_file
 
     plan = plan_file(args.project)
     fpga = [t.name for t in plan.targets.values() if t.kind == "fpga"]
-    targets = [args.target] if args.target else fpga
-    if not targets:
+    if not fpga:
         raise HardwareError(f"{args.project} has no fpga target: add one (targets: {{fpga0: {{kind: fpga}}}}) and "
                             "put the nodes of a topic on it")
+    return plan, [args.target] if args.target else fpga
+
+
+def cmd_hw_report(args: argparse.Namespace) -> int:
+    from ..hw._report import format_transfers, transfer_report
+
+    plan, targets = _fpga_targets(args)
     for target in targets:
-        for path in build_target(plan, target, Path(args.output), registry()):
-            print(f"wrote {path}")
+        print(f"fpga target {target}: one message from the first publisher to every subscriber, simulated "
+              "(cycles from the first beat offered to the last TLAST taken)\n")
+        print(format_transfers(transfer_report(plan, target, simulator=args.simulator)))
+    return 0
+
+
+def cmd_hw_synth(args: argparse.Namespace) -> int:
+    from ..hw._report import format_resources, synth_report
+
+    plan, targets = _fpga_targets(args)
+    for target in targets:
+        part = plan.targets[target].part or "no part named"
+        print(f"fpga target {target} ({part}): Yosys estimate (synth_xilinx -family xcup -flatten) per topic "
+              "network, not vendor place-and-route\n")
+        rows = [(f"{t.name} ({len(t.publishers)}x{len(t.subscribers)}"
+                 + (f", FIFO {t.fifo_depth}" if t.fifo_depth else "") + ")", used)
+                for t, used in synth_report(plan, target)]
+        print(format_resources(rows))
     return 0
 
 
@@ -226,6 +258,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="folder for <top>.v and <top>.json")
     p.add_argument("--target", help="the fpga target (default: every one)")
     p.set_defaults(func=cmd_hw_build)
+    p = hw.add_parser("report", help="simulated transfer time per message size (fpgaDDS Table I sizes)")
+    p.add_argument("project")
+    p.add_argument("--target", help="the fpga target (default: every one)")
+    p.add_argument("--simulator", choices=["auto", "icarus", "amaranth"], default="auto",
+                   help="auto: Icarus Verilog when installed (fast), else Amaranth's simulator")
+    p.set_defaults(func=cmd_hw_report)
+    p = hw.add_parser("synth", help="Yosys resource estimate (LUT/FF/BRAM/LUTRAM) per topic network")
+    p.add_argument("project")
+    p.add_argument("--target", help="the fpga target (default: every one)")
+    p.set_defaults(func=cmd_hw_synth)
     msg = sub.add_parser("msg", help="message types").add_subparsers(dest="msg_command", required=True)
     p = msg.add_parser("show", help="print a type's full definition")
     p.add_argument("type")

@@ -143,8 +143,10 @@ def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRe
     """Every port with its direction and width, every topic with its endpoints and message layout."""
     spec = plan.targets[target]
     width = spec.data_width
+    clocked = any(len(t.publishers) > 1 or len(t.subscribers) > 1 or t.fifo_depth for t in topics)
     ports = [{"name": "clk", "direction": "input", "width": 1, "role": "clock"},
-             {"name": "rst", "direction": "input", "width": 1, "role": "reset (active high, synchronous)"}]
+             {"name": "rst", "direction": "input", "width": 1, "role": "reset (active high, synchronous)"}
+             ] if clocked else []  # a network of wiring only has neither
     for topic in topics:
         for prefix, nodes, sends in (("s_axis", topic.publishers, True), ("m_axis", topic.subscribers, False)):
             for node in nodes:

@@ -34,11 +34,18 @@ class _Source:
 
 @dataclass
 class SimResult:
-    """What a simulation saw: cycles run, messages per subscriber, when each message finished."""
+    """What a simulation saw: cycles run, messages per subscriber, the cycle each one ended on.
+
+    ``idle`` and ``stall`` are the per-cycle decisions it drew (a bit per publisher: do not
+    start a beat this cycle; a bit per subscriber: hold TREADY low), so another simulator can
+    replay exactly the same run.
+    """
 
     cycles: int
     received: list[list[bytes]]
     done_at: list[list[int]] = field(default_factory=list)
+    idle: list[int] = field(default_factory=list)
+    stall: list[int] = field(default_factory=list)
 
 
 def simulate(network: TopicNetwork, messages: list[list[bytes]], *, idle: float = 0.0, stall: float = 0.0,
@@ -68,8 +75,12 @@ def simulate(network: TopicNetwork, messages: list[list[bytes]], *, idle: float 
             if cycle >= max_cycles:
                 raise HardwareError(f"the topic network moved {sum(map(len, received))} of "
                                     f"{expected * len(subs)} messages in {max_cycles:,} cycles: it is stuck")
-            for source, port in zip(sources, pubs, strict=True):
-                if not source.showing and source.pending() and rng.random() >= idle:
+            idle_bits = sum((rng.random() < idle) << i for i in range(len(pubs)))
+            stall_bits = sum((rng.random() < stall) << j for j in range(len(subs)))
+            result.idle.append(idle_bits)
+            result.stall.append(stall_bits)
+            for index, (source, port) in enumerate(zip(sources, pubs, strict=True)):
+                if not source.showing and source.pending() and not idle_bits >> index & 1:
                     source.showing = True
                 if source.showing:
                     beats = source.messages[source.message]
@@ -77,7 +88,7 @@ def simulate(network: TopicNetwork, messages: list[list[bytes]], *, idle: float 
                     ctx.set(port.tkeep, int(beats.keep[source.beat]))
                     ctx.set(port.tlast, int(source.beat == len(beats) - 1))
                 ctx.set(port.tvalid, int(source.showing))
-            ready = [rng.random() >= stall for _ in subs]
+            ready = [not stall_bits >> j & 1 for j in range(len(subs))]
             for port, wants in zip(subs, ready, strict=True):
                 ctx.set(port.tready, int(wants))
             for source, port in zip(sources, pubs, strict=True):

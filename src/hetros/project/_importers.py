@@ -64,7 +64,9 @@ def import_roslite(path: Path, module: str = "nodes") -> dict[str, Any]:
     return {"name": path.stem, "targets": targets, "nodes": nodes}
 
 
-_SECTION = re.compile(r"^\[ResourceGroup(?:@|\(at\))(?P<name>[^\]]+)\]$")
+_SECTION = re.compile(r"^\[(?P<kind>\w+)(?:@|\(at\))(?P<name>[^\]]+)\]$")
+# one fpga target for every hardware thread of a ReconROS build
+FPGA_TARGET = "fpga"
 
 
 def _fields(value: str) -> list[str]:
@@ -72,26 +74,57 @@ def _fields(value: str) -> list[str]:
 
 
 def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
-    """A project dict from the ROS part of a ReconROS build.cfg (Listing 1 of the paper)."""
+    """A project dict from the ROS part of a ReconROS build.cfg (Listing 1 of the paper).
+
+    Each ``[ResourceGroup@…]`` becomes a process target; the nodes of a group that a
+    ``[ReconosThread@…]`` with a ``HwSource`` uses, and every node with an ``hw``-flagged
+    ``rossub``/``rospub``, go on one fpga target instead (clock from the system clock, part from
+    ``TargetPart``). Message types may be variables (``rosmsg``…) or written inline
+    (``sensor_msgs/Image``).
+    """
     targets: dict[str, Any] = {}
     nodes: dict[str, Any] = {}
     group = ""
+    section_kind = ""
     variables: dict[str, str] = {}
     messages: dict[str, str] = {}
+    group_of: dict[str, str] = {}
+    hardware_nodes: set[str] = set()
+    hardware_groups: set[str] = set()
+    thread: dict[str, str] = {}
+    general: dict[str, str] = {}
+    clocks: dict[str, dict[str, str]] = {}
+    threads: list[dict[str, str]] = []
+    clock_name = ""
     for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
         line = re.sub(r"^\d+\s+", "", raw.split("#", 1)[0].strip())
         if not line:
             continue
         section = _SECTION.match(line)
-        if section:
-            group = section.group("name")
+        if section or line.startswith("["):
+            section_kind = section.group("kind") if section else line.strip("[]")
+            group = section.group("name") if section and section_kind == "ResourceGroup" else ""
+            if section_kind == "ReconosThread":
+                thread = {}
+                threads.append(thread)
+            if section and section_kind == "Clock":
+                clocks[section.group("name")] = {}
+            clock_name = section.group("name") if section and section_kind == "Clock" else ""
             continue
-        if line.startswith("["):
-            group = ""
-            continue
-        if not group or "=" not in line:
+        if "=" not in line:
             continue
         var, _, value = (p.strip() for p in line.partition("="))
+        if section_kind == "General":
+            general[var] = value
+            continue
+        if section_kind == "ReconosThread":
+            thread[var] = value
+            continue
+        if section_kind == "Clock" and clock_name:
+            clocks[clock_name][var] = value
+            continue
+        if not group:
+            continue
         fields = _fields(value)
         kind = fields[0]
 
@@ -105,10 +138,16 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
             found: dict[str, Any] = nodes[variables[ref]]
             return found
 
-        def message_of(ref: str) -> str:
-            if ref not in messages:
-                raise ProjectError(f"{path}:{lineno}: {ref!r} is not a message defined earlier in this group")
-            return messages[ref]
+        def message_of(ref: str, kind_of_type: str = "msg") -> str:
+            if ref in messages:
+                return messages[ref]
+            parts = ref.split("/")
+            if len(parts) == 2 and all(parts):  # written inline: sensor_msgs/Image
+                return f"{parts[0]}/{kind_of_type}/{parts[1]}"
+            if len(parts) == 3 and all(parts):
+                return ref
+            raise ProjectError(f"{path}:{lineno}: {ref!r} is neither a message defined earlier in this group "
+                               "nor a type name like 'sensor_msgs/Image'")
 
         if kind in ("rosnode", "roscpp"):
             need(2)
@@ -117,6 +156,7 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
             target = group.lower()
             targets.setdefault(target, {"kind": "process"})
             nodes[name] = {"run": f"{module}:{name}", "target": target}
+            group_of[name] = group
         elif kind in ("rosmsg", "rosmg", "rossrvmsg", "rosactionmsg"):
             need(4)
             messages[var] = f"{fields[1]}/{fields[2]}/{fields[3]}"
@@ -124,16 +164,34 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
             need(4)
             section_name = "subscribe" if kind == "rossub" else "publish"
             node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
+            if "hw" in (f.lower() for f in fields[4:]):
+                hardware_nodes.add(variables[fields[1]])
         elif kind in ("rossrvs", "rossrv"):
             need(4)
             section_name = "services" if kind == "rossrvs" else "clients"
-            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
+            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2], "srv")
         elif kind in ("rosactions", "rosactionc"):
             need(4)
             section_name = "actions" if kind == "rosactions" else "action_clients"
-            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
+            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2], "action")
         else:
             continue
     if not nodes:
         raise ProjectError(f"{path}: no [ResourceGroup@...] section with a rosnode/roscpp entry found")
+    for spec in threads:
+        if spec.get("HwSource") and spec.get("ResourceGroup"):
+            hardware_groups.update(g.strip() for g in spec["ResourceGroup"].split(","))
+    hardware_nodes |= {n for n, g in group_of.items() if g in hardware_groups}
+    if hardware_nodes:
+        fpga: dict[str, Any] = {"kind": "fpga"}
+        clock = clocks.get(general.get("SystemClock", ""), {}).get("ClockFreq", "")
+        if clock.isdigit():
+            fpga["clock_mhz"] = int(clock) / 1e6
+        if general.get("TargetPart"):
+            fpga["part"] = general["TargetPart"]
+        targets[FPGA_TARGET] = fpga
+        for name in hardware_nodes:
+            nodes[name]["target"] = FPGA_TARGET
+        used = {spec["target"] for spec in nodes.values()}
+        targets = {name: spec for name, spec in targets.items() if name in used}
     return {"name": path.stem, "targets": targets, "nodes": nodes}

@@ -7,15 +7,16 @@ TSTAMP  := $(VENV)/.installed-test
 PYTHON  ?= python3
 
 BSTAMP  := $(VENV)/.installed-bench
-# plus Icarus Verilog, which runs the fpga targets' exported Verilog
-ROS_DEBS := iverilog ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-std-msgs \
-            python3-sensor-msgs python3-std-srvs python3-actionlib libroscpp-dev libstd-srvs-dev g++ pkg-config
-# Debian's ROS 1 (rospy, the ros* tools): real peers for the tests and the benchmark, installed when we may
-define install_ros_debs
+# The real peers of the tests and benchmarks, from Debian: ROS 1 (rospy, roscpp, actionlib, the
+# ros* tools) and Icarus Verilog (runs the fpga targets' exported Verilog); installed when we may
+PEER_DEBS := iverilog ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice \
+             python3-std-msgs python3-sensor-msgs python3-std-srvs python3-actionlib libroscpp-dev libstd-srvs-dev \
+             g++ pkg-config
+define install_peer_debs
 	@if { [ ! -x /usr/bin/rostopic ] || [ ! -d /usr/lib/python3/dist-packages/std_srvs ] || \
-	      [ ! -f /usr/include/std_srvs/SetBool.h ] || [ ! -d /usr/lib/python3/dist-packages/actionlib ] || ! command -v iverilog > /dev/null || \
-	      ! command -v g++ > /dev/null; } && [ "$$(id -u)" = 0 ]; then \
-		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(ROS_DEBS) > /dev/null; fi
+	      [ ! -f /usr/include/std_srvs/SetBool.h ] || [ ! -d /usr/lib/python3/dist-packages/actionlib ] || \
+	      ! command -v iverilog > /dev/null || ! command -v g++ > /dev/null; } && [ "$$(id -u)" = 0 ]; then \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(PEER_DEBS) > /dev/null; fi
 endef
 
 
@@ -37,7 +38,7 @@ install-examples: | $(PY)
 
 $(TSTAMP): pyproject.toml Makefile | $(PY)
 	$(PIP) install --quiet -e '.[test]'
-	$(install_ros_debs)
+	$(install_peer_debs)
 	touch $(STAMP) $@
 
 install-test: $(TSTAMP)
@@ -45,7 +46,7 @@ install-test: $(TSTAMP)
 # The benchmark's peers: pip extras, and Debian's rospy + rosmaster when we may install them.
 $(BSTAMP): pyproject.toml Makefile | $(PY)
 	$(PIP) install --quiet -e '.[bench]'
-	$(install_ros_debs)
+	$(install_peer_debs)
 	touch $(STAMP) $@
 
 install-bench: $(BSTAMP)

@@ -195,6 +195,10 @@ def cmd_master(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    if args.bench == "hw":
+        from ..bench.hw import main as hardware
+
+        return hardware((["--quick"] if args.quick else []) + (["--out", args.out] if args.out else []))
     try:
         from ..bench.latency import main as latency
         from ..bench.ros1 import main as ros1
@@ -246,6 +250,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.add_argument("--systems", help="comma-separated subset")
+    p.set_defaults(func=cmd_bench)
+    p = bench.add_parser("hw", help="hardware topics: simulated transfer times and Yosys resources vs fpgaDDS")
+    p.add_argument("--quick", action="store_true", help="sizes up to 196 kB, two networks")
+    p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("ros1", help="one-way latency over TCPROS: rospy and hetros nodes, both ways")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")

@@ -256,16 +256,19 @@ def test_reconros_hardware_threads_and_hw_topics_land_on_one_fpga_target(tmp_pat
         [ResourceGroup@Producer]
         frame = rosmsg, sensor_msgs, msg, Image
         node_1 = rosnode, "producer"
-        out = rospub, node_1, frame, "fast"
+        out = rospub, node_1, frame, "fast", hw
         [ResourceGroup@Consumer]
         node_1 = rosnode, "consumer"
         in = rossub, node_1, sensor_msgs/Image, "fast", 10000, hw
         [ResourceGroup@Software]
         node_1 = rosnode, "logger"
         in = rossub, node_1, sensor_msgs/Image, "/other", 10000
-        [ReconosThread@Producer]
+        [ResourceGroup@Sorter]
+        node_1 = rosnode, "sorter"
+        sort = rossrvs, node_1, sorter_msgs/Sort, "sort", 10000
+        [ReconosThread@Sorter]
         HwSource = hls
-        ResourceGroup = Producer
+        ResourceGroup = Sorter
         [ROSGateway@Gateway]
         HWTopic = "fast"
     """))
@@ -274,6 +277,44 @@ def test_reconros_hardware_threads_and_hw_topics_land_on_one_fpga_target(tmp_pat
     assert data["nodes"]["producer"]["target"] == data["nodes"]["consumer"]["target"] == "fpga"
     assert data["nodes"]["consumer"]["subscribe"] == {"/fast": "sensor_msgs/msg/Image"}
     assert data["nodes"]["logger"]["target"] == "software"
+    # a hardware thread without hardware topics stays runnable in software, one edit from the fpga target
+    assert data["nodes"]["sorter"]["target"] == "sorter"
+    assert data["nodes"]["sorter"]["services"] == {"/sort": "sorter_msgs/srv/Sort"}
     with pytest.raises(Exception, match="is neither a message defined earlier"):
         cfg.write_text("[ResourceGroup@G]\nnode_1 = rosnode, \"n\"\nx = rossub, node_1, nothing, \"t\"\n")
         import_reconros(cfg)
+
+
+@pytest.mark.parametrize("typename", ["geometry_msgs/msg/Pose", "geometry_msgs/msg/Twist", "sensor_msgs/msg/Imu",
+                                      "builtin_interfaces/msg/Time", "std_msgs/msg/ColorRGBA"])
+def test_the_amaranth_layout_reads_the_fixed_fields_out_of_the_beats(typename: str) -> None:
+    import struct
+
+    from hetros.hw import amaranth_layout
+    from hetros.msg import flat_layout
+
+    types = registry()
+    layout = amaranth_layout(types, typename)
+    fixed = [f for f in flat_layout(types, typename).fields]
+    fixed = fixed[:next((i for i, f in enumerate(fixed) if f.variable), len(fixed))]
+    rnd = random.Random(typename)
+    for _ in range(10):
+        message = random_message(types, typename, rnd)
+        body = BeatCodec(types, typename, 64).body(message)
+        bits = int.from_bytes(body[:layout.size // 8], "little")
+        for field in fixed:
+            assert field.offset is not None
+            offset = layout[field.path.replace(".", "__")].offset
+            assert offset == 8 * field.offset, field.path
+            width = 8 * (field.size or 0)
+            raw = bits >> offset & ((1 << width) - 1)
+            value = message
+            for part in field.path.split("."):
+                value = getattr(value, part)
+            fmt = {"float64": "<d", "float32": "<f"}.get(field.type)
+            if fmt and field.count == 1:
+                assert raw == int.from_bytes(struct.pack(fmt, value), "little"), field.path
+            elif field.count == 1 and field.type.startswith("int"):
+                assert raw == int(value) % (1 << width), field.path
+            elif field.count == 1:
+                assert raw == int(value), field.path

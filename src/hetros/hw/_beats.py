@@ -118,3 +118,41 @@ class BeatCodec:
         except Exception as exc:  # rosbags raises several kinds for bad bytes
             raise SerializationError(f"{len(data) - 4} bytes of beats do not decode as {self.typename}: "
                                      f"{exc}") from exc
+
+
+_SIGNED = {"int8", "int16", "int32", "int64"}
+_BITS = {"bool": 8, "byte": 8, "char": 8, "int8": 8, "uint8": 8, "int16": 16, "uint16": 16, "int32": 32,
+         "uint32": 32, "int64": 64, "uint64": 64, "float32": 32, "float64": 64}
+
+
+def field_name(path: str) -> str:
+    """``header.stamp.sec`` -> ``header__stamp__sec``: a flattened field as an Amaranth field name."""
+    return path.replace(".", "__")
+
+
+def amaranth_layout(types: TypeRegistry, typename: str) -> Any:
+    """The fixed part of a message's beat stream as an Amaranth ``StructLayout`` (for hardware nodes).
+
+    Its fields sit at the bit offsets of the CDR body (padding included, as ``_pad<offset>``),
+    so a ``View`` of this layout over the first beats, concatenated in order, reads the
+    fields a node needs without a parser. Floats are their IEEE-754 bits; everything from
+    the first string or sequence on has data-dependent offsets and is left out.
+    """
+    from amaranth import signed, unsigned
+    from amaranth.lib import data
+
+    from ..msg import flat_layout
+
+    fields: dict[str, Any] = {}
+    cursor = 0
+    for item in flat_layout(types, typename).fields:
+        if item.variable:
+            break
+        assert item.offset is not None
+        if item.offset > cursor:
+            fields[f"_pad{cursor}"] = unsigned(8 * (item.offset - cursor))
+        bits = _BITS[item.type]
+        shape = signed(bits) if item.type in _SIGNED else unsigned(bits)
+        fields[field_name(item.path)] = data.ArrayLayout(shape, item.count) if item.count > 1 else shape
+        cursor = item.offset + bits // 8 * item.count
+    return data.StructLayout(fields)

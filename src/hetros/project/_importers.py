@@ -76,11 +76,12 @@ def _fields(value: str) -> list[str]:
 def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
     """A project dict from the ROS part of a ReconROS build.cfg (Listing 1 of the paper).
 
-    Each ``[ResourceGroup@…]`` becomes a process target; the nodes of a group that a
-    ``[ReconosThread@…]`` with a ``HwSource`` uses, and every node with an ``hw``-flagged
-    ``rossub``/``rospub``, go on one fpga target instead (clock from the system clock, part from
-    ``TargetPart``). Message types may be variables (``rosmsg``…) or written inline
-    (``sensor_msgs/Image``).
+    Each ``[ResourceGroup@…]`` becomes a process target. A build with hardware threads
+    (``[ReconosThread@…]`` with a ``HwSource``) or ``hw``-flagged ``rossub``/``rospub`` lines gets
+    one fpga target (clock from the system clock, part from ``TargetPart``): nodes with hardware
+    topics go on it, since a hardware topic has all its endpoints in hardware; the other nodes
+    of hardware threads stay in software, runnable, one ``target:`` edit away from it. Message
+    types may be variables (``rosmsg``…) or written inline (``sensor_msgs/Image``).
     """
     targets: dict[str, Any] = {}
     nodes: dict[str, Any] = {}
@@ -90,7 +91,7 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
     messages: dict[str, str] = {}
     group_of: dict[str, str] = {}
     hardware_nodes: set[str] = set()
-    hardware_groups: set[str] = set()
+    hardware_groups: set[str] = set()  # groups of hardware threads
     thread: dict[str, str] = {}
     general: dict[str, str] = {}
     clocks: dict[str, dict[str, str]] = {}
@@ -181,8 +182,7 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
     for spec in threads:
         if spec.get("HwSource") and spec.get("ResourceGroup"):
             hardware_groups.update(g.strip() for g in spec["ResourceGroup"].split(","))
-    hardware_nodes |= {n for n, g in group_of.items() if g in hardware_groups}
-    if hardware_nodes:
+    if hardware_nodes or hardware_groups:
         fpga: dict[str, Any] = {"kind": "fpga"}
         clock = clocks.get(general.get("SystemClock", ""), {}).get("ClockFreq", "")
         if clock.isdigit():
@@ -192,6 +192,6 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
         targets[FPGA_TARGET] = fpga
         for name in hardware_nodes:
             nodes[name]["target"] = FPGA_TARGET
-        used = {spec["target"] for spec in nodes.values()}
+        used = {spec["target"] for spec in nodes.values()} | {FPGA_TARGET}
         targets = {name: spec for name, spec in targets.items() if name in used}
     return {"name": path.stem, "targets": targets, "nodes": nodes}

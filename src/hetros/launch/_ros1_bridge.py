@@ -9,14 +9,13 @@ topics (``_ros1_actions``).
 
 from __future__ import annotations
 
-import threading
-from collections import deque
 from collections.abc import Callable
 from typing import Any
 
 from ..msg import registry
 from ..runtime import Node
 from ..transport.tcpros import Ros1ActionType, Ros1Peer, Ros1ServiceType, Ros1Type
+from ._bridging import Imported
 from ._ros1_actions import ExportedAction, ImportedAction
 
 
@@ -28,7 +27,7 @@ def bridge(node: Node) -> None:
         exports: dict[str, str] = node.get_parameter("export")
         imports: dict[str, str] = node.get_parameter("import")
         latched = set(node.get_parameter("latch", []))
-        imported_here = _Imported()
+        imported_here = Imported()
         for topic, typename in exports.items():
             outgoing = peer.advertise(topic, Ros1Type(types, typename), latch=topic in latched)
             node.create_subscription(types.get(typename), topic, imported_here.skip(outgoing.publish))
@@ -65,34 +64,3 @@ def _forward(peer: Ros1Peer, service: str, kind: Ros1ServiceType) -> Callable[[A
         return peer.call_service(service, kind, request)
 
     return call
-
-
-class _Imported:
-    """The messages this bridge brought in from ROS 1, so a topic both imported and exported does
-    not send ROS 1's own messages back to it (in a process a subscriber gets the very object)."""
-
-    def __init__(self, remembered: int = 256) -> None:
-        self._order: deque[Any] = deque()
-        self._ids: set[int] = set()
-        self._remembered = remembered
-        self._lock = threading.Lock()
-
-    def keep(self, publish: Callable[[Any], None]) -> Callable[[Any], None]:
-        def imported(message: Any) -> None:
-            with self._lock:
-                self._order.append(message)  # held, so its id stays its own while remembered
-                self._ids.add(id(message))
-                if len(self._order) > self._remembered:
-                    self._ids.discard(id(self._order.popleft()))
-            publish(message)
-
-        return imported
-
-    def skip(self, publish: Callable[[Any], None]) -> Callable[[Any], None]:
-        def exported(message: Any) -> None:
-            with self._lock:
-                if id(message) in self._ids:
-                    return
-            publish(message)
-
-        return exported

@@ -7,6 +7,7 @@ Neither depends on the other: both depend on this package.
 from ._plan import (
     ACTION_PREFIX,
     LAUNCHER,
+    ROS2_BRIDGE,
     SERVICE_QOS,
     ChannelKind,
     ChannelPlan,
@@ -26,6 +27,7 @@ from ._plan import (
 __all__ = [
     "ACTION_PREFIX",
     "LAUNCHER",
+    "ROS2_BRIDGE",
     "SERVICE_QOS",
     "ChannelKind",
     "ChannelPlan",

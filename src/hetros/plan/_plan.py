@@ -20,6 +20,8 @@ TransportKind = Literal["inproc", "shm", "hw"]
 SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
 # The process that runs ``hetros launch``: thread targets live in it.
 LAUNCHER = "launcher"
+# the node (and thread target) the planner adds when the project shares endpoints with ROS 2
+ROS2_BRIDGE = "hetros_ros2_bridge"
 ChannelKind = Literal["topic", "request", "reply"]
 
 

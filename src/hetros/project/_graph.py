@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from .._errors import Error
-from ..plan import ACTION_PREFIX, Plan
+from ..plan import ACTION_PREFIX, ROS2_BRIDGE, Plan
 
 
 def describe(plan: Plan) -> str:
@@ -51,7 +51,29 @@ def describe(plan: Plan) -> str:
                             ("serves", node.services), ("calls", node.clients)):
             for endpoint, typename in table.items():
                 lines.append(f"  {name} {what} {endpoint} [{typename}]  via tcpros (ROS 1 master {plan.ros1_master})")
+    lines += _ros2_lines(plan)
     return "\n".join(lines)
+
+
+def _ros2_lines(plan: Plan) -> list[str]:
+    """What crosses to ROS 2, under the DDS names a ROS 2 peer sees."""
+    from ..transport.dds import reply_topic, request_topic, topic_name
+
+    bridge = plan.nodes.get(ROS2_BRIDGE)
+    if bridge is None:
+        return []
+    p = bridge.parameters
+    domain = p["domain"] if p["domain"] is not None else "$ROS_DOMAIN_ID or 0"
+    where = f"ROS 2 domain {domain}, peers {', '.join(p['peers'])}"
+    lines = []
+    for section, verb in (("export", "exported to"), ("import", "imported from")):
+        for topic, typename in p[section].items():
+            lines.append(f"  {topic} [{typename}] {verb} ROS 2 as {topic_name(topic)}  via dds ({where})")
+    for section, verb in (("export_services", "served to"), ("import_services", "called from")):
+        for service, typename in p[section].items():
+            lines.append(f"  {service} [{typename}] {verb} ROS 2 as {request_topic(service)} / "
+                         f"{reply_topic(service)}  via dds ({where})")
+    return lines
 
 
 def to_dot(plan: Plan) -> str:

@@ -116,21 +116,26 @@ _DERIVED = {"services": ("actions", 0), "publish": ("actions", 1),
             "clients": ("action_clients", 0), "subscribe": ("action_clients", 1)}
 
 
-class Ros1Spec(_Strict):
-    """Topics shared with a ROS 1 graph through its master (``hetros master`` or roscore)."""
+class Bridged(_Strict):
+    """What a bridge carries across: hetros endpoints exported, the other graph's imported."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
-    # None: $ROS_MASTER_URI, else http://127.0.0.1:11311/
-    master: str | None = None
-    # the interface the bridge's slave API and TCPROS server listen on
-    host: str = "127.0.0.1"
     export: list[str] = Field(default_factory=list)
     import_: list[str] = Field(default_factory=list, alias="import")
     export_services: list[str] = Field(default_factory=list)
     import_services: list[str] = Field(default_factory=list)
-    # hetros action servers offered to actionlib clients; actionlib servers offered to hetros clients
+    # hetros action servers offered to the other graph's clients, and the other way round
     export_actions: list[str] = Field(default_factory=list)
     import_actions: list[str] = Field(default_factory=list)
+
+
+class Ros1Spec(Bridged):
+    """Topics shared with a ROS 1 graph through its master (``hetros master`` or roscore)."""
+
+    # None: $ROS_MASTER_URI, else http://127.0.0.1:11311/
+    master: str | None = None
+    # the interface the bridge's slave API and TCPROS server listen on
+    host: str = "127.0.0.1"
 
     @field_validator("master")
     @classmethod
@@ -140,8 +145,20 @@ class Ros1Spec(_Strict):
         return value
 
 
+class Ros2Spec(Bridged):
+    """Topics, services and actions shared with a ROS 2 graph over DDS (rmw_cyclonedds's wire)."""
+
+    # None: $ROS_DOMAIN_ID, else 0
+    domain: int | None = Field(default=None, ge=0, le=232)
+    # the one interface the DDS participant uses, and the addresses it looks for peers at
+    # (static discovery; $CYCLONEDDS_URI replaces all three, as for any ROS 2 node)
+    interface: str = "127.0.0.1"
+    peers: list[str] = Field(default_factory=lambda: ["127.0.0.1"])
+    multicast: bool = False
+
+
 class ExternalSpec(_Strict):
-    ros2: dict[str, Any] | None = None
+    ros2: Ros2Spec | None = None
     ros1: Ros1Spec | None = None
 
 

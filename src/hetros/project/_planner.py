@@ -7,14 +7,16 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .._errors import CheckError, DefinitionError, MessageError, UnknownTypeError
+from .._errors import CheckError, DefinitionError, MessageError
 from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
 from ..plan import (
     ACTION_PREFIX,
     LAUNCHER,
+    ROS2_BRIDGE,
     SERVICE_QOS,
     ChannelPlan,
     EdgePlan,
@@ -29,7 +31,7 @@ from ..plan import (
     request_channel,
 )
 from ..transport import QoS, reserved_bytes
-from ._model import LoadedProject, NodeSpec, Ros1Spec, load_project
+from ._model import Bridged, LoadedProject, NodeSpec, load_project
 from ._names import node_name_problem, topic_name_problem
 from ._scan import scan_file
 
@@ -83,14 +85,11 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                     f"{where('targets', tname, 'cpus', index)}: cpu {cpu} does not exist on this "
                     f"machine ({os.cpu_count()} CPUs: 0..{(os.cpu_count() or 1) - 1})"
                 )
-    if model.external is not None and model.external.ros2 is not None:
-        report.errors.append(f"{where('external', 'ros2')}: bridges to ROS 2 graphs are not implemented "
-                             "yet; remove the 'ros2' section")
-
     speaks_ros1 = _ros1_nodes(project)
-    if ROS1_BRIDGE in model.nodes or ROS1_BRIDGE in model.targets:
-        report.errors.append(f"{where('nodes', ROS1_BRIDGE)}: {ROS1_BRIDGE!r} is reserved for the ROS 1 bridge; "
-                             "rename the node or target")
+    for reserved, graph in ((ROS1_BRIDGE, "ROS 1"), (ROS2_BRIDGE, "ROS 2")):
+        if reserved in model.nodes or reserved in model.targets:
+            report.errors.append(f"{where('nodes', reserved)}: {reserved!r} is reserved for the {graph} bridge; "
+                                 "rename the node or target")
     publishers: dict[str, list[tuple[str, str]]] = {}
     subscribers: dict[str, list[tuple[str, str]]] = {}
     servers: dict[str, list[tuple[str, str]]] = {}
@@ -139,9 +138,9 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     for run, problem in _runnable_problems(project, list(runnable)).items():
         for nname in runnable.get(run, []):
             report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
-    ros1 = model.external.ros1 if model.external is not None else None
-    imported = set(ros1.import_) if ros1 is not None else set()
-    _check_action_pairs(project, set(ros1.import_actions) if ros1 is not None else set(), report)
+    bridged = _bridged(project)
+    imported = {t for spec in bridged.values() for t in spec.import_}
+    _check_action_pairs(project, {a for spec in bridged.values() for a in spec.import_actions}, report)
     for topic, subscribed in subscribers.items():
         if topic in derived:
             continue
@@ -151,8 +150,8 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                     continue  # a ROS 1 node's topic may come from any ROS 1 publisher
                 report.errors.append(
                     f"{where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}; "
-                    "add a publisher under some node's 'publish', import it from ROS 1 "
-                    "(external: ros1: import:) or remove this subscription"
+                    "add a publisher under some node's 'publish', import it from ROS 1 or ROS 2 "
+                    "(external: ros1: / ros2: import:) or remove this subscription"
                 )
     for topic in (set(publishers) | set(subscribers)) - derived:
         declared = {t for _, t in publishers.get(topic, []) + subscribers.get(topic, [])}
@@ -160,7 +159,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
             users = ", ".join(f"{n}: {t}" for n, t in publishers.get(topic, []) + subscribers.get(topic, []))
             report.errors.append(f"{where('nodes')}: topic {topic} is declared with different types "
                                  f"({users}); one topic carries one type")
-    imported_services = set(ros1.import_services) if ros1 is not None else set()
+    imported_services = {v for spec in bridged.values() for v in spec.import_services}
     for service, calling in clients.items():
         if service in derived:
             continue
@@ -198,8 +197,10 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     if speaks_ros1:
         _check_ros1_nodes(project, speaks_ros1, types, report)
     _check_sources(project, report)
-    if model.external is not None and model.external.ros1 is not None:
-        _check_ros1(project, model.external.ros1, publishers, subscribers, servers, clients, types, report)
+    tables = (publishers, subscribers, servers, clients)
+    for graph, bridged_spec in bridged.items():
+        _check_bridged(project, graph, bridged_spec, tables, _ros1_carries if graph == "ros1" else _ros2_carries,
+                       types, report)
     return report
 
 
@@ -502,70 +503,156 @@ def _shared_with_ros1(project: LoadedProject) -> dict[str, list[str]]:
     }
 
 
-def _check_ros1(project: LoadedProject, spec: Ros1Spec, publishers: dict[str, list[tuple[str, str]]],
-                subscribers: dict[str, list[tuple[str, str]]], servers: dict[str, list[tuple[str, str]]],
-                clients: dict[str, list[tuple[str, str]]], types: TypeRegistry, report: CheckReport) -> None:
-    """Exported topics and services need hetros publishers or servers, imported ones subscribers
-    or clients; every type must be one ROS 1 can carry."""
-    from ..transport.tcpros import Ros1ServiceType, Ros1Type
+def _bridged(project: LoadedProject) -> dict[str, Bridged]:
+    """The ``external:`` graphs the project file names: ``ros1`` and ``ros2``."""
+    external = project.model.external
+    if external is None:
+        return {}
+    return {graph: spec for graph, spec in (("ros1", external.ros1), ("ros2", external.ros2)) if spec is not None}
 
+
+# what the other graph must be able to carry, per kind of endpoint; raises MessageError if it cannot
+Carries = Callable[[TypeRegistry, str, str], object]
+
+
+def _ros1_carries(types: TypeRegistry, kind: str, typename: str) -> object:
+    from ..transport.tcpros import Ros1ActionType, Ros1ServiceType, Ros1Type
+
+    return {"msg": Ros1Type, "srv": Ros1ServiceType, "action": Ros1ActionType}[kind](types, typename)
+
+
+def _ros2_carries(types: TypeRegistry, kind: str, typename: str) -> object:
+    """Every ROS 2 type crosses, except what DDS's binding cannot describe (wstring)."""
+    from ..transport.dds import idl_type
+
+    if kind == "msg":
+        return idl_type(types, typename)
+    srvs = [typename] if kind == "srv" else [f"{typename}_SendGoal", f"{typename}_GetResult"]
+    for srv in srvs:
+        idl_type(types, f"{srv}_Request", True)
+        idl_type(types, f"{srv}_Response", True)
+    if kind == "action":
+        idl_type(types, f"{typename}_FeedbackMessage")
+    return srvs
+
+
+def _check_bridged(project: LoadedProject, graph: str, spec: Bridged,
+                   tables: tuple[dict[str, list[tuple[str, str]]], ...], carries: Carries,
+                   types: TypeRegistry, report: CheckReport) -> None:
+    """Exported topics and services need hetros publishers or servers, imported ones subscribers
+    or clients; every type must be one the other graph can carry."""
+    publishers, subscribers, servers, clients = tables
     where = project.where
+    other = "ROS 1" if graph == "ros1" else "ROS 2"
     for section, attr, table, needs in (("export", "export", publishers, "publisher"),
                                         ("import", "import_", subscribers, "subscriber")):
         for index, topic in enumerate(getattr(spec, attr)):
-            here = where("external", "ros1", section, index)
+            here = where("external", graph, section, index)
             endpoints = table.get(topic)
             if not endpoints:
                 report.errors.append(f"{here}: {topic} has no hetros {needs} to {section} for; declare one "
                                      f"under a node's {'publish' if needs == 'publisher' else 'subscribe'}")
                 continue
             try:
-                Ros1Type(types, endpoints[0][1])
-            except (UnknownTypeError, DefinitionError) as exc:
+                carries(types, "msg", endpoints[0][1])
+            except MessageError as exc:
                 report.errors.append(f"{here}: {exc}")
-    for section, table, needs, other in (("export_services", servers, "server", clients),
-                                         ("import_services", clients, "client", servers)):
+    for section, table, needs, counterpart in (("export_services", servers, "server", clients),
+                                               ("import_services", clients, "client", servers)):
         for index, service in enumerate(getattr(spec, section)):
-            here = where("external", "ros1", section, index)
+            here = where("external", graph, section, index)
             endpoints = table.get(service)
             if not endpoints:
                 report.errors.append(f"{here}: {service} has no hetros {needs} to "
                                      f"{section.split('_')[0]} for; declare one under a node's "
                                      f"{'services' if needs == 'server' else 'clients'}")
                 continue
-            if section == "import_services" and service in other:
+            if section == "import_services" and service in counterpart:
                 report.errors.append(f"{here}: {service} is served by a hetros node already; import it from "
-                                     "ROS 1 or serve it here, not both")
+                                     f"{other} or serve it here, not both")
                 continue
             try:
-                Ros1ServiceType(types, endpoints[0][1])
-            except (UnknownTypeError, DefinitionError) as exc:
+                carries(types, "srv", endpoints[0][1])
+            except MessageError as exc:
                 report.errors.append(f"{here}: {exc}")
-    _check_ros1_actions(project, spec, types, report)
-
-
-def _check_ros1_actions(project: LoadedProject, spec: Ros1Spec, types: TypeRegistry, report: CheckReport) -> None:
-    """Exported actions need a hetros server, imported ones hetros clients and no hetros server."""
-    from ..transport.tcpros import Ros1ActionType
-
-    servers = {a: t for node in project.model.nodes.values() for a, t in node.types("actions").items()}
-    clients = {a: t for node in project.model.nodes.values() for a, t in node.types("action_clients").items()}
-    for section, needs, table in (("export_actions", "server", servers), ("import_actions", "client", clients)):
+    action_servers = {a: t for node in project.model.nodes.values() for a, t in node.types("actions").items()}
+    action_clients = {a: t for node in project.model.nodes.values() for a, t in node.types("action_clients").items()}
+    for section, needs, declared in (("export_actions", "server", action_servers),
+                                     ("import_actions", "client", action_clients)):
         for index, action in enumerate(getattr(spec, section)):
-            here = project.where("external", "ros1", section, index)
-            if section == "import_actions" and action in servers:
-                report.errors.append(f"{here}: {action} is served by a hetros node already; import it from ROS 1 "
-                                     "or serve it here, not both")
+            here = where("external", graph, section, index)
+            if section == "import_actions" and action in action_servers:
+                report.errors.append(f"{here}: {action} is served by a hetros node already; import it from "
+                                     f"{other} or serve it here, not both")
                 continue
-            if action not in table:
+            if action not in declared:
                 report.errors.append(f"{here}: {action} has no hetros action {needs} to {section.split('_')[0]} "
                                      f"for; declare one under a node's "
                                      f"{'actions' if needs == 'server' else 'action_clients'}")
                 continue
             try:
-                Ros1ActionType(types, normalize_typename(table[action], "action"))
+                carries(types, "action", normalize_typename(declared[action], "action"))
             except MessageError as exc:
                 report.errors.append(f"{here}: {exc}")
+
+
+def _typed(project: LoadedProject, shared: dict[str, list[str]]) -> tuple[dict[str, str], ...]:
+    """The types of the endpoints a bridge carries: export, import (topics), export_services,
+    import_services, export_actions, import_actions, each name -> full type name."""
+    sections = {"msg": ("publish", "subscribe"), "srv": ("services", "clients"),
+                "action": ("actions", "action_clients")}
+    declared: dict[str, dict[str, str]] = {kind: {} for kind in sections}
+    for node in project.model.nodes.values():
+        for kind, names in sections.items():
+            for section in names:
+                declared[kind].update(node.types(section))
+    return tuple({name: normalize_typename(declared[kind][name], kind) for name in shared.get(key, ())}
+                 for key, kind in (("export", "msg"), ("import", "msg"), ("export_services", "srv"),
+                                   ("import_services", "srv"), ("export_actions", "action"),
+                                   ("import_actions", "action")))
+
+
+
+def _ros2_bridge(project: LoadedProject) -> NodePlan | None:
+    """The node that carries what ``external: ros2:`` names to and from DDS (in the launcher's
+    process). Actions cross as what they are on ROS 2's wire: three services and two topics."""
+    spec = project.model.external.ros2 if project.model.external is not None else None
+    if spec is None:
+        return None
+    shared = {key: list(getattr(spec, attr)) for key, attr in (
+        ("export", "export"), ("import", "import_"), ("export_services", "export_services"),
+        ("import_services", "import_services"), ("export_actions", "export_actions"),
+        ("import_actions", "import_actions"))}
+    if not any(shared.values()):
+        return None
+    exports, imports, export_services, import_services, export_actions, import_actions = _typed(project, shared)
+    for actions, (services, topics) in ((export_actions, (export_services, exports)),
+                                        (import_actions, (import_services, imports))):
+        for action, typename in actions.items():
+            derived_services, derived_topics = action_endpoints(action, typename)
+            services.update(derived_services)
+            topics.update(derived_topics)
+
+    def qos(topic: str) -> dict[str, object]:
+        chosen = project.model.topics.get(topic) or action_topic_qos(topic) or QoS()
+        return {"reliability": chosen.reliability, "history": chosen.history, "depth": chosen.depth,
+                "durability": chosen.durability, "publish_timeout": chosen.publish_timeout}
+
+    # ROS 2 tools list endpoints under nodes: a DDS writer of an exported topic under the hetros
+    # nodes that publish it, a reader of an imported one under those that subscribe, and so on
+    def owners(section: str, names: dict[str, str]) -> dict[str, list[str]]:
+        return {name: [n for n, node in project.model.nodes.items() if name in node.types(section)] or [ROS2_BRIDGE]
+                for name in names}
+
+    parameters = {"domain": spec.domain, "interface": spec.interface, "peers": list(spec.peers),
+                  "multicast": spec.multicast, "export": exports, "import": imports,
+                  "export_services": export_services, "import_services": import_services,
+                  "qos": {t: qos(t) for t in [*exports, *imports]},
+                  "owners": {"export": owners("publish", exports), "import": owners("subscribe", imports),
+                             "export_services": owners("services", export_services),
+                             "import_services": owners("clients", import_services)}}
+    return NodePlan(ROS2_BRIDGE, "hetros.launch._ros2_bridge:bridge", ROS2_BRIDGE, parameters,
+                    publish=imports, subscribe=exports, services=import_services, clients=export_services)
 
 
 def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
@@ -580,24 +667,7 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
             shared[key] = sorted(set(shared.get(key, ())) | set(listed))
     if not any(shared.values()):
         return None
-    declared: dict[str, str] = {}
-    for node in model.nodes.values():
-        declared.update(node.types("publish"))
-        declared.update(node.types("subscribe"))
-    exports = {t: normalize_typename(declared[t]) for t in shared["export"]}
-    imports = {t: normalize_typename(declared[t]) for t in shared["import"]}
-    served: dict[str, str] = {}
-    for node in model.nodes.values():
-        served.update(node.types("services"))
-        served.update(node.types("clients"))
-    export_services = {s: normalize_typename(served[s], "srv") for s in shared["export_services"]}
-    import_services = {s: normalize_typename(served[s], "srv") for s in shared["import_services"]}
-    acted: dict[str, str] = {}
-    for node in model.nodes.values():
-        acted.update(node.types("actions"))
-        acted.update(node.types("action_clients"))
-    export_actions = {a: normalize_typename(acted[a], "action") for a in shared.get("export_actions", ())}
-    import_actions = {a: normalize_typename(acted[a], "action") for a in shared.get("import_actions", ())}
+    exports, imports, export_services, import_services, export_actions, import_actions = _typed(project, shared)
     # the bridge is a client of exported actions and the server of imported ones
     publish, subscribe = dict(imports), dict(exports)
     services, clients = dict(import_services), dict(export_services)
@@ -629,13 +699,13 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
     process_of = {
         n: process_name(s.target, model.targets[s.target].kind) for n, s in model.nodes.items()
     }
-    bridge = _ros1_bridge(project)
+    bridges = [b for b in (_ros1_bridge(project), _ros2_bridge(project)) if b is not None]
     speaks_ros1 = _ros1_nodes(project)
     # every hetros node's endpoints, the ROS 1 bridge's too (ROS 1 nodes' endpoints are ROS 1's):
     # (name, publish, subscribe, services, clients)
     endpoints = [(n, spec.types("publish"), spec.types("subscribe"), spec.types("services"), spec.types("clients"))
                  for n, spec in model.nodes.items() if n not in speaks_ros1]
-    if bridge is not None:
+    for bridge in bridges:
         process_of[bridge.name] = LAUNCHER
         endpoints.append((bridge.name, bridge.publish, bridge.subscribe, bridge.services, bridge.clients))
     channels: dict[str, ChannelPlan] = {}
@@ -675,7 +745,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
         targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "")
                  for n, t in model.targets.items()}
-        | ({ROS1_BRIDGE: TargetPlan(ROS1_BRIDGE, "thread")} if bridge is not None else {}),
+        | {bridge.name: TargetPlan(bridge.name, "thread") for bridge in bridges},
         nodes={
             n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts, s.required,
                         s.types("publish"), s.types("subscribe"), s.types("services"), s.types("clients"),
@@ -683,7 +753,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
                         {a: normalize_typename(t, "action") for a, t in s.types("action_clients").items()},
                         s.max_goals())
             for n, s in model.nodes.items()
-        } | ({ROS1_BRIDGE: bridge} if bridge is not None else {}),
+        } | {bridge.name: bridge for bridge in bridges},
         channels=channels,
         edges=edges,
         ros1_master=_ros1_master(project),

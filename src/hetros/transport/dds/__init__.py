@@ -1,0 +1,37 @@
+"""ROS 2 on the wire: CycloneDDS with rmw_cyclonedds's names, XCDR1 bytes and service headers."""
+
+from ._discovery import DiscoveryInfo
+from ._domain import MAX_DOMAIN_ID, SERVICE_QOS, DdsDomain, config_xml, dds_qos, default_domain_id, participant_gid
+from ._endpoints import (
+    DdsServiceClient,
+    DdsServiceServer,
+    DdsTopicReader,
+    DdsTopicWriter,
+    type_hash_user_data,
+)
+from ._idl import REQUEST_HEADER_FIELDS, idl_type
+from ._names import DISCOVERY_TOPIC, DISCOVERY_TYPE, dds_type_name, reply_topic, request_topic, topic_name
+
+__all__ = [
+    "DISCOVERY_TOPIC",
+    "DISCOVERY_TYPE",
+    "MAX_DOMAIN_ID",
+    "REQUEST_HEADER_FIELDS",
+    "SERVICE_QOS",
+    "DdsDomain",
+    "DdsServiceClient",
+    "DdsServiceServer",
+    "DdsTopicReader",
+    "DdsTopicWriter",
+    "DiscoveryInfo",
+    "config_xml",
+    "dds_qos",
+    "dds_type_name",
+    "default_domain_id",
+    "idl_type",
+    "participant_gid",
+    "reply_topic",
+    "request_topic",
+    "topic_name",
+    "type_hash_user_data",
+]

@@ -1,0 +1,129 @@
+"""One DDS participant per process, configured from the project file, and its QoS.
+
+Discovery is static and loopback by default: multicast off, the peers the project
+file names (``127.0.0.1`` unless it says otherwise), one interface. A user who
+already runs ROS 2 with their own Cyclone configuration sets ``CYCLONEDDS_URI``
+as for any ROS 2 node, and hetros then takes that file instead.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Sequence
+from typing import Any
+from xml.sax.saxutils import quoteattr
+
+from cyclonedds.core import DDSException, Policy, Qos
+from cyclonedds.domain import Domain, DomainParticipant
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
+from ..._errors import TransportError
+from .._qos import QoS
+
+# ROS 2's domains are 0..232 (ports are computed from them)
+MAX_DOMAIN_ID = 232
+# stock ROS 2 peers only accept XCDR1: a writer offering XCDR2 is discovered and never matched
+_XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
+
+_domains_lock = threading.Lock()
+_domains: dict[int, Domain] = {}
+
+
+def default_domain_id() -> int:
+    """``ROS_DOMAIN_ID`` as ROS 2 reads it, else 0."""
+    text = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    if not text:
+        return 0
+    if not text.isdigit() or int(text) > MAX_DOMAIN_ID:
+        raise TransportError(f"ROS_DOMAIN_ID must be a number from 0 to {MAX_DOMAIN_ID}, not {text!r}")
+    return int(text)
+
+
+def config_xml(interface: str, peers: Sequence[str], multicast: bool) -> str:
+    """The Cyclone configuration of a hetros participant."""
+    peer_lines = "".join(f"<Peer address={quoteattr(peer)}/>" for peer in peers)
+    return (
+        "<CycloneDDS><Domain Id=\"any\"><General>"
+        f"<Interfaces><NetworkInterface address={quoteattr(interface)}/></Interfaces>"
+        f"<AllowMulticast>{'true' if multicast else 'false'}</AllowMulticast>"
+        "</General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
+        "<MaxAutoParticipantIndex>100</MaxAutoParticipantIndex>"
+        f"<Peers>{peer_lines}</Peers></Discovery>"
+        # multi-MB samples arrive as many fragments: a small socket buffer loses them
+        "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MiB\"/></Internal>"
+        "</Domain></CycloneDDS>"
+    )
+
+
+def dds_qos(qos: QoS, user_data: bytes = b"") -> Qos:
+    """A hetros QoS as DDS policies, one to one."""
+    policies: list[Any] = [
+        Policy.Reliability.Reliable(max_blocking_time=duration(seconds=qos.publish_timeout))
+        if qos.reliability == "reliable" else Policy.Reliability.BestEffort,
+        Policy.History.KeepAll if qos.history == "keep_all" else Policy.History.KeepLast(qos.depth),
+        Policy.Durability.TransientLocal if qos.durability == "transient_local" else Policy.Durability.Volatile,
+        _XCDR1,
+    ]
+    if user_data:
+        policies.append(Policy.Userdata(data=user_data))
+    return Qos(*policies)
+
+
+# ROS 2's default service QoS (rmw_qos_profile_services_default)
+SERVICE_QOS = QoS(reliability="reliable", history="keep_last", depth=10, durability="volatile")
+
+
+class DdsDomain:
+    """A participant on one DDS domain and the topics created on it (shared by name)."""
+
+    def __init__(self, domain_id: int | None = None, *, interface: str = "127.0.0.1",
+                 peers: Sequence[str] = ("127.0.0.1",), multicast: bool = False) -> None:
+        self.domain_id = default_domain_id() if domain_id is None else domain_id
+        if not 0 <= self.domain_id <= MAX_DOMAIN_ID:
+            raise TransportError(f"a ROS 2 domain id must be 0 to {MAX_DOMAIN_ID}, not {self.domain_id!r}")
+        self.configured_by = os.environ.get("CYCLONEDDS_URI", "") or "hetros (static peers " + ", ".join(peers) + ")"
+        try:
+            if not os.environ.get("CYCLONEDDS_URI"):
+                with _domains_lock:
+                    if self.domain_id not in _domains:
+                        _domains[self.domain_id] = Domain(self.domain_id, config_xml(interface, peers, multicast))
+            # rmw_cyclonedds announces the security enclave in the participant's USER_DATA
+            self.participant = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
+        except DDSException as exc:
+            raise TransportError(f"cannot join DDS domain {self.domain_id} on {interface}: {exc}; check the "
+                                 "interface address under external: ros2: (or CYCLONEDDS_URI)") from exc
+        self._topics: dict[str, Topic[Any]] = {}
+        self._lock = threading.Lock()
+        # the instance handles of this participant's topic writers
+        self.local_writers: set[int] = set()
+
+    def topic(self, name: str, data_type: Any) -> Topic[Any]:
+        with self._lock:
+            topic = self._topics.get(name)
+            if topic is None:
+                topic = self._topics[name] = Topic(self.participant, name, data_type, qos=Qos(_XCDR1))
+            elif topic.data_type is not data_type:
+                raise TransportError(f"DDS topic {name} already carries {topic.data_type.__idl_typename__}, "
+                                     f"not {data_type.__idl_typename__}")
+            return topic
+
+    @property
+    def gid(self) -> bytes:
+        return participant_gid(self.participant)
+
+    def close(self) -> None:
+        """Deletes the participant and with it every reader and writer it made (Cyclone waits for
+        listeners that are running), so nothing of it outlives the bridge."""
+        participant, self.participant = self.participant, None  # type: ignore[assignment]
+        if participant is not None:
+            self._topics.clear()
+            if participant._ref in participant._entities:
+                del participant._entities[participant._ref]
+                participant._delete(participant._ref)
+
+
+def participant_gid(entity: Any) -> bytes:
+    """The 16 bytes of an entity's DDS GUID: what ROS 2 calls its gid."""
+    return bytes(entity.guid.bytes)

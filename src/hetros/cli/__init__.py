@@ -103,7 +103,7 @@ def cmd_launch(args: argparse.Namespace) -> int:
     from ..project import plan_file
 
     plan = plan_file(args.project)
-    result = launch(plan, duration=args.duration)
+    result = launch(plan, duration=args.duration, host=args.as_host)
     if result.exit_code:
         print(f"[launch] graph stopped: {result.reason} (failed: {', '.join(result.failures) or '-'})",
               file=sys.stderr)
@@ -228,6 +228,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("launch", help="run a project")
     p.add_argument("project")
     p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--as", dest="as_host", metavar="HOST",
+                   help="with hosts: run this host's targets (default: the host whose address is this machine's)")
     p.set_defaults(func=cmd_launch)
     p = sub.add_parser("init", help="write a template project from node sources")
     p.add_argument("files", nargs="+")

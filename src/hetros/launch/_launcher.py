@@ -28,6 +28,7 @@ from .._errors import LaunchError
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
 from ..transport import cleanup_stale, remove_session_segments
+from ._hosts import HostLink, local_host
 
 log = logging.getLogger("hetros.launch")
 
@@ -58,6 +59,7 @@ class Launcher:
         self.failures: list[str] = []
         self.stop = threading.Event()
         self.host: Host | None = None
+        self.link: HostLink | None = None
         self._plan_file: Path | None = None
 
     # -- start -----------------------------------------------------------------------------
@@ -151,11 +153,68 @@ class Launcher:
                 return LaunchResult(1, self.failures, f"target {event['target']} exited during start-up")
             elif event["event"] == "signal":
                 return LaunchResult(130, [], "interrupted")
+        if self.plan.hosts:
+            refused = self._meet_hosts()
+            if refused is not None:
+                return refused
         for child in self.children.values():
             self._send(child, "go")
         if self.host is not None:
             self.host.start()
+        if self.link is not None:
+            self.link.announce("running")
         return self._watch()
+
+    def _meet_hosts(self) -> LaunchResult | None:
+        """The start barrier across hosts: announce that this host is ready, then wait (for as long
+        as it takes, Ctrl-C ends it) until every other host of the project is, with the same hash."""
+        self.link = HostLink(self.plan, self.events.put)
+        self.link.announce("ready")
+        me = self.plan.hosts[self.plan.local_host]
+        log.info("host %s (%s) ready; waiting for %s", me.name, me.address, ", ".join(self.link.missing()) or "nobody")
+        said = time.monotonic()
+        while True:
+            if mismatch := self.link.mismatch():
+                sys.stderr.write(f"[ERROR] [launch]: {mismatch}\n")
+                return LaunchResult(1, [], mismatch)
+            missing = self.link.missing()
+            if not missing:
+                log.info("every host is ready: starting the nodes")
+                return None
+            if time.monotonic() - said > 5.0:
+                log.info("still waiting for host(s) %s", ", ".join(
+                    f"{h} ({self.plan.hosts[h].address})" for h in missing))
+                said = time.monotonic()
+            event = self._next_event(1.0)
+            if event is None or event["event"] in ("host_state", "host_back", "host_lost"):
+                continue
+            if event["event"] == "signal":
+                return LaunchResult(130, [], "interrupted while waiting for the other hosts")
+            if event["event"] == "exited":
+                self.failures.append(event["target"])
+                return LaunchResult(1, self.failures, f"target {event['target']} exited during start-up")
+            self.events.put(event)  # for the watch loop
+            time.sleep(0.01)
+
+    def _peer_news(self, event: dict[str, Any]) -> LaunchResult | None:
+        """A host came, went or came back: report it, and act as ``on_peer_lost`` says."""
+        assert self.link is not None
+        host = event["host"]
+        address = self.plan.hosts[host].address
+        if mismatch := self.link.mismatch():
+            sys.stderr.write(f"[ERROR] [launch]: {mismatch}\n")
+            return LaunchResult(1, [host], mismatch)
+        if event["event"] == "host_lost":
+            if self.plan.on_peer_lost == "stop":
+                sys.stderr.write(f"[ERROR] [launch]: host {host} ({address}) is gone; shutting the graph down "
+                                 "(on_peer_lost: stop)\n")
+                return LaunchResult(1, [host], f"host {host} ({address}) was lost")
+            sys.stderr.write(f"[ERROR] [launch]: host {host} ({address}) is gone; its topics pause until it "
+                             "returns (on_peer_lost: continue)\n")
+        elif event["event"] == "host_back":
+            log.info("host %s (%s) is back; its topics resume", host, address)
+        sys.stderr.flush()
+        return None
 
     def _next_event(self, timeout: float | None) -> dict[str, Any] | None:
         try:
@@ -203,6 +262,11 @@ class Launcher:
                 return LaunchResult(1 if self.failures else 0, self.failures, f"required node {event['node']} finished")
             elif kind == "stopped" and event.get("failed"):
                 self.failures.extend(event["failed"])
+            elif kind in ("host_lost", "host_back", "host_state"):
+                outcome = self._peer_news(event)
+                if outcome is not None:
+                    self.failures.extend(outcome.failures)
+                    return outcome
         return LaunchResult(1 if self.failures else 0, self.failures, "all nodes finished")
 
     # -- stop ------------------------------------------------------------------------------
@@ -250,12 +314,22 @@ class Launcher:
                 stuck.extend(f"node {node} (target {event['target']})" for node in event.get("stuck", []))
         if stuck:
             log.error("%s did not stop within 5 s of shutdown", ", ".join(stuck))
+        if self.link is not None:
+            self.link.close()
         remove_session_segments(self.session)
         cleanup_stale()
         return stuck
 
 
-def launch(plan: Plan, *, duration: float | None = None) -> LaunchResult:
+def launch(plan: Plan, *, duration: float | None = None, host: str | None = None) -> LaunchResult:
+    """Run ``plan`` here; with hosts, this machine's share of it (``host``, else the host whose
+    address is this machine's)."""
+    if plan.hosts:
+        if host is not None and host not in plan.hosts:
+            raise LaunchError(f"--as {host}: the project's hosts are {', '.join(plan.hosts)}")
+        plan = plan.on_host(host or local_host(plan))
+    elif host is not None:
+        raise LaunchError(f"--as {host}: the project names no hosts (add a hosts: section)")
     fpga = sorted({spec.target for spec in plan.nodes.values() if plan.targets[spec.target].kind == "fpga"})
     if fpga:
         raise LaunchError(f"target(s) {', '.join(fpga)} are fpga targets: running their nodes needs hardware "

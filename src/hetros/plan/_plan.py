@@ -9,12 +9,13 @@ and no discovery: this is ROS-lite's masterless static initialisation.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
 from ..transport import QoS
 
-TransportKind = Literal["inproc", "shm", "hw"]
+# inproc: one process; shm: one host; dds: between hosts; hw: an fpga target's topic network
+TransportKind = Literal["inproc", "shm", "dds", "hw"]
 # Both directions of every service, whatever carries them: deep enough for bursts of calls,
 # patient enough for a slow handler.
 SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
@@ -39,6 +40,15 @@ class TargetPlan:
     clock_mhz: float = 100.0
     data_width: int = 64
     part: str = ""
+    # the machine (a name in Plan.hosts; "" when the project names no hosts)
+    host: str = ""
+
+
+@dataclass(frozen=True)
+class HostPlan:
+    name: str
+    address: str
+    ssh: str = ""
 
 
 @dataclass(frozen=True)
@@ -98,21 +108,40 @@ class Plan:
     ros1_host: str = "127.0.0.1"
     # the QoS of the topics of `kind: ros1` nodes (they are not hetros channels)
     ros1_qos: dict[str, QoS] = field(default_factory=dict)
+    # the machines of the graph (empty: one machine); which of them this runtime is on
+    hosts: dict[str, HostPlan] = field(default_factory=dict)
+    local_host: str = ""
+    on_peer_lost: str = "stop"
+    dds_domain: int | None = None
+    # of the project file and its message definitions: hosts running different ones refuse each other
+    project_hash: str = ""
 
     def process_of(self, node: str) -> str:
-        """Threads share the launcher's process (called 'launcher'); others run alone."""
+        """Threads share their host's launcher process (called 'launcher'); others run alone."""
         target = self.targets[self.nodes[node].target]
         return process_name(target.name, target.kind)
+
+    def host_of(self, node: str) -> str:
+        return self.targets[self.nodes[node].target].host
+
+    def on_host(self, host: str) -> Plan:
+        """This plan as the runtime of ``host`` sees it: its processes are that host's."""
+        if host not in self.hosts:
+            raise KeyError(host)
+        return replace(self, local_host=host)
+
+    def _here(self, node: str) -> bool:
+        return not self.hosts or self.host_of(node) == self.local_host
 
     def speaks_ros1(self, node: str) -> bool:
         """A node of a ``kind: ros1`` target: all its endpoints are ROS 1's (TCPROS, ROSRPC)."""
         return self.targets[self.nodes[node].target].kind == "ros1"
 
     def nodes_in(self, process: str) -> list[str]:
-        return [n for n in self.nodes if self.process_of(n) == process]
+        return [n for n in self.nodes if self.process_of(n) == process and self._here(n)]
 
     def processes(self) -> list[str]:
-        return sorted({self.process_of(n) for n in self.nodes} - {LAUNCHER})
+        return sorted({self.process_of(n) for n in self.nodes if self._here(n)} - {LAUNCHER})
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=1, sort_keys=True)
@@ -125,7 +154,7 @@ class Plan:
             root=raw["root"],
             message_paths=tuple(raw["message_paths"]),
             targets={k: TargetPlan(v["name"], v["kind"], tuple(v["cpus"]), v.get("clock_mhz", 100.0),
-                                   v.get("data_width", 64), v.get("part", ""))
+                                   v.get("data_width", 64), v.get("part", ""), v.get("host", ""))
                      for k, v in raw["targets"].items()},
             nodes={k: NodePlan(**v) for k, v in raw["nodes"].items()},
             channels={
@@ -140,6 +169,11 @@ class Plan:
             ros1_master=raw.get("ros1_master", ""),
             ros1_host=raw.get("ros1_host", "127.0.0.1"),
             ros1_qos={k: QoS(**v) for k, v in raw.get("ros1_qos", {}).items()},
+            hosts={k: HostPlan(**v) for k, v in raw.get("hosts", {}).items()},
+            local_host=raw.get("local_host", ""),
+            on_peer_lost=raw.get("on_peer_lost", "stop"),
+            dds_domain=raw.get("dds_domain"),
+            project_hash=raw.get("project_hash", ""),
         )
 
 

@@ -21,15 +21,31 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
+class HostSpec(_Strict):
+    """A machine of the graph: where its targets run and where its peers find it."""
+
+    address: str
+    # the user `hetros deploy` logs in as over ssh (None: deploy starts it only when it is this machine)
+    ssh: str | None = None
+
+    @field_validator("address")
+    @classmethod
+    def _address(cls, value: str) -> str:
+        if not value or any(c.isspace() for c in value) or "/" in value:
+            raise ValueError(f"address must be an IP address or host name like '10.0.0.2', not {value!r}")
+        return value
+
+
 class TargetSpec(_Strict):
-    kind: Literal["thread", "process", "ros1", "fpga", "host"]
+    kind: Literal["thread", "process", "ros1", "fpga"]
     cpus: list[int] = Field(default_factory=list)
     # fpga: the clock of the generated topic network, the stream width, the device
     clock_mhz: float | None = Field(default=None, gt=0)
     data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8)
     part: str | None = None
     sim: str | None = None
-    address: str | None = None
+    # the machine it runs on (a name under hosts:); None: the first host, or this machine without hosts:
+    host: str | None = None
 
     @field_validator("cpus")
     @classmethod
@@ -188,6 +204,12 @@ class Project(_Strict):
     nodes: dict[str, NodeSpec]
     topics: dict[str, QoS] = Field(default_factory=dict)
     external: ExternalSpec | None = None
+    # the machines one graph spans; edges between them go over DDS
+    hosts: dict[str, HostSpec] = Field(default_factory=dict)
+    # when a host goes away: stop the whole graph, or keep the rest running until it returns
+    on_peer_lost: Literal["stop", "continue"] = "stop"
+    # the DDS domain of the edges between hosts (None: $ROS_DOMAIN_ID, else 0)
+    dds_domain: int | None = Field(default=None, ge=0, le=232)
 
     @field_validator("shm_budget")
     @classmethod

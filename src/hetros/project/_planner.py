@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
 import json
 import os
@@ -20,6 +21,7 @@ from ..plan import (
     SERVICE_QOS,
     ChannelPlan,
     EdgePlan,
+    HostPlan,
     NodePlan,
     Plan,
     TargetPlan,
@@ -34,10 +36,6 @@ from ..transport import QoS, reserved_bytes
 from ._model import Bridged, LoadedProject, NodeSpec, load_project
 from ._names import node_name_problem, topic_name_problem
 from ._scan import scan_file
-
-_NOT_YET = {
-    "host": "remote host targets are not implemented yet; map the node to a thread or process target",
-}
 
 
 @dataclass
@@ -74,17 +72,13 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     where = project.where
 
     for tname, target in model.targets.items():
-        if target.kind in _NOT_YET:
-            used = [n for n, spec in model.nodes.items() if spec.target == tname]
-            if used:
-                report.errors.append(f"{where('targets', tname, 'kind')}: {_NOT_YET[target.kind]} "
-                                     f"(used by {', '.join(used)})")
         for index, cpu in enumerate(target.cpus):
             if cpu >= (os.cpu_count() or 1):
                 report.errors.append(
                     f"{where('targets', tname, 'cpus', index)}: cpu {cpu} does not exist on this "
                     f"machine ({os.cpu_count()} CPUs: 0..{(os.cpu_count() or 1) - 1})"
                 )
+    _check_hosts(project, report)
     speaks_ros1 = _ros1_nodes(project)
     for reserved, graph in ((ROS1_BRIDGE, "ROS 1"), (ROS2_BRIDGE, "ROS 2")):
         if reserved in model.nodes or reserved in model.targets:
@@ -202,6 +196,42 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
         _check_bridged(project, graph, bridged_spec, tables, _ros1_carries if graph == "ros1" else _ros2_carries,
                        types, report)
     return report
+
+
+def _check_hosts(project: LoadedProject, report: CheckReport) -> None:
+    """Host names become parts of DDS topic names; targets name hosts that exist; one address each."""
+    model = project.model
+    where = project.where
+    for name, host in model.hosts.items():
+        if not name.isidentifier():
+            report.errors.append(f"{where('hosts', name)}: a host name must be letters, digits and '_' "
+                                 f"(it is part of DDS topic names), not {name!r}")
+        users = [other for other, spec in model.hosts.items() if spec.address == host.address]
+        if users[0] != name:
+            report.errors.append(f"{where('hosts', name, 'address')}: {host.address} is host {users[0]}'s "
+                                 "address already; one machine is one host (targets share it)")
+    for tname, target in model.targets.items():
+        if target.host is None:
+            continue
+        if not model.hosts:
+            report.errors.append(f"{where('targets', tname, 'host')}: host {target.host!r} is not defined; "
+                                 "name the machines under hosts: (name: {address: ...})")
+        elif target.host not in model.hosts:
+            report.errors.append(f"{where('targets', tname, 'host')}: unknown host {target.host!r}; define it "
+                                 f"under hosts: (known: {', '.join(model.hosts)})")
+        elif target.kind == "fpga" and len(model.hosts) > 1:
+            report.warnings.append(f"{where('targets', tname, 'host')}: an fpga target's topic network is "
+                                   "generated per target; its host only decides where its software side runs")
+
+
+def project_hash(project: LoadedProject) -> str:
+    """Of the project file and every message definition it loads: hosts compare it when they meet."""
+    digest = hashlib.sha256(project.path.read_bytes())
+    for folder in project.model.messages:
+        root = (project.root / folder).resolve()
+        for path in sorted(p for p in root.rglob("*") if p.is_file() and p.suffix in (".msg", ".srv", ".action")):
+            digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
 
 
 _HW_QOS = {"reliability": "reliable", "history": "keep_all", "durability": "volatile"}
@@ -731,10 +761,16 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
             _add(channels, name, f"{srv}_Response", "reply", project, pub=server, service=service)
             _add(channels, name, f"{srv}_Response", "reply", project, sub=nname, service=service)
     fpga_of = {n: s.target for n, s in model.nodes.items() if model.targets[s.target].kind == "fpga"}
+    # every target on a host: its own, else the first one named (bridges run in the first host's launcher)
+    first_host = next(iter(model.hosts), "")
+    host_of_target = {t: spec.host or first_host for t, spec in model.targets.items()}
+    host_of = {n: host_of_target[s.target] for n, s in model.nodes.items()} | {b.name: first_host for b in bridges}
 
     def transport(publisher: str, subscriber: str) -> TransportKind:
         if publisher in fpga_of:
             return "hw"  # check: a topic with an endpoint on an fpga target has all of them on it
+        if host_of[publisher] != host_of[subscriber]:
+            return "dds"
         return "inproc" if process_of[publisher] == process_of[subscriber] else "shm"
 
     edges = tuple(EdgePlan(c.name, p, s, transport(p, s))
@@ -743,9 +779,10 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         name=model.name,
         root=str(project.root.resolve()),
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
-        targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "")
+        targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "",
+                               host_of_target[n])
                  for n, t in model.targets.items()}
-        | {bridge.name: TargetPlan(bridge.name, "thread") for bridge in bridges},
+        | {bridge.name: TargetPlan(bridge.name, "thread", host=first_host) for bridge in bridges},
         nodes={
             n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts, s.required,
                         s.types("publish"), s.types("subscribe"), s.types("services"), s.types("clients"),
@@ -760,6 +797,10 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         ros1_host=external.ros1.host if (external := model.external) is not None and external.ros1 else "127.0.0.1",
         ros1_qos={t: q for t, q in model.topics.items()
                   if any(t in model.nodes[n].publish or t in model.nodes[n].subscribe for n in speaks_ros1)},
+        hosts={n: HostPlan(n, h.address, h.ssh or "") for n, h in model.hosts.items()},
+        on_peer_lost=model.on_peer_lost,
+        dds_domain=model.dds_domain,
+        project_hash=project_hash(project),
     )
 
 

@@ -1,14 +1,16 @@
 """One process' share of the graph: the transports its nodes' endpoints use.
 
 For each endpoint the plan says which peers live in this process (served by
-the inproc transport, the object itself) and which live in other processes on
-this host (served by shm). A writer feeds both; a reader drains both.
+the inproc transport, the object itself), which live in other processes on
+this host (served by shm) and which on other hosts (dds). A writer feeds all
+of them; a reader drains all of them.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -41,6 +43,7 @@ from ..transport import (
     carried_message,
     has_loan,
 )
+from ..transport.dds import HOST_LEASE, DdsDomain, DdsEdgeReader, DdsEdgeWriter, edge_topic
 from ..transport.tcpros import (
     Ros1Peer,
     Ros1ServiceCaller,
@@ -202,6 +205,9 @@ class Graph:
         self._stop_hooks: list[Callable[[], None]] = []
         self._prepared: dict[tuple[str, str], _Retained] = {}
         self._ros1: _Ros1Nodes | None = None
+        self._dds: DdsDomain | None = None
+        self._dds_writers: dict[str, DdsEdgeWriter] = {}
+        self._dds_readers: list[tuple[str, DdsEdgeReader]] = []
         # the plan's edges, by (channel, publisher) and (channel, subscriber): the runtime wires
         # what they say and never works the transport out again
         self._out: dict[tuple[str, str], list[EdgePlan]] = {}
@@ -224,6 +230,11 @@ class Graph:
                     reader = self._open_reader(channel, node, channel.type, relay, None,
                                                envelope=channel.kind != "topic")
                     self._prepared[(channel.name, node)] = _Retained(reader, relay, self._give_back(channel.name, node))
+        # writers to other hosts exist before the nodes run, so remote readers match them meanwhile
+        for edge in self.plan.edges:
+            if edge.transport == "dds" and edge.publisher in nodes:
+                channel = self.plan.channels[edge.channel]
+                self._dds_writer(channel.name, channel.type, channel.kind != "topic", channel.qos)
         for node in nodes:
             spec = self.plan.nodes[node]
             if self.plan.speaks_ros1(node):
@@ -322,6 +333,47 @@ class Graph:
             self._codecs[key] = codec
         return codec
 
+    def _dds_domain(self) -> DdsDomain:
+        with self._lock:
+            if self._dds is None:
+                assert self.plan is not None and self.plan.local_host
+                hosts = self.plan.hosts
+                self._dds = DdsDomain(self.plan.dds_domain, interface=hosts[self.plan.local_host].address,
+                                      peers=[h.address for h in hosts.values()], lease=HOST_LEASE)
+            return self._dds
+
+    def _dds_writer(self, name: str, typename: str, envelope: bool, qos: QoS) -> DdsEdgeWriter:
+        """One DDS writer per channel and process (every node of the process writes through it)."""
+        writer = self._dds_writers.get(name)
+        if writer is None:
+            assert self.plan is not None
+            writer = DdsEdgeWriter(self._dds_domain(), edge_topic(self.plan.name, self.plan.local_host, name),
+                                   self._codec(typename, envelope), qos)
+            with self._lock:
+                writer = self._dds_writers.setdefault(name, writer)
+        return writer
+
+    def wait_for_remote_readers(self, timeout: float = 10.0) -> list[str]:
+        """Wait until each writer to other hosts is matched by every remote reader the plan has for it,
+        so nothing reliable is published before its remote subscribers hear it; return the channels
+        still short when ``timeout`` passed (they are logged)."""
+        if not self._dds_writers:
+            return []
+        assert self.plan is not None
+        expected = {name: len({e.subscriber for e in self.plan.edges if e.channel == name and e.transport == "dds"
+                               and self.plan.host_of(e.publisher) == self.plan.local_host})
+                    for name in self._dds_writers}
+        deadline = time.monotonic() + timeout
+        while not self.stop.is_set():
+            short = [n for n, w in self._dds_writers.items() if w.matched() < expected[n]]
+            if not short or time.monotonic() > deadline:
+                for name in short:
+                    log.warning("%s: %d of %d remote subscribers matched after %g s; publishing anyway",
+                                name, self._dds_writers[name].matched(), expected[name], timeout)
+                return short
+            time.sleep(0.01)
+        return []
+
     def _ros1_nodes(self) -> _Ros1Nodes:
         with self._lock:
             if self._ros1 is None:
@@ -347,6 +399,8 @@ class Graph:
         if "shm" in transports:
             parts.append(self._domain().open_writer(name, self.process, effective,
                                                     self._codec(typename, envelope)))
+        if "dds" in transports:
+            parts.append(self._dds_writer(name, typename, envelope, effective))
         return _FanoutWriter(parts, self.types)
 
     def open_reader(self, name: str, node: str, typename: str, wake: Wake, *,
@@ -381,6 +435,13 @@ class Graph:
             slot = channel.subscribers.index(node)
             parts.append(self._domain().open_reader(name, remote, effective,
                                                     self._codec(typename, envelope), slot, wake, node))
+        other_hosts = sorted({self.plan.host_of(e.publisher) for e in edges if e.transport == "dds"})
+        if other_hosts:
+            topics = [edge_topic(self.plan.name, host, name) for host in other_hosts]
+            remote_reader = DdsEdgeReader(self._dds_domain(), topics, self._codec(typename, envelope), effective, wake)
+            with self._lock:
+                self._dds_readers.append((f"{name} from {', '.join(other_hosts)}", remote_reader))
+            parts.append(remote_reader)
         return parts[0] if len(parts) == 1 else _MergedReader(parts)
 
     def close(self) -> None:
@@ -393,10 +454,19 @@ class Graph:
         with self._lock:
             domain, self._shm = self._shm, None
             ros1, self._ros1 = self._ros1, None
+            dds, self._dds = self._dds, None
+            writers, self._dds_writers = self._dds_writers, {}
+            readers, self._dds_readers = self._dds_readers, []
+        for name, dds_writer in writers.items():
+            log.info("dds: sent %d samples of %s to other hosts", dds_writer.sent, name)
+        for what, dds_reader in readers:
+            log.info("dds: received %d samples of %s", dds_reader.received, what)
         if domain is not None:
             domain.close()
         if ros1 is not None:
             ros1.close()
+        if dds is not None:
+            dds.close()
 
 
 class _Ros1Nodes:

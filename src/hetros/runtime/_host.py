@@ -129,6 +129,7 @@ class Host:
             self._on_all_exited()
 
     def start(self) -> None:
+        self.graph.wait_for_remote_readers()
         self._running = len(self.threads)
         for nthread in self.threads:
             nthread.start()

@@ -10,17 +10,17 @@ from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 from xml.sax.saxutils import quoteattr
 
 from cyclonedds.core import DDSException, Policy, Qos
 from cyclonedds.domain import Domain, DomainParticipant
 from cyclonedds.topic import Topic
-from cyclonedds.util import duration
 
 from ..._errors import TransportError
 from .._qos import QoS
+from ._waiter import Waiter
 
 # ROS 2's domains are 0..232 (ports are computed from them)
 MAX_DOMAIN_ID = 232
@@ -41,26 +41,42 @@ def default_domain_id() -> int:
     return int(text)
 
 
-def config_xml(interface: str, peers: Sequence[str], multicast: bool) -> str:
-    """The Cyclone configuration of a hetros participant."""
+def config_xml(interface: str, peers: Sequence[str], multicast: bool, lease: float | None = None) -> str:
+    """The Cyclone configuration of a hetros participant; ``lease`` (seconds) is how soon peers
+    give up on it when it vanishes (Cyclone's default is 10 s)."""
     peer_lines = "".join(f"<Peer address={quoteattr(peer)}/>" for peer in peers)
+    # a short lease needs announcements more often than it (Cyclone's default interval is 30 s)
+    lease_line = (f"<LeaseDuration>{lease:g}s</LeaseDuration><SPDPInterval>{lease / 4:g}s</SPDPInterval>"
+                  if lease else "")
     return (
         "<CycloneDDS><Domain Id=\"any\"><General>"
         f"<Interfaces><NetworkInterface address={quoteattr(interface)}/></Interfaces>"
         f"<AllowMulticast>{'true' if multicast else 'false'}</AllowMulticast>"
         "</General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
         "<MaxAutoParticipantIndex>100</MaxAutoParticipantIndex>"
-        f"<Peers>{peer_lines}</Peers></Discovery>"
+        f"<Peers>{peer_lines}</Peers>{lease_line}</Discovery>"
         # multi-MB samples arrive as many fragments: a small socket buffer loses them
         "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MiB\"/></Internal>"
-        "</Domain></CycloneDDS>"
+        + _tracing()
+        + "</Domain></CycloneDDS>"
     )
 
 
+def _tracing() -> str:
+    """``HETROS_DDS_TRACE=<file>``: Cyclone's discovery trace (per process: ``<file>.<pid>``), for
+    finding out why peers do not see each other."""
+    path = os.environ.get("HETROS_DDS_TRACE", "")
+    if not path:
+        return ""
+    return (f"<Tracing><Verbosity>fine</Verbosity><OutputFile>{quoteattr(f'{path}.{os.getpid()}')[1:-1]}"
+            "</OutputFile></Tracing>")
+
+
 def dds_qos(qos: QoS, user_data: bytes = b"") -> Qos:
-    """A hetros QoS as DDS policies, one to one."""
+    """A hetros QoS as DDS policies, one to one; except that a reliable writer never blocks inside
+    DDS (the binding would hold the GIL): ``publish_timeout`` is waited out by ``write_sample``."""
     policies: list[Any] = [
-        Policy.Reliability.Reliable(max_blocking_time=duration(seconds=qos.publish_timeout))
+        Policy.Reliability.Reliable(max_blocking_time=0)
         if qos.reliability == "reliable" else Policy.Reliability.BestEffort,
         Policy.History.KeepAll if qos.history == "keep_all" else Policy.History.KeepLast(qos.depth),
         Policy.Durability.TransientLocal if qos.durability == "transient_local" else Policy.Durability.Volatile,
@@ -71,6 +87,9 @@ def dds_qos(qos: QoS, user_data: bytes = b"") -> Qos:
     return Qos(*policies)
 
 
+# how soon the hosts of one graph notice that one of them vanished (seconds; Cyclone's default is 10)
+HOST_LEASE = 1.0
+
 # ROS 2's default service QoS (rmw_qos_profile_services_default)
 SERVICE_QOS = QoS(reliability="reliable", history="keep_last", depth=10, durability="volatile")
 
@@ -79,7 +98,7 @@ class DdsDomain:
     """A participant on one DDS domain and the topics created on it (shared by name)."""
 
     def __init__(self, domain_id: int | None = None, *, interface: str = "127.0.0.1",
-                 peers: Sequence[str] = ("127.0.0.1",), multicast: bool = False) -> None:
+                 peers: Sequence[str] = ("127.0.0.1",), multicast: bool = False, lease: float | None = None) -> None:
         self.domain_id = default_domain_id() if domain_id is None else domain_id
         if not 0 <= self.domain_id <= MAX_DOMAIN_ID:
             raise TransportError(f"a ROS 2 domain id must be 0 to {MAX_DOMAIN_ID}, not {self.domain_id!r}")
@@ -88,7 +107,8 @@ class DdsDomain:
             if not os.environ.get("CYCLONEDDS_URI"):
                 with _domains_lock:
                     if self.domain_id not in _domains:
-                        _domains[self.domain_id] = Domain(self.domain_id, config_xml(interface, peers, multicast))
+                        _domains[self.domain_id] = Domain(self.domain_id,
+                                                                      config_xml(interface, peers, multicast, lease))
             # rmw_cyclonedds announces the security enclave in the participant's USER_DATA
             self.participant = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
         except DDSException as exc:
@@ -98,6 +118,15 @@ class DdsDomain:
         self._lock = threading.Lock()
         # the instance handles of this participant's topic writers
         self.local_writers: set[int] = set()
+        self._waiter: Waiter | None = None
+
+    def watch(self, reader: Any, handler: Callable[[], None]) -> None:
+        """Run ``handler`` (on this participant's waiting thread) whenever ``reader`` has data."""
+        with self._lock:
+            if self._waiter is None:
+                self._waiter = Waiter(self.participant, str(self.domain_id))
+            waiter = self._waiter
+        waiter.watch(reader, handler)
 
     def topic(self, name: str, data_type: Any) -> Topic[Any]:
         with self._lock:
@@ -116,6 +145,10 @@ class DdsDomain:
     def close(self) -> None:
         """Deletes the participant and with it every reader and writer it made (Cyclone waits for
         listeners that are running), so nothing of it outlives the bridge."""
+        with self._lock:
+            waiter, self._waiter = self._waiter, None
+        if waiter is not None:
+            waiter.close()
         participant, self.participant = self.participant, None  # type: ignore[assignment]
         if participant is not None:
             self._topics.clear()

@@ -5,8 +5,8 @@ XCDR1 body (byte for byte what ROS 2 makes) and ``ddspy_write``/``ddspy_take``
 move it, so no per-field Python serializer runs (the binding's own path takes
 ~150 ms for a 3 MiB ``sequence<uint8>``). Services carry rmw_cyclonedds's request
 header (client id, sequence number) in front of the body, in the same CDR stream.
-Arriving samples are handled on Cyclone's listener thread, which only decodes and
-hands over; hetros's own transports do the rest.
+Arriving samples are handled on the participant's waiting thread (``_waiter``), which
+only decodes and hands over; hetros's own transports do the rest.
 """
 
 from __future__ import annotations
@@ -15,13 +15,13 @@ import itertools
 import logging
 import struct
 import threading
-import weakref
+import time
 from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
 from cyclonedds._clayer import ddspy_take, ddspy_write
-from cyclonedds.core import InstanceState, Listener, SampleState, ViewState
+from cyclonedds.core import InstanceState, SampleState, ViewState
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 
@@ -37,7 +37,7 @@ log = logging.getLogger("hetros.dds")
 
 _CDR_LE = b"\x00\x01\x00\x00"
 _HEADER = struct.Struct("<Qq")  # rmw_cyclonedds: client id, sequence number
-_ANY = SampleState.Any | ViewState.Any | InstanceState.Any
+ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
 _TAKE_AT_ONCE = 64
 # DDS_RETCODE_TIMEOUT: a reliable writer's history stayed full for max_blocking_time
 _RETCODE_TIMEOUT = -10
@@ -53,40 +53,41 @@ def _handle(instance_handle: int) -> int:
     return int(instance_handle) & 0xFFFF_FFFF_FFFF_FFFF
 
 
-def _listener(on_data_available: Callable[[DataReader[Any] | None], None]) -> Listener:
-    """A listener that holds its endpoint weakly. A strong reference would make a cycle (endpoint →
-    reader → listener → endpoint) that the garbage collector may break listener first, leaving
-    Cyclone a reader that calls freed memory; so an endpoint nobody holds is deleted at once."""
-    method = weakref.WeakMethod(on_data_available)
-
-    def available(reader: DataReader[Any] | None) -> None:
-        bound = method()
-        if bound is not None:
-            bound(reader)
-
-    return Listener(on_data_available=available)  # type: ignore[no-untyped-call]
-
-
-def _padded(size: int) -> bytearray:
+def padded(size: int) -> bytearray:
     return bytearray((size + 3) & ~3)  # DDS payloads are whole 4-byte words
 
 
-def _write(writer: DataWriter[Any], data: bytes | bytearray, what: str, timeout: float) -> None:
-    code = ddspy_write(writer._ref, data)
-    if code == _RETCODE_TIMEOUT:
-        raise PublishTimeoutError(f"{what}: a DDS reader did not take the sample within {timeout:g} s "
-                                  "(reliable back-pressure); the sample was not sent")
+def write_sample(writer: DataWriter[Any], data: bytes | bytearray, what: str, timeout: float) -> None:
+    """Write one sample, waiting up to ``timeout`` while a reliable reader's history is full.
+
+    The binding holds the GIL inside ``dds_write``, so a write that blocked there would stop every
+    Python thread of the process, Cyclone's listener callbacks included (and with them the
+    acknowledgements that would unblock it, and the leases of the process' participants). So
+    writers never block in DDS (``max_blocking_time`` 0, see ``dds_qos``); the wait is here, in
+    short sleeps that let everything else run.
+    """
+    deadline = None
+    pause = 0.0002
+    while True:
+        code = ddspy_write(writer._ref, data)
+        if code != _RETCODE_TIMEOUT:
+            break
+        now = time.monotonic()
+        deadline = deadline or now + timeout
+        if now >= deadline:
+            raise PublishTimeoutError(f"{what}: a DDS reader did not take the sample within {timeout:g} s "
+                                      "(reliable back-pressure); the sample was not sent")
+        time.sleep(pause)
+        pause = min(pause * 2, 0.005)
     if code < 0:
         raise TransportError(f"{what}: DDS refused the sample (return code {code})")
 
 
-def _taken(reader: DataReader[Any] | None, ignore: set[int] | frozenset[int] = frozenset()) -> list[bytes]:
+def _taken(reader: DataReader[Any], ignore: set[int] | frozenset[int] = frozenset()) -> list[bytes]:
     """Every valid sample waiting, except those of the writers in ``ignore``."""
     samples: list[bytes] = []
-    if reader is None:  # the binding lost the entity: it is being deleted
-        return samples
     while True:
-        batch = ddspy_take(reader._ref, _ANY, _TAKE_AT_ONCE)
+        batch = ddspy_take(reader._ref, ANY_STATE, _TAKE_AT_ONCE)
         if isinstance(batch, int):
             raise TransportError(f"taking from DDS reader failed (return code {batch})")
         samples += [data for data, info in batch
@@ -114,9 +115,9 @@ class DdsTopicWriter:
         return cls(domain, types, dds_topic, typename, qos, dds_topic=dds_topic)
 
     def write(self, message: Any) -> None:
-        data = _padded(self._codec.size(message))
+        data = padded(self._codec.size(message))
         self._codec.encode_into(message, memoryview(data))
-        _write(self.writer, data, f"DDS topic {self.topic}", self._timeout)
+        write_sample(self.writer, data, f"DDS topic {self.topic}", self._timeout)
 
     def matched(self) -> int:
         return len(self.writer.get_matched_subscriptions())
@@ -133,11 +134,11 @@ class DdsTopicReader:
         self._own = domain.local_writers
         self.received = 0
         self.reader = DataReader(domain.participant, domain.topic(topic_name(topic), idl_type(types, typename)),
-                                 qos=dds_qos(qos, type_hash_user_data(types, typename)),
-                                 listener=_listener(self._available))
+                                 qos=dds_qos(qos, type_hash_user_data(types, typename)))
+        domain.watch(self.reader, self._available)
 
-    def _available(self, reader: DataReader[Any] | None) -> None:
-        for data in _taken(reader, self._own):  # a topic both exported and imported: not our own samples back
+    def _available(self) -> None:
+        for data in _taken(self.reader, self._own):  # a topic both exported and imported: not our own samples back
             try:
                 message = self._codec.decode(memoryview(data))
             except SerializationError as exc:
@@ -161,7 +162,7 @@ class _RequestCodec:
         self._what = f"service {service} ({typename})"
 
     def encode(self, client_id: int, sequence: int, message: Any) -> bytearray:
-        data = _padded(4 + _HEADER.size + self._cdr.size(message))
+        data = padded(4 + _HEADER.size + self._cdr.size(message))
         view = memoryview(data)
         view[:4] = _CDR_LE
         _HEADER.pack_into(view, 4, client_id, sequence)
@@ -192,11 +193,11 @@ class DdsServiceServer:
             qos=dds_qos(SERVICE_QOS, type_hash_user_data(types, f"{srv_typename}_Response")))
         self.reader = DataReader(
             domain.participant, domain.topic(request_topic(service), idl_type(types, f"{srv_typename}_Request", True)),
-            qos=dds_qos(SERVICE_QOS, type_hash_user_data(types, f"{srv_typename}_Request")),
-            listener=_listener(self._available))
+            qos=dds_qos(SERVICE_QOS, type_hash_user_data(types, f"{srv_typename}_Request")))
+        domain.watch(self.reader, self._available)
 
-    def _available(self, reader: DataReader[Any] | None) -> None:
-        for data in _taken(reader):
+    def _available(self) -> None:
+        for data in _taken(self.reader):
             try:
                 client_id, sequence, request = self._requests.decode(data)
             except SerializationError as exc:
@@ -215,7 +216,7 @@ class DdsServiceServer:
                 raise TransportError(f"{self.service}: request #{sequence} was answered already")
             answered.set()
             with self._lock:
-                _write(self.writer, self._replies.encode(client_id, sequence, response),
+                write_sample(self.writer, self._replies.encode(client_id, sequence, response),
                        f"reply of {self.service}", SERVICE_QOS.publish_timeout)
 
         return respond
@@ -238,8 +239,8 @@ class DdsServiceClient:
         self.client_id = _handle(self.writer.instance_handle)
         self.reader = DataReader(
             domain.participant, domain.topic(reply_topic(service), idl_type(types, f"{srv_typename}_Response", True)),
-            qos=dds_qos(SERVICE_QOS, type_hash_user_data(types, f"{srv_typename}_Response")),
-            listener=_listener(self._available))
+            qos=dds_qos(SERVICE_QOS, type_hash_user_data(types, f"{srv_typename}_Response")))
+        domain.watch(self.reader, self._available)
 
     def ready(self) -> bool:
         """A server's request reader and reply writer are both matched (ROS 2's service_is_ready)."""
@@ -251,7 +252,7 @@ class DdsServiceClient:
             sequence = next(self._sequence)
             self._pending[sequence] = future
         try:
-            _write(self.writer, self._requests.encode(self.client_id, sequence, request),
+            write_sample(self.writer, self._requests.encode(self.client_id, sequence, request),
                    f"request to {self.service}", SERVICE_QOS.publish_timeout)
         except Error:
             with self._lock:
@@ -264,8 +265,8 @@ class DdsServiceClient:
         with self._lock:
             self._pending = {k: v for k, v in self._pending.items() if v is not future}
 
-    def _available(self, reader: DataReader[Any] | None) -> None:
-        for data in _taken(reader):
+    def _available(self) -> None:
+        for data in _taken(self.reader):
             try:
                 client_id, sequence, response = self._replies.decode(data)
             except SerializationError as exc:

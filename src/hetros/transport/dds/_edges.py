@@ -1,0 +1,147 @@
+"""Edges between hosts of one hetros graph: hetros's own bytes in DDS samples.
+
+Inside one graph nothing needs ROS 2's conventions, and services carry hetros's
+envelopes (request id, client), so an edge between hosts moves exactly the bytes the
+shared-memory transport moves (the channel's codec), wrapped as one ``sequence<octet>``.
+Each host publishes a channel on a topic of its own (``hetros/<project>/<host>/<channel>``),
+so a reader subscribes only to the hosts the plan says feed it, and a subscriber that
+gets a host's messages through shared memory never gets them twice.
+
+Reliability is DDS's: reliable and keep_all, with ``depth`` unacknowledged samples at most
+in the writer's history, so a network or host that does not keep up holds back the writer
+(which raises after ``publish_timeout``). The reader's history is not bounded: Cyclone
+delivers on its receive thread, and a full reader would stall that thread, and with it
+every other topic and the hosts' leases. A subscriber that does not take its messages
+therefore grows its process' memory rather than losing them; the node's ``try_take``
+drains it.
+"""
+
+from __future__ import annotations
+
+import struct
+import threading
+from collections import deque
+from typing import Any
+
+from cyclonedds._clayer import ddspy_take
+from cyclonedds.core import Policy, Qos
+from cyclonedds.idl import make_idl_struct
+from cyclonedds.idl import types as idl
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+
+from ..._errors import SerializationError, TransportError
+from .._base import Codec, Reader, Wake, Writer
+from .._qos import QoS
+from ._domain import DdsDomain, dds_qos
+from ._endpoints import ANY_STATE, padded, write_sample
+
+_sequence: Any = idl.sequence
+_SAMPLE = make_idl_struct("HetrosSample", "hetros::dds_::Sample_", {"data": _sequence[idl.uint8]})
+_LENGTH = struct.Struct("<I")
+_HEAD = 8  # encapsulation, then the sequence's length
+
+
+def edge_topic(project: str, host: str, channel: str) -> str:
+    """The DDS topic on which ``host`` publishes ``channel`` of ``project``."""
+    return f"hetros/{project}/{host}/{channel.lstrip('/')}"
+
+
+def _edge_qos(qos: QoS, writer: bool) -> Qos:
+    policies = list(dds_qos(qos))
+    if writer and qos.history == "keep_all":
+        # at most ``depth`` samples in flight; beyond that the writer waits: back-pressure
+        policies.append(Policy.ResourceLimits(max_samples=qos.depth, max_instances=1,
+                                              max_samples_per_instance=qos.depth))
+    return Qos(*policies)
+
+
+class DdsEdgeWriter(Writer):
+    """Publishes one channel of this host to the other hosts."""
+
+    def __init__(self, domain: DdsDomain, topic: str, codec: Codec, qos: QoS) -> None:
+        self.topic = topic
+        self._codec = codec
+        self._timeout = qos.publish_timeout
+        self._lock = threading.Lock()
+        self.writer = DataWriter(domain.participant, domain.topic(topic, _SAMPLE), qos=_edge_qos(qos, writer=True))
+        self.sent = 0
+
+    def write(self, message: Any) -> None:
+        size = self._codec.size(message)
+        data = padded(_HEAD + size)
+        data[:4] = b"\x00\x01\x00\x00"
+        _LENGTH.pack_into(data, 4, size)
+        self._codec.encode_into(message, memoryview(data)[_HEAD:_HEAD + size])
+        with self._lock:
+            write_sample(self.writer, data, f"{self.topic} (to another host)", self._timeout)
+            self.sent += 1
+
+    def matched(self) -> int:
+        return len(self.writer.get_matched_subscriptions())
+
+    def close(self) -> None:
+        """Writers are shared per channel and deleted with the process' DDS participant."""
+
+
+class DdsEdgeReader(Reader):
+    """Takes one channel from the hosts that publish it to this subscriber.
+
+    The participant's waiting thread moves arriving samples into a queue and wakes the node;
+    the node's ``try_take`` decodes from the queue (no DDS call on the node's thread).
+    """
+
+    def __init__(self, domain: DdsDomain, topics: list[str], codec: Codec, qos: QoS, wake: Wake) -> None:
+        self._codec = codec
+        self._wake = wake
+        self._queue: deque[tuple[str, bytes]] = deque()
+        self.received = 0
+        self.readers = [DataReader(domain.participant, domain.topic(topic, _SAMPLE), qos=_edge_qos(qos, writer=False))
+                        for topic in topics]
+        for reader in self.readers:
+            domain.watch(reader, self._arrived)
+
+    def _arrived(self) -> None:
+        arrived = False
+        for reader in self.readers:
+            while (taken := _take_one(reader)) is not None:
+                data, valid = taken
+                if valid:
+                    self._queue.append((reader.topic.name, data))
+                    arrived = True
+        if arrived:
+            self._wake()
+
+    def try_take(self) -> Any | None:
+        try:
+            topic, data = self._queue.popleft()
+        except IndexError:
+            return None
+        if len(data) < _HEAD or data[1] != 1:
+            raise SerializationError(f"a sample of {topic} is not hetros's framing (starts {data[:_HEAD].hex(' ')})")
+        (size,) = _LENGTH.unpack_from(data, 4)
+        if _HEAD + size > len(data):
+            raise SerializationError(f"a sample of {topic} says {size} bytes and holds {len(data) - _HEAD}")
+        self.received += 1
+        return self._codec.decode(memoryview(data)[_HEAD:_HEAD + size])
+
+    def matched(self) -> int:
+        return sum(len(r.get_matched_publications()) for r in self.readers)
+
+    def close(self) -> None:
+        readers, self.readers = self.readers, []
+        for reader in readers:
+            if reader._ref in reader._entities:
+                del reader._entities[reader._ref]
+                reader._delete(reader._ref)
+
+
+def _take_one(reader: DataReader[Any]) -> tuple[bytes, bool] | None:
+    batch = ddspy_take(reader._ref, ANY_STATE, 1)
+    if isinstance(batch, int):
+        raise TransportError(f"taking from DDS reader {reader.topic.name} failed (return code {batch})")
+    if not batch:
+        return None
+    data, info = batch[0]
+    return data, bool(info.valid_data)
+

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -108,6 +109,19 @@ def cmd_launch(args: argparse.Namespace) -> int:
         print(f"[launch] graph stopped: {result.reason} (failed: {', '.join(result.failures) or '-'})",
               file=sys.stderr)
     return result.exit_code
+
+
+def cmd_deploy(args: argparse.Namespace) -> int:
+    from ..launch import deploy, deploy_commands
+    from ..project import plan_file
+
+    plan = plan_file(args.project)
+    if args.print:
+        for host, command in deploy_commands(plan, Path(args.project), remote=args.remote,
+                                             duration=args.duration).items():
+            print(f"{host}: {shlex.join(command)}")
+        return 0
+    return deploy(plan, Path(args.project), remote=args.remote, duration=args.duration)
 
 
 def cmd_init(args: argparse.Namespace) -> int:
@@ -231,6 +245,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--as", dest="as_host", metavar="HOST",
                    help="with hosts: run this host's targets (default: the host whose address is this machine's)")
     p.set_defaults(func=cmd_launch)
+    p = sub.add_parser("deploy", help="start every host of a project (this one directly, the others over ssh)")
+    p.add_argument("project")
+    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--remote", default="python3 -m hetros",
+                   help="how a remote host runs hetros in the project's folder (default: %(default)s)")
+    p.add_argument("--print", action="store_true", help="print each host's command instead of running it")
+    p.set_defaults(func=cmd_deploy)
     p = sub.add_parser("init", help="write a template project from node sources")
     p.add_argument("files", nargs="+")
     p.add_argument("-o", "--output")

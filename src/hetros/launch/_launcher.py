@@ -104,7 +104,8 @@ class Launcher:
         with os.fdopen(fd, "w") as handle:
             handle.write(self.plan.to_json())
         self._plan_file = Path(name)
-        previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+        # SIGHUP: `hetros deploy` stops a remote host by hanging up its ssh terminal
+        previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
         in_main = threading.current_thread() is threading.main_thread()
         if in_main:
             for sig in previous:

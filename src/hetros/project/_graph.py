@@ -38,6 +38,9 @@ def describe(plan: Plan) -> str:
         if target.kind == "fpga":
             where = (f"{target.part or 'any part'}, topic network at {target.clock_mhz:g} MHz, "
                      f"{target.data_width}-bit AXI-Stream")
+        if plan.hosts:
+            host = plan.hosts[target.host]
+            where += f", on host {host.name} ({host.address})"
         lines.append(f"  target {target.name} ({target.kind}: {where}): {', '.join(members)}")
     for edge in plan.edges:
         q = plan.channels[edge.channel].qos

@@ -9,13 +9,12 @@ import subprocess
 import sys
 import textwrap
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from hetros.project import load_project, plan
-from tests.support.netns import Namespace, namespaces, unavailable
+from tests.support.netns import Namespace, unavailable
 
 pytestmark = pytest.mark.skipif(bool(unavailable()), reason=f"no network namespaces here: {unavailable()}")
 
@@ -100,12 +99,6 @@ def _wait(condition: object, timeout: float, what: str, logs: list[_Host]) -> No
                          "\n".join(f"--- {h.log.name}\n{h.text()}" for h in logs))
 
 
-@pytest.fixture(scope="module")
-def spaces() -> Iterator[list[Namespace]]:
-    with namespaces(3) as made:
-        yield made
-
-
 def test_a_chain_over_three_hosts_survives_losing_one(spaces: list[Namespace], tmp_path: Path) -> None:
     project = _project(tmp_path, spaces, "continue")
     planned = plan(load_project(project))
@@ -113,7 +106,7 @@ def test_a_chain_over_three_hosts_survives_losing_one(spaces: list[Namespace], t
     got = tmp_path / "got.txt"
     hosts = [_Host(space, project, f"h{i}", tmp_path / f"h{i}.log") for i, space in enumerate(spaces)]
     try:
-        lines = lambda: got.read_text().splitlines() if got.exists() else []  # noqa: E731
+        lines = lambda: got.read_text().splitlines() if got.exists() else []
         _wait(lambda: "add 42" in lines() and sum(" via h1" in line for line in lines()) >= 10, 60,
               "the chain's first messages and the service reply", hosts)
         delivered = [int(line[1:].split()[0]) for line in lines() if line.endswith(" via h1")]

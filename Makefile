@@ -43,10 +43,13 @@ $(TSTAMP): pyproject.toml Makefile | $(PY)
 
 install-test: $(TSTAMP)
 
-# The benchmark's peers: pip extras, and Debian's rospy + rosmaster when we may install them.
+# The benchmark's peers: pip extras, Debian's rospy + rosmaster, and Cyclone's native ddsperf
+# (cyclonedds-tools) when we may install them.
 $(BSTAMP): pyproject.toml Makefile | $(PY)
 	$(PIP) install --quiet -e '.[bench]'
 	$(install_peer_debs)
+	@if ! command -v ddsperf > /dev/null && [ "$$(id -u)" = 0 ]; then \
+		DEBIAN_FRONTEND=noninteractive apt-get install -y -qq cyclonedds-tools > /dev/null; fi
 	touch $(STAMP) $@
 
 install-bench: $(BSTAMP)

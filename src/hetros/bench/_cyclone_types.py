@@ -28,3 +28,21 @@ def payload_type(size: int) -> Any:
         )
         _cache[size].__idl_typename__ = f"hetros_bench::msg::dds_::Payload{size}_"
     return _cache[size]
+
+
+def sequence_type() -> Any:
+    """The binding's stock path for a ROS-like byte array: ``sequence[uint8]``, element by element."""
+    if -1 not in _cache:
+        _cache[-1] = make_dataclass(
+            "PayloadSeq", [("stamp", int64), ("seq", int64), ("data", _sequence_of_bytes())],
+            bases=(IdlStruct,), namespace={"__module__": __name__},
+        )
+        _cache[-1].__idl_typename__ = "hetros_bench::msg::dds_::PayloadSeq_"
+    return _cache[-1]
+
+
+def _sequence_of_bytes() -> Any:
+    from cyclonedds.idl.types import sequence
+
+    generic: Any = sequence
+    return generic[uint8]

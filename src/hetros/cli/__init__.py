@@ -224,6 +224,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
         forwarded += ["--out", args.out]
     if args.bench == "ros1":
         return ros1([*forwarded, "--gap-ms", str(args.gap_ms)])
+    if args.bench == "dds":
+        from ..bench.dds import main as dds
+
+        return dds(forwarded)
     if args.systems:
         forwarded += ["--systems", args.systems]
     return latency(forwarded)
@@ -276,6 +280,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("hw", help="hardware topics: simulated transfer times and Yosys resources vs fpgaDDS")
     p.add_argument("--quick", action="store_true", help="sizes up to 196 kB, two networks")
+    p.add_argument("--out", help="output folder (default out/bench)")
+    p.set_defaults(func=cmd_bench)
+    p = bench.add_parser("dds", help="hetros's DDS transport against the raw cyclonedds binding and ddsperf")
+    p.add_argument("--quick", action="store_true")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("ros1", help="one-way latency over TCPROS: rospy and hetros nodes, both ways")

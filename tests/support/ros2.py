@@ -8,9 +8,13 @@ ROS 2 node would see; raw samples are available to assert the bytes themselves.
 
 # no `from __future__ import annotations`: the binding reads the IDL classes' annotations as types
 import random
+import subprocess
+import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, ClassVar
 
 from cyclonedds._clayer import ddspy_take
@@ -140,3 +144,20 @@ class ParticipantEntitiesInfo(IdlStruct, typename="rmw_dds_common::msg::dds_::Pa
 def latched_qos() -> Qos:
     return Qos(Policy.Reliability.Reliable(max_blocking_time=duration(seconds=5)), Policy.History.KeepLast(1),
                Policy.Durability.TransientLocal, Policy.DataRepresentation(use_cdrv0_representation=True))
+
+
+@contextmanager
+def launched(project: Path, env: dict[str, str] | None = None, duration: float = 40) -> Iterator[subprocess.Popen[str]]:
+    """`hetros launch project` for the length of a test, stopped as Ctrl-C would."""
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(project), "--duration", f"{duration:g}"],
+                              cwd=project.parent, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              text=True)
+    try:
+        yield launch
+    finally:
+        launch.terminate()
+        try:
+            launch.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            launch.kill()
+            launch.wait()

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from .latency import SIZE_LABELS, Stats, _table, fmt, log_axes
+from .ros1 import wait_all
 
 SIZES = [4, 3 * 1024, 192 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
 SYSTEMS = ["hetros-ros2", "hetros-hosts", "binding-array", "binding-seq", "ddsperf"]
@@ -200,15 +201,7 @@ def measure(system: str, size: int, quick: bool, out: Path) -> dict[str, Any]:
                                "--reps", str(reps), "--result", str(result_file), "--cpu", str(cpu)],
                               stderr=subprocess.PIPE, text=True)
              for role, cpu in (("pong", 1), ("ping", 0))]
-    deadline = time.monotonic() + 600
-    while any(p.poll() is None for p in procs):  # the first to fail (or the deadline) ends the other
-        if time.monotonic() > deadline or any(p.returncode not in (None, 0) for p in procs):
-            for proc in procs:
-                if proc.poll() is None:
-                    proc.kill()
-            break
-        time.sleep(0.05)
-    errors = [(p.communicate()[1] or "").strip()[-300:] or f"exit code {p.returncode}" for p in procs if p.wait()]
+    errors = wait_all(procs, timeout=600)
     if errors:
         return {"system": system, "size": size, "error": " | ".join(errors)}
     rtt = json.loads(result_file.read_text())["rtt_ns"]

@@ -55,7 +55,7 @@ class Ros1Bench(Bench):
             if kind == "rospy":
                 procs.append(subprocess.Popen(["/usr/bin/python3", str(ROSPY_PEER), role, str(path)], env=self.env,
                                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True))
-        errors = _wait_all(procs, timeout=600)
+        errors = wait_all(procs, timeout=600)
         if errors:
             return Result(name, size, error="\n".join(errors))
         try:
@@ -66,7 +66,7 @@ class Ros1Bench(Bench):
         return Result(name, size, Stats.of(one_way), Stats.of(rtt))
 
 
-def _wait_all(procs: list[subprocess.Popen[str]], timeout: float) -> list[str]:
+def wait_all(procs: list[subprocess.Popen[str]], timeout: float) -> list[str]:
     """Wait for every process; the first that fails (or the timeout) stops the others. Their errors."""
     deadline = time.monotonic() + timeout
     while any(p.poll() is None for p in procs):

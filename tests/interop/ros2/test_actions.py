@@ -3,14 +3,12 @@ goal, feedback, cancel and result travel as ROS 2's three services and two topic
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
 from hetros.plan import action_endpoints
 from hetros.transport.dds import dds_type_name, reply_topic, request_topic, topic_name
-from tests.support.ros2 import free_domain, wait_for
+from tests.support.ros2 import free_domain, launched, wait_for
 
 MSG = Path(__file__).resolve().parents[3] / "examples" / "sort_action" / "msg"
 
@@ -37,19 +35,17 @@ CLIENT = textwrap.dedent('''
 ''')
 
 
-def _launch(folder: Path, project: str, nodes: str) -> subprocess.Popen[str]:
+def _write(folder: Path, project: str, nodes: str) -> Path:
     folder.mkdir()
     (folder / "nodes.py").write_text(nodes)
     (folder / "project.yaml").write_text(textwrap.dedent(project))
-    return subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(folder / "project.yaml"),
-                             "--duration", "60"], cwd=folder, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    return folder / "project.yaml"
 
 
 def test_an_action_crosses_ros2_with_feedback_cancel_and_result(tmp_path: Path) -> None:
     domain = free_domain()
     sorter_dir = Path(__file__).resolve().parents[3] / "examples" / "sort_action"
-    server = _launch(tmp_path / "server", f"""
+    server_project = _write(tmp_path / "server", f"""
         name: sort_server
         messages: [{MSG}]
         targets: {{proc: {{kind: process}}}}
@@ -59,20 +55,19 @@ def test_an_action_crosses_ros2_with_feedback_cancel_and_result(tmp_path: Path) 
         external:
           ros2: {{domain: {domain}, export_actions: [/sort]}}
     """, (sorter_dir / "nodes.py").read_text())
-    client = None
-    try:
-        client_dir = tmp_path / "client"
-        client = _launch(client_dir, f"""
-            name: sort_client
-            messages: [{MSG}]
-            targets: {{proc: {{kind: process}}}}
-            nodes:
-              client: {{run: nodes:client, target: proc, action_clients: {{/sort: sorter_msgs/action/Sort}},
-                       parameters: {{out: {client_dir / "got.txt"}}}}}
-            external:
-              ros2: {{domain: {domain}, import_actions: [/sort]}}
-        """, CLIENT)
-        got = client_dir / "got.txt"
+    client_dir = tmp_path / "client"
+    client_project = _write(client_dir, f"""
+        name: sort_client
+        messages: [{MSG}]
+        targets: {{proc: {{kind: process}}}}
+        nodes:
+          client: {{run: nodes:client, target: proc, action_clients: {{/sort: sorter_msgs/action/Sort}},
+                   parameters: {{out: {client_dir / "got.txt"}}}}}
+        external:
+          ros2: {{domain: {domain}, import_actions: [/sort]}}
+    """, CLIENT)
+    got = client_dir / "got.txt"
+    with launched(server_project, duration=60) as server, launched(client_project, duration=60) as client:
         try:
             wait_for(got.exists, 60, "the client's outcome")
         except AssertionError:
@@ -81,16 +76,7 @@ def test_an_action_crosses_ros2_with_feedback_cancel_and_result(tmp_path: Path) 
             raise AssertionError(f"client:\n{client.communicate()[0]}\nserver:\n{server.communicate()[0]}") from None
         lines = wait_for(lambda: len(got.read_text().splitlines()) == 2 and got.read_text().splitlines(), 10,
                          "both outcomes")
-        assert lines == ["first SUCCEEDED True True", "second CANCELED"], lines
-    finally:
-        for process in (client, server):
-            if process is not None:
-                process.terminate()
-                try:
-                    process.wait(timeout=15)
-                except subprocess.TimeoutExpired:
-                    process.kill()
-                    process.wait()
+    assert lines == ["first SUCCEEDED True True", "second CANCELED"], lines
 
 
 def test_an_actions_dds_names_are_ros2s() -> None:

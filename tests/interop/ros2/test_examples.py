@@ -3,37 +3,21 @@
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
-from tests.support.ros2 import AddTwoIntsRequest, AddTwoIntsResponse, Peer, String, free_domain, wait_for
+from tests.support.ros2 import AddTwoIntsRequest, AddTwoIntsResponse, Peer, String, free_domain, launched, wait_for
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 
 
-@contextmanager
-def _launched(project: Path, domain: int) -> Iterator[subprocess.Popen[str]]:
-    """`hetros launch` with ROS_DOMAIN_ID set, as ROS 2 users select their domain."""
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "40"],
-                              cwd=project.parent, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    try:
-        yield launch
-    finally:
-        launch.terminate()
-        try:
-            launch.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            launch.kill()
-            launch.wait()
+def _env(domain: int) -> dict[str, str]:
+    """ROS_DOMAIN_ID, as ROS 2 users select their domain."""
+    return dict(os.environ, ROS_DOMAIN_ID=str(domain))
 
 
 def test_talker_listener_over_ros2() -> None:
     domain = free_domain()
-    with _launched(EXAMPLES / "talker_listener" / "project_ros2.yaml", domain) as launch:
+    with launched(EXAMPLES / "talker_listener" / "project_ros2.yaml", _env(domain)) as launch:
         peer = Peer(domain)
         echo = peer.reader("rt/chatter", String)  # what `ros2 topic echo /chatter` would subscribe
         heard: list[String] = []
@@ -53,7 +37,7 @@ def test_talker_listener_over_ros2() -> None:
 
 def test_add_two_ints_served_to_ros2() -> None:
     domain = free_domain()
-    with _launched(EXAMPLES / "add_two_ints" / "project_ros2.yaml", domain):
+    with launched(EXAMPLES / "add_two_ints" / "project_ros2.yaml", _env(domain)):
         peer = Peer(domain)
         requests = peer.writer("rq/add_two_intsRequest", AddTwoIntsRequest)
         replies = peer.reader("rr/add_two_intsReply", AddTwoIntsResponse)

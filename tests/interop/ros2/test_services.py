@@ -4,7 +4,6 @@ ROS 2's tools would read about hetros: ``ros_discovery_info`` and each endpoint'
 from __future__ import annotations
 
 import subprocess
-import sys
 import textwrap
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,6 +19,7 @@ from tests.support.ros2 import (
     String,
     free_domain,
     latched_qos,
+    launched,
     wait_for,
 )
 
@@ -50,7 +50,7 @@ NODES = textwrap.dedent('''
 
 
 @pytest.fixture
-def launched(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
+def graph(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
     domain = free_domain()
     (tmp_path / "nodes.py").write_text(NODES)
     (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
@@ -66,22 +66,12 @@ def launched(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]
           ros2: {{domain: {domain}, export: [/chatter], export_services: [/add_two_ints],
                  import_services: [/ros2_add]}}
     """))
-    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"),
-                               "--duration", "40"], cwd=tmp_path, stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, text=True)
-    try:
+    with launched(tmp_path / "project.yaml") as launch:
         yield domain, tmp_path / "got.txt", launch
-    finally:
-        launch.terminate()
-        try:
-            launch.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            launch.kill()
-            launch.wait()
 
 
-def test_a_ros2_client_calls_a_hetros_service(launched: tuple[int, Path, subprocess.Popen[str]]) -> None:
-    domain, _got, launch = launched
+def test_a_ros2_client_calls_a_hetros_service(graph: tuple[int, Path, subprocess.Popen[str]]) -> None:
+    domain, _got, launch = graph
     peer = Peer(domain)
     requests = peer.writer("rq/add_two_intsRequest", AddTwoIntsRequest)
     replies = peer.reader("rr/add_two_intsReply", AddTwoIntsResponse)
@@ -97,8 +87,8 @@ def test_a_ros2_client_calls_a_hetros_service(launched: tuple[int, Path, subproc
     assert launch.poll() is None
 
 
-def test_a_hetros_client_calls_a_ros2_service(launched: tuple[int, Path, subprocess.Popen[str]]) -> None:
-    domain, got, launch = launched
+def test_a_hetros_client_calls_a_ros2_service(graph: tuple[int, Path, subprocess.Popen[str]]) -> None:
+    domain, got, launch = graph
     peer = Peer(domain)
     requests = peer.reader("rq/ros2_addRequest", AddTwoIntsRequest)
     replies = peer.writer("rr/ros2_addReply", AddTwoIntsResponse)
@@ -118,9 +108,9 @@ def test_a_hetros_client_calls_a_ros2_service(launched: tuple[int, Path, subproc
     assert launch.poll() is None
 
 
-def test_ros2_tools_learn_hetros_nodes_and_type_hashes(launched: tuple[int, Path, subprocess.Popen[str]]) -> None:
+def test_ros2_tools_learn_hetros_nodes_and_type_hashes(graph: tuple[int, Path, subprocess.Popen[str]]) -> None:
     """What `ros2 node list` / `ros2 topic info -v` read: ros_discovery_info and USER_DATA."""
-    domain, _got, _launch = launched
+    domain, _got, _launch = graph
     peer = Peer(domain)
     info = peer.reader("ros_discovery_info", ParticipantEntitiesInfo, qos=latched_qos())
     chatter = peer.reader("rt/chatter", String)

@@ -4,7 +4,6 @@ with ROS 2's DDS names and its own type classes, sees what a stock ROS 2 node wo
 from __future__ import annotations
 
 import subprocess
-import sys
 import textwrap
 from collections.abc import Iterator
 from pathlib import Path
@@ -13,7 +12,7 @@ import numpy as np
 import pytest
 from rosbags.typesys import Stores, get_typestore
 
-from tests.support.ros2 import Header, Image, Peer, String, Time, free_domain, raw_samples, wait_for
+from tests.support.ros2 import Header, Image, Peer, String, Time, free_domain, launched, raw_samples, wait_for
 
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
 
@@ -56,7 +55,7 @@ NODES = textwrap.dedent('''
 
 
 @pytest.fixture
-def launched(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
+def graph(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
     domain = free_domain()
     (tmp_path / "nodes.py").write_text(NODES)
     (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
@@ -70,22 +69,12 @@ def launched(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]
         external:
           ros2: {{domain: {domain}, export: [/chatter, /image], import: [/from_ros2, /image_in]}}
     """))
-    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"),
-                               "--duration", "40"], cwd=tmp_path, stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, text=True)
-    try:
+    with launched(tmp_path / "project.yaml") as launch:
         yield domain, tmp_path / "got.txt", launch
-    finally:
-        launch.terminate()
-        try:
-            launch.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            launch.kill()
-            launch.wait()
 
 
-def test_hetros_topics_reach_a_ros2_peer_byte_identical(launched: tuple[int, Path, subprocess.Popen[str]]) -> None:
-    domain, _got, launch = launched
+def test_hetros_topics_reach_a_ros2_peer_byte_identical(graph: tuple[int, Path, subprocess.Popen[str]]) -> None:
+    domain, _got, launch = graph
     peer = Peer(domain)
     chatter = peer.reader("rt/chatter", String)
     image = peer.reader("rt/image", Image)
@@ -115,8 +104,8 @@ def test_hetros_topics_reach_a_ros2_peer_byte_identical(launched: tuple[int, Pat
     assert launch.poll() is None
 
 
-def test_a_ros2_peer_reaches_hetros_subscribers(launched: tuple[int, Path, subprocess.Popen[str]]) -> None:
-    domain, got, launch = launched
+def test_a_ros2_peer_reaches_hetros_subscribers(graph: tuple[int, Path, subprocess.Popen[str]]) -> None:
+    domain, got, launch = graph
     peer = Peer(domain)
     talker = peer.writer("rt/from_ros2", String)
     camera = peer.writer("rt/image_in", Image)

@@ -16,7 +16,7 @@ import logging
 import struct
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from typing import Any
 
@@ -176,6 +176,14 @@ class _RequestCodec:
         client_id, sequence = _HEADER.unpack_from(data, 4)
         return client_id, sequence, self._cdr.decode(memoryview(data)[4:], _HEADER.size)
 
+    def decode_all(self, reader: DataReader[Any], what: str) -> Iterator[tuple[int, int, Any]]:
+        """Every waiting sample of ``reader`` decoded; one that does not decode is dropped and logged."""
+        for data in _taken(reader):
+            try:
+                yield self.decode(data)
+            except SerializationError as exc:
+                log.error("%s: dropped a %s (%s)", self._what, what, exc)
+
 
 class DdsServiceServer:
     """Serves one service to ROS 2 clients. ``handle(request, respond)`` may answer later, from
@@ -197,12 +205,7 @@ class DdsServiceServer:
         domain.watch(self.reader, self._available)
 
     def _available(self) -> None:
-        for data in _taken(self.reader):
-            try:
-                client_id, sequence, request = self._requests.decode(data)
-            except SerializationError as exc:
-                log.error("%s: dropped a request (%s)", self.service, exc)
-                continue
+        for client_id, sequence, request in self._requests.decode_all(self.reader, "request"):
             try:
                 self._handle(request, self._responder(client_id, sequence))
             except Error as exc:
@@ -266,12 +269,7 @@ class DdsServiceClient:
             self._pending = {k: v for k, v in self._pending.items() if v is not future}
 
     def _available(self) -> None:
-        for data in _taken(self.reader):
-            try:
-                client_id, sequence, response = self._replies.decode(data)
-            except SerializationError as exc:
-                log.error("%s: dropped a reply (%s)", self.service, exc)
-                continue
+        for client_id, sequence, response in self._replies.decode_all(self.reader, "reply"):
             if client_id != self.client_id:
                 continue  # another client's reply: every client of a service reads every reply
             with self._lock:

@@ -112,3 +112,14 @@ def test_deploy_starts_this_host_directly_and_the_others_over_ssh(tmp_path: Path
     no_ssh = _project(tmp_path, HOSTS.replace(", ssh: pi", ""), TARGETS)
     with pytest.raises(LaunchError, match=r"host robot \(10\.0\.0\.2\) is not this machine and has no ssh user"):
         deploy_commands(plan(load_project(no_ssh)), no_ssh)
+
+
+def test_hosts_and_a_ros2_bridge_need_different_domains(tmp_path: Path) -> None:
+    path = _project(tmp_path, HOSTS, TARGETS)
+    path.write_text(path.read_text() + "external: {ros2: {export: [/chatter]}}\n")
+    with pytest.raises(CheckError, match=r"dds_domain: the edges between hosts and external: ros2: need different "
+                                         r"DDS domains"):
+        plan(load_project(path))
+    path.write_text(path.read_text().replace("external: {ros2: {export: [/chatter]}}",
+                                             "dds_domain: 7\nexternal: {ros2: {domain: 0, export: [/chatter]}}"))
+    assert plan(load_project(path)).dds_domain == 7

@@ -194,7 +194,7 @@ def measure(system: str, size: int, quick: bool, out: Path) -> dict[str, Any]:
             return {"system": system, "size": size, "error": "ddsperf printed no latency (ping and pong did not meet)"}
         return {"system": system, "size": size, "one_way_p50_us": one_way, "rtt_p50_us": 2 * one_way}
     warmup, reps = _reps(system, size, quick)
-    domain = 100 + os.getpid() % 100
+    domain = 2 + os.getpid() % 100  # Cyclone's ports from domain 102 up are ephemeral ones
     result_file = out / f"dds-{system}-{size}.json"
     procs = [subprocess.Popen([sys.executable, "-m", "hetros.bench.dds", "--role", role, "--system", system,
                                "--size", str(size), "--domain", str(domain), "--warmup", str(warmup),

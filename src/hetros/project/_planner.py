@@ -202,6 +202,12 @@ def _check_hosts(project: LoadedProject, report: CheckReport) -> None:
     """Host names become parts of DDS topic names; targets name hosts that exist; one address each."""
     model = project.model
     where = project.where
+    ros2 = model.external.ros2 if model.external is not None else None
+    if model.hosts and ros2 is not None and (model.dds_domain is None or model.dds_domain == ros2.domain):
+        # one process holds one Cyclone configuration per domain: the bridge would take the hosts' one
+        report.errors.append(f"{where('dds_domain')}: the edges between hosts and external: ros2: need different "
+                             "DDS domains (their participants are configured differently); set dds_domain: and "
+                             "external: ros2: domain: to two numbers")
     for name, host in model.hosts.items():
         if not name.isidentifier():
             report.errors.append(f"{where('hosts', name)}: a host name must be letters, digits and '_' "

@@ -233,3 +233,28 @@ def test_an_imported_topic_needs_no_hetros_publisher_and_the_graph_names_the_dds
                                                    "subscribe: {/from_ros2: std_msgs/msg/String}"))
     with pytest.raises(CheckError, match=r"nobody publishes /from_ros2.*import it from ROS 1 or ROS 2"):
         plan(load_project(without))
+
+
+def test_cyclone_listens_only_on_the_named_interface(domain: DdsDomain) -> None:
+    """Cyclone binds its receive sockets to 0.0.0.0; hetros pins them to the interface's device."""
+    import os
+    import socket
+    import stat
+
+    first = 7400 + 250 * domain.domain_id
+    devices = {}
+    for entry in os.listdir("/proc/self/fd"):
+        try:
+            if not stat.S_ISSOCK(os.fstat(int(entry)).st_mode):
+                continue
+            sock = socket.socket(fileno=os.dup(int(entry)))
+        except OSError:
+            continue
+        with sock:
+            if sock.family == socket.AF_INET and sock.type == socket.SOCK_DGRAM:
+                host, port = sock.getsockname()
+                if host == "0.0.0.0" and first <= port < first + 250:
+                    devices[port] = sock.getsockopt(socket.SOL_SOCKET, socket.SO_BINDTODEVICE, 16).rstrip(b"\0")
+    assert devices and set(devices.values()) == {b"lo"}, devices
+    with pytest.raises(TransportError, match=r"cannot join DDS domain \d+ on 10.255.255.1: .*check the interface"):
+        DdsDomain(free_domain(), interface="10.255.255.1")

@@ -8,7 +8,12 @@ as for any ROS 2 node, and hetros then takes that file instead.
 
 from __future__ import annotations
 
+import fcntl
+import logging
 import os
+import socket
+import stat
+import struct
 import threading
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -26,6 +31,8 @@ from ._waiter import Waiter
 MAX_DOMAIN_ID = 232
 # stock ROS 2 peers only accept XCDR1: a writer offering XCDR2 is discovered and never matched
 _XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
+
+log = logging.getLogger("hetros.dds")
 
 _domains_lock = threading.Lock()
 _domains: dict[int, Domain] = {}
@@ -111,6 +118,8 @@ class DdsDomain:
                                                                       config_xml(interface, peers, multicast, lease))
             # rmw_cyclonedds announces the security enclave in the participant's USER_DATA
             self.participant = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
+            if not os.environ.get("CYCLONEDDS_URI"):
+                pin_receive_sockets(interface, self.domain_id)
         except DDSException as exc:
             raise TransportError(f"cannot join DDS domain {self.domain_id} on {interface}: {exc}; check the "
                                  "interface address under external: ros2: (or CYCLONEDDS_URI)") from exc
@@ -155,6 +164,67 @@ class DdsDomain:
             if participant._ref in participant._entities:
                 del participant._entities[participant._ref]
                 participant._delete(participant._ref)
+
+
+def _device_of(address: str) -> str:
+    """The network device that owns ``address`` (``lo`` for 127.0.0.1)."""
+    packed = socket.inet_aton(socket.gethostbyname(address))
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        for _index, name in socket.if_nameindex():
+            try:
+                request = struct.pack("256s", name.encode()[:15])
+                answer = fcntl.ioctl(probe.fileno(), _SIOCGIFADDR, request)
+            except OSError:
+                continue  # a device without an IPv4 address
+            if answer[20:24] == packed:
+                return name
+    raise TransportError(f"no network device of this machine has the address {address}; name one it has "
+                         "(interface: under external: ros2:, or the host's address under hosts:)")
+
+
+_SIOCGIFADDR = 0x8915
+_warned_unpinned = False
+
+
+def pin_receive_sockets(interface: str, domain_id: int) -> list[int]:
+    """Make Cyclone's receive sockets take packets only from ``interface``'s device.
+
+    Cyclone binds its receive sockets to the wildcard address whatever the configuration
+    says (it sends only from the chosen interface, but would accept packets from any), so
+    that a participant meant for loopback would listen on every network. hetros pins those
+    sockets (the domain's ports, bound to 0.0.0.0, in this process) to the interface's device
+    with SO_BINDTODEVICE; returns the ports pinned. Where the kernel refuses (it may want
+    CAP_NET_RAW), it says so once: firewall the domain's ports there.
+    """
+    global _warned_unpinned
+    device = _device_of(interface)
+    first, last = 7400 + 250 * domain_id, 7400 + 250 * domain_id + 249
+    pinned = []
+    for entry in os.listdir("/proc/self/fd"):
+        try:
+            if not stat.S_ISSOCK(os.fstat(int(entry)).st_mode):
+                continue
+            sock = socket.socket(fileno=os.dup(int(entry)))  # a duplicate: closing it leaves Cyclone's
+        except OSError:
+            continue
+        try:
+            if sock.family != socket.AF_INET or sock.type != socket.SOCK_DGRAM:
+                continue
+            host, port = sock.getsockname()
+            if host != "0.0.0.0" or not first <= port <= last:
+                continue
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_BINDTODEVICE, device.encode())
+            pinned.append(port)
+        except PermissionError:
+            if not _warned_unpinned:
+                _warned_unpinned = True
+                log.warning("DDS: Cyclone listens on every interface (UDP ports %d-%d) and this process may not "
+                            "restrict it to %s (SO_BINDTODEVICE needs CAP_NET_RAW here); firewall those ports",
+                            first, last, device)
+            return pinned
+        finally:
+            sock.close()
+    return pinned
 
 
 def participant_gid(entity: Any) -> bytes:

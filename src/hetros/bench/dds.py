@@ -9,6 +9,9 @@ One run, ping and pong in two processes pinned to CPUs 0 and 1, Cyclone over UDP
   XCDR1 from hetros's codec, written as opaque samples; what `external: ros2:` uses);
 - ``hetros-hosts``: hetros's edges between hosts (the channel's bytes framed as one
   ``sequence<octet>``), delivered through the participant's waiting thread as in a graph;
+- ``hetros-node``: what users write: two hetros nodes on two hosts of one plan (both on this
+  machine), ``pub.publish`` a new message and ``sub.take()`` on each side, through the graph,
+  its executor and the hosts' DDS edges;
 - ``binding-array``: the raw binding at its fastest, one fixed ``array[uint8, N]`` type per
   size, written and taken in the ping/pong threads themselves;
 - ``binding-seq``: the binding's stock path for a ROS-like message, ``sequence[uint8]``;
@@ -36,7 +39,7 @@ from .latency import SIZE_LABELS, Stats, _table, fmt, log_axes
 from .ros1 import wait_all
 
 SIZES = [4, 3 * 1024, 192 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
-SYSTEMS = ["hetros-ros2", "hetros-hosts", "binding-array", "binding-seq", "ddsperf"]
+SYSTEMS = ["hetros-ros2", "hetros-hosts", "hetros-node", "binding-array", "binding-seq", "ddsperf"]
 
 
 def _reps(system: str, size: int, quick: bool) -> tuple[int, int]:
@@ -48,6 +51,49 @@ def _reps(system: str, size: int, quick: bool) -> tuple[int, int]:
 
 
 # -- the roles -------------------------------------------------------------------------------
+
+class _NodeEndpoint:
+    """Two hetros nodes, one per host of a two-host plan, with the edges between them over DDS."""
+
+    def __init__(self, size: int, domain: int, role: str) -> None:
+        import numpy as np
+
+        from ..msg import registry
+        from ..plan import LAUNCHER, ChannelPlan, EdgePlan, HostPlan, NodePlan, Plan, TargetPlan
+        from ..runtime import Graph, Node
+        from ..transport import QoS
+
+        typename = "std_msgs/msg/UInt8MultiArray"
+        qos = QoS(reliability="reliable", history="keep_last", depth=4)
+        out, into = ("/bench_ping", "/bench_pong") if role == "ping" else ("/bench_pong", "/bench_ping")
+        plan = Plan(
+            name="bench_dds", root="", message_paths=(),
+            targets={r: TargetPlan(r, "thread", host=r) for r in ("ping", "pong")},
+            nodes={r: NodePlan(r, "bench:none", r, publish={f"/bench_{r}": typename},
+                               subscribe={f"/bench_{'pong' if r == 'ping' else 'ping'}": typename})
+                   for r in ("ping", "pong")},
+            channels={f"/bench_{r}": ChannelPlan(f"/bench_{r}", typename, "topic", qos, (r,),
+                                                 ("pong" if r == "ping" else "ping",)) for r in ("ping", "pong")},
+            edges=(EdgePlan("/bench_ping", "ping", "pong", "dds"), EdgePlan("/bench_pong", "pong", "ping", "dds")),
+            hosts={r: HostPlan(r, "127.0.0.1") for r in ("ping", "pong")}, dds_domain=domain,
+        ).on_host(role)
+        self.graph = Graph(plan, LAUNCHER, f"bench{os.getpid()}", types=registry())
+        self.graph.prepare([role])
+        node = Node(role, self.graph)
+        self.cls = registry().get(typename)
+        self.payload = np.zeros(max(size, 1), dtype=np.uint8)
+        self.pub = node.create_publisher(self.cls, out)
+        self.sub = node.create_subscription(self.cls, into)
+
+    def matched(self) -> bool:
+        return not self.graph.wait_for_remote_readers(timeout=0.05)
+
+    def send(self) -> None:
+        self.pub.publish(self.cls(data=self.payload))
+
+    def receive(self) -> None:
+        self.sub.take(timeout=10)
+
 
 class _Endpoint:
     """Sends one payload and waits for one, for each system."""
@@ -134,7 +180,8 @@ class _Endpoint:
 
 def role_main(role: str, system: str, size: int, domain: int, warmup: int, reps: int, out: str, cpu: int) -> int:
     os.sched_setaffinity(0, [cpu])
-    endpoint = _Endpoint(system, size, domain, role)
+    endpoint: Any = (_NodeEndpoint(size, domain, role) if system == "hetros-node"
+                     else _Endpoint(system, size, domain, role))
     deadline = time.monotonic() + 20
     while not endpoint.matched():
         if time.monotonic() > deadline:
@@ -226,10 +273,11 @@ def render(results: list[dict[str, Any]]) -> str:
 
     lines: list[str] = []
     _table(lines, "One-way latency over DDS (half the round trip), p50 µs", SYSTEMS, SIZES, p50)
-    _table(lines, "hetros over the raw binding (time ratio; target <= 1.3x)", ["hetros-ros2", "hetros-hosts"], SIZES,
-           lambda size, ours: ratio("binding-array", ours, size))
+    ours = ["hetros-ros2", "hetros-hosts", "hetros-node"]
+    _table(lines, "hetros over the raw binding (time ratio; target <= 1.3x)", ours, SIZES,
+           lambda size, system: ratio("binding-array", system, size))
     _table(lines, "The binding's stock sequence<uint8> path over hetros (speed-up; target >= 10x from 196 kB)",
-           ["hetros-ros2", "hetros-hosts"], SIZES, lambda size, ours: ratio(ours, "binding-seq", size))
+           ours, SIZES, lambda size, system: ratio(system, "binding-seq", size))
     errors = [r for r in results if "error" in r]
     if errors:
         lines += ["", "### Missing or failed", ""]

@@ -8,6 +8,7 @@ over DDS, not shared memory).
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 import subprocess
@@ -43,9 +44,13 @@ def unavailable() -> str:
     return ""
 
 
+_made = itertools.count()
+
+
 @contextmanager
 def namespaces(count: int) -> Iterator[list[Namespace]]:
-    tag = f"{os.getpid() % 10000}"
+    # names of their own per call: the kernel removes a deleted namespace's links asynchronously
+    tag = f"{os.getpid() % 1000}{next(_made) % 100}"
     bridge = f"htbr{tag}"
     subnet = f"10.{77 + os.getpid() % 100}.{os.getpid() % 250}"
     made: list[Namespace] = []

@@ -10,6 +10,7 @@ ROS 2 node would see; raw samples are available to assert the bytes themselves.
 import random
 import subprocess
 import sys
+import textwrap
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -146,6 +147,14 @@ class ParticipantEntitiesInfo(IdlStruct, typename="rmw_dds_common::msg::dds_::Pa
 def latched_qos() -> Qos:
     return Qos(Policy.Reliability.Reliable(max_blocking_time=duration(seconds=5)), Policy.History.KeepLast(1),
                Policy.Durability.TransientLocal, Policy.DataRepresentation(use_cdrv0_representation=True))
+
+
+def write_project(folder: Path, nodes: str, project: str) -> Path:
+    """``nodes.py`` and ``project.yaml`` (dedented) in ``folder``; the project file's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "nodes.py").write_text(nodes)
+    (folder / "project.yaml").write_text(textwrap.dedent(project))
+    return folder / "project.yaml"
 
 
 @contextmanager

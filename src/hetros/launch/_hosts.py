@@ -60,8 +60,9 @@ def local_host(plan: Plan) -> str:
 
 
 class HostLink:
-    """This host's presence among the others. ``on_change`` runs (on a DDS thread) after any
-    host's news; the launcher then reads :meth:`missing`, :meth:`lost` and :meth:`mismatch`."""
+    """This host's presence among the others. ``on_change`` gets an event (``host_state``,
+    ``host_lost``, ``host_back``) on the participant's waiting thread after any host's news; the
+    launcher then reads :meth:`missing` and :meth:`mismatch`."""
 
     def __init__(self, plan: Plan, on_change: Callable[[dict[str, Any]], None]) -> None:
         self.plan = plan

@@ -17,9 +17,9 @@ from typing import Any
 
 from .._errors import Error
 from ..msg import TypeRegistry, registry
-from ..plan import reply_channel, request_channel
-from ..runtime import Client, Node
-from ..transport import QoS, Writer
+from ..plan import request_channel
+from ..runtime import Client, Node, Replies
+from ..transport import QoS
 from ..transport.dds import (
     DdsDomain,
     DdsServiceClient,
@@ -121,8 +121,7 @@ class _ImportedService:
         self.node = node
         self.dds = dds
         self.service = dds.service
-        self._response_type = f"{typename}_Response"
-        self._replies: dict[str, Writer] = {}
+        self._replies = Replies(node, self.service, f"{typename}_Response")
         self._waiting: list[tuple[float, int, str, Any]] = []
         self._lock = threading.Lock()
         node._check_declared_type(request_channel(self.service), f"{typename}_Request")
@@ -162,13 +161,8 @@ class _ImportedService:
         future.add_done_callback(lambda done: self._reply(request_id, client, done.result()))
 
     def _reply(self, request_id: int, client: str, response: Any) -> None:
-        with self._lock:
-            writer = self._replies.get(client)
-            if writer is None:
-                writer = self._replies[client] = self.node.graph.open_writer(
-                    reply_channel(self.service, client), self.node.name, self._response_type, envelope=True)
-            try:
-                writer.write((request_id, client, response))
-            except Error as exc:
-                self.node.log.error("service %s: the ROS 2 reply to %s could not be delivered: %s",
-                                    self.service, client, exc)
+        try:
+            self._replies.send(request_id, client, response)
+        except Error as exc:
+            self.node.log.error("service %s: the ROS 2 reply to %s could not be delivered: %s",
+                                self.service, client, exc)

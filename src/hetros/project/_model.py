@@ -144,6 +144,12 @@ class Bridged(_Strict):
     export_actions: list[str] = Field(default_factory=list)
     import_actions: list[str] = Field(default_factory=list)
 
+    def listed(self) -> dict[str, list[str]]:
+        """The six lists by their YAML keys (``export``, ``import``, ``export_services``, ...)."""
+        return {"export": list(self.export), "import": list(self.import_),
+                "export_services": list(self.export_services), "import_services": list(self.import_services),
+                "export_actions": list(self.export_actions), "import_actions": list(self.import_actions)}
+
 
 class Ros1Spec(Bridged):
     """Topics shared with a ROS 1 graph through its master (``hetros master`` or roscore)."""

@@ -655,10 +655,7 @@ def _ros2_bridge(project: LoadedProject) -> NodePlan | None:
     spec = project.model.external.ros2 if project.model.external is not None else None
     if spec is None:
         return None
-    shared = {key: list(getattr(spec, attr)) for key, attr in (
-        ("export", "export"), ("import", "import_"), ("export_services", "export_services"),
-        ("import_services", "import_services"), ("export_actions", "export_actions"),
-        ("import_actions", "import_actions"))}
+    shared = spec.listed()
     if not any(shared.values()):
         return None
     exports, imports, export_services, import_services, export_actions, import_actions = _typed(project, shared)
@@ -697,9 +694,7 @@ def _ros1_bridge(project: LoadedProject) -> NodePlan | None:
     spec = model.external.ros1 if model.external is not None else None
     shared = _shared_with_ros1(project)
     if spec is not None:
-        for key, listed in (("export", spec.export), ("import", spec.import_),
-                            ("export_services", spec.export_services), ("import_services", spec.import_services),
-                            ("export_actions", spec.export_actions), ("import_actions", spec.import_actions)):
+        for key, listed in spec.listed().items():
             shared[key] = sorted(set(shared.get(key, ())) | set(listed))
     if not any(shared.values()):
         return None

@@ -4,7 +4,7 @@ from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, S
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
-from ._node import Client, Node, Publisher, Service, Subscription, Timer
+from ._node import Client, Node, Publisher, Replies, Service, Subscription, Timer
 
 __all__ = [
     "ActionClient",
@@ -16,6 +16,7 @@ __all__ = [
     "Host",
     "Node",
     "Publisher",
+    "Replies",
     "ServerGoalHandle",
     "Service",
     "Subscription",

@@ -35,9 +35,9 @@ from .._errors import (
     UndeclaredEndpointError,
 )
 from ..msg import ActionType, registry
-from ..plan import action_endpoints, reply_channel, request_channel
-from ..transport import Reader, Writer
-from ._node import Client, _check_type, _typename
+from ..plan import action_endpoints, request_channel
+from ..transport import Reader
+from ._node import Client, Replies, _check_type, _typename
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -217,11 +217,12 @@ class ActionServer:
         self._goals: OrderedDict[bytes, ServerGoalHandle] = OrderedDict()
         self._waiting_goals: deque[ServerGoalHandle] = deque()  # accepted, not yet executing
         self._threads: dict[bytes, threading.Thread] = {}
-        self._replies: dict[tuple[str, str], Writer] = {}
         self._closed = False
         graph = node.graph
         self._requests: dict[str, Reader] = {}
         self._types = {part: graph.types.get_service(srv) for part, (_, srv) in services.items()}
+        self._replies = {part: Replies(node, service, _typename(self._types[part].Response))
+                         for part, (service, _srv) in services.items()}
         for part, (service, srv) in services.items():
             node._check_declared_type(request_channel(service), f"{srv}_Request")
             self._requests[part] = graph.open_reader(request_channel(service), node.name, f"{srv}_Request",
@@ -250,14 +251,7 @@ class ActionServer:
         self._expire()
 
     def _reply(self, part: str, request_id: int, client: str, response: Any) -> None:
-        service = self._services[part][0]
-        with self._lock:
-            writer = self._replies.get((part, client))
-            if writer is None:
-                writer = self.node.graph.open_writer(reply_channel(service, client), self.node.name,
-                                                     _typename(self._types[part].Response), envelope=True)
-                self._replies[(part, client)] = writer
-            writer.write((request_id, client, response))
+        self._replies[part].send(request_id, client, response)
 
     def _on_send_goal(self, request_id: int, client: str, request: Any) -> None:
         goal_id = bytes(request.goal_id.uuid)

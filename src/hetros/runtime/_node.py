@@ -245,6 +245,26 @@ class Timer:
             self._node.executor.entities -= 1
 
 
+class Replies:
+    """The reply side of one service: a writer per calling client, opened on its first reply.
+    Callable from any thread (an action's goals answer from theirs)."""
+
+    def __init__(self, node: Node, service: str, response_type: str) -> None:
+        self._node = node
+        self._service = service
+        self._response_type = response_type
+        self._writers: dict[str, Writer] = {}
+        self._lock = threading.Lock()
+
+    def send(self, request_id: int, client: str, response: Any) -> None:
+        with self._lock:
+            writer = self._writers.get(client)
+            if writer is None:
+                writer = self._writers[client] = self._node.graph.open_writer(
+                    reply_channel(self._service, client), self._node.name, self._response_type, envelope=True)
+            writer.write((request_id, client, response))
+
+
 class Service:
     """Serves one service: the handler takes a request and returns the response."""
 
@@ -256,7 +276,7 @@ class Service:
         self.handler = handler
         self._request_type = _typename(srv_type.Request)
         self._response_type = _typename(srv_type.Response)
-        self._replies: dict[str, Writer] = {}
+        self._replies = Replies(node, name, self._response_type)
         self._closed = False
         self.stats = HandlingStats()
         self._reader = node.graph.open_reader(
@@ -274,13 +294,7 @@ class Service:
         self.stats.add(time.perf_counter() - start)
         _check_type(response, self._response_type, f"the response of service {self.name}")
         response._hetros_validate(response, f"the response of {self.name}")
-        writer = self._replies.get(client)
-        if writer is None:
-            writer = self.node.graph.open_writer(
-                reply_channel(self.name, client), self.node.name, self._response_type, envelope=True
-            )
-            self._replies[client] = writer
-        writer.write((request_id, client, response))
+        self._replies.send(request_id, client, response)
         return True
 
     def close(self) -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from hetros.plan import action_endpoints
 from hetros.transport.dds import dds_type_name, reply_topic, request_topic, topic_name
-from tests.support.ros2 import free_domain, launched, wait_for
+from tests.support.ros2 import free_domain, launched, wait_for, write_project
 
 MSG = Path(__file__).resolve().parents[3] / "examples" / "sort_action" / "msg"
 
@@ -35,17 +35,10 @@ CLIENT = textwrap.dedent('''
 ''')
 
 
-def _write(folder: Path, project: str, nodes: str) -> Path:
-    folder.mkdir()
-    (folder / "nodes.py").write_text(nodes)
-    (folder / "project.yaml").write_text(textwrap.dedent(project))
-    return folder / "project.yaml"
-
-
 def test_an_action_crosses_ros2_with_feedback_cancel_and_result(tmp_path: Path) -> None:
     domain = free_domain()
     sorter_dir = Path(__file__).resolve().parents[3] / "examples" / "sort_action"
-    server_project = _write(tmp_path / "server", f"""
+    server_project = write_project(tmp_path / "server", (sorter_dir / "nodes.py").read_text(), f"""
         name: sort_server
         messages: [{MSG}]
         targets: {{proc: {{kind: process}}}}
@@ -54,9 +47,9 @@ def test_an_action_crosses_ros2_with_feedback_cancel_and_result(tmp_path: Path) 
                    parameters: {{style: callback, feedback_every: 64}}}}
         external:
           ros2: {{domain: {domain}, export_actions: [/sort]}}
-    """, (sorter_dir / "nodes.py").read_text())
+    """)
     client_dir = tmp_path / "client"
-    client_project = _write(client_dir, f"""
+    client_project = write_project(client_dir, CLIENT, f"""
         name: sort_client
         messages: [{MSG}]
         targets: {{proc: {{kind: process}}}}
@@ -65,7 +58,7 @@ def test_an_action_crosses_ros2_with_feedback_cancel_and_result(tmp_path: Path) 
                    parameters: {{out: {client_dir / "got.txt"}}}}}
         external:
           ros2: {{domain: {domain}, import_actions: [/sort]}}
-    """, CLIENT)
+    """)
     got = client_dir / "got.txt"
     with launched(server_project, duration=60) as server, launched(client_project, duration=60) as client:
         try:

@@ -21,6 +21,7 @@ from tests.support.ros2 import (
     latched_qos,
     launched,
     wait_for,
+    write_project,
 )
 
 NODES = textwrap.dedent('''
@@ -52,8 +53,7 @@ NODES = textwrap.dedent('''
 @pytest.fixture
 def graph(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
     domain = free_domain()
-    (tmp_path / "nodes.py").write_text(NODES)
-    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+    project = write_project(tmp_path, NODES, f"""
         name: ros2_services
         targets: {{main: {{kind: thread}}, worker: {{kind: process}}}}
         nodes:
@@ -65,8 +65,8 @@ def graph(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
         external:
           ros2: {{domain: {domain}, export: [/chatter], export_services: [/add_two_ints],
                  import_services: [/ros2_add]}}
-    """))
-    with launched(tmp_path / "project.yaml") as launch:
+    """)
+    with launched(project) as launch:
         yield domain, tmp_path / "got.txt", launch
 
 

@@ -12,7 +12,18 @@ import numpy as np
 import pytest
 from rosbags.typesys import Stores, get_typestore
 
-from tests.support.ros2 import Header, Image, Peer, String, Time, free_domain, launched, raw_samples, wait_for
+from tests.support.ros2 import (
+    Header,
+    Image,
+    Peer,
+    String,
+    Time,
+    free_domain,
+    launched,
+    raw_samples,
+    wait_for,
+    write_project,
+)
 
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
 
@@ -57,8 +68,7 @@ NODES = textwrap.dedent('''
 @pytest.fixture
 def graph(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
     domain = free_domain()
-    (tmp_path / "nodes.py").write_text(NODES)
-    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+    project = write_project(tmp_path, NODES, f"""
         name: ros2_demo
         targets: {{main: {{kind: thread}}, worker: {{kind: process}}}}
         nodes:
@@ -68,8 +78,8 @@ def graph(tmp_path: Path) -> Iterator[tuple[int, Path, subprocess.Popen[str]]]:
                      subscribe: {{/from_ros2: std_msgs/msg/String, /image_in: sensor_msgs/msg/Image}}}}
         external:
           ros2: {{domain: {domain}, export: [/chatter, /image], import: [/from_ros2, /image_in]}}
-    """))
-    with launched(tmp_path / "project.yaml") as launch:
+    """)
+    with launched(project) as launch:
         yield domain, tmp_path / "got.txt", launch
 
 

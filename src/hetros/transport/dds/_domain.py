@@ -161,9 +161,7 @@ class DdsDomain:
         participant, self.participant = self.participant, None  # type: ignore[assignment]
         if participant is not None:
             self._topics.clear()
-            if participant._ref in participant._entities:
-                del participant._entities[participant._ref]
-                participant._delete(participant._ref)
+            delete_entity(participant)
 
 
 def _device_of(address: str) -> str:
@@ -225,6 +223,13 @@ def pin_receive_sockets(interface: str, domain_id: int) -> list[int]:
         finally:
             sock.close()
     return pinned
+
+
+def delete_entity(entity: Any) -> None:
+    """Delete a DDS entity (and what it owns) now, not when the binding's object is collected."""
+    if entity._ref in entity._entities:
+        del entity._entities[entity._ref]
+        entity._delete(entity._ref)
 
 
 def participant_gid(entity: Any) -> bytes:

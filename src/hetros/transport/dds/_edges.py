@@ -33,7 +33,7 @@ from cyclonedds.sub import DataReader
 from ..._errors import SerializationError, TransportError
 from .._base import Codec, Reader, Wake, Writer
 from .._qos import QoS
-from ._domain import DdsDomain, dds_qos
+from ._domain import DdsDomain, dds_qos, delete_entity
 from ._endpoints import ANY_STATE, padded, write_sample
 
 _sequence: Any = idl.sequence
@@ -131,9 +131,7 @@ class DdsEdgeReader(Reader):
     def close(self) -> None:
         readers, self.readers = self.readers, []
         for reader in readers:
-            if reader._ref in reader._entities:
-                del reader._entities[reader._ref]
-                reader._delete(reader._ref)
+            delete_entity(reader)
 
 
 def _take_one(reader: DataReader[Any]) -> tuple[bytes, bool] | None:

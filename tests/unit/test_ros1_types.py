@@ -11,7 +11,7 @@ import pytest
 from hetros import UnknownTypeError
 from hetros.msg import TypeRegistry
 from hetros.transport.tcpros import Ros1Type
-from hetros.transport.tcpros._types import Ros1ServiceType, md5_text, ros1_store
+from hetros.transport.tcpros._types import SPLICE_MIN, Ros1ServiceType, md5_text, ros1_store
 from tests.support.messages import random_message
 
 TYPES = TypeRegistry()
@@ -93,3 +93,33 @@ def test_direct_types_give_the_bytes_of_the_conversion_path(typename: str) -> No
         slow = bytes(ros1_store().serialize_ros1(kind._outgoing(message), typename))
         assert kind.serialize(message) == slow
         assert kind.deserialize(slow) == message
+
+
+SPLICED = ["sensor_msgs/msg/Image", "sensor_msgs/msg/PointCloud2", "sensor_msgs/msg/CompressedImage",
+           "std_msgs/msg/UInt8MultiArray", "std_msgs/msg/Float32MultiArray", "std_msgs/msg/Int16MultiArray"]
+
+
+@pytest.mark.parametrize("typename", SPLICED)
+def test_large_arrays_are_spliced_into_rosbags_bytes(typename: str) -> None:
+    """The pieces of a vectored write join to rosbags' own bytes, the big array sent from its memory."""
+    kind = Ros1Type(TYPES, typename)
+    rng = random.Random(typename)
+    name, dtype = kind._spliceable[0]
+    for length in (SPLICE_MIN // dtype.itemsize, SPLICE_MIN + 7, 3 * SPLICE_MIN + 1):
+        message = random_message(TYPES, typename, rng)
+        array = np.frombuffer(rng.randbytes(length * dtype.itemsize), dtype)
+        setattr(message, name, array)
+        parts = kind.serialize_parts(message)
+        assert len(parts) == 4 and np.shares_memory(np.frombuffer(parts[2], np.uint8), array)
+        slow = bytes(ros1_store().serialize_ros1(kind._outgoing(message), typename))
+        assert b"".join(parts) == slow
+        assert bytes(kind.serialize(message)) == slow
+
+
+def test_small_arrays_are_serialized_whole_and_big_endian_ones_still_right() -> None:
+    kind = Ros1Type(TYPES, "std_msgs/msg/Float32MultiArray")
+    cls = TYPES.get("std_msgs/msg/Float32MultiArray")
+    small = cls(data=np.arange(16, dtype=np.float32))
+    assert kind.serialize_parts(small) == [kind.serialize(small)]
+    big_endian = cls(data=np.arange(SPLICE_MIN, dtype=">f4"))
+    assert b"".join(kind.serialize_parts(big_endian)) == bytes(kind.serialize(big_endian))

@@ -20,7 +20,7 @@ from rosbags.typesys.store import Typestore
 
 from ..._errors import SerializationError, UnknownTypeError
 from ...msg import TypeRegistry, normalize_typename
-from ._types import Ros1Type, ros1_name
+from ._types import Payload, Ros1Type, ros1_name
 
 PARTS = ("Goal", "Result", "Feedback")
 # actionlib_msgs/GoalStatus
@@ -38,11 +38,14 @@ class Ros1Native:
         self.cls: Any = store.types[typename]
         self._store = store
 
-    def serialize(self, message: Any) -> bytes:
+    def serialize(self, message: Any) -> Payload:
         try:
-            return bytes(self._store.serialize_ros1(message, self.typename))
+            return self._store.serialize_ros1(message, self.typename)
         except (ValueError, TypeError, OverflowError, AttributeError) as exc:
             raise SerializationError(f"cannot serialize {self.name} for ROS 1: {exc}") from exc
+
+    def serialize_parts(self, message: Any) -> list[Payload]:
+        return [self.serialize(message)]
 
     def deserialize(self, data: bytes | memoryview) -> Any:
         try:

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..._errors import ProtocolError, SerializationError, ServiceTimeoutError, TransportError
 from ._header import decode_header, encode_header, header_length, require
-from ._types import Ros1Kind, Ros1ServiceType
+from ._types import Payload, Ros1Kind, Ros1ServiceType
 from ._xmlrpc import CALL_TIMEOUT, proxy, serve
 
 log = logging.getLogger("hetros.ros1")
@@ -135,6 +135,23 @@ def read_header(sock: socket.socket, peer: str) -> dict[str, str]:
     return decode_header(bytes(_receive_exactly(sock, length)), peer)
 
 
+def send_parts(sock: socket.socket, parts: list[Payload]) -> None:
+    """One vectored write of ``parts``, continued where the kernel stopped if it took only some."""
+    sent = sock.sendmsg(parts)
+    total = sum(len(part) for part in parts)
+    while sent < total:
+        rest: list[Payload] = []
+        skip = sent
+        for part in parts:
+            if skip >= len(part):
+                skip -= len(part)
+                continue
+            rest.append(memoryview(part)[skip:])
+            skip = 0
+        parts, total = rest, total - sent
+        sent = sock.sendmsg(parts)
+
+
 def _configure(sock: socket.socket) -> None:
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
@@ -149,19 +166,24 @@ class Ros1Publication:
         self.latch = latch
         self._lock = threading.Lock()
         self._connections: list[tuple[socket.socket, str]] = []
-        self._latched: bytes | None = None
+        self._latched: list[Payload] | None = None
         self.sent = 0
 
     def publish(self, message: Any) -> None:
-        """Serialize once, one vectored write per subscriber; a subscriber that went away is dropped."""
-        payload = self.kind.serialize(message)
-        frame = [_FRAME.pack(len(payload)), payload]
+        """Serialize once, one vectored write per subscriber; a subscriber that went away is dropped.
+
+        A large array goes from the message's memory to the socket (``serialize_parts``):
+        the write returns once the kernel holds the bytes, so the caller may reuse its
+        buffer after ``publish``. A latched message is kept as one copy of its own.
+        """
+        parts = self.kind.serialize_parts(message)
+        frame = [_FRAME.pack(sum(len(part) for part in parts)), *parts]
         with self._lock:
             if self.latch:
-                self._latched = payload
+                self._latched = [b"".join(frame)]
             for sock, who in list(self._connections):
                 try:
-                    sock.sendmsg(frame)
+                    send_parts(sock, frame)
                 except OSError as exc:
                     log.info("ROS 1 subscriber %s of %s went away (%s)", who, self.topic, exc)
                     self._drop(sock)
@@ -170,7 +192,7 @@ class Ros1Publication:
     def _add(self, sock: socket.socket, who: str) -> None:
         with self._lock:
             if self._latched is not None:
-                sock.sendmsg([_FRAME.pack(len(self._latched)), self._latched])
+                send_parts(sock, self._latched)
             self._connections.append((sock, who))
 
     def _drop(self, sock: socket.socket) -> None:
@@ -358,7 +380,7 @@ class Ros1Peer:
                 require(fields, ("md5sum",), peer)
                 _same_type(service, peer, fields, kind.name, kind.md5)
                 payload = kind.request.serialize(request)
-                sock.sendmsg([_FRAME.pack(len(payload)), payload])
+                send_parts(sock, [_FRAME.pack(len(payload)), payload])
                 ok = _receive_exactly(sock, 1)[0]
                 body = _receive_exactly(sock, _frame_length(_receive_exactly(sock, 4), peer))
         except TimeoutError:
@@ -462,13 +484,13 @@ class Ros1Peer:
                 request = kind.request.deserialize(_receive_exactly(sock, _frame_length(prefix, peer)))
                 try:
                     payload = kind.response.serialize(handler(request))
-                    sock.sendmsg([b"\x01", _FRAME.pack(len(payload)), payload])
+                    send_parts(sock, [b"\x01", _FRAME.pack(len(payload)), payload])
                 except (ProtocolError, OSError):
                     raise
                 except Exception as exc:  # the handler's failure goes back to the caller, as in ROS 1
                     log.error("service %s failed for %s: %s", service, peer, exc)
                     text = f"{type(exc).__name__}: {exc}".encode()
-                    sock.sendmsg([b"\x00", _FRAME.pack(len(text)), text])
+                    send_parts(sock, [b"\x00", _FRAME.pack(len(text)), text])
         finally:
             sock.close()
 

@@ -15,6 +15,7 @@ definitions come from rosbags. Between the two, fields map by name, recursively:
 from __future__ import annotations
 
 import hashlib
+import struct
 import threading
 from collections.abc import Callable
 from typing import Any, Protocol
@@ -28,6 +29,14 @@ from ..._errors import SerializationError, UnknownTypeError
 from ...msg import TypeRegistry, freeze, normalize_typename
 
 Convert = Callable[[Any], Any]
+Payload = bytes | memoryview
+# a top-level array at least this large goes to the socket from its own memory (see Ros1Type.serialize_parts)
+SPLICE_MIN = 1 << 16
+_LENGTH = struct.Struct("<I")
+# ROS 1 element types whose little-endian numpy arrays are their serialized bytes
+_SPLICE_DTYPES = {name: np.dtype(code).newbyteorder("<") for name, code in (
+    ("int8", "i1"), ("uint8", "u1"), ("int16", "i2"), ("uint16", "u2"), ("int32", "i4"), ("uint32", "u4"),
+    ("int64", "i8"), ("uint64", "u8"), ("float32", "f4"), ("float64", "f8"))}
 # ROS 2 gives an empty message this field; ROS 1 has none
 _PLACEHOLDER = "structure_needs_at_least_one_member"
 
@@ -57,7 +66,11 @@ class Ros1Kind(Protocol):
     md5: str
     definition: str
 
-    def serialize(self, message: Any) -> bytes: ...
+    def serialize(self, message: Any) -> Payload: ...
+
+    def serialize_parts(self, message: Any) -> list[Payload]:
+        """The payload as pieces for one vectored write (joined, they are ``serialize(message)``)."""
+        ...
 
     def deserialize(self, data: bytes | memoryview) -> Any: ...
 
@@ -84,13 +97,50 @@ class Ros1Type:
         self.direct = (types.store.generate_msgdef(self.typename, ros_version=1)[1] == self.md5
                        and _same_names(types, self.typename))
         self._codec = types.store if self.direct else store
+        self._spliceable = [(name, _SPLICE_DTYPES[desc[1][0][1][0]]) for name, desc in store.fielddefs[self.typename][1]
+                            if desc[0] == Nodetype.SEQUENCE and desc[1][0][0] == Nodetype.BASE
+                            and desc[1][0][1][0] in _SPLICE_DTYPES]
 
-    def serialize(self, message: Any) -> bytes:
+    def serialize(self, message: Any) -> Payload:
         """A hetros message as ROS 1 bytes (the payload of one TCPROS frame)."""
+        return self._serialize(message if self.direct else self._convert(message))
+
+    def serialize_parts(self, message: Any) -> list[Payload]:
+        """The payload as pieces for one vectored write, a large array among them as its own memory.
+
+        rosbags would copy a 6 MiB image into a fresh buffer (and page it in) before the
+        socket copies it again. ROS 1 bytes are unaligned, so a top-level sequence field
+        whose numpy array already holds its little-endian bytes is spliced in: rosbags
+        serializes the message with that field empty (the bytes before and after it), and
+        a second time with one element, so the first byte that differs is where the
+        field's length goes. ``tests/unit/test_ros1_types.py`` holds the joined pieces
+        against rosbags' own bytes.
+        """
+        ros1 = message if self.direct else self._convert(message)
+        for name, dtype in self._spliceable:
+            array = getattr(ros1, name)
+            if (isinstance(array, np.ndarray) and array.nbytes >= SPLICE_MIN and array.dtype == dtype
+                    and array.ndim == 1 and array.flags.c_contiguous):
+                return self._splice(ros1, name, array)
+        return [self._serialize(ros1)]
+
+    def _splice(self, ros1: Any, name: str, array: np.ndarray[Any, Any]) -> list[Payload]:
+        empty = self._serialize(_Replaced(ros1, name, array[:0]))
+        one = self._serialize(_Replaced(ros1, name, array[:1]))
+        mismatch = np.flatnonzero(np.frombuffer(empty, np.uint8) != np.frombuffer(one, np.uint8)[:len(empty)])
+        at = int(mismatch[0])
+        return [empty[:at], _LENGTH.pack(len(array)), memoryview(array).cast("B"), empty[at + _LENGTH.size:]]
+
+    def _convert(self, message: Any) -> Any:
         try:
-            ros1 = message if self.direct else self._outgoing(message)
-            return bytes(self._codec.serialize_ros1(ros1, self.typename))
-        except (ValueError, TypeError, OverflowError, AttributeError) as exc:
+            return self._outgoing(message)
+        except (ValueError, TypeError, AttributeError) as exc:
+            raise SerializationError(f"cannot serialize {self.typename} for ROS 1: {exc}") from exc
+
+    def _serialize(self, ros1: Any) -> Payload:
+        try:
+            return self._codec.serialize_ros1(ros1, self.typename)
+        except (ValueError, TypeError, OverflowError, AttributeError, struct.error) as exc:
             raise SerializationError(f"cannot serialize {self.typename} for ROS 1: {exc}") from exc
 
     def to_ros1(self, message: Any) -> Any:
@@ -112,6 +162,20 @@ class Ros1Type:
         except Exception as exc:  # rosbags raises several kinds for bad bytes
             raise SerializationError(f"{len(data)} bytes do not decode as ROS 1 {self.name}: {exc}") from exc
         return freeze(decoded if self.direct else self._incoming(decoded))
+
+
+class _Replaced:
+    """``message`` as rosbags' serializer sees it, with one attribute standing in for another value."""
+
+    __slots__ = ("_message", "_name", "_value")
+
+    def __init__(self, message: Any, name: str, value: Any) -> None:
+        self._message = message
+        self._name = name
+        self._value = value
+
+    def __getattr__(self, name: str) -> Any:
+        return self._value if name == self._name else getattr(self._message, name)
 
 
 def _same_names(types: TypeRegistry, typename: str) -> bool:

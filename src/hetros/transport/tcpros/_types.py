@@ -129,7 +129,7 @@ class Ros1Type:
         one = self._serialize(_Replaced(ros1, name, array[:1]))
         mismatch = np.flatnonzero(np.frombuffer(empty, np.uint8) != np.frombuffer(one, np.uint8)[:len(empty)])
         at = int(mismatch[0])
-        return [empty[:at], _LENGTH.pack(len(array)), memoryview(array).cast("B"), empty[at + _LENGTH.size:]]
+        return [empty[:at], _LENGTH.pack(len(array)), array.data.cast("B"), empty[at + _LENGTH.size:]]
 
     def _convert(self, message: Any) -> Any:
         try:

@@ -38,7 +38,6 @@ from ..transport import (
     ShmDomain,
     ShmWriter,
     Wake,
-    WakeChannel,
     Writer,
     carried_message,
     has_loan,
@@ -51,8 +50,10 @@ from ..transport.tcpros import (
     Ros1ServiceType,
     Ros1Type,
     Ros1Writer,
+    SocketWaiter,
     open_ros1_reader,
 )
+from ._executor import WaitSource
 
 log = logging.getLogger("hetros.graph")
 
@@ -254,10 +255,13 @@ class Graph:
             reader.inner.close()
         return release
 
-    def wake_source(self, node: str) -> WakeChannel | None:
-        """The wake channel of ``node`` if any of its readers is fed from another process."""
+    def wake_source(self, node: str) -> WaitSource | None:
+        """What ``node``'s executor blocks on besides its condition: a ROS 1 node's TCPROS
+        connections, or the shm wake channel if any of its readers is fed from another process."""
         if self.plan is None:
             return None
+        if self._speaks_ros1(node):
+            return self._ros1_nodes().waiter(node)
         if any(edge.transport == "shm" and edge.subscriber == node for edge in self.plan.edges):
             return self._domain().wake_channel(node)
         return None
@@ -482,6 +486,15 @@ class _Ros1Nodes:
         self._peers: dict[str, Ros1Peer] = {}
         self._servers: dict[tuple[str, str], Ros1ServiceServer] = {}
         self._callers: dict[tuple[str, str], Ros1ServiceCaller] = {}
+        self._waiters: dict[str, SocketWaiter] = {}
+
+    def waiter(self, node: str) -> SocketWaiter:
+        """What ``node``'s executor waits on: its subscriptions' connections and in-process wake-ups."""
+        with self._lock:
+            waiter = self._waiters.get(node)
+            if waiter is None:
+                waiter = self._waiters[node] = SocketWaiter()
+            return waiter
 
     def _peer(self, node: str) -> Ros1Peer:
         with self._lock:
@@ -532,7 +545,7 @@ class _Ros1Nodes:
         if not envelope:
             typename = self._declared(node, "subscribe", name)
             kind = Ros1Type(self._types, typename)
-            return open_ros1_reader(self._peer(node), name, kind, self._qos(name), wake, self._stop)
+            return open_ros1_reader(self._peer(node), name, kind, self._qos(name), self.waiter(node), wake)
         service, client = service_of(name)
         if not client:
             kind_name = self._declared(node, "services", service)
@@ -546,7 +559,10 @@ class _Ros1Nodes:
         with self._lock:
             callers, self._callers = list(self._callers.values()), {}
             peers, self._peers = list(self._peers.values()), {}
+            waiters, self._waiters = list(self._waiters.values()), {}
         for caller in callers:
             caller.close()
         for peer in peers:
             peer.close()
+        for waiter in waiters:
+            waiter.close()

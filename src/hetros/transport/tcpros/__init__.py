@@ -4,6 +4,7 @@ from ._actions import Ros1ActionType
 from ._endpoints import ROSRPC_CLIENT, Ros1ServiceCaller, Ros1ServiceServer, Ros1Writer, open_ros1_reader
 from ._master import DEFAULT_PORT, Master, MasterState
 from ._peer import Ros1Peer, Ros1Publication, Ros1Subscription, get_ros1_parameter
+from ._stream import Ros1StreamReader, SocketWaiter
 from ._types import Ros1ServiceType, Ros1Type, ros1_name
 
 __all__ = [
@@ -17,9 +18,11 @@ __all__ = [
     "Ros1ServiceCaller",
     "Ros1ServiceServer",
     "Ros1ServiceType",
+    "Ros1StreamReader",
     "Ros1Subscription",
     "Ros1Type",
     "Ros1Writer",
+    "SocketWaiter",
     "get_ros1_parameter",
     "open_ros1_reader",
     "ros1_name",

@@ -1,8 +1,8 @@
 """The node API's readers and writers for a node that speaks only ROS 1 (``kind: ros1`` targets).
 
-Topics: a writer publishes on the node's TCPROS publication; a reader is a FIFO the
-TCPROS connection threads fill (the one hop the node API needs: callbacks run on the
-node's thread). Services use the same request/reply envelopes as every other mapping,
+Topics: a writer publishes on the node's TCPROS publication; a reader reads its
+connections in the node's own thread (``_stream``), so no thread stands between the
+socket and a callback. Services use the same request/reply envelopes as every other mapping,
 ``(request_id, client, message)``, so ``Service`` and ``Client`` do not know they are
 talking ROS 1: a ROSRPC request becomes an envelope in the server's FIFO and waits for
 the reply envelope; a client's request envelope becomes one ROSRPC call on a worker
@@ -14,17 +14,17 @@ from __future__ import annotations
 import itertools
 import logging
 import threading
-import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any
 
-from ..._errors import Error, PublishTimeoutError, ShutdownError, TransportError
+from ..._errors import Error, ShutdownError, TransportError
 from ...msg import hand_over
 from .._base import Reader, Wake, Writer
 from .._inproc import Mailbox
 from .._qos import QoS
-from ._peer import Ros1Peer, Ros1Publication
+from ._peer import MAX_FRAME, Ros1Peer, Ros1Publication
+from ._stream import Ros1StreamReader, SocketWaiter
 from ._types import Ros1ServiceType, Ros1Type
 
 log = logging.getLogger("hetros.ros1")
@@ -47,43 +47,31 @@ class Ros1Writer(Writer):
         self._publication.close()
 
 
-def open_ros1_reader(peer: Ros1Peer, topic: str, kind: Ros1Type, qos: QoS, wake: Wake,
-                     stop: threading.Event) -> Reader:
-    """Subscribe over TCPROS into a FIFO with the topic's QoS.
+def open_ros1_reader(peer: Ros1Peer, topic: str, kind: Ros1Type, qos: QoS, waiter: SocketWaiter,
+                     wake: Wake) -> Reader:
+    """Subscribe over TCPROS, read in the node's thread (see ``_stream``).
 
-    A full FIFO of a reliable topic holds the connection's thread (TCP then pushes back on
-    the ROS 1 publisher) and says so in the log every ``publish_timeout``: nothing is dropped
-    on this side. keep_last drops the oldest, as ROS 1's ``queue_size`` does.
+    A reliable topic reads one frame per take: a node that falls behind leaves the rest in
+    the kernel and TCP holds the ROS 1 publisher; nothing is dropped on this side.
+    keep_last keeps the newest ``depth``, as ROS 1's ``queue_size`` does.
     """
-    mailbox = Mailbox(topic, peer.name, qos, wake)
-
-    def arrived(message: Any) -> None:
-        while True:
-            try:
-                mailbox.put(message, time.monotonic() + qos.publish_timeout, stop)
-                return
-            except PublishTimeoutError:
-                log.error("%s: node %s has not taken a message for %g s; the ROS 1 publisher is held "
-                          "(TCP back-pressure) until it does", topic, peer.name, qos.publish_timeout)
-            except ShutdownError:
-                return
-
-    subscription = peer.subscribe(topic, kind, arrived)
-    return _Ros1Reader(mailbox, subscription.close)
+    reader = Ros1StreamReader(topic, kind, qos, waiter, wake, MAX_FRAME)
+    subscription = peer.subscribe(topic, kind, attach=reader.add)
+    return _Ros1Reader(reader, subscription.close)
 
 
 class _Ros1Reader(Reader):
-    def __init__(self, mailbox: Mailbox, release: Any) -> None:
-        self._mailbox = mailbox
+    def __init__(self, reader: Ros1StreamReader, release: Any) -> None:
+        self._reader = reader
         self._release = release
-        self.try_take = mailbox.try_take  # type: ignore[method-assign]
+        self.try_take = reader.try_take  # type: ignore[method-assign]
 
     def try_take(self) -> Any | None:
-        return self._mailbox.try_take()
+        return self._reader.try_take()
 
     def close(self) -> None:
         self._release()
-        self._mailbox.close()
+        self._reader.close()
 
 
 class Ros1ServiceServer:

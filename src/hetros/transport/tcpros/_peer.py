@@ -211,24 +211,41 @@ class Ros1Publication:
             self._connections.clear()
 
 
-class Ros1Subscription:
-    """A topic this process receives from ROS 1 publishers; ``callback`` runs per message."""
+def hang_up(sock: socket.socket) -> None:
+    """End a connection that another thread reads: its read sees the end and that thread closes it."""
+    try:
+        sock.shutdown(socket.SHUT_RDWR)
+    except OSError:
+        pass
 
-    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Kind, callback: Callable[[Any], None]) -> None:
+
+# what a subscription does with a connection past its header: (socket, peer description, gone)
+Attach = Callable[[socket.socket, str, Callable[[], None]], None]
+
+
+class Ros1Subscription:
+    """A topic this process receives from ROS 1 publishers.
+
+    Each publisher's connection is made (``requestTopic``, headers) on a thread of its own;
+    then ``attach`` takes it over: :meth:`Ros1Peer.subscribe`'s attach reads it on that
+    thread and calls back per message (the bridge), a node's stream reader reads it in
+    the node's thread (``kind: ros1`` nodes).
+    """
+
+    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Kind, attach: Attach) -> None:
         self.peer = peer
         self.topic = topic
         self.kind = kind
-        self.callback = callback
+        self._attach = attach
         self._lock = threading.Lock()
         self._connections: dict[str, socket.socket] = {}
-        self.received = 0
 
     def update(self, publishers: list[str]) -> None:
         """Connect to new publishers (slave API URIs), drop those that left."""
         with self._lock:
             gone = [uri for uri in self._connections if uri not in publishers]
             for uri in gone:
-                self._connections.pop(uri).close()
+                hang_up(self._connections.pop(uri))
             new = [uri for uri in publishers if uri not in self._connections and uri != self.peer.uri]
         for uri in new:
             threading.Thread(target=self._connect, args=(uri,), name=f"hetros-ros1-in {self.topic}",
@@ -262,24 +279,13 @@ class Ros1Subscription:
             return
         with self._lock:
             self._connections[publisher] = sock
-        self._receive(sock, peer, publisher)
 
-    def _receive(self, sock: socket.socket, peer: str, publisher: str) -> None:
-        try:
-            while True:
-                length = _frame_length(_receive_exactly(sock, 4), peer)
-                message = self.kind.deserialize(_receive_exactly(sock, length))
-                self.received += 1
-                self.callback(message)
-        except (ProtocolError, SerializationError) as exc:
-            _refused(logging.ERROR, "%s; disconnected", exc)
-        except OSError:
-            pass  # the publisher went away or we closed the connection
-        finally:
+        def gone() -> None:
             with self._lock:
                 if self._connections.get(publisher) is sock:
                     del self._connections[publisher]
-            sock.close()
+
+        self._attach(sock, peer, gone)
 
     @property
     def publishers(self) -> list[str]:
@@ -289,8 +295,27 @@ class Ros1Subscription:
     def close(self) -> None:
         with self._lock:
             for sock in self._connections.values():
-                sock.close()
+                hang_up(sock)
             self._connections.clear()
+
+
+def receive_loop(kind: Ros1Kind, callback: Callable[[Any], None]) -> Attach:
+    """An ``attach`` that reads a connection on its connecting thread, ``callback`` per message."""
+
+    def attach(sock: socket.socket, peer: str, gone: Callable[[], None]) -> None:
+        try:
+            while True:
+                length = _frame_length(_receive_exactly(sock, 4), peer)
+                callback(kind.deserialize(_receive_exactly(sock, length)))
+        except (ProtocolError, SerializationError) as exc:
+            _refused(logging.ERROR, "%s; disconnected", exc)
+        except OSError:
+            pass  # the publisher went away or we closed the connection
+        finally:
+            gone()
+            sock.close()
+
+    return attach
 
 
 class Ros1Peer:
@@ -352,8 +377,15 @@ class Ros1Peer:
         self._call_master("registerPublisher", topic, kind.name, self.uri)
         return publication
 
-    def subscribe(self, topic: str, kind: Ros1Kind, callback: Callable[[Any], None]) -> Ros1Subscription:
-        subscription = Ros1Subscription(self, topic, kind, callback)
+    def subscribe(self, topic: str, kind: Ros1Kind, callback: Callable[[Any], None] | None = None, *,
+                  attach: Attach | None = None) -> Ros1Subscription:
+        """Receive ``topic``: ``callback`` per message on the connection's thread, or each connection
+        handed to ``attach`` once its header is through (a node's stream reader)."""
+        if attach is None:
+            if callback is None:
+                raise TypeError("subscribe needs a callback or an attach function")
+            attach = receive_loop(kind, callback)
+        subscription = Ros1Subscription(self, topic, kind, attach)
         with self._lock:
             self._subscriptions[topic] = subscription
         publishers = self._call_master("registerSubscriber", topic, kind.name, self.uri)

@@ -143,3 +143,23 @@ def test_an_interrupt_ends_a_wait_and_a_closed_waiter_is_inert() -> None:
     waiter.close()
     waiter.interrupt()
     waiter.wait(0.01)
+
+
+def test_a_peer_trickling_a_large_frame_does_not_hold_the_reader(pair: tuple[socket.socket, socket.socket]) -> None:
+    ours, theirs = pair
+    stream = FrameStream(ours, "peer", 1 << 24)
+    theirs.sendall(struct.pack("<I", 1 << 20) + bytes(1000))
+    done = threading.Event()
+
+    def trickle() -> None:
+        while not done.wait(0.001):
+            theirs.send(b"x")
+
+    trickler = threading.Thread(target=trickle)
+    trickler.start()
+    try:
+        assert stream.next_frame() is None
+        assert trickler.is_alive()  # the read gave up while the peer was still sending
+    finally:
+        done.set()
+        trickler.join()

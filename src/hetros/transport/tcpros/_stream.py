@@ -19,6 +19,7 @@ import select
 import socket
 import struct
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from typing import Any
@@ -36,6 +37,9 @@ _FRAME = struct.Struct("<I")
 # frames up to this size are assembled in the connection's buffer; larger ones in memory of their own
 _CHUNK = 1 << 16
 _ONESHOT = select.EPOLLIN | select.EPOLLONESHOT
+# how long a read waits for the next piece of a large frame under way, and for all of them
+_PATIENCE_MS = 2
+_PATIENCE_TOTAL = 0.01
 
 
 class SocketWaiter:
@@ -116,6 +120,10 @@ class FrameStream:
     A frame up to ``_CHUNK`` bytes is copied out of the connection's buffer (the message
     keeps it); a larger one lands in memory of its own that the kernel maps as bytes
     arrive, so a length prefix that lies costs the peer what it sent, not what it announced.
+    The rest of a large frame is usually in flight: a read waits up to ``_PATIENCE_MS`` for
+    each next piece (going back to the executor between pieces would cost a wake-up each)
+    and ``_PATIENCE_TOTAL`` in all, so a peer that trickles or stalls mid-frame does not
+    hold the node.
     """
 
     def __init__(self, sock: socket.socket, peer: str, max_frame: int) -> None:
@@ -128,6 +136,8 @@ class FrameStream:
         self._end = 0
         self._large: memoryview | None = None
         self._large_got = 0
+        self._readable = select.poll()
+        self._readable.register(sock, select.POLLIN)
 
     def next_frame(self) -> bytes | memoryview | None:
         """The next complete frame, None when the socket has no more for now.
@@ -163,8 +173,11 @@ class FrameStream:
     def _fill_large(self) -> memoryview | None:
         large = self._large
         assert large is not None
+        give_up = time.monotonic() + _PATIENCE_TOTAL
         while self._large_got < len(large):
-            if not self._receive_into(large, self._large_got):
+            if not self._receive_into(large, self._large_got) and not (
+                    time.monotonic() < give_up and self._readable.poll(_PATIENCE_MS)
+                    and self._receive_into(large, self._large_got)):
                 return None
         self._large = None
         return large

@@ -1,10 +1,13 @@
 """ROS 1 benchmark: one-way latency over TCPROS between rospy and hetros nodes, both ways.
 
-    python benchmarks/ros1.py [--quick] [--gap-ms MS] [--out DIR]      (or: hetros bench ros1)
+    python benchmarks/ros1.py [--quick] [--rounds N] [--gap-ms MS] [--out DIR]      (or: hetros bench ros1)
 
 Four pairs, sender -> receiver, in one run through one Debian rosmaster, the sender pinned
 to CPU 0 and the receiver to CPU 1: rospy -> rospy, rospy -> hetros, hetros -> rospy and
-hetros -> hetros. hetros's side is what a user writes: nodes on ``kind: ros1`` targets
+hetros -> hetros. The run goes round every size and pair ``--rounds`` times (3) and pools
+each pair's samples: absolute times here drift by 2x within minutes, and interleaving
+lets every pair meet the same drift, so the ratios compare like with like.
+hetros's side is what a user writes: nodes on ``kind: ros1`` targets
 started by ``hetros launch``, the receiver a subscription callback that publishes the data
 back. One-way latency is measured by the receiver (the sender's stamp in the payload, one
 monotonic clock); the round trip by the sender. Prints markdown tables, writes JSON lines
@@ -33,11 +36,19 @@ def pair_name(sender: str, receiver: str) -> str:
     return f"{sender}->{receiver}"
 
 
+Samples = tuple[list[int], list[int]]
+
+
 class Ros1Bench(Bench):
-    def run_ros1_pair(self, sender: str, receiver: str, size: int, gap: float = 0.0) -> Result:
+    def run_ros1_pair(self, sender: str, receiver: str, size: int, gap: float = 0.0, rounds: int = 1) -> Samples:
+        """One run of a pair: (one-way, round-trip) samples in ns, a ``rounds``-th of the repetitions.
+
+        Raises BenchError with the processes' last words when the run fails.
+        """
         name = pair_name(sender, receiver)
         cfg, path = self.config(name, size)
         cfg["gap_s"] = gap
+        cfg["reps"] = max(cfg["reps"] // rounds, 10)
         path.write_text(json.dumps(cfg))
         cpus = self.cpus or []
         nodes: dict[str, dict[str, Any]] = {}
@@ -57,13 +68,17 @@ class Ros1Bench(Bench):
                                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True))
         errors = wait_all(procs, timeout=600)
         if errors:
-            return Result(name, size, error="\n".join(errors))
+            raise BenchError("\n".join(errors))
         try:
             rtt = json.loads(Path(cfg["ping_out"]).read_text())["rtt_ns"]
             one_way = json.loads(Path(cfg["echo_out"]).read_text())["one_way_ns"]
         except (OSError, ValueError, KeyError) as exc:
-            return Result(name, size, error=f"no result: {exc}")
-        return Result(name, size, Stats.of(one_way), Stats.of(rtt))
+            raise BenchError(f"no result: {exc}") from None
+        return one_way, rtt
+
+
+class BenchError(Exception):
+    """A benchmark run that gave no samples (its text goes into the report, the run goes on)."""
 
 
 def wait_all(procs: list[subprocess.Popen[str]], timeout: float) -> list[str]:
@@ -150,6 +165,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="fewer repetitions")
     parser.add_argument("--out", default="out/bench", help="folder for ros1.jsonl, ros1.md, ros1.png")
+    parser.add_argument("--rounds", type=int, default=None,
+                        help="interleaved rounds over every pair and size, their samples pooled (default 3, "
+                             "--quick 1): machine drift during the run then weighs on every pair alike")
     parser.add_argument("--gap-ms", type=float, default=0.0,
                         help="pause of the sender after each reply: 0 (default) measures back-to-back exchanges, "
                              "a few ms isolated messages (every receiver then wakes from idle)")
@@ -160,19 +178,40 @@ def main(argv: list[str] | None = None) -> int:
     bench = Ros1Bench(out, args.quick, cpus)
     results: list[Result] = []
     missing = bench.available("rospy")
+    rounds = args.rounds or (1 if args.quick else 3)
+    samples: dict[tuple[str, int], Samples] = {}
+    failed: dict[tuple[str, int], str] = {}
     try:
         if missing:
             print(f"[bench] rospy: missing: {missing}", flush=True)
         else:
-            for sender, receiver in PAIRS:
+            for round_number in range(1, rounds + 1):
                 for size in SIZES:
-                    result = bench.run_ros1_pair(sender, receiver, size, args.gap_ms / 1000.0)
-                    results.append(result)
-                    status = result.error.splitlines()[-1][:120] if result.error else (
-                        f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")
-                    print(f"[bench] {result.system:16} {SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
+                    for sender, receiver in PAIRS:
+                        key = (pair_name(sender, receiver), size)
+                        if key in failed:
+                            continue
+                        try:
+                            one_way, rtt = bench.run_ros1_pair(sender, receiver, size, args.gap_ms / 1000.0, rounds)
+                        except BenchError as exc:
+                            failed[key] = str(exc)
+                            status = str(exc).splitlines()[-1][:120]
+                        else:
+                            pooled = samples.setdefault(key, ([], []))
+                            pooled[0].extend(one_way)
+                            pooled[1].extend(rtt)
+                            status = f"p50 {Stats.of(one_way).p50:.1f} µs"
+                        print(f"[bench] round {round_number}/{rounds} {key[0]:16} "
+                              f"{SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
     finally:
         bench.close()
+    for size in SIZES:
+        for sender, receiver in PAIRS:
+            key = (pair_name(sender, receiver), size)
+            if key in failed:
+                results.append(Result(key[0], size, error=failed[key]))
+            elif key in samples:
+                results.append(Result(key[0], size, Stats.of(samples[key][0]), Stats.of(samples[key][1])))
     report = render(results, SIZES, missing)
     print()
     print(report)

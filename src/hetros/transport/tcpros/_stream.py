@@ -274,18 +274,18 @@ class Ros1StreamReader(Reader):
         with self._lock:
             known = any(s is stream for s, _g in self._streams)
             self._streams = [(s, g) for s, g in self._streams if s is not stream]
-        if not known:
-            return
+        if known:
+            self._release(stream)
+            gone()
+
+    def _release(self, stream: FrameStream) -> None:
         if stream.sock.fileno() != -1:
             self._waiter.forget(stream.sock.fileno())
         stream.sock.close()
-        gone()
 
     def close(self) -> None:
         with self._lock:
             self._closed = True
             streams, self._streams = self._streams, []
         for stream, _gone in streams:
-            if stream.sock.fileno() != -1:
-                self._waiter.forget(stream.sock.fileno())
-            stream.sock.close()
+            self._release(stream)

@@ -7,8 +7,8 @@ wakes its subscription; the subscription then reads the frame itself, without bl
 a frame that arrives in pieces (a slow or malicious peer) is assembled across calls and
 never holds the node. A reliable subscription reads one frame per take, so a node that
 falls behind leaves the rest in the kernel and TCP pushes back on the publisher; a
-keep_last one reads what has arrived and keeps the newest ``depth`` frames, as ROS 1's
-``queue_size`` does.
+keep_last one keeps the newest ``depth`` frames of what each read brings (up to 64 KiB of
+small frames at once), as ROS 1's ``queue_size`` does.
 """
 
 from __future__ import annotations
@@ -139,13 +139,14 @@ class FrameStream:
         self._readable = select.poll()
         self._readable.register(sock, select.POLLIN)
 
-    def next_frame(self) -> bytes | memoryview | None:
-        """The next complete frame, None when the socket has no more for now.
+    def next_frame(self, receive: bool = True) -> bytes | memoryview | None:
+        """The next complete frame, None when the socket has no more for now (or, without
+        ``receive``, when no complete small frame is already buffered: no system call then).
 
         Raises ConnectionError when the peer closed, ProtocolError on a refused length.
         """
         if self._large is not None:
-            return self._fill_large()
+            return self._fill_large() if receive else None
         while True:
             available = self._end - self._start
             if available >= _FRAME.size:
@@ -157,6 +158,8 @@ class FrameStream:
                 if self._end - body >= length:
                     self._start = body + length
                     return bytes(self._buffer[body:body + length])
+                if not receive:
+                    return None
                 if length > _CHUNK - _FRAME.size:
                     large = memoryview(np.empty(length, np.uint8).data)
                     have = self._end - body
@@ -167,7 +170,7 @@ class FrameStream:
             if self._start:
                 self._buffer[:available] = self._buffer[self._start:self._end]
                 self._start, self._end = 0, available
-            if not self._receive_into(self._buffer, self._end):
+            if not receive or not self._receive_into(self._buffer, self._end):
                 return None
 
     def _fill_large(self) -> memoryview | None:
@@ -247,28 +250,36 @@ class Ros1StreamReader(Reader):
                 return None
 
     def _read(self) -> None:
-        """One frame (reliable) or all that arrived (keep_last), round robin over publishers."""
+        """The next frame, round robin over publishers; keep_last adds the newer ones already read.
+
+        One system call brings the frame (and whatever followed it) on the way to a callback;
+        finding the socket drained and re-arming it wait for the next take, after the callback.
+        """
         with self._lock:
             streams = list(self._streams)
         for offset in range(len(streams)):
             stream, gone = streams[(self._next + offset) % len(streams)]
             try:
-                while True:
-                    frame = stream.next_frame()
-                    if frame is None:
-                        self._waiter.rearm(stream.sock.fileno())
-                        break
-                    if self._keep_last and len(self._frames) == self._frames.maxlen:
-                        self.dropped += 1
-                    self._frames.append((frame, stream, gone))
-                    if not self._keep_last:
-                        self._next = (self._next + offset + 1) % len(streams)
-                        return
+                frame = stream.next_frame()
+                if frame is None:
+                    self._waiter.rearm(stream.sock.fileno())
+                    continue
+                self._keep(frame, stream, gone)
+                if self._keep_last:
+                    while (frame := stream.next_frame(receive=False)) is not None:
+                        self._keep(frame, stream, gone)
+                self._next = (self._next + offset + 1) % len(streams)
+                return
             except ProtocolError as exc:
                 log.error("%s; disconnected", exc)
                 self._drop(stream, gone)
             except OSError:
                 self._drop(stream, gone)  # the publisher went away, or the subscription dropped it
+
+    def _keep(self, frame: bytes | memoryview, stream: FrameStream, gone: Callable[[], None]) -> None:
+        if self._keep_last and len(self._frames) == self._frames.maxlen:
+            self.dropped += 1
+        self._frames.append((frame, stream, gone))
 
     def _drop(self, stream: FrameStream, gone: Callable[[], None]) -> None:
         with self._lock:

@@ -531,8 +531,9 @@ class _Ros1Nodes:
     def open_writer(self, name: str, node: str, *, envelope: bool) -> Writer:
         if not envelope:
             typename = self._declared(node, "publish", name)
-            latch = self._qos(name).keeps_history
-            return Ros1Writer(self._peer(node).advertise(name, Ros1Type(self._types, typename), latch=latch))
+            qos = self._qos(name)
+            return Ros1Writer(self._peer(node).advertise(name, Ros1Type(self._types, typename),
+                                                         latch=qos.keeps_history, qos=qos))
         service, client = service_of(name)
         if client:
             server = self._servers.get((node, service))

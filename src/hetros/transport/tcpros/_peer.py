@@ -22,8 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from ..._errors import ProtocolError, SerializationError, ServiceTimeoutError, TransportError
+from ..._errors import ProtocolError, PublishTimeoutError, SerializationError, ServiceTimeoutError, TransportError
+from .._qos import QoS
 from ._header import decode_header, encode_header, header_length, require
+from ._outgoing import SubscriberLink, send_parts
 from ._types import Payload, Ros1Kind, Ros1ServiceType
 from ._xmlrpc import CALL_TIMEOUT, proxy, serve
 
@@ -135,80 +137,76 @@ def read_header(sock: socket.socket, peer: str) -> dict[str, str]:
     return decode_header(bytes(_receive_exactly(sock, length)), peer)
 
 
-def send_parts(sock: socket.socket, parts: list[Payload]) -> None:
-    """One vectored write of ``parts``, continued where the kernel stopped if it took only some."""
-    sent = sock.sendmsg(parts)
-    total = sum(len(part) for part in parts)
-    while sent < total:
-        rest: list[Payload] = []
-        skip = sent
-        for part in parts:
-            if skip >= len(part):
-                skip -= len(part)
-                continue
-            rest.append(memoryview(part)[skip:])
-            skip = 0
-        parts, total = rest, total - sent
-        sent = sock.sendmsg(parts)
-
-
 def _configure(sock: socket.socket) -> None:
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
 
-class Ros1Publication:
-    """A topic this process publishes to ROS 1 subscribers."""
+# what a publication to ROS 1 does with a subscriber that falls behind, unless told otherwise
+ROS1_QOS = QoS(reliability="reliable", history="keep_last", depth=10)
 
-    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Kind, latch: bool) -> None:
+
+class Ros1Publication:
+    """A topic this process publishes to ROS 1 subscribers (see SubscriberLink for slow ones)."""
+
+    def __init__(self, peer: Ros1Peer, topic: str, kind: Ros1Kind, latch: bool, qos: QoS = ROS1_QOS) -> None:
         self.peer = peer
         self.topic = topic
         self.kind = kind
         self.latch = latch
+        self.qos = qos
         self._lock = threading.Lock()
-        self._connections: list[tuple[socket.socket, str]] = []
+        self._links: list[SubscriberLink] = []
         self._latched: list[Payload] | None = None
         self.sent = 0
 
     def publish(self, message: Any) -> None:
         """Serialize once, one vectored write per subscriber; a subscriber that went away is dropped.
 
-        A large array goes from the message's memory to the socket (``serialize_parts``):
-        the write returns once the kernel holds the bytes, so the caller may reuse its
+        A large array goes from the message's memory to the socket (``serialize_parts``);
+        whatever a subscriber cannot take at once is copied, so the caller may reuse its
         buffer after ``publish``. A latched message is kept as one copy of its own.
         """
         parts = self.kind.serialize_parts(message)
-        frame = [_FRAME.pack(sum(len(part) for part in parts)), *parts]
+        total = sum(len(part) for part in parts)
+        frame = [_FRAME.pack(total), *parts]
+        total += _FRAME.size
+        timeout: PublishTimeoutError | None = None
         with self._lock:
             if self.latch:
                 self._latched = [b"".join(frame)]
-            for sock, who in list(self._connections):
+            for link in list(self._links):
                 try:
-                    send_parts(sock, frame)
+                    link.send(frame, total)
+                except PublishTimeoutError as exc:
+                    timeout = exc
                 except OSError as exc:
-                    log.info("ROS 1 subscriber %s of %s went away (%s)", who, self.topic, exc)
-                    self._drop(sock)
+                    log.info("ROS 1 subscriber %s of %s went away (%s)", link.who, self.topic, exc)
+                    self._drop(link)
             self.sent += 1
+        if timeout is not None:
+            raise timeout
 
     def _add(self, sock: socket.socket, who: str) -> None:
+        link = SubscriberLink(sock, who, self.topic, self.qos)
         with self._lock:
             if self._latched is not None:
-                send_parts(sock, self._latched)
-            self._connections.append((sock, who))
+                link.send(self._latched, len(self._latched[0]))
+            self._links.append(link)
 
-    def _drop(self, sock: socket.socket) -> None:
-        self._connections = [(s, w) for s, w in self._connections if s is not sock]
-        sock.close()
+    def _drop(self, link: SubscriberLink) -> None:
+        self._links = [other for other in self._links if other is not link]
+        link.close()
 
     @property
     def subscribers(self) -> list[str]:
         with self._lock:
-            return [who for _sock, who in self._connections]
+            return [link.who for link in self._links]
 
     def close(self) -> None:
         with self._lock:
-            for sock, _who in self._connections:
-                sock.close()
-            self._connections.clear()
+            links, self._links = self._links, []
+        for link in links:
+            link.close()
 
 
 def hang_up(sock: socket.socket) -> None:
@@ -370,8 +368,8 @@ class Ros1Peer:
 
     # -- endpoints -------------------------------------------------------------------------
 
-    def advertise(self, topic: str, kind: Ros1Kind, latch: bool = False) -> Ros1Publication:
-        publication = Ros1Publication(self, topic, kind, latch)
+    def advertise(self, topic: str, kind: Ros1Kind, latch: bool = False, qos: QoS = ROS1_QOS) -> Ros1Publication:
+        publication = Ros1Publication(self, topic, kind, latch, qos)
         with self._lock:
             self._publications[topic] = publication
         self._call_master("registerPublisher", topic, kind.name, self.uri)

@@ -15,6 +15,9 @@ from ._types import Payload
 
 log = logging.getLogger("hetros.ros1")
 
+# how long a publisher keeps writing a frame the subscriber is taking, before the rest is copied aside
+_PATIENCE = 0.05
+
 
 def send_parts(sock: socket.socket, parts: list[Payload]) -> None:
     """One vectored write of ``parts`` on a blocking socket, continued where the kernel stopped."""
@@ -40,9 +43,10 @@ def _rest(parts: list[Payload], sent: int) -> list[Payload]:
 class SubscriberLink:
     """One ROS 1 subscriber's connection, fed by its publication.
 
-    A frame goes straight to the socket (non-blocking, from the message's own memory)
-    while the kernel takes it whole: the common case costs one system call and no thread.
-    What the subscriber cannot take now waits, copied, in a backlog that a helper thread
+    A frame goes straight to the socket (non-blocking, from the message's own memory):
+    the common case costs one system call and no thread, and a large frame that the
+    subscriber is reading goes on being written for up to ``_PATIENCE``. What the
+    subscriber does not take by then waits, copied, in a backlog that a helper thread
     drains as the socket allows, so a subscriber that stops reading (a stuck process, a
     node busy for seconds) never freezes the publisher. The backlog holds ``depth``
     frames besides the one under way: keep_last drops the oldest waiting one, as rospy's
@@ -63,6 +67,8 @@ class SubscriberLink:
         self._drainer: threading.Thread | None = None
         self._failure: OSError | None = None
         self._closed = False
+        self._writable = select.poll()
+        self._writable.register(sock, select.POLLOUT)
 
     def send(self, frame: list[Payload], total: int) -> None:
         """Raises OSError when the subscriber is gone, PublishTimeoutError as described above."""
@@ -70,17 +76,24 @@ class SubscriberLink:
             if self._failure is not None:
                 raise self._failure
             if not self._backlog:
-                try:
-                    sent = self.sock.sendmsg(frame)
-                except (BlockingIOError, InterruptedError):
-                    sent = 0
-                if sent == total:
-                    return
-                self._queue(_rest(frame, sent))
+                sent = self._try_send(frame)
+                if sent < total:
+                    give_up = time.monotonic() + _PATIENCE
+                    while sent < total and time.monotonic() < give_up:
+                        if self._writable.poll(max(1, int((give_up - time.monotonic()) * 1000))):
+                            sent += self._try_send(_rest(frame, sent))
+                if sent < total:
+                    self._queue(_rest(frame, sent))
                 return
             if len(self._backlog) > self.qos.depth:
                 self._make_room()
             self._queue(frame)
+
+    def _try_send(self, parts: list[Payload]) -> int:
+        try:
+            return self.sock.sendmsg(parts)
+        except (BlockingIOError, InterruptedError):
+            return 0
 
     def _queue(self, parts: list[Payload]) -> None:
         self._backlog.append(memoryview(b"".join(parts)))  # a copy: the caller may reuse its memory

@@ -223,7 +223,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.out:
         forwarded += ["--out", args.out]
     if args.bench == "ros1":
-        return ros1([*forwarded, "--gap-ms", str(args.gap_ms)])
+        rounds = ["--rounds", str(args.rounds)] if args.rounds else []
+        return ros1([*forwarded, *rounds, "--gap-ms", str(args.gap_ms)])
     if args.bench == "dds":
         from ..bench.dds import main as dds
 
@@ -289,6 +290,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = bench.add_parser("ros1", help="one-way latency over TCPROS: rospy and hetros nodes, both ways")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")
     p.add_argument("--gap-ms", type=float, default=0.0, help="sender's pause after each reply (isolated messages)")
+    p.add_argument("--rounds", type=int, help="interleaved rounds over every pair and size, pooled (default 3)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
     hw = sub.add_parser("hw", help="fpga targets: topic networks as RTL").add_subparsers(dest="hw", required=True)

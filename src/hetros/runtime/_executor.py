@@ -102,16 +102,22 @@ class Executor:
             if key not in self._queued:
                 self._queued.add(key)
                 self._ready.append(entity)
-        self.wake()
+            interrupt = self._woken()
+        if interrupt and self._source is not None:
+            self._source.interrupt()
 
     def wake(self) -> None:
         """Something may be ready: every waiter rechecks (callable from any thread)."""
         with self._cond:
-            self._generation += 1
-            self._cond.notify_all()
-            interrupt = self._listening and self._listener != threading.get_ident()
+            interrupt = self._woken()
         if interrupt and self._source is not None:
             self._source.interrupt()
+
+    def _woken(self) -> bool:
+        """Under the condition: a new generation for every waiter; whether the source must be interrupted."""
+        self._generation += 1
+        self._cond.notify_all()
+        return self._listening and self._listener != threading.get_ident()
 
     def wait(self, seen: int, timeout: float | None) -> None:
         """Block until the generation differs from ``seen`` or ``timeout`` passes."""

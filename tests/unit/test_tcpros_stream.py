@@ -163,3 +163,31 @@ def test_a_peer_trickling_a_large_frame_does_not_hold_the_reader(pair: tuple[soc
     finally:
         done.set()
         trickler.join()
+
+
+def test_a_subscription_is_read_by_the_waiting_thread_with_no_reader_thread_left() -> None:
+    """Through hetros' own master: connected, the connection is read only by whoever waits."""
+    from hetros.transport.tcpros import Master, Ros1Peer, open_ros1_reader
+
+    master = Master("127.0.0.1", 0)
+    talker = Ros1Peer("/talker", master.uri)
+    listener = Ros1Peer("/listener", master.uri)
+    waiter = SocketWaiter()
+    try:
+        publication = talker.advertise("/chatter", STRING)
+        reader = open_ros1_reader(listener, "/chatter", STRING, QoS(), waiter, lambda: None)
+        message = None
+        for attempt in range(200):
+            publication.publish(TYPES.get("std_msgs/msg/String")(data=f"hello {attempt}"))
+            waiter.wait(0.05)
+            message = reader.try_take()
+            if message is not None:
+                break
+        assert message is not None and message.data.startswith("hello")
+        assert not [t for t in threading.enumerate() if t.name.startswith("hetros-ros1-in")]
+        reader.close()
+    finally:
+        waiter.close()
+        listener.close()
+        talker.close()
+        master.close()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import os
 import threading
 import time
 from typing import TYPE_CHECKING, Any
@@ -30,6 +31,9 @@ from ._sample import (
 
 if TYPE_CHECKING:
     from ._domain import ShmDomain
+
+# how long a publisher facing a full reliable FIFO re-reads the credits awake before it blocks
+FULL_SPIN = 100e-6
 
 
 class Service:
@@ -107,9 +111,16 @@ class Service:
             self.space.notify_all()
 
     def wait_for_space(self, deadline: float) -> None:
-        """Block (with ``self.lock`` held) until every live blocking subscriber has room."""
+        """Block (with ``self.lock`` held) until every live blocking subscriber has room.
+
+        A subscriber that keeps up frees room within microseconds: the publisher re-reads
+        the credits awake for ``FULL_SPIN`` before it announces that it waits and blocks
+        (being woken costs the subscriber a notification and this process two thread
+        wake-ups; at 64 B that was 10-15 % of the throughput).
+        """
         published = self.next_seq - 1
         credits = self.credits
+        spin_until: float | None = None
         while True:
             blocked = credits.full_slots(published, self.qos.depth)
             for index in list(blocked):
@@ -127,6 +138,11 @@ class Service:
                 self.room = self.qos.depth - credits.max_fill(published)
                 return
             if not credits.waiting:
+                if spin_until is None:
+                    spin_until = time.perf_counter() + FULL_SPIN
+                if time.perf_counter() < spin_until:
+                    os.sched_yield()
+                    continue
                 credits.waiting = True
                 continue  # re-check after announcing: a take may have slipped in between
             remaining = deadline - time.monotonic()

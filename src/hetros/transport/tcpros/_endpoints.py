@@ -23,7 +23,8 @@ from ...msg import hand_over
 from .._base import Reader, Wake, Writer
 from .._inproc import Mailbox
 from .._qos import QoS
-from ._peer import MAX_FRAME, Ros1Peer, Ros1Publication
+from ._header import MAX_FRAME
+from ._peer import Ros1Peer, Ros1Publication
 from ._stream import Ros1StreamReader, SocketWaiter
 from ._types import Ros1ServiceType, Ros1Type
 

@@ -5,6 +5,9 @@ length and ``name=value`` (the value may hold ``=`` and any bytes). rospy and ro
 ``callerid``, ``topic``, ``md5sum``, ``type``, ``message_definition`` and optionally
 ``tcp_nodelay`` when subscribing, ``latching`` when answering, ``service``,
 ``persistent`` and ``probe`` for services, and ``error`` to refuse.
+
+After the headers every message is a frame: a 4-byte little-endian length (``FRAME``)
+and that many bytes, refused above ``MAX_FRAME``.
 """
 
 from __future__ import annotations
@@ -17,6 +20,9 @@ from ..._errors import ProtocolError
 _LENGTH = struct.Struct("<I")
 # no stock node sends more; a larger length is garbage or an attack, never a buffer to allocate
 MAX_HEADER = 1 << 20
+FRAME = struct.Struct("<I")
+# a frame longer than this is refused
+MAX_FRAME = 1 << 30
 
 
 def encode_header(fields: Mapping[str, str]) -> bytes:
@@ -80,3 +86,10 @@ def require(fields: Mapping[str, str], names: tuple[str, ...], peer: str) -> Non
         error = f"; it says: {fields['error']}" if "error" in fields else ""
         raise ProtocolError(f"{peer}: connection header lacks {', '.join(missing)} "
                             f"(it has {', '.join(sorted(fields)) or 'nothing'}){error}")
+
+
+def frame_length(length: int, peer: str, limit: int = MAX_FRAME) -> int:
+    """``length`` as a frame announces it, refused above ``limit`` (garbage must not become an allocation)."""
+    if length > limit:
+        raise ProtocolError(f"{peer}: a frame announces {length} bytes (more than {limit})")
+    return int(length)

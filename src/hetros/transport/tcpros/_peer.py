@@ -13,7 +13,6 @@ from __future__ import annotations
 import logging
 import os
 import socket
-import struct
 import threading
 import time
 import xmlrpc.client
@@ -24,16 +23,13 @@ import numpy as np
 
 from ..._errors import ProtocolError, PublishTimeoutError, SerializationError, ServiceTimeoutError, TransportError
 from .._qos import QoS
-from ._header import decode_header, encode_header, header_length, require
+from ._header import FRAME, decode_header, encode_header, frame_length, header_length, require
 from ._outgoing import SubscriberLink, send_parts
 from ._types import Payload, Ros1Kind, Ros1ServiceType
 from ._xmlrpc import CALL_TIMEOUT, proxy, serve
 
 log = logging.getLogger("hetros.ros1")
 
-_FRAME = struct.Struct("<I")
-# a frame longer than this is refused
-MAX_FRAME = 1 << 30
 # connections accepted but not yet past their header; beyond them a new one waits a second, then is closed
 MAX_HANDSHAKES = 64
 
@@ -125,11 +121,8 @@ def _same_type(name: str, peer: str, fields: dict[str, str], kind: str, md5: str
 
 
 def _frame_length(prefix: bytes | memoryview, peer: str) -> int:
-    """The length a frame announces, refused above ``MAX_FRAME`` (garbage must not become an allocation)."""
-    (length,) = _FRAME.unpack(prefix)
-    if length > MAX_FRAME:
-        raise ProtocolError(f"{peer}: a frame announces {length} bytes (more than {MAX_FRAME})")
-    return int(length)
+    (length,) = FRAME.unpack(prefix)
+    return frame_length(length, peer)
 
 
 def read_header(sock: socket.socket, peer: str) -> dict[str, str]:
@@ -168,8 +161,8 @@ class Ros1Publication:
         """
         parts = self.kind.serialize_parts(message)
         total = sum(len(part) for part in parts)
-        frame = [_FRAME.pack(total), *parts]
-        total += _FRAME.size
+        frame = [FRAME.pack(total), *parts]
+        total += FRAME.size
         timeout: PublishTimeoutError | None = None
         with self._lock:
             if self.latch:
@@ -410,7 +403,7 @@ class Ros1Peer:
                 require(fields, ("md5sum",), peer)
                 _same_type(service, peer, fields, kind.name, kind.md5)
                 payload = kind.request.serialize(request)
-                send_parts(sock, [_FRAME.pack(len(payload)), payload])
+                send_parts(sock, [FRAME.pack(len(payload)), payload])
                 ok = _receive_exactly(sock, 1)[0]
                 body = _receive_exactly(sock, _frame_length(_receive_exactly(sock, 4), peer))
         except TimeoutError:
@@ -514,13 +507,13 @@ class Ros1Peer:
                 request = kind.request.deserialize(_receive_exactly(sock, _frame_length(prefix, peer)))
                 try:
                     payload = kind.response.serialize(handler(request))
-                    send_parts(sock, [b"\x01", _FRAME.pack(len(payload)), payload])
+                    send_parts(sock, [b"\x01", FRAME.pack(len(payload)), payload])
                 except (ProtocolError, OSError):
                     raise
                 except Exception as exc:  # the handler's failure goes back to the caller, as in ROS 1
                     log.error("service %s failed for %s: %s", service, peer, exc)
                     text = f"{type(exc).__name__}: {exc}".encode()
-                    send_parts(sock, [b"\x00", _FRAME.pack(len(text)), text])
+                    send_parts(sock, [b"\x00", FRAME.pack(len(text)), text])
         finally:
             sock.close()
 

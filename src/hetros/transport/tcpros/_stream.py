@@ -17,7 +17,6 @@ import logging
 import os
 import select
 import socket
-import struct
 import threading
 import time
 from collections import deque
@@ -29,11 +28,11 @@ import numpy as np
 from ..._errors import ProtocolError, SerializationError
 from .._base import Reader, Wake
 from .._qos import QoS
+from ._header import FRAME, frame_length
 from ._types import Ros1Kind
 
 log = logging.getLogger("hetros.ros1")
 
-_FRAME = struct.Struct("<I")
 # frames up to this size are assembled in the connection's buffer; larger ones in memory of their own
 _CHUNK = 1 << 16
 _ONESHOT = select.EPOLLIN | select.EPOLLONESHOT
@@ -149,18 +148,15 @@ class FrameStream:
             return self._fill_large() if receive else None
         while True:
             available = self._end - self._start
-            if available >= _FRAME.size:
-                (length,) = _FRAME.unpack_from(self._buffer, self._start)
-                if length > self._max_frame:
-                    raise ProtocolError(f"{self.peer}: a frame announces {length} bytes "
-                                        f"(more than {self._max_frame})")
-                body = self._start + _FRAME.size
+            if available >= FRAME.size:
+                length = frame_length(FRAME.unpack_from(self._buffer, self._start)[0], self.peer, self._max_frame)
+                body = self._start + FRAME.size
                 if self._end - body >= length:
                     self._start = body + length
                     return bytes(self._buffer[body:body + length])
                 if not receive:
                     return None
-                if length > _CHUNK - _FRAME.size:
+                if length > _CHUNK - FRAME.size:
                     large = memoryview(np.empty(length, np.uint8).data)
                     have = self._end - body
                     large[:have] = self._buffer[body:self._end]

@@ -182,6 +182,18 @@ def test_messages_without_arrays_use_zeroed_cdr(open_pair: Any) -> None:
         assert reader.try_take().data == text
 
 
+def test_messages_without_arrays_outlive_their_recycled_slots(open_pair: Any) -> None:
+    """A String decodes into copies, so its sample goes back at once and its slot is reused:
+    every message taken must still read as sent after many rounds through the same slots."""
+    writer, reader = open_pair("std_msgs/msg/String", depth=4)
+    string = registry().get("std_msgs/msg/String")
+    kept = []
+    for index in range(200):
+        writer.write(string(data=f"message {index} " + "x" * (index % 37)))
+        kept.append(reader.try_take())
+    assert [m.data for m in kept] == [f"message {index} " + "x" * (index % 37) for index in range(200)]
+
+
 def test_fixed_size_arrays_stay_inline(open_pair: Any) -> None:
     writer, reader = open_pair("geometry_msgs/msg/PoseWithCovariance", depth=2)
     cls = registry().get("geometry_msgs/msg/PoseWithCovariance")

@@ -42,11 +42,35 @@ def test_generated_codec_matches_rosbags_on_random_messages(typename: str) -> No
         message = random_message(TYPES, typename, rnd)
         reference = bytes(TYPES.serialize(message))[4:]
         assert _encode(codec.size, codec.encode, message) == reference
-        decoded = codec.decode(memoryview(reference).toreadonly())
+        buffer = bytearray(reference)
+        decoded = codec.decode(memoryview(buffer).toreadonly())
         assert decoded == message
         assert decoded.is_frozen
+        if codec.decode_copies:  # the transports reuse the bytes at once: nothing may point into them
+            assert not _holds_array(decoded)
+            buffer[:] = b"\xee" * len(buffer)
+            assert decoded == message
         lean_reference = bytes(TYPES.serialize(_lean(message, typename)))[4:]  # type: ignore[arg-type]
         assert _encode(codec.size_lean, codec.encode_lean, message) == lean_reference
+
+
+def _holds_array(value: object) -> bool:
+    if isinstance(value, np.ndarray):
+        return True
+    if isinstance(value, list):
+        return any(_holds_array(item) for item in value)
+    names = getattr(value, "__fieldnames__", ())
+    return any(_holds_array(getattr(value, name)) for name in names)
+
+
+@pytest.mark.parametrize(("typename", "copies"), [
+    ("std_msgs/msg/String", True), ("geometry_msgs/msg/Twist", True), ("geometry_msgs/msg/PoseArray", True),
+    ("nav_msgs/msg/Path", True), ("sensor_msgs/msg/Image", False), ("sensor_msgs/msg/Imu", False),
+    ("sensor_msgs/msg/PointCloud2", False),
+])
+def test_decode_copies_only_for_types_without_primitive_arrays(typename: str, copies: bool) -> None:
+    """``decode_copies`` lets shared memory return a sample before the message is used."""
+    assert TYPES.codec(typename).decode_copies is copies
 
 
 def test_reference_codec_is_rosbags_behind_the_same_interface() -> None:

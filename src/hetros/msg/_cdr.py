@@ -64,7 +64,9 @@ class CdrCodec:
     ``buffer``. CDR aligns relative to the body's start, the code to the buffer's: ``pos``
     must be a multiple of 8 (pass a slice otherwise). The ``lean`` pair encodes
     every variable-length primitive array outside sequences of messages as empty (the
-    shared-memory transport sends those arrays beside the body).
+    shared-memory transport sends those arrays beside the body). ``decode_copies`` says
+    that a decoded message keeps no view on the buffer (its type has no primitive array),
+    so the buffer can be reused as soon as ``decode`` returns.
     """
 
     typename: str
@@ -74,6 +76,7 @@ class CdrCodec:
     encode_lean: Encode
     decode: Decode
     generated: bool
+    decode_copies: bool = False
 
 
 def _lowbit(value: int) -> int:
@@ -112,6 +115,8 @@ class _Generator:
         self.ns = namespace
         self.functions: dict[str, str] = {}
         self._counter = 0
+        # whether decode made a view on the buffer (np.frombuffer) anywhere
+        self.views = False
 
     # -- one function ----------------------------------------------------------------------
 
@@ -305,6 +310,7 @@ class _Body:
             dtype = self.gen.constant("_D", np.dtype(_DTYPES[base]))
             wname = self.gen.constant("_W", where)
             self.emit(f"if pos + {nbytes} > end: raise _short({wname}, pos, {nbytes}, end)")
+            self.gen.views = True
             self.emit(f"{target} = _frombuffer(buf, {dtype}, {count}, pos)")
             self.emit(f"pos += {nbytes}")
         if static is not None:
@@ -400,13 +406,18 @@ def _namespace() -> dict[str, Any]:
 
 
 def _generate(types: TypeRegistry, typename: str, mode: str, lean: bool) -> Callable[..., Any]:
+    return _generate_with_views(types, typename, mode, lean)[0]
+
+
+def _generate_with_views(types: TypeRegistry, typename: str, mode: str, lean: bool) -> tuple[Callable[..., Any], bool]:
+    """The function, and whether it makes views on the buffer (decode only)."""
     namespace = _namespace()
     gen = _Generator(types, mode, lean, namespace)
     root = gen.function(typename, item=False)
     source = "\n\n".join(gen.functions.values())
     exec(compile(source, f"<hetros cdr {mode}{' lean' if lean else ''} {typename}>", "exec"), namespace)
     function: Callable[..., Any] = namespace[root]
-    return function
+    return function, gen.views
 
 
 def generated_source(types: TypeRegistry, typename: str, mode: str, lean: bool = False) -> str:
@@ -420,14 +431,16 @@ def build_codec(types: TypeRegistry, typename: str) -> CdrCodec:
     """The fastest codec for ``typename``: generated, or rosbags' where the generator has no code."""
     if sys.byteorder == "little":
         try:
+            decode, views = _generate_with_views(types, typename, "decode", False)
             return CdrCodec(
                 typename,
                 size=_generate(types, typename, "size", False),
                 encode=_generate(types, typename, "encode", False),
                 size_lean=_generate(types, typename, "size", True),
                 encode_lean=_generate(types, typename, "encode", True),
-                decode=_generate(types, typename, "decode", False),
+                decode=decode,
                 generated=True,
+                decode_copies=not views,
             )
         except UnsupportedType:
             pass

@@ -166,27 +166,47 @@ def _seal_array(holder: Message, name: str, value: np.ndarray[Any, Any], callers
 
 
 def _build_sealer(cls: type[Message]) -> Callable[[Message, int], Message]:
-    """Straight-line code that seals one ``cls`` message in place (nested ones by their own sealer).
+    """Straight-line code that seals one ``cls`` message in place.
 
     Sealing swaps the class for its read-only twin, seals nested messages, turns list fields
-    into FrozenLists and makes arrays read-only (per ``callers``, see ``_seal_array``).
+    into FrozenLists and makes arrays read-only (per ``callers``, see ``_seal_array``). A
+    nested message of its field's own generated class is sealed inline (a call per nested
+    message is most of the cost of a small message); any other goes through its sealer.
     """
-    lines = ["def seal(m, callers):", "    if type(m) is _F: return m"]
-    for name in cls._array_names:
-        lines += [f"    v = m.{name}",
-                  f"    if type(v) is _nd and (callers or v.flags.writeable): _seal_array(m, {name!r}, v, callers)"]
-    for name in cls._nested_names:
-        lines += [f"    v = m.{name}", "    type(v)._hetros_seal(v, callers)"]
-    for name in cls._nested_list_names:
-        lines += [f"    for v in m.{name}: type(v)._hetros_seal(v, callers)"]
-    for name in cls._list_names:
-        lines += [f"    v = m.{name}", f"    if type(v) is not _FL: _osa(m, {name!r}, _FL(v))"]
-    lines += ["    _osa(m, '__class__', _F)", "    return m"]
-    namespace: dict[str, Any] = {"_F": cls._frozen_class, "_nd": np.ndarray, "_FL": FrozenList,
+    namespace: dict[str, Any] = {"_nd": np.ndarray, "_FL": FrozenList,
                                  "_osa": object.__setattr__, "_seal_array": _seal_array}
+    lines = ["def seal(m, callers):", "    if type(m) is _F0: return m"]
+    namespace["_F0"] = cls._frozen_class
+    _seal_body(cls, "m", "    ", lines, namespace, [0])
+    lines.append("    return m")
     exec(compile("\n".join(lines), f"<hetros sealer {cls.__msgtype__}>", "exec"), namespace)
     sealer: Callable[[Message, int], Message] = namespace["seal"]
     return sealer
+
+
+def _seal_body(cls: type[Message], var: str, indent: str, lines: list[str], namespace: dict[str, Any],
+               counter: list[int]) -> None:
+    """Append the statements that seal ``var`` (known to be exactly ``cls``), nested ones inline."""
+    frozen = f"_F{counter[0]}"
+    for name in cls._array_names:
+        lines += [f"{indent}a = {var}.{name}",
+                  f"{indent}if type(a) is _nd and (callers or a.flags.writeable): "
+                  f"_seal_array({var}, {name!r}, a, callers)"]
+    if cls._nested_names:
+        example = cls()
+        for name in cls._nested_names:
+            counter[0] += 1
+            nested, sub = f"v{counter[0]}", type(getattr(example, name))._thawed_class
+            namespace[f"_C{counter[0]}"] = sub
+            namespace[f"_F{counter[0]}"] = sub._frozen_class
+            lines += [f"{indent}{nested} = {var}.{name}", f"{indent}if type({nested}) is _C{counter[0]}:"]
+            _seal_body(sub, nested, indent + "    ", lines, namespace, counter)
+            lines += [f"{indent}else:", f"{indent}    type({nested})._hetros_seal({nested}, callers)"]
+    for name in cls._nested_list_names:
+        lines += [f"{indent}for v in {var}.{name}: type(v)._hetros_seal(v, callers)"]
+    for name in cls._list_names:
+        lines += [f"{indent}v = {var}.{name}", f"{indent}if type(v) is not _FL: _osa({var}, {name!r}, _FL(v))"]
+    lines.append(f"{indent}_osa({var}, '__class__', {frozen})")
 
 
 def _first_seal(message: Message, callers: int) -> Message:

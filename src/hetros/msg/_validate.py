@@ -116,43 +116,62 @@ def validate(message: Any) -> None:
 
 
 def build_validator(types: TypeRegistry, typename: str) -> Validator:
-    """A function that raises FieldValueError for the first wrong field of a ``typename`` message."""
+    """A function that raises FieldValueError for the first wrong field of a ``typename`` message.
+
+    A nested message of its field's own generated class is checked inline (a call per nested
+    message is most of the cost of a small message); any other goes through its validator.
+    """
     namespace: dict[str, Any] = {"check_int": check_int, "check_float": check_float, "check_bool": check_bool,
                                  "check_str": check_str, "convert_array": convert_array, "refuse": refuse,
-                                 "np": np}
+                                 "np": np, "osa": object.__setattr__}
     short = typename.rsplit("/", 1)[-1]
     lines = ["def validate(m, where=" + repr(short) + "):"]
-    _, fields = types.store.fielddefs[typename]
-    cls = types.get(typename)
-    for index, ((_name, desc), attr) in enumerate(zip(fields, cls.__fieldnames__, strict=True)):
-        lines.extend(_field_lines(types, desc, attr, index, namespace))
-    if len(lines) == 1:
-        lines.append("    pass")
+    _message_lines(types, typename, "m", "", "    ", lines, namespace, [0])
+    lines.append("    pass")
     exec(compile("\n".join(lines), f"<hetros validator {typename}>", "exec"), namespace)
     validate: Validator = namespace["validate"]
     return validate
 
 
-def _field_lines(types: TypeRegistry, desc: Any, attr: str, index: int, namespace: dict[str, Any]) -> list[str]:
+def _message_lines(types: TypeRegistry, typename: str, obj: str, path: str, indent: str, lines: list[str],
+                   namespace: dict[str, Any], counter: list[int]) -> None:
+    """Append the checks of every field of ``obj`` (a ``typename`` message at ``path``)."""
+    _, fields = types.store.fielddefs[typename]
+    cls = types.get(typename)
+    for (_name, desc), attr in zip(fields, cls.__fieldnames__, strict=True):
+        counter[0] += 1
+        _field_lines(types, desc, obj, attr, f"{path}.{attr}", indent, lines, namespace, counter)
+
+
+def _field_lines(types: TypeRegistry, desc: Any, obj: str, attr: str, path: str, indent: str, lines: list[str],
+                 namespace: dict[str, Any], counter: list[int]) -> None:
+    """Append the checks of field ``attr`` of ``obj``; ``path`` names it for errors ('.header.stamp')."""
     kind, arg = desc
-    get = f"m.{attr}"
-    where = f"where + '.{attr}'"
+    index = counter[0]
+    get = f"{obj}.{attr}"
+    where = f"where + {path!r}"
     if kind == Nodetype.BASE:
         base, bound = arg
         if base in INT_RANGES:
-            return [f"    v = {get}", "    if type(v) is not int or not "
-                    f"{INT_RANGES[base][0]} <= v <= {INT_RANGES[base][1]}: check_int(v, {base!r}, {where})"]
-        if base in ("float32", "float64"):
-            return [f"    v = {get}", f"    if type(v) is not float or {base == 'float32'!r}: "
-                    f"check_float(v, {base!r}, {where})"]
-        if base == "bool":
-            return [f"    v = {get}", f"    if type(v) is not bool: check_bool(v, {where})"]
-        return [f"    v = {get}", f"    if type(v) is not str or {bound or 0}: check_str(v, {bound or 0}, {where})"]
+            low, high = INT_RANGES[base]
+            check = f"if type(v) is not int or not {low} <= v <= {high}: check_int(v, {base!r}, {where})"
+        elif base in ("float32", "float64"):
+            check = f"if type(v) is not float or {base == 'float32'!r}: check_float(v, {base!r}, {where})"
+        elif base == "bool":
+            check = f"if type(v) is not bool: check_bool(v, {where})"
+        else:
+            check = f"if type(v) is not str or {bound or 0}: check_str(v, {bound or 0}, {where})"
+        lines += [f"{indent}v = {get}", indent + check]
+        return
     if kind == Nodetype.NAME:
+        nested = f"o{index}"
         namespace[f"T{index}"] = types.get(arg)
-        return [f"    v = {get}",
-                f"    if not isinstance(v, T{index}): raise refuse({where}, {'a ' + arg!r}, v)",
-                f"    v._hetros_validate(v, {where})"]
+        lines += [f"{indent}{nested} = {get}", f"{indent}if type({nested}) is T{index}:"]
+        _message_lines(types, arg, nested, path, indent + "    ", lines, namespace, counter)
+        lines += [f"{indent}    pass",
+                  f"{indent}elif not isinstance({nested}, T{index}): raise refuse({where}, {'a ' + arg!r}, {nested})",
+                  f"{indent}else: {nested}._hetros_validate({nested}, {where})"]
+        return
     sub, length = arg
     bounded = kind == Nodetype.SEQUENCE
     if sub[0] == Nodetype.BASE and sub[1][0] not in ("string", "wstring"):
@@ -160,22 +179,21 @@ def _field_lines(types: TypeRegistry, desc: Any, attr: str, index: int, namespac
 
         namespace[f"D{index}"] = np.dtype(NUMPY_DTYPES[sub[1][0]])
         fixed = f"v.size != {length}" if not bounded and length else (f"v.size > {length}" if length else "False")
-        return [f"    v = {get}",
-                f"    if type(v) is not np.ndarray or v.dtype != D{index} or {fixed}:",
-                f"        object.__setattr__(m, {attr!r}, convert_array(v, D{index}, {where}, {length}, {bounded}))"]
-    count = (f"    if {'len(v) > ' if bounded else 'len(v) != '}{length}: "
-             f"raise refuse({where}, '{'at most' if bounded else 'exactly'} {length} elements', v)") if length else ""
-    lines = [f"    v = {get}", f"    if not isinstance(v, (list, tuple)): raise refuse({where}, 'a list', v)"]
-    if count:
-        lines.append(count)
+        lines += [f"{indent}v = {get}",
+                  f"{indent}if type(v) is not np.ndarray or v.dtype != D{index} or {fixed}:",
+                  f"{indent}    osa({obj}, {attr!r}, convert_array(v, D{index}, {where}, {length}, {bounded}))"]
+        return
+    lines += [f"{indent}v = {get}", f"{indent}if not isinstance(v, (list, tuple)): raise refuse({where}, 'a list', v)"]
+    if length:
+        lines.append(f"{indent}if {'len(v) > ' if bounded else 'len(v) != '}{length}: "
+                     f"raise refuse({where}, '{'at most' if bounded else 'exactly'} {length} elements', v)")
     if sub[0] == Nodetype.BASE:
         bound = sub[1][1] or 0
-        lines.append(f"    for i, item in enumerate(v): check_str(item, {bound}, {where} + f'[{{i}}]') "
+        lines.append(f"{indent}for i, item in enumerate(v): check_str(item, {bound}, {where} + f'[{{i}}]') "
                      "if type(item) is not str or " + f"{bound} else None")
-        return lines
+        return
     namespace[f"T{index}"] = types.get(sub[1])
-    lines.append("    for i, item in enumerate(v):")
     expected = "a " + sub[1]
-    lines.append(f"        if not isinstance(item, T{index}): raise refuse({where} + f'[{{i}}]', {expected!r}, item)")
-    lines.append(f"        item._hetros_validate(item, {where} + f'[{{i}}]')")
-    return lines
+    lines += [f"{indent}for i, item in enumerate(v):",
+              f"{indent}    if not isinstance(item, T{index}): raise refuse({where} + f'[{{i}}]', {expected!r}, item)",
+              f"{indent}    item._hetros_validate(item, {where} + f'[{{i}}]')"]

@@ -60,6 +60,9 @@ log = logging.getLogger("hetros.graph")
 
 def _hand_over(item: Any, copy_arrays: bool) -> Any:
     """Freeze a message (or a service envelope's message) on its way out; see ``msg.hand_over``."""
+    if isinstance(item, Message):
+        hand_over(item, copy_arrays)
+        return item
     message = carried_message(item)
     if message is not None:
         hand_over(message, copy_arrays)
@@ -75,6 +78,9 @@ class _FanoutWriter(Writer):
         self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
         self._local = any(p is not self._shm for p in parts)
         self._loans: dict[tuple[type[Message], tuple[tuple[str, int], ...]], Any] = {}
+        if len(parts) == 1:
+            # the common case, one transport: a loan needs no copy for other parts
+            self.write = self._write_one  # type: ignore[method-assign]
 
     def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
         """A message to fill in place: its arrays live in a shared-memory slot when a process
@@ -109,6 +115,9 @@ class _FanoutWriter(Writer):
             raise TransportError(f"{cls.__msgtype__} has no variable-length primitive array "
                                  f"{', '.join(wanted)}")
         return arrays
+
+    def _write_one(self, message: Any) -> None:
+        self._parts[0].write(_hand_over(message, self._local))
 
     def write(self, message: Any) -> None:
         if self._shm is not None and has_loan(message):

@@ -27,7 +27,7 @@ from cyclonedds.sub import DataReader
 
 from ..._errors import Error, PublishTimeoutError, SerializationError, TransportError
 from ...msg import TypeRegistry
-from .._codec import MessageCodec
+from .._codec import CDR_LE, MessageCodec
 from .._qos import QoS
 from ._domain import SERVICE_QOS, DdsDomain, dds_qos
 from ._idl import idl_type
@@ -35,7 +35,6 @@ from ._names import reply_topic, request_topic, topic_name
 
 log = logging.getLogger("hetros.dds")
 
-_CDR_LE = b"\x00\x01\x00\x00"
 _HEADER = struct.Struct("<Qq")  # rmw_cyclonedds: client id, sequence number
 ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
 _TAKE_AT_ONCE = 64
@@ -164,7 +163,7 @@ class _RequestCodec:
     def encode(self, client_id: int, sequence: int, message: Any) -> bytearray:
         data = padded(4 + _HEADER.size + self._cdr.size(message))
         view = memoryview(data)
-        view[:4] = _CDR_LE
+        view[:4] = CDR_LE
         _HEADER.pack_into(view, 4, client_id, sequence)
         self._cdr.encode(message, view[4:], _HEADER.size)
         return data

@@ -12,7 +12,7 @@ import numpy as np
 from ..._errors import SerializationError, TransportError
 from ...msg import get_path, set_path
 from .._base import Codec, Reader, Wake, Writer
-from .._codec import MessageCodec
+from .._codec import CDR_LE, MessageCodec
 from ._events import (
     WakeChannel,
     fd_hint,
@@ -31,12 +31,17 @@ from ._sample import (
     align,
     blob_table,
     leased_memory,
+    scratch_memory,
 )
 from ._service import Service
 
 if TYPE_CHECKING:
     from ._domain import ShmDomain
 
+
+
+# where the CDR body of an inline sample starts: after hetros' header and the encapsulation
+_BODY_AT = HEADER.size + 4
 
 
 class _SlotPlan:
@@ -118,23 +123,30 @@ class ShmWriter(Writer):
             if isinstance(codec, MessageCodec) else []
         self._loan_plans: dict[tuple[tuple[str, int], ...], _SlotPlan] = {}
         self._cdr = codec if isinstance(codec, MessageCodec) else None
+        self._loan_slot = service.loan_scratch
+        self._send = service.send
         service.publisher()
 
     def write(self, message: Any) -> None:
-        loan = take_loan(message, self)
-        if loan is not None:
-            self._send_loan(message, loan)
-            return
-        size = HEADER.size + self._codec.size(message)
-        if self._arrays and size > INLINE_LIMIT:
-            self._send_copy(message)
-            return
-        sample, memory = self._service.loan(size)
-        if self._cdr is not None:
-            self._cdr.encode_at(message, memory, HEADER.size)
+        if getattr(message, "_hetros_loan", None) is not None:
+            loan = take_loan(message, self)
+            if loan is not None:
+                self._send_loan(message, loan)
+                return
+        cdr = self._cdr
+        if cdr is None:
+            size = HEADER.size + self._codec.size(message)
+            sample, memory = self._loan_slot(size)
+            self._codec.encode_into(message, memory[HEADER.size:size])
         else:
-            self._codec.encode_into(message, memory[HEADER.size:])
-        self._service.send(sample, memory, LAYOUT_CDR, self._slot)
+            size = _BODY_AT + cdr.body_size(message)
+            if size > INLINE_LIMIT and self._arrays:
+                self._send_copy(message)
+                return
+            sample, memory = self._loan_slot(size)
+            memory[HEADER.size:_BODY_AT] = CDR_LE
+            cdr.encode_body(message, memory, _BODY_AT)
+        self._send(sample, memory, LAYOUT_CDR, self._slot)
 
     def _place(self, plan: _SlotPlan) -> tuple[Any, memoryview, list[tuple[tuple[str, ...], np.ndarray[Any, Any]]]]:
         """A slot laid out by ``plan``, its table written, and views on its blobs."""
@@ -276,6 +288,10 @@ class ShmReader(Reader):
         self._lock = threading.Lock()
         self._borrowed: list[None] = []
         self._cdr = codec if isinstance(codec, MessageCodec) else None
+        # a decoded message of a type without primitive arrays keeps nothing of the sample,
+        # so the sample is read through a reused view and returned at once
+        self._copies = self._cdr is not None and self._cdr.decode_copies
+        self._scratch: dict[int, memoryview] = {}
         self.topic = services[0].topic if services else ""
         for service in services:
             subscriber, start = service.subscriber(slot, channel, self.event)
@@ -304,8 +320,12 @@ class ShmReader(Reader):
                         self._check_arrival(port)
                     continue
                 size = sample.header.number_of_elements
-                memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed)
-                del sample
+                if self._copies:
+                    # the message will hold no view on the sample: it goes back once decoded
+                    memory = self._scratch_view(sample.payload_ptr, size)
+                else:
+                    memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed).toreadonly()
+                    del sample
                 if size < HEADER.size:
                     raise SerializationError(f"a {size}-byte sample on {service.topic} from target "
                                              f"{service.target!r} is shorter than hetros' {HEADER.size}-byte header")
@@ -324,8 +344,17 @@ class ShmReader(Reader):
                     self._domain.notify_back(service.target, credits.back_event)
                 if len(self._borrowed) >= BORROW_LIMIT - 2:
                     memory = memoryview(bytes(memory))
-                return self._decode(memory.toreadonly(), layout)
+                return self._decode(memory, layout)
             return None
+
+    def _scratch_view(self, address: int, size: int) -> memoryview:
+        """The read-only bytes of a sample, from a view kept per slot address (see ``_copies``)."""
+        memory = self._scratch.get(address)
+        if memory is None or len(memory) < size:
+            if len(self._scratch) > 1024:  # publishers reallocating their segments must not grow this forever
+                self._scratch.clear()
+            memory = self._scratch[address] = scratch_memory(address, size).toreadonly()
+        return memory[:size]
 
     def _check_arrival(self, port: _Port) -> None:
         """Nothing to receive: is that true, or did iceoryx2 fail to connect to the publisher?"""
@@ -352,8 +381,12 @@ class ShmReader(Reader):
 
     def _decode(self, memory: memoryview, layout: int) -> Any:
         if layout == LAYOUT_CDR:
-            if self._cdr is not None:
-                return self._cdr.decode_at(memory, HEADER.size, len(memory))
+            cdr = self._cdr
+            if cdr is not None:
+                end = len(memory)
+                if end < _BODY_AT or memory[HEADER.size + 1] != 1:
+                    cdr.refuse_encapsulation(memory, HEADER.size, end)
+                return cdr.decode_body(memory, _BODY_AT, end)
             return self._codec.decode(memory[HEADER.size:])
         if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
             raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")

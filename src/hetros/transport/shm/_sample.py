@@ -124,3 +124,8 @@ def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
     return memoryview(raw).cast("B")
 
 
+
+
+def scratch_memory(address: int, size: int) -> memoryview:
+    """Bytes at ``address`` as a memoryview that keeps nothing alive (see ``Service.loan_scratch``)."""
+    return memoryview((ctypes.c_uint8 * size).from_address(address)).cast("B")

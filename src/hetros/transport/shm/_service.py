@@ -25,6 +25,7 @@ from ._sample import (
     MAX_PUBLISHERS_PER_SERVICE,
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
+    scratch_memory,
     segment_prefix,
     slot_memory,
 )
@@ -73,6 +74,7 @@ class Service:
             ) from exc
         self.credits = Credits(SHM_DIR / f"{segment_prefix(domain.session)}{digest}")
         self._publisher: Any = None
+        self._scratch: dict[int, memoryview] = {}
         self._wakes: list[tuple[Any, Any]] = []
         self._wakes_version = -1
         self.next_seq = 1
@@ -160,19 +162,42 @@ class Service:
             self.space.wait(min(remaining, 0.01))
 
     def loan(self, size: int) -> tuple[Any, memoryview]:
-        """A writable slot of ``size`` payload bytes (header included) and its memory."""
+        """A writable slot of ``size`` payload bytes (header included) and its memory.
+
+        The memory keeps the slot's sample alive: views of it may outlive the call (loans).
+        """
+        sample = self._loan_sample(size)
+        return sample, slot_memory(sample.payload_ptr, size, sample)
+
+    def loan_scratch(self, size: int) -> tuple[Any, memoryview]:
+        """A slot as ``loan`` gives it, its memory a view to fill now and drop before ``send``.
+
+        The view does not hold the sample, so one per slot address is kept and reused: the
+        inline path writes the message and sends, and nothing else sees the view. It may be
+        longer than ``size`` (made for a larger message in the same slot); only the first
+        ``size`` bytes are this sample's.
+        """
+        sample = self._loan_sample(size)
+        address = sample.payload_ptr
+        memory = self._scratch.get(address)
+        if memory is None or len(memory) < size:
+            if len(self._scratch) > 1024:  # a publisher reallocating its segments must not grow this forever
+                self._scratch.clear()
+            memory = self._scratch[address] = scratch_memory(address, size)
+        return sample, memory
+
+    def _loan_sample(self, size: int) -> Any:
         publisher = self._publisher
         if publisher is None:
             publisher = self.publisher()
         try:
-            sample = loan_slice(publisher, size)
+            return loan_slice(publisher, size)
         except iox2.LoanError as exc:
             raise TransportError(
                 f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "
                 f"at most {MAX_LOANS} unpublished loans at once; publish the loaned messages you hold, or "
                 "drop them (a dropped loan returns its slot when the message is garbage-collected)"
             ) from exc
-        return sample, slot_memory(sample.payload_ptr, size, sample)
 
     def send(self, sample: Any, memory: memoryview, layout: int, publisher_slot: int) -> None:
         """Stamp the header and send; blocks first while a reliable keep_all FIFO is full."""
@@ -217,6 +242,7 @@ class Service:
             self._closed = True
             self.space.notify_all()
         self._publisher = None
+        self._scratch.clear()
         self._wakes = []  # they hold notifiers, and so other nodes' event services
         self.data = None
         self.credits.close()

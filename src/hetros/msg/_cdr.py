@@ -101,6 +101,18 @@ def _string(buffer: memoryview, pos: int, length: int, end: int, where: str) -> 
         raise SerializationError(f"{where} at offset {pos + exc.start} is not UTF-8: {exc.reason}") from None
 
 
+def _string_ros1(buffer: memoryview, pos: int, length: int, end: int, where: str) -> str:
+    """A ROS 1 string body at ``pos`` (no terminator)."""
+    stop = pos + length
+    if stop > end:
+        raise SerializationError(f"{where} at offset {pos - 4} has length {length}, which does not fit "
+                                 f"the message (ends at offset {end})")
+    try:
+        return str(buffer[pos:stop], "utf-8")
+    except UnicodeDecodeError as exc:
+        raise SerializationError(f"{where} at offset {pos + exc.start} is not UTF-8: {exc.reason}") from None
+
+
 def _sequence(where: str, pos: int, count: int, bound: int) -> SerializationError:
     return SerializationError(f"{where} at offset {pos} has {count} elements, more than its bound of {bound}")
 
@@ -108,10 +120,13 @@ def _sequence(where: str, pos: int, count: int, bound: int) -> SerializationErro
 class _Generator:
     """Writes one kind of function (size, encode or decode) for a type and the types it nests."""
 
-    def __init__(self, types: TypeRegistry, mode: str, lean: bool, namespace: dict[str, Any]) -> None:
+    def __init__(self, types: TypeRegistry, mode: str, lean: bool, namespace: dict[str, Any],
+                 ros1: bool = False) -> None:
         self.types = types
         self.mode = mode
         self.lean = lean
+        # ROS 1's serialization: CDR's layout without alignment, strings without their NUL
+        self.ros1 = ros1
         self.ns = namespace
         self.functions: dict[str, str] = {}
         self._counter = 0
@@ -122,7 +137,8 @@ class _Generator:
 
     def function(self, typename: str, item: bool) -> str:
         """The name of the function for ``typename``; ``item`` variants start at an unknown alignment."""
-        name = f"_{self.mode}{'_lean' if self.lean else ''}{'_item' if item else ''}_{typename.replace('/', '_')}"
+        flavour = f"{'_ros1' if self.ros1 else ''}{'_lean' if self.lean else ''}{'_item' if item else ''}"
+        name = f"_{self.mode}{flavour}_{typename.replace('/', '_')}"
         if name in self.functions:
             return name
         self.functions[name] = ""
@@ -167,12 +183,22 @@ class _Body:
         self.item = item
         self.lines: list[str] = []
         self.indent = "    "
-        self.known = 1 if item else 8
+        self.ros1 = gen.ros1
+        self._known = 1 if item else 8
         self.run_format = ""
         self.run_items: list[str] = []
         self.run_length = 0
         self.run_where = ""
         self.objects: list[tuple[str, str]] = []
+
+    @property
+    def known(self) -> int:
+        """The alignment ``pos`` is known to have (ROS 1 bytes are never aligned: always 8)."""
+        return 8 if self.ros1 else self._known
+
+    @known.setter
+    def known(self, value: int) -> None:
+        self._known = value
 
     def emit(self, line: str) -> None:
         self.lines.append(self.indent + line)
@@ -182,7 +208,7 @@ class _Body:
     def primitive(self, fmt: str, size: int, item: str, where: str) -> None:
         if size > self.known:
             self.align(size)
-        pad = -self.run_length % size
+        pad = 0 if self.ros1 else -self.run_length % size
         if not self.run_items:
             self.run_where = where
         self.run_format += "x" * pad + fmt
@@ -210,7 +236,7 @@ class _Body:
     def align(self, size: int, condition: str = "") -> None:
         """Align ``pos`` to ``size`` at run time (``condition``: only when it holds)."""
         self.flush()
-        if size <= self.known:
+        if size <= self.known:  # always under ROS 1
             return
         indent = self.indent
         if condition:
@@ -272,21 +298,24 @@ class _Body:
                 self.sequence(sub, length, target, where)
 
     def string(self, target: str, where: str) -> None:
+        nul = 0 if self.ros1 else 1
         if self.mode == "decode":
             length = self.gen.unique("n")
             self.primitive("I", 4, length, where)
             self.flush()
-            self.emit(f"{target} = _string(buf, pos, {length}, end, {self.gen.constant('_W', where)})")
+            read = "_string_ros1" if self.ros1 else "_string"
+            self.emit(f"{target} = {read}(buf, pos, {length}, end, {self.gen.constant('_W', where)})")
             self.emit(f"pos += {length}")
         else:
             encoded = self.gen.unique("s")
             self.emit(f"{encoded} = {target}.encode()")
-            self.primitive("I", 4, f"len({encoded}) + 1", where)
+            self.primitive("I", 4, f"len({encoded}) + {nul}" if nul else f"len({encoded})", where)
             self.flush()
             if self.mode == "encode":
                 self.emit(f"buf[pos:pos + len({encoded})] = {encoded}")
-                self.emit(f"buf[pos + len({encoded})] = 0")
-            self.emit(f"pos += len({encoded}) + 1")
+                if nul:
+                    self.emit(f"buf[pos + len({encoded})] = 0")
+            self.emit(f"pos += len({encoded}) + {nul}" if nul else f"pos += len({encoded})")
         self.known = 1
 
     def primitive_block(self, base: str, count: str, static: int | None, target: str, where: str) -> None:
@@ -322,7 +351,7 @@ class _Body:
             if size > self.known:
                 self.align(size)
             else:
-                pad = -self.run_length % size
+                pad = 0 if self.ros1 else -self.run_length % size
                 self.run_format += "x" * pad
                 self.run_length += pad
                 self.flush()
@@ -368,10 +397,12 @@ class _Body:
             if is_string:
                 length = gen.unique("n")
                 wname = gen.constant("_W", where)
-                self.emit("    pos = (pos + 3) & -4")
+                if not self.ros1:
+                    self.emit("    pos = (pos + 3) & -4")
                 self.emit(f"    if pos + 4 > end: raise _short({wname}, pos, 4, end)")
                 self.emit(f"    {length}, = _U32.unpack_from(buf, pos)")
-                self.emit(f"    {values}.append(_string(buf, pos + 4, {length}, end, {wname}))")
+                read = "_string_ros1" if self.ros1 else "_string"
+                self.emit(f"    {values}.append({read}(buf, pos + 4, {length}, end, {wname}))")
                 self.emit(f"    pos += 4 + {length}")
             else:
                 function = gen.function(sub[1], item=True)
@@ -380,7 +411,13 @@ class _Body:
             self.emit(f"{target} = _FrozenList({values})")
         else:
             self.emit(f"for item in {target}:")
-            if is_string:
+            if is_string and self.ros1:
+                self.emit("    s = item.encode()")
+                if self.mode == "encode":
+                    self.emit("    _U32.pack_into(buf, pos, len(s))")
+                    self.emit("    buf[pos + 4:pos + 4 + len(s)] = s")
+                self.emit("    pos += 4 + len(s)")
+            elif is_string:
                 self.emit("    s = item.encode()")
                 if self.mode == "encode":
                     self.emit("    buf[pos:pos + 4] = _Z4")
@@ -399,25 +436,55 @@ class _Body:
 
 def _namespace() -> dict[str, Any]:
     return {
-        "_new": object.__new__, "_short": _short, "_string": _string, "_sequence": _sequence,
+        "_new": object.__new__, "_short": _short, "_string": _string, "_string_ros1": _string_ros1,
+        "_sequence": _sequence,
         "_frombuffer": np.frombuffer, "_mv": memoryview, "_FrozenList": FrozenList,
         "_U32": struct.Struct("<I"), "_Z2": bytes(2), "_Z4": bytes(4), "_Z8": bytes(8),
     }
 
 
-def _generate(types: TypeRegistry, typename: str, mode: str, lean: bool) -> Callable[..., Any]:
-    return _generate_with_views(types, typename, mode, lean)[0]
+def _generate(types: TypeRegistry, typename: str, mode: str, lean: bool, ros1: bool = False) -> Callable[..., Any]:
+    return _generate_with_views(types, typename, mode, lean, ros1)[0]
 
 
-def _generate_with_views(types: TypeRegistry, typename: str, mode: str, lean: bool) -> tuple[Callable[..., Any], bool]:
+def _generate_with_views(types: TypeRegistry, typename: str, mode: str, lean: bool,
+                         ros1: bool = False) -> tuple[Callable[..., Any], bool]:
     """The function, and whether it makes views on the buffer (decode only)."""
     namespace = _namespace()
-    gen = _Generator(types, mode, lean, namespace)
+    gen = _Generator(types, mode, lean, namespace, ros1)
     root = gen.function(typename, item=False)
     source = "\n\n".join(gen.functions.values())
-    exec(compile(source, f"<hetros cdr {mode}{' lean' if lean else ''} {typename}>", "exec"), namespace)
+    wire = "ros1" if ros1 else "cdr"
+    exec(compile(source, f"<hetros {wire} {mode}{' lean' if lean else ''} {typename}>", "exec"), namespace)
     function: Callable[..., Any] = namespace[root]
     return function, gen.views
+
+
+@dataclass(frozen=True)
+class Ros1Codec:
+    """ROS 1 bytes of a type whose ROS 1 definition is its own (``Ros1Type.direct``).
+
+    ``encode(message, buffer, pos=0)`` writes ``size(message)`` bytes; ``decode(buffer,
+    pos=0, end=len(buffer))`` returns a read-only message whose primitive arrays are views
+    on ``buffer``. Generated like the CDR codec; rosbags' ROS 1 serializer is the reference.
+    """
+
+    typename: str
+    size: Size
+    encode: Encode
+    decode: Decode
+
+
+def build_ros1_codec(types: TypeRegistry, typename: str) -> Ros1Codec | None:
+    """The generated ROS 1 codec of ``typename``; None where the generator has no code for it."""
+    if sys.byteorder != "little":
+        return None
+    try:
+        return Ros1Codec(typename, size=_generate(types, typename, "size", False, ros1=True),
+                         encode=_generate(types, typename, "encode", False, ros1=True),
+                         decode=_generate(types, typename, "decode", False, ros1=True))
+    except UnsupportedType:
+        return None
 
 
 def generated_source(types: TypeRegistry, typename: str, mode: str, lean: bool = False) -> str:

@@ -23,7 +23,7 @@ from rosbags.typesys import Stores, TypesysError, get_typestore
 from rosbags.typesys.store import Typestore
 
 from .._errors import DefinitionError, SerializationError, UnknownTypeError
-from ._cdr import CdrCodec, build_codec
+from ._cdr import CdrCodec, Ros1Codec, build_codec, build_ros1_codec
 from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
 from ._message import FrozenMessage, Message
 from ._validate import Validator, build_validator, convert_array
@@ -86,6 +86,7 @@ class TypeRegistry:
         self.store.fielddefs = dict(self.store.fielddefs)
         self._classes: dict[str, type[Message]] = {}
         self._codecs: dict[str, CdrCodec] = {}
+        self._ros1_codecs: dict[str, Ros1Codec | None] = {}
         self.services: dict[str, ServiceType] = {}
         self.actions: dict[str, ActionType] = {}
         self.sources: dict[str, str] = {}
@@ -209,6 +210,17 @@ class TypeRegistry:
                 if codec is None:
                     codec = self._codecs[full] = build_codec(self, full)
         return codec
+
+    def ros1_codec(self, name: str) -> Ros1Codec | None:
+        """The generated ROS 1 codec of a type whose ROS 1 definition is its own; None where the
+        generator has no code for it (the caller keeps rosbags' ROS 1 serializer)."""
+        full = normalize_typename(name)
+        if full not in self._ros1_codecs:
+            self.get(full)
+            with self._lock:
+                if full not in self._ros1_codecs:
+                    self._ros1_codecs[full] = build_ros1_codec(self, full)
+        return self._ros1_codecs[full]
 
     def names(self) -> list[str]:
         return sorted(self.store.fielddefs)

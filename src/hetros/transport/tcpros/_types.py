@@ -97,6 +97,8 @@ class Ros1Type:
         self.direct = (types.store.generate_msgdef(self.typename, ros_version=1)[1] == self.md5
                        and _same_names(types, self.typename))
         self._codec = types.store if self.direct else store
+        # a direct type goes through generated code (rosbags' serializer is its reference)
+        self._generated = types.ros1_codec(self.typename) if self.direct else None
         self._spliceable = [(name, _SPLICE_DTYPES[desc[1][0][1][0]]) for name, desc in store.fielddefs[self.typename][1]
                             if desc[0] == Nodetype.SEQUENCE and desc[1][0][0] == Nodetype.BASE
                             and desc[1][0][1][0] in _SPLICE_DTYPES]
@@ -139,6 +141,11 @@ class Ros1Type:
 
     def _serialize(self, ros1: Any) -> Payload:
         try:
+            generated = self._generated
+            if generated is not None:
+                buffer = memoryview(bytearray(generated.size(ros1)))
+                generated.encode(ros1, buffer)
+                return buffer
             return self._codec.serialize_ros1(ros1, self.typename)
         except (ValueError, TypeError, OverflowError, AttributeError, struct.error) as exc:
             raise SerializationError(f"cannot serialize {self.typename} for ROS 1: {exc}") from exc
@@ -157,7 +164,10 @@ class Ros1Type:
 
     def deserialize(self, data: bytes | memoryview) -> Any:
         """ROS 1 bytes as a read-only hetros message."""
+        generated = self._generated
         try:
+            if generated is not None:
+                return generated.decode(memoryview(data).toreadonly())  # arrays are views: read-only ones
             decoded: Any = self._codec.deserialize_ros1(data, self.typename)
         except Exception as exc:  # rosbags raises several kinds for bad bytes
             raise SerializationError(f"{len(data)} bytes do not decode as ROS 1 {self.name}: {exc}") from exc

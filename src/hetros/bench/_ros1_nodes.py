@@ -26,6 +26,7 @@ STOP = -2
 def ping(node: Node) -> None:
     size, warmup, reps = (int(node.get_parameter(k)) for k in ("size", "warmup", "reps"))
     gap = float(node.get_parameter("gap_s", 0.0))
+    settle = float(node.get_parameter("settle_s", 0.0))
     publisher = node.create_publisher(UInt8MultiArray, "/bench_send")
     replies = node.create_subscription(UInt8MultiArray, "/bench_recv")
     buffer = np.zeros(PREFIX.size + size, np.uint8)
@@ -50,6 +51,9 @@ def ping(node: Node) -> None:
             break
     rtt = []
     for seq in range(warmup + reps):
+        settled = time.monotonic() + settle
+        while time.monotonic() < settled:  # awake: the echo finishes its reply, this CPU stays warm
+            pass
         start = time.monotonic_ns()
         send(seq)
         while PREFIX.unpack_from(replies.take(timeout=10.0).data)[1] != seq:

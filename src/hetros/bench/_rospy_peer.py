@@ -58,6 +58,9 @@ def main():
             pass
         rtt = []
         for seq in range(cfg["warmup"] + cfg["reps"]):
+            settled = time.monotonic() + cfg.get("settle_s", 0.0)
+            while time.monotonic() < settled:  # awake: the echo finishes its reply, this CPU stays warm
+                pass
             start = time.monotonic_ns()
             send(start, seq, payload)
             while True:

@@ -1,6 +1,7 @@
 """ROS 1 benchmark: one-way latency over TCPROS between rospy and hetros nodes, both ways.
 
-    python benchmarks/ros1.py [--quick] [--rounds N] [--gap-ms MS] [--out DIR]      (or: hetros bench ros1)
+    python benchmarks/ros1.py [--quick] [--rounds N] [--settle-us US] [--gap-ms MS] [--out DIR]
+    (or: hetros bench ros1)
 
 Four pairs, sender -> receiver, in one run through one Debian rosmaster, the sender pinned
 to CPU 0 and the receiver to CPU 1: rospy -> rospy, rospy -> hetros, hetros -> rospy and
@@ -12,6 +13,15 @@ started by ``hetros launch``, the receiver a subscription callback that publishe
 back. One-way latency is measured by the receiver (the sender's stamp in the payload, one
 monotonic clock); the round trip by the sender. Prints markdown tables, writes JSON lines
 and a PNG plot. Report ratios, not absolute numbers.
+
+Every sender, after each reply, lets ``--settle-us`` (50 µs) pass, awake, before it stamps
+the next message. Without it a fast sender's next message lands while a rospy echo is
+still busy with its reply (its publisher's writer thread shares the echo's CPU), and the
+one-way time of that message then holds the echo's leftover work: measured here, a rospy
+receiver got hetros's messages 17-22 µs later than rospy's, by as much as hetros's sender
+was quicker, and 30 µs of settling already removed that. ``--settle-us 0`` measures
+back-to-back exchanges; ``--gap-ms`` sleeps instead (isolated messages: every receiver then
+wakes from idle).
 """
 
 from __future__ import annotations
@@ -40,7 +50,8 @@ Samples = tuple[list[int], list[int]]
 
 
 class Ros1Bench(Bench):
-    def run_ros1_pair(self, sender: str, receiver: str, size: int, gap: float = 0.0, rounds: int = 1) -> Samples:
+    def run_ros1_pair(self, sender: str, receiver: str, size: int, gap: float = 0.0, rounds: int = 1,
+                      settle: float = 0.0) -> Samples:
         """One run of a pair: (one-way, round-trip) samples in ns, a ``rounds``-th of the repetitions.
 
         Raises BenchError with the processes' last words when the run fails.
@@ -48,6 +59,7 @@ class Ros1Bench(Bench):
         name = pair_name(sender, receiver)
         cfg, path = self.config(name, size)
         cfg["gap_s"] = gap
+        cfg["settle_s"] = settle
         cfg["reps"] = max(cfg["reps"] // rounds, 10)
         path.write_text(json.dumps(cfg))
         cpus = self.cpus or []
@@ -56,6 +68,7 @@ class Ros1Bench(Bench):
         for role, kind, cpu in (("echo", receiver, cpus[1:2]), ("ping", sender, cpus[0:1])):
             if kind == "hetros":
                 nodes[role] = {"cpus": cpu, "parameters": {"size": size, "warmup": cfg["warmup"], "gap_s": gap,
+                                                           "settle_s": settle,
                                                            "reps": cfg["reps"], "out": cfg[f"{role}_out"]}}
         project = self.tmp / f"{name}-{size}.yaml"
         project.write_text(_project(nodes))
@@ -168,6 +181,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rounds", type=int, default=None,
                         help="interleaved rounds over every pair and size, their samples pooled (default 3, "
                              "--quick 1): machine drift during the run then weighs on every pair alike")
+    parser.add_argument("--settle-us", type=float, default=50.0,
+                        help="time every sender lets pass, awake, after each reply before the next message "
+                             "(default 50: the receiver has finished its reply); 0 for back-to-back exchanges")
     parser.add_argument("--gap-ms", type=float, default=0.0,
                         help="pause of the sender after each reply: 0 (default) measures back-to-back exchanges, "
                              "a few ms isolated messages (every receiver then wakes from idle)")
@@ -192,7 +208,8 @@ def main(argv: list[str] | None = None) -> int:
                         if key in failed:
                             continue
                         try:
-                            one_way, rtt = bench.run_ros1_pair(sender, receiver, size, args.gap_ms / 1000.0, rounds)
+                            one_way, rtt = bench.run_ros1_pair(sender, receiver, size, args.gap_ms / 1000.0, rounds,
+                                                                 args.settle_us / 1e6)
                         except BenchError as exc:
                             failed[key] = str(exc)
                             status = str(exc).splitlines()[-1][:120]

@@ -224,7 +224,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         forwarded += ["--out", args.out]
     if args.bench == "ros1":
         rounds = ["--rounds", str(args.rounds)] if args.rounds else []
-        return ros1([*forwarded, *rounds, "--gap-ms", str(args.gap_ms)])
+        return ros1([*forwarded, *rounds, "--gap-ms", str(args.gap_ms), "--settle-us", str(args.settle_us)])
     if args.bench == "dds":
         from ..bench.dds import main as dds
 
@@ -289,6 +289,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("ros1", help="one-way latency over TCPROS: rospy and hetros nodes, both ways")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")
+    p.add_argument("--settle-us", type=float, default=50.0,
+                   help="sender's wait, awake, after each reply (default 50; 0: back-to-back exchanges)")
     p.add_argument("--gap-ms", type=float, default=0.0, help="sender's pause after each reply (isolated messages)")
     p.add_argument("--rounds", type=int, help="interleaved rounds over every pair and size, pooled (default 3)")
     p.add_argument("--out", help="output folder (default out/bench)")

@@ -307,15 +307,16 @@ class _Body:
             self.emit(f"{target} = {read}(buf, pos, {length}, end, {self.gen.constant('_W', where)})")
             self.emit(f"pos += {length}")
         else:
-            encoded = self.gen.unique("s")
+            encoded, size = self.gen.unique("s"), self.gen.unique("k")
             self.emit(f"{encoded} = {target}.encode()")
-            self.primitive("I", 4, f"len({encoded}) + {nul}" if nul else f"len({encoded})", where)
+            self.emit(f"{size} = len({encoded})")
+            self.primitive("I", 4, f"{size} + {nul}" if nul else size, where)
             self.flush()
             if self.mode == "encode":
-                self.emit(f"buf[pos:pos + len({encoded})] = {encoded}")
+                self.emit(f"buf[pos:pos + {size}] = {encoded}")
                 if nul:
-                    self.emit(f"buf[pos + len({encoded})] = 0")
-            self.emit(f"pos += len({encoded}) + {nul}" if nul else f"pos += len({encoded})")
+                    self.emit(f"buf[pos + {size}] = 0")
+            self.emit(f"pos += {size} + {nul}" if nul else f"pos += {size}")
         self.known = 1
 
     def primitive_block(self, base: str, count: str, static: int | None, target: str, where: str) -> None:
@@ -413,20 +414,22 @@ class _Body:
             self.emit(f"for item in {target}:")
             if is_string and self.ros1:
                 self.emit("    s = item.encode()")
+                self.emit("    k = len(s)")
                 if self.mode == "encode":
-                    self.emit("    _U32.pack_into(buf, pos, len(s))")
-                    self.emit("    buf[pos + 4:pos + 4 + len(s)] = s")
-                self.emit("    pos += 4 + len(s)")
+                    self.emit("    _U32.pack_into(buf, pos, k)")
+                    self.emit("    buf[pos + 4:pos + 4 + k] = s")
+                self.emit("    pos += 4 + k")
             elif is_string:
                 self.emit("    s = item.encode()")
+                self.emit("    k = len(s)")
                 if self.mode == "encode":
                     self.emit("    buf[pos:pos + 4] = _Z4")
                 self.emit("    pos = (pos + 3) & -4")
                 if self.mode == "encode":
-                    self.emit("    _U32.pack_into(buf, pos, len(s) + 1)")
-                    self.emit("    buf[pos + 4:pos + 4 + len(s)] = s")
-                    self.emit("    buf[pos + 4 + len(s)] = 0")
-                self.emit("    pos += 5 + len(s)")
+                    self.emit("    _U32.pack_into(buf, pos, k + 1)")
+                    self.emit("    buf[pos + 4:pos + 4 + k] = s")
+                    self.emit("    buf[pos + 4 + k] = 0")
+                self.emit("    pos += 5 + k")
             else:
                 function = gen.function(sub[1], item=True)
                 call = f"{function}(item, pos)" if self.mode == "size" else f"{function}(item, buf, pos)"

@@ -87,26 +87,17 @@ def _short(where: str, pos: int, need: int, end: int) -> SerializationError:
     return SerializationError(f"{where} at offset {pos} needs {need} bytes, but the message ends at offset {end}")
 
 
-def _string(buffer: memoryview, pos: int, length: int, end: int, where: str) -> str:
-    """A CDR string body at ``pos`` (length counts the NUL terminator)."""
+def _string(buffer: memoryview, pos: int, length: int, end: int, where: str, terminated: bool = True) -> str:
+    """A string body at ``pos``: CDR's length counts a NUL terminator, ROS 1's (``terminated=False``) has none."""
     stop = pos + length
-    if length < 1 or stop > end:
+    if stop > end or (terminated and length < 1):
+        nul = "; a CDR string has at least its NUL" if terminated else ""
         raise SerializationError(f"{where} at offset {pos - 4} has length {length}, which does not fit "
-                                 f"the message (ends at offset {end}; a CDR string has at least its NUL)")
-    if buffer[stop - 1]:
-        raise SerializationError(f"{where} at offset {pos - 4}: string of length {length} does not end in NUL")
-    try:
-        return str(buffer[pos:stop - 1], "utf-8")
-    except UnicodeDecodeError as exc:
-        raise SerializationError(f"{where} at offset {pos + exc.start} is not UTF-8: {exc.reason}") from None
-
-
-def _string_ros1(buffer: memoryview, pos: int, length: int, end: int, where: str) -> str:
-    """A ROS 1 string body at ``pos`` (no terminator)."""
-    stop = pos + length
-    if stop > end:
-        raise SerializationError(f"{where} at offset {pos - 4} has length {length}, which does not fit "
-                                 f"the message (ends at offset {end})")
+                                 f"the message (ends at offset {end}{nul})")
+    if terminated:
+        if buffer[stop - 1]:
+            raise SerializationError(f"{where} at offset {pos - 4}: string of length {length} does not end in NUL")
+        stop -= 1
     try:
         return str(buffer[pos:stop], "utf-8")
     except UnicodeDecodeError as exc:
@@ -303,8 +294,8 @@ class _Body:
             length = self.gen.unique("n")
             self.primitive("I", 4, length, where)
             self.flush()
-            read = "_string_ros1" if self.ros1 else "_string"
-            self.emit(f"{target} = {read}(buf, pos, {length}, end, {self.gen.constant('_W', where)})")
+            ros1 = ", False" if self.ros1 else ""
+            self.emit(f"{target} = _string(buf, pos, {length}, end, {self.gen.constant('_W', where)}{ros1})")
             self.emit(f"pos += {length}")
         else:
             encoded, size = self.gen.unique("s"), self.gen.unique("k")
@@ -402,8 +393,8 @@ class _Body:
                     self.emit("    pos = (pos + 3) & -4")
                 self.emit(f"    if pos + 4 > end: raise _short({wname}, pos, 4, end)")
                 self.emit(f"    {length}, = _U32.unpack_from(buf, pos)")
-                read = "_string_ros1" if self.ros1 else "_string"
-                self.emit(f"    {values}.append({read}(buf, pos + 4, {length}, end, {wname}))")
+                ros1 = ", False" if self.ros1 else ""
+                self.emit(f"    {values}.append(_string(buf, pos + 4, {length}, end, {wname}{ros1}))")
                 self.emit(f"    pos += 4 + {length}")
             else:
                 function = gen.function(sub[1], item=True)
@@ -412,24 +403,20 @@ class _Body:
             self.emit(f"{target} = _FrozenList({values})")
         else:
             self.emit(f"for item in {target}:")
-            if is_string and self.ros1:
+            if is_string:
+                nul = 0 if self.ros1 else 1
                 self.emit("    s = item.encode()")
                 self.emit("    k = len(s)")
+                if not self.ros1:
+                    if self.mode == "encode":
+                        self.emit("    buf[pos:pos + 4] = _Z4")
+                    self.emit("    pos = (pos + 3) & -4")
                 if self.mode == "encode":
-                    self.emit("    _U32.pack_into(buf, pos, k)")
+                    self.emit(f"    _U32.pack_into(buf, pos, {'k + 1' if nul else 'k'})")
                     self.emit("    buf[pos + 4:pos + 4 + k] = s")
-                self.emit("    pos += 4 + k")
-            elif is_string:
-                self.emit("    s = item.encode()")
-                self.emit("    k = len(s)")
-                if self.mode == "encode":
-                    self.emit("    buf[pos:pos + 4] = _Z4")
-                self.emit("    pos = (pos + 3) & -4")
-                if self.mode == "encode":
-                    self.emit("    _U32.pack_into(buf, pos, k + 1)")
-                    self.emit("    buf[pos + 4:pos + 4 + k] = s")
-                    self.emit("    buf[pos + 4 + k] = 0")
-                self.emit("    pos += 5 + k")
+                    if nul:
+                        self.emit("    buf[pos + 4 + k] = 0")
+                self.emit(f"    pos += {4 + nul} + k")
             else:
                 function = gen.function(sub[1], item=True)
                 call = f"{function}(item, pos)" if self.mode == "size" else f"{function}(item, buf, pos)"
@@ -439,8 +426,7 @@ class _Body:
 
 def _namespace() -> dict[str, Any]:
     return {
-        "_new": object.__new__, "_short": _short, "_string": _string, "_string_ros1": _string_ros1,
-        "_sequence": _sequence,
+        "_new": object.__new__, "_short": _short, "_string": _string, "_sequence": _sequence,
         "_frombuffer": np.frombuffer, "_mv": memoryview, "_FrozenList": FrozenList,
         "_U32": struct.Struct("<I"), "_Z2": bytes(2), "_Z4": bytes(4), "_Z8": bytes(8),
     }

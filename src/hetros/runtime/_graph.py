@@ -60,9 +60,6 @@ log = logging.getLogger("hetros.graph")
 
 def _hand_over(item: Any, copy_arrays: bool) -> Any:
     """Freeze a message (or a service envelope's message) on its way out; see ``msg.hand_over``."""
-    if isinstance(item, Message):
-        hand_over(item, copy_arrays)
-        return item
     message = carried_message(item)
     if message is not None:
         hand_over(message, copy_arrays)

@@ -25,12 +25,10 @@ class MessageCodec(Codec):
         self.cls = registry.get(typename)
         self._cdr = registry.codec(typename)
         self._arrays: list[ArrayField] | None = None
-        # the generated body functions, for transports that place the encapsulation themselves
-        # (one call less per message on the hot path)
-        self.body_size = self._cdr.size
-        self.encode_body = self._cdr.encode
-        self.decode_body = self._cdr.decode
+        # a decoded message keeps no view on its bytes (see ``msg.CdrCodec``)
         self.decode_copies = self._cdr.decode_copies
+        # the generated functions, held directly: every transport's hot path runs through here
+        self._body_size, self._encode, self._decode = self._cdr.size, self._cdr.encode, self._cdr.decode
 
     @property
     def arrays(self) -> list[ArrayField]:
@@ -40,28 +38,24 @@ class MessageCodec(Codec):
         return self._arrays
 
     def size(self, message: Any) -> int:
-        return 4 + self._cdr.size(message)
+        return 4 + self._body_size(message)
 
     def encode_into(self, message: Any, buffer: memoryview) -> None:
         buffer[:4] = CDR_LE
-        self._cdr.encode(message, buffer[4:])
+        self._encode(message, buffer[4:])
 
     def encode_at(self, message: Any, buffer: memoryview, at: int) -> None:
         """Encapsulation at ``at``, the body after it (``at + 4`` must be a multiple of 8)."""
         buffer[at:at + 4] = CDR_LE
-        self._cdr.encode(message, buffer, at + 4)
+        self._encode(message, buffer, at + 4)
 
     def decode_at(self, buffer: memoryview, at: int, end: int) -> Message:
         """Decode ``buffer[at:end]`` in place (``at + 4`` must be a multiple of 8)."""
-        self._check_encapsulation(buffer, at, end)
-        return self._cdr.decode(buffer, at + 4, end)  # type: ignore[no-any-return]
-
-    def _check_encapsulation(self, buffer: memoryview, at: int, end: int) -> None:
         if end - at < 4 or buffer[at + 1] != 1:
-            self.refuse_encapsulation(buffer, at, end)
+            self._refuse_encapsulation(buffer, at, end)
+        return self._decode(buffer, at + 4, end)  # type: ignore[no-any-return]
 
-    def refuse_encapsulation(self, buffer: memoryview, at: int, end: int) -> NoReturn:
-        """Raise the error for bytes at ``at`` that are not little-endian CDR."""
+    def _refuse_encapsulation(self, buffer: memoryview, at: int, end: int) -> NoReturn:
         raise SerializationError(
             f"{self.typename}: {end - at} bytes do not start with the little-endian CDR "
             f"encapsulation 00 01 (got {bytes(buffer[at:min(at + 4, end)]).hex(' ') or 'nothing'})"
@@ -79,8 +73,9 @@ class MessageCodec(Codec):
 
     def decode(self, data: memoryview) -> Message:
         """Decode CDR into a read-only message; primitive arrays are views on ``data`` (no copy)."""
-        self._check_encapsulation(data, 0, len(data))
-        return self._cdr.decode(data[4:])  # type: ignore[no-any-return]
+        if len(data) < 4 or data[1] != 1:
+            self._refuse_encapsulation(data, 0, len(data))
+        return self._decode(data[4:])  # type: ignore[no-any-return]
 
 
 _ENVELOPE = struct.Struct("<QH")

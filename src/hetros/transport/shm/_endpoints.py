@@ -12,7 +12,7 @@ import numpy as np
 from ..._errors import SerializationError, TransportError
 from ...msg import get_path, set_path
 from .._base import Codec, Reader, Wake, Writer
-from .._codec import CDR_LE, MessageCodec
+from .._codec import MessageCodec
 from ._events import (
     WakeChannel,
     fd_hint,
@@ -28,20 +28,16 @@ from ._sample import (
     LOAN_RESERVE,
     LOSS_GRACE,
     SPLIT,
+    ScratchViews,
     align,
     blob_table,
     leased_memory,
-    scratch_memory,
 )
 from ._service import Service
 
 if TYPE_CHECKING:
     from ._domain import ShmDomain
 
-
-
-# where the CDR body of an inline sample starts: after hetros' header and the encapsulation
-_BODY_AT = HEADER.size + 4
 
 
 class _SlotPlan:
@@ -128,24 +124,19 @@ class ShmWriter(Writer):
         service.publisher()
 
     def write(self, message: Any) -> None:
-        if getattr(message, "_hetros_loan", None) is not None:
-            loan = take_loan(message, self)
-            if loan is not None:
-                self._send_loan(message, loan)
-                return
-        cdr = self._cdr
-        if cdr is None:
-            size = HEADER.size + self._codec.size(message)
-            sample, memory = self._loan_slot(size)
-            self._codec.encode_into(message, memory[HEADER.size:size])
+        loan = take_loan(message, self)
+        if loan is not None:
+            self._send_loan(message, loan)
+            return
+        size = HEADER.size + self._codec.size(message)
+        if self._arrays and size > INLINE_LIMIT:
+            self._send_copy(message)
+            return
+        sample, memory = self._loan_slot(size)
+        if self._cdr is not None:
+            self._cdr.encode_at(message, memory, HEADER.size)
         else:
-            size = _BODY_AT + cdr.body_size(message)
-            if size > INLINE_LIMIT and self._arrays:
-                self._send_copy(message)
-                return
-            sample, memory = self._loan_slot(size)
-            memory[HEADER.size:_BODY_AT] = CDR_LE
-            cdr.encode_body(message, memory, _BODY_AT)
+            self._codec.encode_into(message, memory[HEADER.size:size])
         self._send(sample, memory, LAYOUT_CDR, self._slot)
 
     def _place(self, plan: _SlotPlan) -> tuple[Any, memoryview, list[tuple[tuple[str, ...], np.ndarray[Any, Any]]]]:
@@ -291,7 +282,7 @@ class ShmReader(Reader):
         # a decoded message of a type without primitive arrays keeps nothing of the sample,
         # so the sample is read through a reused view and returned at once
         self._copies = self._cdr is not None and self._cdr.decode_copies
-        self._scratch: dict[int, memoryview] = {}
+        self._scratch = ScratchViews(readonly=True)
         self.topic = services[0].topic if services else ""
         for service in services:
             subscriber, start = service.subscriber(slot, channel, self.event)
@@ -322,7 +313,7 @@ class ShmReader(Reader):
                 size = sample.header.number_of_elements
                 if self._copies:
                     # the message will hold no view on the sample: it goes back once decoded
-                    memory = self._scratch_view(sample.payload_ptr, size)
+                    memory = self._scratch.at(sample.payload_ptr, size)[:size]
                 else:
                     memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed).toreadonly()
                     del sample
@@ -346,15 +337,6 @@ class ShmReader(Reader):
                     memory = memoryview(bytes(memory))
                 return self._decode(memory, layout)
             return None
-
-    def _scratch_view(self, address: int, size: int) -> memoryview:
-        """The read-only bytes of a sample, from a view kept per slot address (see ``_copies``)."""
-        memory = self._scratch.get(address)
-        if memory is None or len(memory) < size:
-            if len(self._scratch) > 1024:  # publishers reallocating their segments must not grow this forever
-                self._scratch.clear()
-            memory = self._scratch[address] = scratch_memory(address, size).toreadonly()
-        return memory[:size]
 
     def _check_arrival(self, port: _Port) -> None:
         """Nothing to receive: is that true, or did iceoryx2 fail to connect to the publisher?"""
@@ -381,12 +363,8 @@ class ShmReader(Reader):
 
     def _decode(self, memory: memoryview, layout: int) -> Any:
         if layout == LAYOUT_CDR:
-            cdr = self._cdr
-            if cdr is not None:
-                end = len(memory)
-                if end < _BODY_AT or memory[HEADER.size + 1] != 1:
-                    cdr.refuse_encapsulation(memory, HEADER.size, end)
-                return cdr.decode_body(memory, _BODY_AT, end)
+            if self._cdr is not None:
+                return self._cdr.decode_at(memory, HEADER.size, len(memory))
             return self._codec.decode(memory[HEADER.size:])
         if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
             raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")

@@ -125,7 +125,32 @@ def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
 
 
 
+class ScratchViews:
+    """Views on slots that keep nothing alive, one per slot address, made once and reused.
 
-def scratch_memory(address: int, size: int) -> memoryview:
-    """Bytes at ``address`` as a memoryview that keeps nothing alive (see ``Service.loan_scratch``)."""
-    return memoryview((ctypes.c_uint8 * size).from_address(address)).cast("B")
+    For bytes used and dropped within one call while the sample is held elsewhere: a
+    publisher filling an inline sample before it sends, a subscriber decoding a type whose
+    messages keep no view on their bytes. A view may be longer than asked (made for a
+    larger sample in the same slot); only the first ``size`` bytes belong to the sample.
+    """
+
+    __slots__ = ("_readonly", "_views")
+
+    def __init__(self, readonly: bool = False) -> None:
+        self._readonly = readonly
+        self._views: dict[int, memoryview] = {}
+
+    def at(self, address: int, size: int) -> memoryview:
+        """At least ``size`` bytes at ``address``."""
+        memory = self._views.get(address)
+        if memory is None or len(memory) < size:
+            if len(self._views) > 1024:  # segments reallocated over and over must not grow this forever
+                self._views.clear()
+            memory = memoryview((ctypes.c_uint8 * size).from_address(address)).cast("B")
+            if self._readonly:
+                memory = memory.toreadonly()
+            self._views[address] = memory
+        return memory
+
+    def clear(self) -> None:
+        self._views.clear()

@@ -25,7 +25,7 @@ from ._sample import (
     MAX_PUBLISHERS_PER_SERVICE,
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
-    scratch_memory,
+    ScratchViews,
     segment_prefix,
     slot_memory,
 )
@@ -74,7 +74,7 @@ class Service:
             ) from exc
         self.credits = Credits(SHM_DIR / f"{segment_prefix(domain.session)}{digest}")
         self._publisher: Any = None
-        self._scratch: dict[int, memoryview] = {}
+        self._scratch = ScratchViews()
         self._wakes: list[tuple[Any, Any]] = []
         self._wakes_version = -1
         self.next_seq = 1
@@ -178,13 +178,7 @@ class Service:
         ``size`` bytes are this sample's.
         """
         sample = self._loan_sample(size)
-        address = sample.payload_ptr
-        memory = self._scratch.get(address)
-        if memory is None or len(memory) < size:
-            if len(self._scratch) > 1024:  # a publisher reallocating its segments must not grow this forever
-                self._scratch.clear()
-            memory = self._scratch[address] = scratch_memory(address, size)
-        return sample, memory
+        return sample, self._scratch.at(sample.payload_ptr, size)
 
     def _loan_sample(self, size: int) -> Any:
         publisher = self._publisher

@@ -78,10 +78,17 @@ class AddTwoIntsResponse(IdlStruct, typename="example_interfaces::srv::dds_::Add
     sum: t.int64
 
 
+_unused_domains = random.sample(range(2, 102), 100)
+
+
 def free_domain() -> int:
-    """A domain of its own for one test. Not above 101: Cyclone's ports are 7400 + 250 × domain,
-    and from domain 102 they fall among the ephemeral ports the kernel hands to anyone."""
-    return random.randint(2, 101)
+    """A domain of its own for one test, never handed out twice in one process: a domain that a
+    test's peer made in this process cannot be made again with hetros's configuration. Not above
+    101: Cyclone's ports are 7400 + 250 × domain, and from domain 102 they fall among the ephemeral
+    ports the kernel hands to anyone."""
+    if not _unused_domains:
+        raise AssertionError("the tests asked for more than 100 DDS domains in one process")
+    return _unused_domains.pop()
 
 
 class Peer:

@@ -258,3 +258,12 @@ def test_cyclone_listens_only_on_the_named_interface(domain: DdsDomain) -> None:
     assert devices and set(devices.values()) == {b"lo"}, devices
     with pytest.raises(TransportError, match=r"cannot join DDS domain \d+ on 10.255.255.1: .*check the interface"):
         DdsDomain(free_domain(), interface="10.255.255.1")
+
+
+def test_a_domain_made_outside_hetros_in_this_process_is_refused_by_name() -> None:
+    """Cyclone makes a domain once per process; hetros cannot apply its own interface and peers to
+    one that other code made first, and says so instead of blaming the interface address."""
+    number = free_domain()
+    Peer(number)
+    with pytest.raises(TransportError, match=rf"DDS domain {number} already exists in this process .*CYCLONEDDS_URI"):
+        DdsDomain(number)

@@ -101,6 +101,20 @@ HOST_LEASE = 1.0
 SERVICE_QOS = QoS(reliability="reliable", history="keep_last", depth=10, durability="volatile")
 
 
+def _make_domain(domain_id: int, config: str) -> Domain:
+    try:
+        return Domain(domain_id, config)
+    except DDSException as exc:
+        if exc.code != DDSException.DDS_RETCODE_PRECONDITION_NOT_MET:
+            raise
+        # Cyclone refuses a second Domain object for a domain that already exists in the process
+        raise TransportError(
+            f"DDS domain {domain_id} already exists in this process with a configuration hetros did not "
+            "make (some other code created a DomainParticipant on it first), so hetros cannot apply its own "
+            "interface and peers; create hetros's nodes before that code does, or set CYCLONEDDS_URI so both "
+            "use one configuration") from exc
+
+
 class DdsDomain:
     """A participant on one DDS domain and the topics created on it (shared by name)."""
 
@@ -114,8 +128,8 @@ class DdsDomain:
             if not os.environ.get("CYCLONEDDS_URI"):
                 with _domains_lock:
                     if self.domain_id not in _domains:
-                        _domains[self.domain_id] = Domain(self.domain_id,
-                                                                      config_xml(interface, peers, multicast, lease))
+                        _domains[self.domain_id] = _make_domain(self.domain_id,
+                                                                config_xml(interface, peers, multicast, lease))
             # rmw_cyclonedds announces the security enclave in the participant's USER_DATA
             self.participant = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
             if not os.environ.get("CYCLONEDDS_URI"):

@@ -1,6 +1,6 @@
 """A subscriber in another process, driven over stdin/stdout with JSON lines (test helper).
 
-Commands: {"op": "open", ...}, {"op": "take"}, {"op": "close"}. Replies are
+Commands: {"op": "open", ...}, {"op": "take"}, {"op": "pending"}, {"op": "close"}. Replies are
 {"reply": ...}; wake-ups of the reader arrive as {"event": "wake"} at any time.
 Message data travels back through a file, so 64 MiB payloads stay cheap.
 """
@@ -58,6 +58,8 @@ def main() -> None:
             send({"reply": {"height": int(message.height), "width": int(message.width),
                             "file": str(path), "readonly": not message.data.flags.writeable,
                             "frozen": message.is_frozen}})
+        elif op == "pending":
+            send({"reply": reader.pending()})
         elif op == "close":
             reader.close()
             assert domain is not None

@@ -162,6 +162,10 @@ class _AgentReader(Reader):
         # the message itself was checked in the agent: rebuild it here as delivered there
         return freeze(message) if reply["frozen"] else message
 
+    def pending(self) -> bool:
+        answer: bool = self.call({"op": "pending"})
+        return answer
+
     def close(self) -> None:
         if self.proc.poll() is None:
             try:
@@ -351,6 +355,22 @@ def test_delivered_messages_are_read_only(make: Callable[[QoS], Harness]) -> Non
         got.data[0] = 1
     with pytest.raises(ReadOnlyMessageError):
         got.width = 3
+
+
+def test_pending_is_false_only_when_a_take_finds_nothing(make: Callable[[QoS], Harness]) -> None:
+    """The executor trusts a False: it does not queue the subscription again until a wake-up."""
+    h = make(QoS(depth=4))
+    reader = h.reader()
+    writer = h.writer()
+    assert not reader.pending()
+    writer.write(image(0, 1))
+    writer.write(image(0, 2))
+    assert reader.pending()
+    assert reader.try_take().width == 1
+    assert reader.pending()
+    assert reader.try_take().width == 2
+    assert not reader.pending()
+    assert reader.try_take() is None
 
 
 def test_subscriber_is_woken_not_polled(make: Callable[[QoS], Harness]) -> None:

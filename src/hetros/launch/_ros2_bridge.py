@@ -137,6 +137,9 @@ class _ImportedService:
         self._forward(time.monotonic() + _DISCOVERY_WAIT, request_id, client, request)
         return True
 
+    def pending(self) -> bool:
+        return self._requests.pending()
+
     def retry(self) -> None:
         with self._lock:
             waiting, self._waiting = self._waiting, []

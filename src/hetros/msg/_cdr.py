@@ -29,6 +29,7 @@ import numpy as np
 from rosbags.interfaces import Nodetype
 
 from .._errors import SerializationError
+from . import _compiled as compiled
 from ._message import FrozenList, freeze
 
 if TYPE_CHECKING:
@@ -77,6 +78,7 @@ class CdrCodec:
     decode: Decode
     generated: bool
     decode_copies: bool = False
+    compiled: bool = False
 
 
 def _lowbit(value: int) -> int:
@@ -462,6 +464,7 @@ class Ros1Codec:
     size: Size
     encode: Encode
     decode: Decode
+    compiled: bool = False
 
 
 def build_ros1_codec(types: TypeRegistry, typename: str) -> Ros1Codec | None:
@@ -469,11 +472,18 @@ def build_ros1_codec(types: TypeRegistry, typename: str) -> Ros1Codec | None:
     if sys.byteorder != "little":
         return None
     try:
-        return Ros1Codec(typename, size=_generate(types, typename, "size", False, ros1=True),
-                         encode=_generate(types, typename, "encode", False, ros1=True),
-                         decode=_generate(types, typename, "decode", False, ros1=True))
+        codec = Ros1Codec(typename, size=_generate(types, typename, "size", False, ros1=True),
+                          encode=_generate(types, typename, "encode", False, ros1=True),
+                          decode=_generate(types, typename, "decode", False, ros1=True))
     except UnsupportedType:
         return None
+    if compiled.available():
+        try:
+            fast = compiled.compile_codec(types, typename, True, codec.size, codec.encode, codec.decode)
+        except compiled.NotCompilable:
+            return codec
+        return Ros1Codec(typename, fast.size, fast.encode, fast.decode, compiled=True)
+    return codec
 
 
 def generated_source(types: TypeRegistry, typename: str, mode: str, lean: bool = False) -> str:
@@ -488,7 +498,7 @@ def build_codec(types: TypeRegistry, typename: str) -> CdrCodec:
     if sys.byteorder == "little":
         try:
             decode, views = _generate_with_views(types, typename, "decode", False)
-            return CdrCodec(
+            codec = CdrCodec(
                 typename,
                 size=_generate(types, typename, "size", False),
                 encode=_generate(types, typename, "encode", False),
@@ -499,8 +509,21 @@ def build_codec(types: TypeRegistry, typename: str) -> CdrCodec:
                 decode_copies=not views,
             )
         except UnsupportedType:
-            pass
+            return reference_codec(types, typename)
+        return compile_cdr(types, codec) if compiled.available() else codec
     return reference_codec(types, typename)
+
+
+def compile_cdr(types: TypeRegistry, codec: CdrCodec) -> CdrCodec:
+    """``codec`` with the compiled interpreter in front of its generated functions (itself when
+    the interpreter has no op for one of the type's fields)."""
+    try:
+        fast = compiled.compile_codec(types, codec.typename, False, codec.size, codec.encode, codec.decode,
+                                      codec.size_lean, codec.encode_lean)
+    except compiled.NotCompilable:
+        return codec
+    return CdrCodec(codec.typename, fast.size, fast.encode, fast.size_lean, fast.encode_lean, fast.decode,
+                    generated=True, decode_copies=codec.decode_copies, compiled=True)
 
 
 def reference_codec(types: TypeRegistry, typename: str) -> CdrCodec:

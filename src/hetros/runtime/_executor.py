@@ -55,7 +55,11 @@ class AdaptiveSpin:
 
 class Dispatchable(Protocol):
     def dispatch(self) -> bool:
-        """Run one callback if there is work; return whether more work may be pending."""
+        """Run one callback if there is work; return whether one ran."""
+        ...
+
+    def pending(self) -> bool:
+        """Whether more work may be waiting (False only when surely not)."""
         ...
 
 
@@ -79,7 +83,9 @@ class Executor:
     def __init__(self, stop: threading.Event, source: WaitSource | None = None) -> None:
         self._stop = stop
         self._source = source
-        self._cond = threading.Condition()
+        # entered directly (a C call); the condition's own __enter__ is a Python method on the hot path
+        self._lock = threading.RLock()
+        self._cond = threading.Condition(self._lock)
         self._generation = 0
         self._listening = False
         self._listener: int | None = None
@@ -97,7 +103,7 @@ class Executor:
 
     def notify(self, entity: Dispatchable) -> None:
         """Mark ``entity`` as having work (callable from any thread)."""
-        with self._cond:
+        with self._lock:
             key = id(entity)
             if key not in self._queued:
                 self._queued.add(key)
@@ -108,7 +114,7 @@ class Executor:
 
     def wake(self) -> None:
         """Something may be ready: every waiter rechecks (callable from any thread)."""
-        with self._cond:
+        with self._lock:
             interrupt = self._woken()
         if interrupt and self._source is not None:
             self._source.interrupt()
@@ -121,7 +127,7 @@ class Executor:
 
     def wait(self, seen: int, timeout: float | None) -> None:
         """Block until the generation differs from ``seen`` or ``timeout`` passes."""
-        with self._cond:
+        with self._lock:
             if self._generation != seen or self._stop.is_set():
                 return
             if self._source is None or self._listening:
@@ -132,7 +138,7 @@ class Executor:
         try:
             self._source.wait(timeout)
         finally:
-            with self._cond:
+            with self._lock:
                 self._listening = False
                 self._listener = None
                 self._generation += 1
@@ -140,7 +146,7 @@ class Executor:
 
     def add_timer(self, first_due: float, fire: Callable[[], float | None]) -> None:
         """``fire`` runs at ``first_due``; it returns its next due time, or None to stop."""
-        with self._cond:
+        with self._lock:
             heapq.heappush(self._timers, (first_due, next(self._counter), fire))
         self.wake()
 
@@ -148,7 +154,7 @@ class Executor:
         """Run at most one callback; return False when nothing ran before ``timeout``."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
-            with self._cond:
+            with self._lock:
                 if self._stop.is_set():
                     return False
                 seen = self._generation
@@ -170,13 +176,15 @@ class Executor:
             if fire is not None:
                 next_due = fire()
                 if next_due is not None:
-                    with self._cond:
+                    with self._lock:
                         heapq.heappush(self._timers, (next_due, next(self._counter), fire))
                 return True
             if entity is not None:
                 if entity.dispatch():
                     self._spin.arrived()
-                    self.notify(entity)
+                    # asked instead of dispatching again to find the FIFO empty; later arrivals wake it
+                    if entity.pending():
+                        self.notify(entity)
                 return True
             if not self._spin_for_work(seen, wait):
                 self.wait(seen, wait)

@@ -147,6 +147,9 @@ class _MergedReader(Reader):
                 return item
         return None
 
+    def pending(self) -> bool:
+        return any(part.pending() for part in self._parts)
+
     def close(self) -> None:
         for part in self._parts:
             part.close()
@@ -176,9 +179,13 @@ class _Retained(Reader):
         self.relay = relay
         self._release = release
         self.try_take = inner.try_take  # type: ignore[method-assign]  # one call less per message
+        self.pending = inner.pending  # type: ignore[method-assign]
 
     def try_take(self) -> Any | None:
         return self.inner.try_take()
+
+    def pending(self) -> bool:
+        return self.inner.pending()
 
     def close(self) -> None:
         self.relay.target = None

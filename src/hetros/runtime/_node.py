@@ -150,7 +150,8 @@ class Subscription(Generic[M]):
             self.node.executor.wake()
 
     def dispatch(self) -> bool:
-        message = self.try_take()
+        reader = self._reader
+        message = None if reader is None else reader.try_take()
         if message is None:
             return False
         assert self.callback is not None
@@ -158,6 +159,10 @@ class Subscription(Generic[M]):
         self.callback(message)
         self.stats.add(time.perf_counter() - start)
         return True
+
+    def pending(self) -> bool:
+        reader = self._reader
+        return reader is not None and reader.pending()
 
     def try_take(self) -> M | None:
         """The next message, or None when the FIFO is empty (never blocks)."""
@@ -296,6 +301,9 @@ class Service:
         response._hetros_validate(response, f"the response of {self.name}")
         self._replies.send(request_id, client, response)
         return True
+
+    def pending(self) -> bool:
+        return self._reader.pending()
 
     def close(self) -> None:
         if not self._closed:

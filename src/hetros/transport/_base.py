@@ -37,6 +37,16 @@ class Reader(ABC):
     @abstractmethod
     def try_take(self) -> Any | None: ...
 
+    def pending(self) -> bool:
+        """Whether a ``try_take`` now may find a message: False only when the reader knows its
+        FIFO is empty.
+
+        The executor asks after each callback whether to queue the subscription again; an
+        empty take costs more than this answer. A message that arrives after a False still
+        wakes the reader as usual.
+        """
+        return True
+
     @abstractmethod
     def close(self) -> None: ...
 

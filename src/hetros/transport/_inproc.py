@@ -63,6 +63,9 @@ class Mailbox(Reader):
             self._cond.notify_all()
             return item
 
+    def pending(self) -> bool:
+        return bool(self._items)
+
     def __len__(self) -> int:
         return len(self._items)
 

@@ -274,7 +274,7 @@ class ShmReader(Reader):
         self._channel = channel
         self._wake = wake
         self._ports: list[_Port] = []
-        self.event = channel.register(wake, self._pending)
+        self.event = channel.register(wake, self.pending)
         self._next = 0
         self._lock = threading.Lock()
         self._borrowed: list[None] = []
@@ -291,8 +291,7 @@ class ShmReader(Reader):
 
     # -- taking ----------------------------------------------------------------------------
 
-    def _pending(self) -> bool:
-        """Whether a sample is waiting (without taking it)."""
+    def pending(self) -> bool:
         return any(port.subscriber.has_samples() for port in self._ports)
 
     def try_take(self) -> Any | None:

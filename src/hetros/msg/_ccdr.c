@@ -1,0 +1,729 @@
+/*
+ * hetros.msg._ccdr: the compiled CDR / ROS 1 codec, one interpreter for every message type.
+ *
+ * Python compiles each type into a program (hetros/msg/_ccdr_program.py): one op per field,
+ * with the slot offset of the field in the message object, the primitive kind, the fixed
+ * length or bound, the nested type's program. This file walks such programs to size,
+ * encode and decode messages, reading and writing the objects' slots directly.
+ *
+ * It never reports an error of its own about a message or bytes. Whatever it does not
+ * accept (a value of an unexpected type, an out-of-range integer, bytes that do not fit,
+ * a bound exceeded, invalid UTF-8) makes it call the generated Python function it stands
+ * in for, with the same arguments: that function raises exactly the error users see
+ * without the extension (field path and offset included), or handles the case. So the
+ * two paths cannot disagree on what is an error, and the Python one stays the reference
+ * that tests cross-check this one against.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <structmember.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+enum { OP_PRIM, OP_STRING, OP_NESTED, OP_PRIM_ARRAY, OP_PRIM_SEQ, OP_STR_ARRAY, OP_STR_SEQ, OP_MSG_ARRAY,
+       OP_MSG_SEQ };
+enum { P_BOOL, P_U8, P_I8, P_I16, P_U16, P_I32, P_U32, P_I64, P_U64, P_F32, P_F64, P_COUNT };
+static const int prim_size[P_COUNT] = {1, 1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
+
+struct Type;
+
+typedef struct {
+    int kind;
+    int prim;
+    Py_ssize_t offset;   /* slot offset of the field in the message object */
+    Py_ssize_t length;   /* fixed length of an array, bound of a sequence (0: none) */
+    struct Type *sub;    /* nested message type */
+    PyObject *dtype;     /* numpy dtype of a primitive array (owned) */
+} Op;
+
+typedef struct Type {
+    PyTypeObject *cls;    /* owned */
+    PyTypeObject *frozen; /* owned */
+    Py_ssize_t loan_offset;
+    Py_ssize_t nops;
+    Op *ops;
+} Type;
+
+/* Raised inside this file only: "hand this call to the Python function". */
+#define REFUSE (-2)
+
+typedef struct {
+    char *data;
+    Py_ssize_t len;
+    int ros1;
+    int lean;
+} Out;
+
+typedef struct {
+    const char *data;
+    Py_ssize_t end;
+    int ros1;
+    PyObject *buffer; /* what numpy views are made on */
+    PyObject *frombuffer;
+    PyObject *frozenlist;
+} In;
+
+/* ---------------------------------------------------------------------------------------- */
+/* programs                                                                                   */
+
+static void type_free(Type *type)
+{
+    if (type == NULL)
+        return;
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        Py_XDECREF(type->ops[i].dtype);
+        type_free(type->ops[i].sub);
+    }
+    PyMem_Free(type->ops);
+    Py_XDECREF(type->cls);
+    Py_XDECREF(type->frozen);
+    PyMem_Free(type);
+}
+
+static int slot_offset(PyObject *descr, Py_ssize_t *offset)
+{
+    if (!Py_IS_TYPE(descr, &PyMemberDescr_Type)) {
+        PyErr_Format(PyExc_TypeError, "a field must be a slot (member descriptor), not %R", descr);
+        return -1;
+    }
+    PyMemberDef *member = ((PyMemberDescrObject *)descr)->d_member;
+    if (member->type != T_OBJECT_EX) {
+        PyErr_Format(PyExc_TypeError, "slot %s must hold an object", member->name);
+        return -1;
+    }
+    *offset = member->offset;
+    return 0;
+}
+
+/* spec: (cls, frozen, loan_descriptor, ((kind, descriptor, prim, length, sub_spec, dtype), ...)) */
+static Type *type_from_spec(PyObject *spec)
+{
+    PyObject *cls, *frozen, *loan, *ops;
+    if (!PyArg_ParseTuple(spec, "O!O!OO!", &PyType_Type, &cls, &PyType_Type, &frozen, &loan, &PyTuple_Type, &ops))
+        return NULL;
+    if (!PyType_IsSubtype((PyTypeObject *)frozen, (PyTypeObject *)cls)) {
+        PyErr_SetString(PyExc_TypeError, "the frozen class must derive from the message class");
+        return NULL;
+    }
+    Type *type = PyMem_Calloc(1, sizeof(Type));
+    if (type == NULL)
+        return (Type *)PyErr_NoMemory();
+    type->cls = (PyTypeObject *)Py_NewRef(cls);
+    type->frozen = (PyTypeObject *)Py_NewRef(frozen);
+    type->nops = PyTuple_GET_SIZE(ops);
+    type->ops = PyMem_Calloc(type->nops ? type->nops : 1, sizeof(Op));
+    if (type->ops == NULL) {
+        type->nops = 0;
+        type_free(type);
+        return (Type *)PyErr_NoMemory();
+    }
+    if (slot_offset(loan, &type->loan_offset) < 0)
+        goto fail;
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        Op *op = &type->ops[i];
+        PyObject *descr, *sub, *dtype;
+        if (!PyArg_ParseTuple(PyTuple_GET_ITEM(ops, i), "iOinOO", &op->kind, &descr, &op->prim, &op->length, &sub,
+                              &dtype))
+            goto fail;
+        if (op->kind < OP_PRIM || op->kind > OP_MSG_SEQ || op->prim < 0 || op->prim >= P_COUNT) {
+            PyErr_Format(PyExc_ValueError, "op %zd: unknown kind %d or primitive %d", i, op->kind, op->prim);
+            goto fail;
+        }
+        if (slot_offset(descr, &op->offset) < 0)
+            goto fail;
+        if (sub != Py_None && (op->sub = type_from_spec(sub)) == NULL)
+            goto fail;
+        if ((op->kind == OP_NESTED || op->kind == OP_MSG_ARRAY || op->kind == OP_MSG_SEQ) && op->sub == NULL) {
+            PyErr_Format(PyExc_ValueError, "op %zd: a message field needs its type's program", i);
+            goto fail;
+        }
+        if (dtype != Py_None)
+            op->dtype = Py_NewRef(dtype);
+        if ((op->kind == OP_PRIM_ARRAY || op->kind == OP_PRIM_SEQ) && op->dtype == NULL) {
+            PyErr_Format(PyExc_ValueError, "op %zd: a primitive array needs its dtype", i);
+            goto fail;
+        }
+    }
+    return type;
+fail:
+    type_free(type);
+    return NULL;
+}
+
+#define SLOT(obj, offset) (*(PyObject **)((char *)(obj) + (offset)))
+
+/* the message's own type or its frozen twin: only then are the slot offsets the program's */
+static inline int is_type(PyObject *obj, const Type *type)
+{
+    PyTypeObject *actual = Py_TYPE(obj);
+    return actual == type->cls || actual == type->frozen;
+}
+
+static inline Py_ssize_t align(Py_ssize_t pos, int size, int ros1)
+{
+    return ros1 ? pos : (pos + size - 1) & -(Py_ssize_t)size;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* size and encode: one walk; with out->data NULL it only counts                             */
+
+static inline int put_align(Out *out, Py_ssize_t *pos, int size)
+{
+    Py_ssize_t aligned = align(*pos, size, out->ros1);
+    if (out->data != NULL && aligned != *pos) {
+        if (aligned > out->len)
+            return REFUSE;
+        memset(out->data + *pos, 0, aligned - *pos);
+    }
+    *pos = aligned;
+    return 0;
+}
+
+static inline int put_u32(Out *out, Py_ssize_t *pos, uint32_t value)
+{
+    if (put_align(out, pos, 4) < 0)
+        return REFUSE;
+    if (out->data != NULL) {
+        if (*pos + 4 > out->len)
+            return REFUSE;
+        memcpy(out->data + *pos, &value, 4);
+    }
+    *pos += 4;
+    return 0;
+}
+
+static int put_prim(Out *out, Py_ssize_t *pos, int prim, PyObject *value)
+{
+    int size = prim_size[prim];
+    if (put_align(out, pos, size) < 0)
+        return REFUSE;
+    if (out->data == NULL) {
+        *pos += size;
+        return 0;
+    }
+    if (*pos + size > out->len)
+        return REFUSE;
+    char *at = out->data + *pos;
+    *pos += size;
+    if (prim == P_BOOL) {
+        int truth = PyObject_IsTrue(value);
+        if (truth < 0)
+            return REFUSE;
+        *at = (char)truth;
+        return 0;
+    }
+    if (prim == P_F32 || prim == P_F64) {
+        if (!PyFloat_Check(value) && !PyLong_Check(value))
+            return REFUSE; /* struct takes __float__ objects too: the Python path decides */
+        double number = PyFloat_AsDouble(value);
+        if (number == -1.0 && PyErr_Occurred())
+            return REFUSE;
+        if (prim == P_F64) {
+            memcpy(at, &number, 8);
+            return 0;
+        }
+        float narrow = (float)number;
+        if (isinf(narrow) && !isinf(number))
+            return REFUSE;
+        memcpy(at, &narrow, 4);
+        return 0;
+    }
+    if (!PyLong_Check(value))
+        return REFUSE; /* numpy integers and other __index__ objects: the Python path */
+    if (prim == P_U64) {
+        unsigned long long word = PyLong_AsUnsignedLongLong(value);
+        if (word == (unsigned long long)-1 && PyErr_Occurred())
+            return REFUSE;
+        memcpy(at, &word, 8);
+        return 0;
+    }
+    int overflow = 0;
+    long long number = PyLong_AsLongLongAndOverflow(value, &overflow);
+    if (overflow || (number == -1 && PyErr_Occurred()))
+        return REFUSE;
+    switch (prim) {
+    case P_U8:
+        if (number < 0 || number > UINT8_MAX) return REFUSE;
+        *at = (char)(uint8_t)number;
+        return 0;
+    case P_I8:
+        if (number < INT8_MIN || number > INT8_MAX) return REFUSE;
+        *at = (char)(int8_t)number;
+        return 0;
+    case P_I16: {
+        if (number < INT16_MIN || number > INT16_MAX) return REFUSE;
+        int16_t word = (int16_t)number;
+        memcpy(at, &word, 2);
+        return 0;
+    }
+    case P_U16: {
+        if (number < 0 || number > UINT16_MAX) return REFUSE;
+        uint16_t word = (uint16_t)number;
+        memcpy(at, &word, 2);
+        return 0;
+    }
+    case P_I32: {
+        if (number < INT32_MIN || number > INT32_MAX) return REFUSE;
+        int32_t word = (int32_t)number;
+        memcpy(at, &word, 4);
+        return 0;
+    }
+    case P_U32: {
+        if (number < 0 || number > UINT32_MAX) return REFUSE;
+        uint32_t word = (uint32_t)number;
+        memcpy(at, &word, 4);
+        return 0;
+    }
+    default: /* P_I64 */
+        memcpy(at, &number, 8);
+        return 0;
+    }
+}
+
+static int put_string(Out *out, Py_ssize_t *pos, PyObject *value)
+{
+    if (!PyUnicode_Check(value))
+        return REFUSE;
+    Py_ssize_t length;
+    const char *text = PyUnicode_AsUTF8AndSize(value, &length);
+    if (text == NULL)
+        return REFUSE;
+    int nul = out->ros1 ? 0 : 1;
+    if (length + nul > UINT32_MAX)
+        return REFUSE;
+    if (put_u32(out, pos, (uint32_t)(length + nul)) < 0)
+        return REFUSE;
+    if (out->data != NULL) {
+        if (*pos + length + nul > out->len)
+            return REFUSE;
+        memcpy(out->data + *pos, text, length);
+        if (nul)
+            out->data[*pos + length] = 0;
+    }
+    *pos += length + nul;
+    return 0;
+}
+
+/* a primitive array: C-contiguous, exactly count elements of the field's size */
+static int put_block(Out *out, Py_ssize_t *pos, int prim, PyObject *value, Py_ssize_t count, int sequence)
+{
+    int size = prim_size[prim];
+    if (!sequence || count)
+        if (put_align(out, pos, size) < 0)
+            return REFUSE;
+    Py_ssize_t nbytes = count * size;
+    if (out->data == NULL) {
+        *pos += nbytes;
+        return 0;
+    }
+    if (*pos + nbytes > out->len)
+        return REFUSE;
+    Py_buffer view;
+    if (PyObject_GetBuffer(value, &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
+        return REFUSE;
+    int ok = view.len == nbytes;
+    /* a byte field takes its buffer as it is: only a byte format fits (as memoryview assignment) */
+    if (ok && prim == P_U8 && view.format != NULL && strcmp(view.format, "B") != 0 && strcmp(view.format, "<B") != 0
+        && strcmp(view.format, "=B") != 0)
+        ok = 0;
+    if (ok)
+        memcpy(out->data + *pos, view.buf, nbytes);
+    PyBuffer_Release(&view);
+    if (!ok)
+        return REFUSE;
+    *pos += nbytes;
+    return 0;
+}
+
+static int put_message(Out *out, Py_ssize_t *pos, const Type *type, PyObject *message, int lean);
+
+static int put_items(Out *out, Py_ssize_t *pos, const Op *op, PyObject *value, int sequence)
+{
+    if (!PyList_Check(value) && !PyTuple_Check(value))
+        return REFUSE;
+    Py_ssize_t count = PySequence_Fast_GET_SIZE(value);
+    if (sequence) {
+        if (count > UINT32_MAX || put_u32(out, pos, (uint32_t)count) < 0)
+            return REFUSE;
+    }
+    for (Py_ssize_t i = 0; i < PySequence_Fast_GET_SIZE(value); i++) {
+        PyObject *item = PySequence_Fast_GET_ITEM(value, i);
+        int status = op->sub != NULL ? put_message(out, pos, op->sub, item, 0) : put_string(out, pos, item);
+        if (status < 0)
+            return REFUSE;
+    }
+    return 0;
+}
+
+static int put_message(Out *out, Py_ssize_t *pos, const Type *type, PyObject *message, int lean)
+{
+    if (!is_type(message, type))
+        return REFUSE;
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        const Op *op = &type->ops[i];
+        PyObject *value = SLOT(message, op->offset);
+        if (value == NULL)
+            return REFUSE;
+        int status = 0;
+        switch (op->kind) {
+        case OP_PRIM:
+            status = put_prim(out, pos, op->prim, value);
+            break;
+        case OP_STRING:
+            status = put_string(out, pos, value);
+            break;
+        case OP_NESTED:
+            status = put_message(out, pos, op->sub, value, lean);
+            break;
+        case OP_PRIM_ARRAY:
+            status = put_block(out, pos, op->prim, value, op->length, 0);
+            break;
+        case OP_PRIM_SEQ: {
+            if (lean) { /* the array travels beside the body */
+                status = put_u32(out, pos, 0);
+                break;
+            }
+            Py_ssize_t count = PyObject_Size(value);
+            if (count < 0 || count > UINT32_MAX || put_u32(out, pos, (uint32_t)count) < 0)
+                return REFUSE;
+            status = put_block(out, pos, op->prim, value, count, 1);
+            break;
+        }
+        case OP_STR_ARRAY:
+        case OP_MSG_ARRAY:
+            status = put_items(out, pos, op, value, 0);
+            break;
+        default: /* OP_STR_SEQ, OP_MSG_SEQ */
+            status = put_items(out, pos, op, value, 1);
+            break;
+        }
+        if (status < 0)
+            return REFUSE;
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* decode                                                                                     */
+
+static inline int need(const In *in, Py_ssize_t pos, Py_ssize_t count)
+{
+    return count >= 0 && pos <= in->end && count <= in->end - pos;
+}
+
+static int get_u32(const In *in, Py_ssize_t *pos, uint32_t *value)
+{
+    *pos = align(*pos, 4, in->ros1);
+    if (!need(in, *pos, 4))
+        return REFUSE;
+    memcpy(value, in->data + *pos, 4);
+    *pos += 4;
+    return 0;
+}
+
+static PyObject *get_prim(const In *in, Py_ssize_t *pos, int prim)
+{
+    int size = prim_size[prim];
+    *pos = align(*pos, size, in->ros1);
+    if (!need(in, *pos, size))
+        return NULL;
+    const char *at = in->data + *pos;
+    *pos += size;
+    switch (prim) {
+    case P_BOOL: return PyBool_FromLong(*at != 0);
+    case P_U8: return PyLong_FromLong(*(const uint8_t *)at);
+    case P_I8: return PyLong_FromLong(*(const int8_t *)at);
+    case P_I16: { int16_t v; memcpy(&v, at, 2); return PyLong_FromLong(v); }
+    case P_U16: { uint16_t v; memcpy(&v, at, 2); return PyLong_FromLong(v); }
+    case P_I32: { int32_t v; memcpy(&v, at, 4); return PyLong_FromLong(v); }
+    case P_U32: { uint32_t v; memcpy(&v, at, 4); return PyLong_FromUnsignedLong(v); }
+    case P_I64: { int64_t v; memcpy(&v, at, 8); return PyLong_FromLongLong(v); }
+    case P_U64: { uint64_t v; memcpy(&v, at, 8); return PyLong_FromUnsignedLongLong(v); }
+    case P_F32: { float v; memcpy(&v, at, 4); return PyFloat_FromDouble(v); }
+    default: { double v; memcpy(&v, at, 8); return PyFloat_FromDouble(v); }
+    }
+}
+
+static PyObject *get_string(const In *in, Py_ssize_t *pos)
+{
+    uint32_t length;
+    if (get_u32(in, pos, &length) < 0 || !need(in, *pos, length))
+        return NULL;
+    Py_ssize_t text = length;
+    if (!in->ros1) {
+        if (length < 1 || in->data[*pos + length - 1] != 0)
+            return NULL;
+        text -= 1;
+    }
+    PyObject *value = PyUnicode_DecodeUTF8(in->data + *pos, text, "strict");
+    *pos += length;
+    return value;
+}
+
+static PyObject *get_block(const In *in, Py_ssize_t *pos, const Op *op, Py_ssize_t count)
+{
+    int size = prim_size[op->prim];
+    if (op->kind == OP_PRIM_ARRAY || count)
+        *pos = align(*pos, size, in->ros1);
+    if (!need(in, *pos, count * size))
+        return NULL;
+    PyObject *args[4] = {in->buffer, op->dtype, NULL, NULL};
+    PyObject *result = NULL;
+    args[2] = PyLong_FromSsize_t(count);
+    args[3] = PyLong_FromSsize_t(*pos);
+    if (args[2] != NULL && args[3] != NULL)
+        result = PyObject_Vectorcall(in->frombuffer, args, 4, NULL);
+    Py_XDECREF(args[2]);
+    Py_XDECREF(args[3]);
+    *pos += count * size;
+    return result;
+}
+
+static PyObject *get_message(const In *in, Py_ssize_t *pos, const Type *type);
+
+static PyObject *get_items(const In *in, Py_ssize_t *pos, const Op *op, Py_ssize_t count)
+{
+    PyObject *items = PyList_New(count);
+    if (items == NULL)
+        return NULL;
+    for (Py_ssize_t i = 0; i < count; i++) {
+        PyObject *item = op->sub != NULL ? get_message(in, pos, op->sub) : get_string(in, pos);
+        if (item == NULL) {
+            Py_DECREF(items);
+            return NULL;
+        }
+        PyList_SET_ITEM(items, i, item);
+    }
+    PyObject *frozen = PyObject_CallOneArg(in->frozenlist, items);
+    Py_DECREF(items);
+    return frozen;
+}
+
+static PyObject *get_message(const In *in, Py_ssize_t *pos, const Type *type)
+{
+    /* made as the frozen twin at once: the Python path makes the thawed class and swaps */
+    PyObject *message = type->frozen->tp_alloc(type->frozen, 0);
+    if (message == NULL)
+        return NULL;
+    SLOT(message, type->loan_offset) = Py_NewRef(Py_None);
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        const Op *op = &type->ops[i];
+        PyObject *value = NULL;
+        uint32_t count;
+        switch (op->kind) {
+        case OP_PRIM:
+            value = get_prim(in, pos, op->prim);
+            break;
+        case OP_STRING:
+            value = get_string(in, pos);
+            break;
+        case OP_NESTED:
+            value = get_message(in, pos, op->sub);
+            break;
+        case OP_PRIM_ARRAY:
+            value = get_block(in, pos, op, op->length);
+            break;
+        case OP_PRIM_SEQ:
+            if (get_u32(in, pos, &count) == 0 && (!op->length || count <= op->length))
+                value = get_block(in, pos, op, count);
+            break;
+        case OP_STR_ARRAY:
+        case OP_MSG_ARRAY:
+            value = get_items(in, pos, op, op->length);
+            break;
+        default: /* OP_STR_SEQ, OP_MSG_SEQ */
+            if (get_u32(in, pos, &count) == 0 && (!op->length || count <= op->length))
+                value = get_items(in, pos, op, count);
+            break;
+        }
+        if (value == NULL) {
+            Py_DECREF(message);
+            return NULL;
+        }
+        PyObject *old = SLOT(message, op->offset);
+        SLOT(message, op->offset) = value;
+        Py_XDECREF(old);
+    }
+    return message;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* the Python object                                                                          */
+
+typedef struct {
+    PyObject_HEAD
+    Type *type;
+    int ros1;
+    PyObject *frombuffer, *frozenlist;
+    /* the generated Python functions this stands in for: size, encode, size_lean, encode_lean, decode */
+    PyObject *fallback[5];
+} Codec;
+
+enum { F_SIZE, F_ENCODE, F_SIZE_LEAN, F_ENCODE_LEAN, F_DECODE };
+
+static void codec_dealloc(Codec *self)
+{
+    type_free(self->type);
+    Py_XDECREF(self->frombuffer);
+    Py_XDECREF(self->frozenlist);
+    for (int i = 0; i < 5; i++)
+        Py_XDECREF(self->fallback[i]);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyObject *codec_new(PyTypeObject *cls, PyObject *args, PyObject *kwargs)
+{
+    static char *names[] = {"program", "ros1", "frombuffer", "frozenlist", "size", "encode", "size_lean",
+                            "encode_lean", "decode", NULL};
+    PyObject *spec, *frombuffer, *frozenlist, *fallback[5];
+    int ros1;
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OpOOOOOOO", names, &spec, &ros1, &frombuffer, &frozenlist,
+                                     &fallback[0], &fallback[1], &fallback[2], &fallback[3], &fallback[4]))
+        return NULL;
+    Codec *self = (Codec *)cls->tp_alloc(cls, 0);
+    if (self == NULL)
+        return NULL;
+    self->type = type_from_spec(spec);
+    if (self->type == NULL) {
+        Py_DECREF(self);
+        return NULL;
+    }
+    self->ros1 = ros1;
+    self->frombuffer = Py_NewRef(frombuffer);
+    self->frozenlist = Py_NewRef(frozenlist);
+    for (int i = 0; i < 5; i++)
+        self->fallback[i] = Py_NewRef(fallback[i]);
+    return (PyObject *)self;
+}
+
+static PyObject *call_fallback(Codec *self, int which, PyObject *const *args, Py_ssize_t nargs)
+{
+    PyErr_Clear();
+    if (self->fallback[which] == Py_None) {
+        PyErr_SetString(PyExc_TypeError, "this codec has no such function");
+        return NULL;
+    }
+    return PyObject_Vectorcall(self->fallback[which], args, nargs, NULL);
+}
+
+static PyObject *codec_sizes(Codec *self, PyObject *const *args, Py_ssize_t nargs, int lean)
+{
+    int which = lean ? F_SIZE_LEAN : F_SIZE;
+    if (nargs != 1)
+        return call_fallback(self, which, args, nargs);
+    Out out = {NULL, 0, self->ros1, lean};
+    Py_ssize_t pos = 0;
+    if (put_message(&out, &pos, self->type, args[0], lean) < 0)
+        return call_fallback(self, which, args, nargs);
+    return PyLong_FromSsize_t(pos);
+}
+
+static PyObject *codec_size(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    return codec_sizes(self, args, nargs, 0);
+}
+
+static PyObject *codec_size_lean(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    return codec_sizes(self, args, nargs, 1);
+}
+
+static PyObject *codec_encodes(Codec *self, PyObject *const *args, Py_ssize_t nargs, int lean)
+{
+    int which = lean ? F_ENCODE_LEAN : F_ENCODE;
+    Py_ssize_t pos = 0;
+    if (nargs < 2 || nargs > 3)
+        return call_fallback(self, which, args, nargs);
+    if (nargs == 3) {
+        pos = PyLong_AsSsize_t(args[2]);
+        if (pos == -1 && PyErr_Occurred())
+            return call_fallback(self, which, args, nargs);
+    }
+    Py_buffer view;
+    if (PyObject_GetBuffer(args[1], &view, PyBUF_WRITABLE) < 0)
+        return call_fallback(self, which, args, nargs);
+    Out out = {view.buf, view.len, self->ros1, lean};
+    int status = pos < 0 || pos > view.len ? REFUSE : put_message(&out, &pos, self->type, args[0], lean);
+    PyBuffer_Release(&view);
+    if (status < 0)
+        return call_fallback(self, which, args, nargs);
+    return PyLong_FromSsize_t(pos);
+}
+
+static PyObject *codec_encode(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    return codec_encodes(self, args, nargs, 0);
+}
+
+static PyObject *codec_encode_lean(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    return codec_encodes(self, args, nargs, 1);
+}
+
+static PyObject *codec_decode(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs < 1 || nargs > 3)
+        return call_fallback(self, F_DECODE, args, nargs);
+    Py_ssize_t pos = 0, end = -1;
+    if (nargs >= 2 && (pos = PyLong_AsSsize_t(args[1])) == -1 && PyErr_Occurred())
+        return call_fallback(self, F_DECODE, args, nargs);
+    if (nargs == 3 && (end = PyLong_AsSsize_t(args[2])) == -1 && PyErr_Occurred())
+        return call_fallback(self, F_DECODE, args, nargs);
+    Py_buffer view;
+    if (PyObject_GetBuffer(args[0], &view, PyBUF_SIMPLE) < 0)
+        return call_fallback(self, F_DECODE, args, nargs);
+    if (end < 0)
+        end = view.len;
+    PyObject *message = NULL;
+    if (pos >= 0 && end <= view.len && pos <= end) {
+        In in = {view.buf, end, self->ros1, args[0], self->frombuffer, self->frozenlist};
+        message = get_message(&in, &pos, self->type);
+    }
+    PyBuffer_Release(&view);
+    if (message == NULL)
+        return call_fallback(self, F_DECODE, args, nargs);
+    return message;
+}
+
+static PyMethodDef codec_methods[] = {
+    {"size", (PyCFunction)(void (*)(void))codec_size, METH_FASTCALL, "size(message) -> bytes of its body"},
+    {"encode", (PyCFunction)(void (*)(void))codec_encode, METH_FASTCALL,
+     "encode(message, buffer, pos=0) -> end: the body written at pos"},
+    {"size_lean", (PyCFunction)(void (*)(void))codec_size_lean, METH_FASTCALL,
+     "size_lean(message): the size with top-level primitive sequences left empty"},
+    {"encode_lean", (PyCFunction)(void (*)(void))codec_encode_lean, METH_FASTCALL,
+     "encode_lean(message, buffer, pos=0) -> end, top-level primitive sequences left empty"},
+    {"decode", (PyCFunction)(void (*)(void))codec_decode, METH_FASTCALL,
+     "decode(buffer, pos=0, end=-1) -> a read-only message; primitive arrays are views on buffer"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject CodecType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "hetros.msg._ccdr.Codec",
+    .tp_doc = "The compiled codec of one message type (falls back to the generated Python functions).",
+    .tp_basicsize = sizeof(Codec),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_new = codec_new,
+    .tp_dealloc = (destructor)codec_dealloc,
+    .tp_methods = codec_methods,
+};
+
+static struct PyModuleDef module = {
+    PyModuleDef_HEAD_INIT, "hetros.msg._ccdr", "The compiled CDR / ROS 1 codec interpreter.", -1, NULL,
+};
+
+PyMODINIT_FUNC PyInit__ccdr(void)
+{
+    if (PyType_Ready(&CodecType) < 0)
+        return NULL;
+    PyObject *mod = PyModule_Create(&module);
+    if (mod == NULL)
+        return NULL;
+    if (PyModule_AddObjectRef(mod, "Codec", (PyObject *)&CodecType) < 0) {
+        Py_DECREF(mod);
+        return NULL;
+    }
+    return mod;
+}

@@ -1,0 +1,169 @@
+"""The compiled codec (C) against the generated Python codec it stands in for.
+
+Both must give the same bytes, the same messages and the same errors: the compiled one
+hands every case it does not take (odd values, damaged bytes) to the Python one.
+"""
+
+from __future__ import annotations
+
+import random
+import shutil
+import struct
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from hetros import FieldValueError, SerializationError
+from hetros.msg import TypeRegistry, _compiled
+from hetros.msg._cdr import CdrCodec, Ros1Codec
+from tests.support.messages import random_message
+
+COMPILED = TypeRegistry()
+MESSAGE_TYPES = [name for name in COMPILED.names() if "/msg/" in name or "/srv/" in name or "/action/" in name]
+
+needs_extension = pytest.mark.skipif(not _compiled.available(), reason="the compiled codec is not built here")
+
+
+@pytest.fixture(scope="module")
+def pure() -> TypeRegistry:
+    """A registry whose codecs are the generated Python ones (as with HETROS_PURE_PYTHON=1)."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("HETROS_PURE_PYTHON", "1")
+        types = TypeRegistry()
+        for name in MESSAGE_TYPES:
+            types.codec(name)
+            types.ros1_codec(name)
+    return types
+
+
+def _encoded(size: object, encode: object, message: object, at: int = 0) -> bytes:
+    length = size(message)  # type: ignore[operator]
+    buffer = memoryview(bytearray(b"\xee" * (at + length)))  # stale bytes must not leak into padding
+    assert encode(message, buffer, at) == at + length  # type: ignore[operator]
+    return bytes(buffer[at:])
+
+
+def test_the_extension_is_built_wherever_a_compiler_is() -> None:
+    """`pip install` builds it when it can; a broken build must not pass silently as the fallback."""
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler on this machine: the pure-Python codecs serve")
+    assert _compiled._ccdr is not None, "the C compiler is there, but hetros.msg._ccdr was not built"
+
+
+def test_pure_python_is_chosen_by_the_environment() -> None:
+    script = ("from hetros.msg import registry; c = registry().codec('sensor_msgs/msg/Image'); "
+              "print(c.compiled, c.generated)")
+    for flag, expected in (("1", "False True"), ("0", f"{_compiled._ccdr is not None} True")):
+        out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
+                             env={"HETROS_PURE_PYTHON": flag, "PATH": ""})
+        assert out.stdout.split() == expected.split()
+
+
+@needs_extension
+@pytest.mark.parametrize("typename", MESSAGE_TYPES)
+def test_compiled_codec_matches_the_generated_one(typename: str, pure: TypeRegistry) -> None:
+    fast, slow = COMPILED.codec(typename), pure.codec(typename)
+    assert slow.generated and not slow.compiled
+    assert fast.compiled, f"{typename} is not compiled"
+    rnd = random.Random(typename)
+    for round_ in range(10):
+        message = random_message(COMPILED, typename, rnd)
+        at = 8 * (round_ % 3)
+        data = _encoded(slow.size, slow.encode, message, at)
+        assert _encoded(fast.size, fast.encode, message, at) == data
+        assert _encoded(fast.size_lean, fast.encode_lean, message, at) == \
+            _encoded(slow.size_lean, slow.encode_lean, message, at)
+        buffer = memoryview(bytes(at) + data)
+        decoded = fast.decode(buffer, at, len(buffer))
+        assert decoded == slow.decode(buffer, at, len(buffer)) == message
+        # two registries, two sets of classes: the same frozen class by name, and this registry's
+        assert type(decoded).__name__ == type(slow.decode(buffer, at)).__name__
+        assert decoded.is_frozen and type(decoded) is COMPILED.get(typename)._frozen_class
+        _assert_read_only(decoded)
+
+
+def _assert_read_only(value: object) -> None:
+    if isinstance(value, np.ndarray):
+        assert not value.flags.writeable
+    elif isinstance(value, list):
+        with pytest.raises(Exception, match="handed over"):
+            value.append(1)
+        for item in value:
+            _assert_read_only(item)
+    elif hasattr(value, "__fieldnames__"):
+        for name in value.__fieldnames__:
+            _assert_read_only(getattr(value, name))
+
+
+@needs_extension
+@pytest.mark.parametrize("typename", [n for n in MESSAGE_TYPES if COMPILED.ros1_codec(n) is not None])
+def test_compiled_ros1_codec_matches_the_generated_one(typename: str, pure: TypeRegistry) -> None:
+    fast, slow = COMPILED.ros1_codec(typename), pure.ros1_codec(typename)
+    assert isinstance(fast, Ros1Codec) and isinstance(slow, Ros1Codec)
+    assert fast.compiled and not slow.compiled
+    rnd = random.Random(f"ros1 {typename}")
+    for _ in range(6):
+        message = random_message(COMPILED, typename, rnd)
+        data = _encoded(slow.size, slow.encode, message)
+        assert _encoded(fast.size, fast.encode, message) == data
+        assert fast.decode(memoryview(data)) == slow.decode(memoryview(data)) == message
+
+
+@needs_extension
+@pytest.mark.parametrize("typename", ["sensor_msgs/msg/Image", "sensor_msgs/msg/JointState",
+                                      "std_msgs/msg/UInt8MultiArray", "sensor_msgs/msg/CameraInfo",
+                                      "geometry_msgs/msg/PoseWithCovarianceStamped"])
+def test_damaged_bytes_give_the_generated_codecs_result(typename: str, pure: TypeRegistry) -> None:
+    """Truncated, flipped and overwritten bytes: the same message or the same error, word for word."""
+    fast, slow = COMPILED.codec(typename), pure.codec(typename)
+    rnd = random.Random(f"damage {typename}")
+    for _ in range(300):
+        data = bytearray(_encoded(slow.size, slow.encode, random_message(COMPILED, typename, rnd)))
+        how = rnd.randrange(3)
+        if how == 0:
+            data = data[:rnd.randrange(len(data) + 1)]
+        elif data:
+            at = rnd.randrange(len(data))
+            if how == 1:
+                data[at] ^= 1 << rnd.randrange(8)
+            else:
+                data[at:at + 4] = struct.pack("<I", rnd.choice([0, 1, 3, 2**31, 2**32 - 1, rnd.randrange(64)]))
+        outcomes: list[object] = []
+        for codec in (fast, slow):
+            try:
+                decoded = codec.decode(memoryview(bytes(data)))
+            except SerializationError as exc:
+                outcomes.append(str(exc))
+            else:  # compared as bytes: a flipped bit can make a NaN, which equals nothing
+                outcomes.append((type(decoded).__name__, _encoded(slow.size, slow.encode, decoded)))
+        assert outcomes[0] == outcomes[1]
+
+
+@needs_extension
+def test_values_the_interpreter_refuses_take_the_generated_path(pure: TypeRegistry) -> None:
+    """numpy scalars, out-of-range numbers and wrong types: the Python codec's result or error."""
+    Image = COMPILED.get("sensor_msgs/msg/Image")
+    fast, slow = COMPILED.codec("sensor_msgs/msg/Image"), pure.codec("sensor_msgs/msg/Image")
+    for accepted in (Image(height=np.uint32(7), width=np.int64(5)), Image(data=np.arange(3, dtype=np.int8))):
+        assert _encoded(fast.size, fast.encode, accepted) == _encoded(slow.size, slow.encode, accepted)
+    for bad in (Image(height=2**32), Image(height=-1), Image(encoding=b"rgb8")):
+        errors = []
+        for codec in (fast, slow):
+            with pytest.raises(Exception) as caught:  # whichever the generated code raises
+                _encoded(codec.size, codec.encode, bad)
+            errors.append((type(caught.value), str(caught.value)))
+        assert errors[0] == errors[1]
+    with pytest.raises(FieldValueError, match="height"):
+        Image._hetros_validate(Image(height=2**32), "Image")
+
+
+@needs_extension
+def test_an_encode_that_does_not_fit_its_buffer_raises_as_before(pure: TypeRegistry) -> None:
+    """The shared-memory loan encodes its small part into a bounded room and relies on the raise."""
+    String = COMPILED.get("std_msgs/msg/String")
+    for codec in (COMPILED.codec("std_msgs/msg/String"), pure.codec("std_msgs/msg/String")):
+        assert isinstance(codec, CdrCodec)
+        with pytest.raises((struct.error, ValueError, IndexError)):
+            codec.encode(String(data="x" * 40), memoryview(bytearray(16)), 0)

@@ -17,6 +17,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <structmember.h>
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -41,6 +42,7 @@ typedef struct Type {
     PyTypeObject *cls;    /* owned */
     PyTypeObject *frozen; /* owned */
     Py_ssize_t loan_offset;
+    int bounded_strings; /* a bounded string anywhere in it: validation is the generated code's */
     Py_ssize_t nops;
     Op *ops;
 } Type;
@@ -96,11 +98,13 @@ static int slot_offset(PyObject *descr, Py_ssize_t *offset)
     return 0;
 }
 
-/* spec: (cls, frozen, loan_descriptor, ((kind, descriptor, prim, length, sub_spec, dtype), ...)) */
+/* spec: (cls, frozen, loan_descriptor, bounded_strings, ((kind, descriptor, prim, length, sub_spec, dtype), ...)) */
 static Type *type_from_spec(PyObject *spec)
 {
     PyObject *cls, *frozen, *loan, *ops;
-    if (!PyArg_ParseTuple(spec, "O!O!OO!", &PyType_Type, &cls, &PyType_Type, &frozen, &loan, &PyTuple_Type, &ops))
+    int bounded_strings;
+    if (!PyArg_ParseTuple(spec, "O!O!OpO!", &PyType_Type, &cls, &PyType_Type, &frozen, &loan, &bounded_strings,
+                          &PyTuple_Type, &ops))
         return NULL;
     if (!PyType_IsSubtype((PyTypeObject *)frozen, (PyTypeObject *)cls)) {
         PyErr_SetString(PyExc_TypeError, "the frozen class must derive from the message class");
@@ -111,6 +115,7 @@ static Type *type_from_spec(PyObject *spec)
         return (Type *)PyErr_NoMemory();
     type->cls = (PyTypeObject *)Py_NewRef(cls);
     type->frozen = (PyTypeObject *)Py_NewRef(frozen);
+    type->bounded_strings = bounded_strings;
     type->nops = PyTuple_GET_SIZE(ops);
     type->ops = PyMem_Calloc(type->nops ? type->nops : 1, sizeof(Op));
     if (type->ops == NULL) {
@@ -548,6 +553,117 @@ static PyObject *get_message(const In *in, Py_ssize_t *pos, const Type *type)
     return message;
 }
 
+
+/* ---------------------------------------------------------------------------------------- */
+/* validate: accepts what the generated validator accepts without a word or a change        */
+
+static PyTypeObject *ndarray_type; /* set at module init from numpy, borrowed through the module */
+static PyObject *str_dtype, *str_size;
+
+static int check_int(PyObject *value, int prim)
+{
+    if (!PyLong_CheckExact(value))
+        return REFUSE;
+    if (prim == P_U64) {
+        unsigned long long word = PyLong_AsUnsignedLongLong(value);
+        return word == (unsigned long long)-1 && PyErr_Occurred() ? REFUSE : 0;
+    }
+    int overflow = 0;
+    long long number = PyLong_AsLongLongAndOverflow(value, &overflow);
+    if (overflow || (number == -1 && PyErr_Occurred()))
+        return REFUSE;
+    switch (prim) {
+    case P_U8: return number < 0 || number > UINT8_MAX ? REFUSE : 0;
+    case P_I8: return number < INT8_MIN || number > INT8_MAX ? REFUSE : 0;
+    case P_I16: return number < INT16_MIN || number > INT16_MAX ? REFUSE : 0;
+    case P_U16: return number < 0 || number > UINT16_MAX ? REFUSE : 0;
+    case P_I32: return number < INT32_MIN || number > INT32_MAX ? REFUSE : 0;
+    case P_U32: return number < 0 || number > UINT32_MAX ? REFUSE : 0;
+    default: return 0; /* P_I64 */
+    }
+}
+
+static int check_prim(PyObject *value, int prim)
+{
+    if (prim == P_BOOL)
+        return Py_IS_TYPE(value, &PyBool_Type) ? 0 : REFUSE;
+    if (prim == P_F64)
+        return PyFloat_CheckExact(value) ? 0 : REFUSE;
+    if (prim == P_F32) {
+        if (!PyFloat_CheckExact(value))
+            return REFUSE;
+        double number = PyFloat_AS_DOUBLE(value);
+        return isfinite(number) && fabs(number) > FLT_MAX ? REFUSE : 0;
+    }
+    return check_int(value, prim);
+}
+
+static int check_array(PyObject *value, const Op *op)
+{
+    if (ndarray_type == NULL || !Py_IS_TYPE(value, ndarray_type))
+        return REFUSE;
+    PyObject *dtype = PyObject_GetAttr(value, str_dtype);
+    if (dtype == NULL)
+        return REFUSE;
+    int same = dtype == op->dtype;
+    Py_DECREF(dtype);
+    if (!same)
+        return REFUSE; /* an equal but distinct dtype: the generated validator decides */
+    if (op->length) {
+        PyObject *size = PyObject_GetAttr(value, str_size);
+        if (size == NULL)
+            return REFUSE;
+        Py_ssize_t count = PyLong_AsSsize_t(size);
+        Py_DECREF(size);
+        if (count < 0 || (op->kind == OP_PRIM_ARRAY ? count != op->length : count > op->length))
+            return REFUSE;
+    }
+    return 0;
+}
+
+static int check_message(PyObject *message, const Type *type)
+{
+    if (!is_type(message, type) || type->bounded_strings)
+        return REFUSE;
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        const Op *op = &type->ops[i];
+        PyObject *value = SLOT(message, op->offset);
+        if (value == NULL)
+            return REFUSE;
+        int status = 0;
+        switch (op->kind) {
+        case OP_PRIM:
+            status = check_prim(value, op->prim);
+            break;
+        case OP_STRING:
+            status = PyUnicode_CheckExact(value) ? 0 : REFUSE;
+            break;
+        case OP_NESTED:
+            status = check_message(value, op->sub);
+            break;
+        case OP_PRIM_ARRAY:
+        case OP_PRIM_SEQ:
+            status = check_array(value, op);
+            break;
+        default: { /* lists of strings or messages */
+            if (!PyList_Check(value) && !PyTuple_Check(value))
+                return REFUSE;
+            Py_ssize_t count = PySequence_Fast_GET_SIZE(value);
+            int fixed = op->kind == OP_STR_ARRAY || op->kind == OP_MSG_ARRAY;
+            if (op->length && (fixed ? count != op->length : count > op->length))
+                return REFUSE;
+            for (Py_ssize_t k = 0; k < count && status == 0; k++) {
+                PyObject *item = PySequence_Fast_GET_ITEM(value, k);
+                status = op->sub != NULL ? check_message(item, op->sub) : (PyUnicode_CheckExact(item) ? 0 : REFUSE);
+            }
+        }
+        }
+        if (status < 0)
+            return REFUSE;
+    }
+    return 0;
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* the Python object                                                                          */
 
@@ -556,18 +672,18 @@ typedef struct {
     Type *type;
     int ros1;
     PyObject *frombuffer, *frozenlist;
-    /* the generated Python functions this stands in for: size, encode, size_lean, encode_lean, decode */
-    PyObject *fallback[5];
+    /* the generated Python functions this stands in for: size, encode, size_lean, encode_lean, decode, validate */
+    PyObject *fallback[6];
 } Codec;
 
-enum { F_SIZE, F_ENCODE, F_SIZE_LEAN, F_ENCODE_LEAN, F_DECODE };
+enum { F_SIZE, F_ENCODE, F_SIZE_LEAN, F_ENCODE_LEAN, F_DECODE, F_VALIDATE, F_COUNT };
 
 static void codec_dealloc(Codec *self)
 {
     type_free(self->type);
     Py_XDECREF(self->frombuffer);
     Py_XDECREF(self->frozenlist);
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < F_COUNT; i++)
         Py_XDECREF(self->fallback[i]);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
@@ -575,11 +691,12 @@ static void codec_dealloc(Codec *self)
 static PyObject *codec_new(PyTypeObject *cls, PyObject *args, PyObject *kwargs)
 {
     static char *names[] = {"program", "ros1", "frombuffer", "frozenlist", "size", "encode", "size_lean",
-                            "encode_lean", "decode", NULL};
-    PyObject *spec, *frombuffer, *frozenlist, *fallback[5];
+                            "encode_lean", "decode", "validate", NULL};
+    PyObject *spec, *frombuffer, *frozenlist, *fallback[F_COUNT];
     int ros1;
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OpOOOOOOO", names, &spec, &ros1, &frombuffer, &frozenlist,
-                                     &fallback[0], &fallback[1], &fallback[2], &fallback[3], &fallback[4]))
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OpOOOOOOOO", names, &spec, &ros1, &frombuffer, &frozenlist,
+                                     &fallback[0], &fallback[1], &fallback[2], &fallback[3], &fallback[4],
+                                     &fallback[5]))
         return NULL;
     Codec *self = (Codec *)cls->tp_alloc(cls, 0);
     if (self == NULL)
@@ -592,7 +709,7 @@ static PyObject *codec_new(PyTypeObject *cls, PyObject *args, PyObject *kwargs)
     self->ros1 = ros1;
     self->frombuffer = Py_NewRef(frombuffer);
     self->frozenlist = Py_NewRef(frozenlist);
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < F_COUNT; i++)
         self->fallback[i] = Py_NewRef(fallback[i]);
     return (PyObject *)self;
 }
@@ -686,7 +803,16 @@ static PyObject *codec_decode(Codec *self, PyObject *const *args, Py_ssize_t nar
     return message;
 }
 
+static PyObject *codec_validate(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs < 1 || nargs > 2 || check_message(args[0], self->type) < 0)
+        return call_fallback(self, F_VALIDATE, args, nargs);
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef codec_methods[] = {
+    {"validate", (PyCFunction)(void (*)(void))codec_validate, METH_FASTCALL,
+     "validate(message, where='') -> None; what it does not accept as it is goes to the generated validator"},
     {"size", (PyCFunction)(void (*)(void))codec_size, METH_FASTCALL, "size(message) -> bytes of its body"},
     {"encode", (PyCFunction)(void (*)(void))codec_encode, METH_FASTCALL,
      "encode(message, buffer, pos=0) -> end: the body written at pos"},
@@ -721,9 +847,19 @@ PyMODINIT_FUNC PyInit__ccdr(void)
     PyObject *mod = PyModule_Create(&module);
     if (mod == NULL)
         return NULL;
-    if (PyModule_AddObjectRef(mod, "Codec", (PyObject *)&CodecType) < 0) {
-        Py_DECREF(mod);
-        return NULL;
-    }
+    if (PyModule_AddObjectRef(mod, "Codec", (PyObject *)&CodecType) < 0)
+        goto fail;
+    str_dtype = PyUnicode_InternFromString("dtype");
+    str_size = PyUnicode_InternFromString("size");
+    PyObject *numpy = PyImport_ImportModule("numpy");
+    if (str_dtype == NULL || str_size == NULL || numpy == NULL)
+        goto fail;
+    ndarray_type = (PyTypeObject *)PyObject_GetAttrString(numpy, "ndarray"); /* kept for the process' life */
+    Py_DECREF(numpy);
+    if (ndarray_type == NULL || !PyType_Check(ndarray_type))
+        goto fail;
     return mod;
+fail:
+    Py_DECREF(mod);
+    return NULL;
 }

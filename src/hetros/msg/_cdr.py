@@ -477,7 +477,7 @@ def build_ros1_codec(types: TypeRegistry, typename: str) -> Ros1Codec | None:
                           decode=_generate(types, typename, "decode", False, ros1=True))
     except UnsupportedType:
         return None
-    if compiled.available():
+    if types.compiled:
         try:
             fast = compiled.compile_codec(types, typename, True, codec.size, codec.encode, codec.decode)
         except compiled.NotCompilable:
@@ -510,7 +510,7 @@ def build_codec(types: TypeRegistry, typename: str) -> CdrCodec:
             )
         except UnsupportedType:
             return reference_codec(types, typename)
-        return compile_cdr(types, codec) if compiled.available() else codec
+        return compile_cdr(types, codec) if types.compiled else codec
     return reference_codec(types, typename)
 
 

@@ -61,11 +61,13 @@ def program(types: TypeRegistry, typename: str) -> tuple[Any, ...]:
     cls = types.get(typename)
     fields: Any = types.store.fielddefs[typename][1]  # rosbags' (kind, argument) pairs, walked as _cdr does
     ops: list[tuple[Any, ...]] = []
+    bounded_strings = False
     for attr, (_name, (kind, arg)) in zip(cls.__fieldnames__, fields, strict=True):
         descriptor = _slot(cls, attr)
         if kind == Nodetype.BASE:
             if arg[0] == "string":
                 ops.append((_STRING, descriptor, 0, 0, None, None))
+                bounded_strings |= bool(arg[1])
             elif arg[0] in _PRIMITIVES:
                 ops.append((_PRIM, descriptor, _PRIMITIVES[arg[0]][0], 0, None, None))
             else:
@@ -79,12 +81,13 @@ def program(types: TypeRegistry, typename: str) -> tuple[Any, ...]:
                 ops.append((_MSG_ARRAY if fixed else _MSG_SEQ, descriptor, 0, length, program(types, sub_arg), None))
             elif sub_arg[0] == "string":
                 ops.append((_STR_ARRAY if fixed else _STR_SEQ, descriptor, 0, length, None, None))
+                bounded_strings |= bool(sub_arg[1])
             elif sub_arg[0] in _PRIMITIVES:
                 code, dtype = _PRIMITIVES[sub_arg[0]]
                 ops.append((_PRIM_ARRAY if fixed else _PRIM_SEQ, descriptor, code, length, None, np.dtype(dtype)))
             else:
                 raise NotCompilable(f"{typename}.{attr}: {sub_arg[0]}")
-    return (cls, cls._frozen_class, vars(Message)["_hetros_loan"], tuple(ops))
+    return (cls, cls._frozen_class, vars(Message)["_hetros_loan"], bounded_strings, tuple(ops))
 
 
 def compile_codec(types: TypeRegistry, typename: str, ros1: bool, size: Callable[..., Any],
@@ -96,4 +99,23 @@ def compile_codec(types: TypeRegistry, typename: str, ros1: bool, size: Callable
     """
     assert _ccdr is not None
     return _ccdr.Codec(program(types, typename), ros1, np.frombuffer, FrozenList,
-                       size, encode, size_lean, encode_lean, decode)
+                       size, encode, size_lean, encode_lean, decode, None)
+
+
+def compile_validator(types: TypeRegistry, typename: str, validate: Callable[..., None]) -> Callable[..., None]:
+    """The compiled validator of ``typename``, standing in for the generated ``validate``.
+
+    It accepts a message the generated validator would pass unchanged (exact types, in range,
+    arrays of the field's dtype and length); anything else, it hands to ``validate``, which
+    converts, refuses with the field's path, or accepts. ``validate`` itself where the
+    interpreter has no op for a field.
+    """
+    if _ccdr is None:
+        return validate
+    try:
+        spec = program(types, typename)
+    except NotCompilable:
+        return validate
+    checker: Callable[..., None] = _ccdr.Codec(spec, False, np.frombuffer, FrozenList,
+                                               None, None, None, None, None, validate).validate
+    return checker

@@ -23,6 +23,7 @@ from rosbags.typesys import Stores, TypesysError, get_typestore
 from rosbags.typesys.store import Typestore
 
 from .._errors import DefinitionError, SerializationError, UnknownTypeError
+from . import _compiled as compiled_codecs
 from ._cdr import CdrCodec, Ros1Codec, build_codec, build_ros1_codec
 from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
 from ._message import FrozenMessage, Message
@@ -79,7 +80,10 @@ def normalize_typename(name: str, kind: str = "msg") -> str:
 class TypeRegistry:
     """All message, service and action types known to one process."""
 
-    def __init__(self) -> None:
+    def __init__(self, compiled: bool | None = None) -> None:
+        """``compiled``: codecs and validators from the compiled interpreter (default: when it is
+        built and ``HETROS_PURE_PYTHON`` is not set), else the generated Python ones."""
+        self.compiled = compiled_codecs.available() if compiled is None else compiled and compiled_codecs.available()
         self._lock = threading.RLock()
         self.store: Typestore = get_typestore(Stores.ROS2_JAZZY)
         self.store.types = dict(self.store.types)
@@ -338,6 +342,8 @@ class TypeRegistry:
 
         def first_use(message: Any, where: str = "") -> None:
             validator = build_validator(self, full)
+            if self.compiled:
+                validator = compiled_codecs.compile_validator(self, full, validator)
             setattr(cls, "_hetros_validate", staticmethod(validator))  # noqa: B010 (a method mypy sees as fixed)
             validator(message, where or full.rsplit("/", 1)[-1])
 

@@ -28,7 +28,7 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install --quiet --upgrade pip
 
-$(STAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c | $(PY)
+$(STAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/shm/_cslot.c | $(PY)
 	$(PIP) install --quiet -e .
 	touch $@
 
@@ -38,7 +38,7 @@ install: $(STAMP)
 install-examples: | $(PY)
 	$(PIP) install --quiet -e '.[examples]'
 
-$(TSTAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c Makefile | $(PY)
+$(TSTAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/shm/_cslot.c Makefile | $(PY)
 	$(PIP) install --quiet -e '.[test]'
 	$(install_peer_debs)
 	touch $(STAMP) $@
@@ -47,7 +47,7 @@ install-test: $(TSTAMP)
 
 # The benchmark's peers: pip extras, Debian's rospy + rosmaster, and Cyclone's native ddsperf
 # (cyclonedds-tools) when we may install them.
-$(BSTAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c Makefile | $(PY)
+$(BSTAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/shm/_cslot.c Makefile | $(PY)
 	$(PIP) install --quiet -e '.[bench]'
 	$(install_peer_debs)
 	@if ! command -v ddsperf > /dev/null && [ "$$(id -u)" = 0 ]; then \

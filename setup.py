@@ -1,7 +1,9 @@
-"""The compiled codec (``hetros.msg._ccdr``): built where a C compiler is, skipped otherwise.
+"""hetros' compiled hot path: built where a C compiler is, skipped otherwise.
 
-Everything else about the package is in pyproject.toml. ``optional=True`` lets an install
-without a compiler go on: hetros then uses its generated pure-Python codecs.
+``hetros.msg._ccdr`` interprets per-type codec programs; ``hetros.transport.shm._cslot`` gives
+shared-memory slots as buffers. Everything else about the package is in pyproject.toml.
+``optional=True`` lets an install without a compiler go on: hetros then runs its pure-Python
+path (generated codecs, ctypes views), which ``HETROS_PURE_PYTHON=1`` also selects.
 """
 
 from setuptools import Extension, setup
@@ -14,6 +16,12 @@ setup(
             extra_compile_args=["-O2", "-std=c11", "-Wall", "-Wextra", "-Wno-missing-field-initializers",
                                 "-Wno-cast-function-type"],
             optional=True,
-        )
+        ),
+        Extension(
+            "hetros.transport.shm._cslot",
+            sources=["src/hetros/transport/shm/_cslot.c"],
+            extra_compile_args=["-O2", "-std=c11", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],
+            optional=True,
+        ),
     ]
 )

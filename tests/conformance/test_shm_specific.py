@@ -126,10 +126,12 @@ def test_subscriber_killed_mid_stream_does_not_hang_the_publisher(
                     writer.write(image(0, seq, 256))
         finally:
             elapsed = time.monotonic() - start
+            # the consumer keeps draining until everything arrived (or the deadline): stopping it
+            # as soon as the publisher is done would leave the last messages untaken
+            deadline = time.monotonic() + 10
+            while len(got) < 40 and time.monotonic() < deadline:
+                time.sleep(0.01)
             stop.set()
-        deadline = time.monotonic() + 10
-        while len(got) < 40 and time.monotonic() < deadline:
-            time.sleep(0.01)
         consumer.join()
         assert elapsed < 10, "the publisher must not wait out its timeout for a dead subscriber"
         assert any("is gone" in r.getMessage() for r in caplog.records), "the lost subscriber is reported"

@@ -36,6 +36,7 @@ typedef struct {
     Py_ssize_t length;   /* fixed length of an array, bound of a sequence (0: none) */
     struct Type *sub;    /* nested message type */
     PyObject *dtype;     /* numpy dtype of a primitive array (owned) */
+    PyObject *name;      /* the field's attribute name (owned) */
 } Op;
 
 typedef struct Type {
@@ -75,6 +76,7 @@ static void type_free(Type *type)
         return;
     for (Py_ssize_t i = 0; i < type->nops; i++) {
         Py_XDECREF(type->ops[i].dtype);
+        Py_XDECREF(type->ops[i].name);
         type_free(type->ops[i].sub);
     }
     PyMem_Free(type->ops);
@@ -137,6 +139,7 @@ static Type *type_from_spec(PyObject *spec)
         }
         if (slot_offset(descr, &op->offset) < 0)
             goto fail;
+        op->name = Py_NewRef(PyDescr_NAME(descr));
         if (sub != Py_None && (op->sub = type_from_spec(sub)) == NULL)
             goto fail;
         if ((op->kind == OP_NESTED || op->kind == OP_MSG_ARRAY || op->kind == OP_MSG_SEQ) && op->sub == NULL) {
@@ -664,6 +667,138 @@ static int check_message(PyObject *message, const Type *type)
     return 0;
 }
 
+
+/* ---------------------------------------------------------------------------------------- */
+/* seal: what the generated sealer does, for messages of the type's own classes             */
+
+enum { SEAL_FREEZE, SEAL_COPY, SEAL_KEEP }; /* _message.py's _FREEZE, _COPY, _KEEP */
+
+static PyTypeObject *loan_buffer_type; /* hetros.msg._message.LoanBuffer */
+static PyObject *seal_array_function;  /* hetros.msg._message._seal_array */
+static PyObject *frozenlist_type;      /* hetros.msg._message.FrozenList */
+static PyObject *str_base, *str_flags, *str_writeable, *str_hetros_seal;
+
+/* hetros' own memory: a view (of views) on a LoanBuffer; -1 on error */
+static int is_loaned(PyObject *array)
+{
+    PyObject *base = PyObject_GetAttr(array, str_base);
+    while (base != NULL && Py_IS_TYPE(base, ndarray_type)) {
+        PyObject *next = PyObject_GetAttr(base, str_base);
+        Py_DECREF(base);
+        base = next;
+    }
+    if (base == NULL)
+        return -1;
+    int loaned = PyMemoryView_Check(base) && PyMemoryView_GET_BASE(base) != NULL
+                 && Py_IS_TYPE(PyMemoryView_GET_BASE(base), loan_buffer_type);
+    Py_DECREF(base);
+    return loaned;
+}
+
+static int make_read_only(PyObject *array)
+{
+    PyObject *flags = PyObject_GetAttr(array, str_flags);
+    if (flags == NULL)
+        return -1;
+    int status = PyObject_SetAttr(flags, str_writeable, Py_False);
+    Py_DECREF(flags);
+    return status;
+}
+
+static int seal_python(PyObject *message, PyObject *callers)
+{
+    PyObject *sealer = PyObject_GetAttr((PyObject *)Py_TYPE(message), str_hetros_seal);
+    if (sealer == NULL)
+        return -1;
+    PyObject *result = PyObject_CallFunctionObjArgs(sealer, message, callers, NULL);
+    Py_DECREF(sealer);
+    Py_XDECREF(result);
+    return result == NULL ? -1 : 0;
+}
+
+static int seal_message(PyObject *message, const Type *type, int callers, PyObject *callers_object);
+
+/* one array field: loaned arrays become read-only in every mode; under KEEP the caller's own
+   arrays are left alone (the transport copies them); the rest is _seal_array's */
+static int seal_array(PyObject *holder, PyObject *name, PyObject *array, int callers, PyObject *callers_object)
+{
+    if (!Py_IS_TYPE(array, ndarray_type))
+        return 0;
+    int loaned = is_loaned(array);
+    if (loaned < 0)
+        return -1;
+    if (loaned)
+        return make_read_only(array);
+    if (callers == SEAL_KEEP)
+        return 0;
+    PyObject *result = PyObject_CallFunctionObjArgs(seal_array_function, holder, name, array, callers_object, NULL);
+    Py_XDECREF(result);
+    return result == NULL ? -1 : 0;
+}
+
+static int seal_nested(PyObject *value, const Type *sub, int callers, PyObject *callers_object)
+{
+    if (Py_IS_TYPE(value, sub->frozen))
+        return 0;
+    if (Py_IS_TYPE(value, sub->cls))
+        return seal_message(value, sub, callers, callers_object);
+    return seal_python(value, callers_object);
+}
+
+/* in field order; list fields become FrozenLists and the class its frozen twin last */
+static int seal_message(PyObject *message, const Type *type, int callers, PyObject *callers_object)
+{
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        const Op *op = &type->ops[i];
+        PyObject *value = SLOT(message, op->offset);
+        if (value == NULL) {
+            PyErr_Format(PyExc_AttributeError, "a %s has no field %R", type->cls->tp_name, op->name);
+            return -1;
+        }
+        int status = 0;
+        switch (op->kind) {
+        case OP_PRIM_ARRAY:
+        case OP_PRIM_SEQ:
+            status = seal_array(message, op->name, value, callers, callers_object);
+            break;
+        case OP_NESTED:
+            status = seal_nested(value, op->sub, callers, callers_object);
+            break;
+        case OP_MSG_ARRAY:
+        case OP_MSG_SEQ: {
+            PyObject *items = PySequence_Fast(value, "a list of messages");
+            if (items == NULL)
+                return -1;
+            for (Py_ssize_t k = 0; k < PySequence_Fast_GET_SIZE(items) && status == 0; k++)
+                status = seal_nested(PySequence_Fast_GET_ITEM(items, k), op->sub, callers, callers_object);
+            Py_DECREF(items);
+            break;
+        }
+        default:
+            break;
+        }
+        if (status < 0)
+            return -1;
+    }
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        const Op *op = &type->ops[i];
+        if (op->kind != OP_STR_ARRAY && op->kind != OP_STR_SEQ && op->kind != OP_MSG_ARRAY && op->kind != OP_MSG_SEQ)
+            continue;
+        PyObject *value = SLOT(message, op->offset);
+        if ((PyObject *)Py_TYPE(value) == frozenlist_type)
+            continue;
+        PyObject *frozen = PyObject_CallOneArg(frozenlist_type, value);
+        if (frozen == NULL)
+            return -1;
+        SLOT(message, op->offset) = frozen;
+        Py_DECREF(value);
+    }
+    Py_INCREF(type->frozen); /* as object.__setattr__(message, "__class__", frozen) does for heap types */
+    Py_SET_TYPE(message, type->frozen);
+    Py_DECREF(type->cls);
+    return 0;
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* the Python object                                                                          */
 
@@ -672,11 +807,11 @@ typedef struct {
     Type *type;
     int ros1;
     PyObject *frombuffer, *frozenlist;
-    /* the generated Python functions this stands in for: size, encode, size_lean, encode_lean, decode, validate */
-    PyObject *fallback[6];
+    /* the generated Python functions this stands in for (None where it has none) */
+    PyObject *fallback[7];
 } Codec;
 
-enum { F_SIZE, F_ENCODE, F_SIZE_LEAN, F_ENCODE_LEAN, F_DECODE, F_VALIDATE, F_COUNT };
+enum { F_SIZE, F_ENCODE, F_SIZE_LEAN, F_ENCODE_LEAN, F_DECODE, F_VALIDATE, F_SEAL, F_COUNT };
 
 static void codec_dealloc(Codec *self)
 {
@@ -691,12 +826,14 @@ static void codec_dealloc(Codec *self)
 static PyObject *codec_new(PyTypeObject *cls, PyObject *args, PyObject *kwargs)
 {
     static char *names[] = {"program", "ros1", "frombuffer", "frozenlist", "size", "encode", "size_lean",
-                            "encode_lean", "decode", "validate", NULL};
+                            "encode_lean", "decode", "validate", "seal", NULL};
     PyObject *spec, *frombuffer, *frozenlist, *fallback[F_COUNT];
     int ros1;
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OpOOOOOOOO", names, &spec, &ros1, &frombuffer, &frozenlist,
+    for (int i = 0; i < F_COUNT; i++)
+        fallback[i] = Py_None;
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OpOO|$OOOOOOO", names, &spec, &ros1, &frombuffer, &frozenlist,
                                      &fallback[0], &fallback[1], &fallback[2], &fallback[3], &fallback[4],
-                                     &fallback[5]))
+                                     &fallback[5], &fallback[6]))
         return NULL;
     Codec *self = (Codec *)cls->tp_alloc(cls, 0);
     if (self == NULL)
@@ -810,7 +947,24 @@ static PyObject *codec_validate(Codec *self, PyObject *const *args, Py_ssize_t n
     Py_RETURN_NONE;
 }
 
+static PyObject *codec_seal(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 2 || !PyLong_Check(args[1]) || !Py_IS_TYPE(args[0], self->type->cls) || seal_array_function == NULL) {
+        if (nargs >= 1 && Py_IS_TYPE(args[0], self->type->frozen))
+            return Py_NewRef(args[0]);
+        return call_fallback(self, F_SEAL, args, nargs);
+    }
+    long callers = PyLong_AsLong(args[1]);
+    if (callers < SEAL_FREEZE || callers > SEAL_KEEP)
+        return call_fallback(self, F_SEAL, args, nargs);
+    if (seal_message(args[0], self->type, (int)callers, args[1]) < 0)
+        return NULL;
+    return Py_NewRef(args[0]);
+}
+
 static PyMethodDef codec_methods[] = {
+    {"seal", (PyCFunction)(void (*)(void))codec_seal, METH_FASTCALL,
+     "seal(message, callers) -> message, frozen in place as the generated sealer does"},
     {"validate", (PyCFunction)(void (*)(void))codec_validate, METH_FASTCALL,
      "validate(message, where='') -> None; what it does not accept as it is goes to the generated validator"},
     {"size", (PyCFunction)(void (*)(void))codec_size, METH_FASTCALL, "size(message) -> bytes of its body"},
@@ -836,8 +990,26 @@ static PyTypeObject CodecType = {
     .tp_methods = codec_methods,
 };
 
+static PyObject *configure(PyObject *module, PyObject *args)
+{
+    (void)module;
+    PyObject *loan_buffer, *seal_array, *frozenlist;
+    if (!PyArg_ParseTuple(args, "O!OO!", &PyType_Type, &loan_buffer, &seal_array, &PyType_Type, &frozenlist))
+        return NULL;
+    Py_XSETREF(loan_buffer_type, (PyTypeObject *)Py_NewRef(loan_buffer));
+    Py_XSETREF(seal_array_function, Py_NewRef(seal_array));
+    Py_XSETREF(frozenlist_type, Py_NewRef(frozenlist));
+    Py_RETURN_NONE;
+}
+
+static PyMethodDef module_functions[] = {
+    {"configure", configure, METH_VARARGS,
+     "configure(LoanBuffer, _seal_array, FrozenList): what sealing needs of hetros.msg._message"},
+    {NULL, NULL, 0, NULL},
+};
+
 static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "hetros.msg._ccdr", "The compiled CDR / ROS 1 codec interpreter.", -1, NULL,
+    PyModuleDef_HEAD_INIT, "hetros.msg._ccdr", "The compiled CDR / ROS 1 codec interpreter.", -1, module_functions,
 };
 
 PyMODINIT_FUNC PyInit__ccdr(void)
@@ -851,6 +1023,12 @@ PyMODINIT_FUNC PyInit__ccdr(void)
         goto fail;
     str_dtype = PyUnicode_InternFromString("dtype");
     str_size = PyUnicode_InternFromString("size");
+    str_base = PyUnicode_InternFromString("base");
+    str_flags = PyUnicode_InternFromString("flags");
+    str_writeable = PyUnicode_InternFromString("writeable");
+    str_hetros_seal = PyUnicode_InternFromString("_hetros_seal");
+    if (str_base == NULL || str_flags == NULL || str_writeable == NULL || str_hetros_seal == NULL)
+        goto fail;
     PyObject *numpy = PyImport_ImportModule("numpy");
     if (str_dtype == NULL || str_size == NULL || numpy == NULL)
         goto fail;

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from rosbags.interfaces import Nodetype
 
-from ._message import FrozenList, Message
+from ._message import FrozenList, LoanBuffer, Message, _seal_array
 
 if TYPE_CHECKING:
     from ._registry import TypeRegistry
@@ -30,6 +30,8 @@ try:
     from . import _ccdr  # type: ignore[attr-defined]
 except ImportError:  # built by pip where a C compiler is; the generated Python codecs serve otherwise
     _ccdr = None
+else:
+    _ccdr.configure(LoanBuffer, _seal_array, FrozenList)
 
 # the interpreter's op kinds and primitive codes (``_ccdr.c`` has the same enums)
 _PRIM, _STRING, _NESTED, _PRIM_ARRAY, _PRIM_SEQ, _STR_ARRAY, _STR_SEQ, _MSG_ARRAY, _MSG_SEQ = range(9)
@@ -44,9 +46,14 @@ class NotCompilable(Exception):
     """The interpreter has no op for a field of this type (``wstring``); it keeps the Python codec."""
 
 
+def wanted() -> bool:
+    """Whether compiled code may serve: ``HETROS_PURE_PYTHON`` (any value but 0) says no."""
+    return os.environ.get("HETROS_PURE_PYTHON", "") in ("", "0")
+
+
 def available() -> bool:
-    """Whether codecs are compiled: the extension is built and ``HETROS_PURE_PYTHON`` is not set."""
-    return _ccdr is not None and os.environ.get("HETROS_PURE_PYTHON", "") in ("", "0")
+    """Whether codecs are compiled: the extension is built and wanted."""
+    return _ccdr is not None and wanted()
 
 
 def _slot(cls: type, attr: str) -> Any:
@@ -98,8 +105,8 @@ def compile_codec(types: TypeRegistry, typename: str, ros1: bool, size: Callable
     Raises NotCompilable when the interpreter has no op for one of its fields.
     """
     assert _ccdr is not None
-    return _ccdr.Codec(program(types, typename), ros1, np.frombuffer, FrozenList,
-                       size, encode, size_lean, encode_lean, decode, None)
+    return _ccdr.Codec(program(types, typename), ros1, np.frombuffer, FrozenList, size=size, encode=encode,
+                       size_lean=size_lean, encode_lean=encode_lean, decode=decode)
 
 
 def compile_validator(types: TypeRegistry, typename: str, validate: Callable[..., None]) -> Callable[..., None]:
@@ -116,6 +123,24 @@ def compile_validator(types: TypeRegistry, typename: str, validate: Callable[...
         spec = program(types, typename)
     except NotCompilable:
         return validate
-    checker: Callable[..., None] = _ccdr.Codec(spec, False, np.frombuffer, FrozenList,
-                                               None, None, None, None, None, validate).validate
+    checker: Callable[..., None] = _ccdr.Codec(spec, False, np.frombuffer, FrozenList, validate=validate).validate
     return checker
+
+
+def compile_sealer(types: TypeRegistry, typename: str, seal: Callable[[Message, int], Message]
+                   ) -> Callable[[Message, int], Message]:
+    """The compiled sealer of ``typename``, standing in for the generated ``seal``.
+
+    It seals a message of the type's own class as ``seal`` does (nested messages of their
+    own classes inline, others through their sealers) and hands it any other object.
+    Arrays: loaned ones become read-only; under ``_KEEP`` the caller's are left alone; the
+    other cases go through ``_message._seal_array``, as in the generated code.
+    """
+    if _ccdr is None:
+        return seal
+    try:
+        spec = program(types, typename)
+    except NotCompilable:
+        return seal
+    sealer: Callable[[Message, int], Message] = _ccdr.Codec(spec, False, np.frombuffer, FrozenList, seal=seal).seal
+    return sealer

@@ -38,7 +38,7 @@ class Message:
     def _hetros_validate(message: Any, where: str = "") -> None:
         """Replaced per type by the registry's generated validator."""
 
-    # replaced per type by a generated sealer on first use (see _build_sealer)
+    # replaced per type by a generated sealer on first use (see build_sealer)
     _hetros_seal: ClassVar[Callable[[Message, int], Message]]
 
     def copy(self) -> Any:
@@ -165,7 +165,7 @@ def _seal_array(holder: Message, name: str, value: np.ndarray[Any, Any], callers
         object.__setattr__(holder, name, value)
 
 
-def _build_sealer(cls: type[Message]) -> Callable[[Message, int], Message]:
+def build_sealer(cls: type[Message]) -> Callable[[Message, int], Message]:
     """Straight-line code that seals one ``cls`` message in place.
 
     Sealing swaps the class for its read-only twin, seals nested messages, turns list fields
@@ -212,7 +212,7 @@ def _seal_body(cls: type[Message], var: str, indent: str, lines: list[str], name
 def _first_seal(message: Message, callers: int) -> Message:
     """Every class starts with this: it builds the class' sealer, installs it and seals."""
     cls = type(message)._thawed_class
-    sealer = _build_sealer(cls)
+    sealer = build_sealer(cls)
     cls._hetros_seal = staticmethod(sealer)
     cls._frozen_class._hetros_seal = staticmethod(sealer)
     return sealer(message, callers)

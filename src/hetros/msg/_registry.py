@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import keyword
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -26,7 +27,7 @@ from .._errors import DefinitionError, SerializationError, UnknownTypeError
 from . import _compiled as compiled_codecs
 from ._cdr import CdrCodec, Ros1Codec, build_codec, build_ros1_codec
 from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
-from ._message import FrozenMessage, Message
+from ._message import FrozenMessage, Message, build_sealer
 from ._validate import Validator, build_validator, convert_array
 
 NUMPY_DTYPES = {
@@ -332,10 +333,22 @@ class TypeRegistry:
         cls._list_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
                                 and a not in cls._array_names)
         setattr(cls, "_hetros_validate", staticmethod(self._lazy_validator(full, cls)))  # noqa: B010
+        if self.compiled:  # else the class keeps Message's generated sealer, built on first use
+            cls._hetros_seal = frozen._hetros_seal = staticmethod(self._lazy_sealer(full, cls))
         self._classes[full] = cls
         self.store.types[full] = cls
         self.store.cache.pop(full, None)
         return cls
+
+    def _lazy_sealer(self, full: str, cls: type[Message]) -> Callable[[Message, int], Message]:
+        """Builds the type's compiled sealer on its first use."""
+
+        def first_use(message: Message, callers: int) -> Message:
+            sealer = compiled_codecs.compile_sealer(self, full, build_sealer(cls))
+            cls._hetros_seal = cls._frozen_class._hetros_seal = staticmethod(sealer)
+            return sealer(message, callers)
+
+        return first_use
 
     def _lazy_validator(self, full: str, cls: type[Message]) -> Validator:
         """Builds the type's validator on its first use (most types are never published)."""

@@ -314,7 +314,7 @@ class ShmReader(Reader):
                     # the message will hold no view on the sample: it goes back once decoded
                     memory = self._scratch.at(sample.payload_ptr, size)[:size]
                 else:
-                    memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed).toreadonly()
+                    memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed)
                     del sample
                 if size < HEADER.size:
                     raise SerializationError(f"a {size}-byte sample on {service.topic} from target "

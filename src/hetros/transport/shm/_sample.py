@@ -7,7 +7,15 @@ import struct
 from pathlib import Path
 from typing import Any
 
+from ...msg._compiled import wanted as _compiled_wanted
 from .._qos import QoS
+
+try:  # the compiled slot buffer (built by pip where a C compiler is); ctypes serves otherwise
+    from ._cslot import Memory as _Memory  # type: ignore[import-not-found]
+except ImportError:
+    _Memory = None
+if not _compiled_wanted():
+    _Memory = None
 
 SHM_DIR = Path("/dev/shm")
 # Every sample: sequence number, publisher slot, layout, padding; then the message. With the
@@ -105,20 +113,24 @@ class _Leased:
 
 
 def leased_memory(address: int, size: int, sample: object, borrowed: list[None]) -> memoryview:
-    """A received sample's bytes; the sample is released when nothing made from them is left."""
+    """A received sample's bytes, read-only; the sample is released when nothing made from them is left."""
+    if _Memory is not None:
+        return memoryview(_Memory(address, size, sample, borrowed))
     raw = _sized(_LEASE_TYPES, size, (_Leased,), ("borrowed", "sample")).from_address(address)
     raw.sample = sample
     raw.borrowed = borrowed
     borrowed.append(None)
-    return memoryview(raw).cast("B")
+    return memoryview(raw).cast("B").toreadonly()
 
 
 def slot_memory(address: int, size: int, keepalive: object) -> memoryview:
     """Bytes at ``address`` as a memoryview that keeps ``keepalive`` alive while referenced.
 
-    Everything made from the view (slices, numpy arrays) refers to the ctypes object that
-    holds ``keepalive``: the sample goes back to iceoryx2 only when all of them are gone.
+    Everything made from the view (slices, numpy arrays) refers to the object that holds
+    ``keepalive``: the sample goes back to iceoryx2 only when all of them are gone.
     """
+    if _Memory is not None:
+        return memoryview(_Memory(address, size, keepalive, None, False))
     raw = _sized(_SLOT_TYPES, size, (), ("keepalive",)).from_address(address)
     raw.keepalive = keepalive
     return memoryview(raw).cast("B")

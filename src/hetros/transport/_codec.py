@@ -29,6 +29,8 @@ class MessageCodec(Codec):
         self.decode_copies = self._cdr.decode_copies
         # the generated functions, held directly: every transport's hot path runs through here
         self._body_size, self._encode, self._decode = self._cdr.size, self._cdr.encode, self._cdr.decode
+        # ``decode_body(buffer, at, end)``: the body alone, the encapsulation already checked
+        self.decode_body = self._cdr.decode
 
     @property
     def arrays(self) -> list[ArrayField]:

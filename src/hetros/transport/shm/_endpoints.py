@@ -282,6 +282,7 @@ class ShmReader(Reader):
         # a decoded message of a type without primitive arrays keeps nothing of the sample,
         # so the sample is read through a reused view and returned at once
         self._copies = self._cdr is not None and self._cdr.decode_copies
+        self._decode_body = self._cdr.decode_body if self._cdr is not None else None
         self._scratch = ScratchViews(readonly=True)
         self.topic = services[0].topic if services else ""
         for service in services:
@@ -296,46 +297,58 @@ class ShmReader(Reader):
 
     def try_take(self) -> Any | None:
         with self._lock:
-            for _ in range(len(self._ports)):
-                port = self._ports[self._next]
-                self._next = (self._next + 1) % len(self._ports)
-                service = port.service
-                try:
-                    sample = port.subscriber.receive()
-                except iox2.ReceiveError as exc:
-                    raise TransportError(f"cannot receive on {service.topic} from target {service.target!r}: "
-                                         f"{exc}; {fd_hint()}") from exc
-                if sample is None:
-                    if service.blocking:
-                        self._check_arrival(port)
-                    continue
-                size = sample.header.number_of_elements
-                if self._copies:
-                    # the message will hold no view on the sample: it goes back once decoded
-                    memory = self._scratch.at(sample.payload_ptr, size)[:size]
-                else:
-                    memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed)
-                    del sample
-                if size < HEADER.size:
-                    raise SerializationError(f"a {size}-byte sample on {service.topic} from target "
-                                             f"{service.target!r} is shorter than hetros' {HEADER.size}-byte header")
-                seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
-                if service.blocking and seq != port.expected and seq > port.expected:
-                    self._lost(port, seq - port.expected)
-                port.expected = seq + 1
-                if port.suspect_since:
-                    port.suspect_since = 0.0
-                    self._channel.suspect(self.event, False)
-                credits = service.credits
-                # a blocked publisher is woken once its FIFO here is half empty, not per take:
-                # it then sends half a FIFO without waiting (one wake-up per depth/2 messages)
-                if credits.set_taken(self._slot, seq) and service.blocking and \
-                        credits.published - seq <= service.qos.depth // 2:
-                    self._domain.notify_back(service.target, credits.back_event)
-                if len(self._borrowed) >= BORROW_LIMIT - 2:
-                    memory = memoryview(bytes(memory))
-                return self._decode(memory, layout)
+            ports = self._ports
+            if len(ports) == 1:  # one publishing target, the common case: no rotation
+                return self._take_from(ports[0])
+            for _ in range(len(ports)):
+                port = ports[self._next]
+                self._next = (self._next + 1) % len(ports)
+                message = self._take_from(port)
+                if message is not None:
+                    return message
             return None
+
+    def _take_from(self, port: _Port) -> Any | None:
+        """The next message of one publishing target (``self._lock`` held), None when it has none."""
+        service = port.service
+        try:
+            sample = port.subscriber.receive()
+        except iox2.ReceiveError as exc:
+            raise TransportError(f"cannot receive on {service.topic} from target {service.target!r}: "
+                                 f"{exc}; {fd_hint()}") from exc
+        if sample is None:
+            if service.blocking:
+                self._check_arrival(port)
+            return None
+        size = sample.header.number_of_elements
+        if self._copies:
+            # the message will hold no view on the sample: it goes back once decoded
+            memory = self._scratch.at(sample.payload_ptr, size)[:size]
+        else:
+            memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed)
+            del sample
+        if size < HEADER.size:
+            raise SerializationError(f"a {size}-byte sample on {service.topic} from target "
+                                     f"{service.target!r} is shorter than hetros' {HEADER.size}-byte header")
+        seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
+        if service.blocking and seq != port.expected and seq > port.expected:
+            self._lost(port, seq - port.expected)
+        port.expected = seq + 1
+        if port.suspect_since:
+            port.suspect_since = 0.0
+            self._channel.suspect(self.event, False)
+        credits = service.credits
+        # a blocked publisher is woken once its FIFO here is half empty, not per take:
+        # it then sends half a FIFO without waiting (one wake-up per depth/2 messages)
+        if credits.set_taken(self._slot, seq) and service.blocking and \
+                credits.published - seq <= service.qos.depth // 2:
+            self._domain.notify_back(service.target, credits.back_event)
+        if len(self._borrowed) >= BORROW_LIMIT - 2:
+            memory = memoryview(bytes(memory))
+        if layout == LAYOUT_CDR and self._decode_body is not None and size >= HEADER.size + 4 and \
+                memory[HEADER.size + 1] == 1:  # little-endian CDR: straight to the type's decoder
+            return self._decode_body(memory, HEADER.size + 4, size)
+        return self._decode(memory, layout)
 
     def _check_arrival(self, port: _Port) -> None:
         """Nothing to receive: is that true, or did iceoryx2 fail to connect to the publisher?"""

@@ -33,9 +33,13 @@ SIZES = [4, 3 * 1024, 12 * 1024, 48 * 1024, 192 * 1024, 768 * 1024, 3 * 1024 * 1
 SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "196 kB",
                786432: "786 kB", 3145728: "3146 kB", 6291456: "6 MiB"}
 # -cb: the echo node is a subscription callback that publishes (what users write); the others
-# take in a loop on both sides
-SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb", "iceoryx2",
-           "cyclonedds", "zenoh", "dora-rs", "rospy", "mp-pipe", "numpy-copy"]
+# take in a loop on both sides. -py: the same with HETROS_PURE_PYTHON=1 (no compiled hot path)
+PURE_PYTHON = "-py"
+SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb",
+           "hetros-shm-py", "hetros-shm-cb-py", "iceoryx2", "cyclonedds", "zenoh", "dora-rs", "rospy", "mp-pipe",
+           "numpy-copy"]
+HETROS_SHM = ("hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb", "hetros-shm-py",
+              "hetros-shm-cb-py")
 HERE = Path(__file__).resolve().parent
 LOOPBACK_CYCLONEDDS = textwrap.dedent("""\
     <CycloneDDS><Domain id="any">
@@ -128,20 +132,22 @@ class Bench:
 
     # -- systems ---------------------------------------------------------------------------
 
-    def spawn_pair(self, receiver: list[str], sender: list[str], pass_fds: tuple[int, ...], delay: float = 0.0
-                   ) -> tuple[subprocess.Popen[str], subprocess.Popen[str]]:
+    def spawn_pair(self, receiver: list[str], sender: list[str], pass_fds: tuple[int, ...], delay: float = 0.0,
+                   env: dict[str, str] | None = None) -> tuple[subprocess.Popen[str], subprocess.Popen[str]]:
         """Start the receiving side, then the sending side; the pipes passed to them close here."""
-        first = subprocess.Popen(receiver, env=self.env, stderr=subprocess.PIPE, text=True, pass_fds=pass_fds)
+        env = self.env if env is None else env
+        first = subprocess.Popen(receiver, env=env, stderr=subprocess.PIPE, text=True, pass_fds=pass_fds)
         if delay:
             time.sleep(delay)
-        second = subprocess.Popen(sender, env=self.env, stderr=subprocess.PIPE, text=True, pass_fds=pass_fds)
+        second = subprocess.Popen(sender, env=env, stderr=subprocess.PIPE, text=True, pass_fds=pass_fds)
         for fd in pass_fds:
             os.close(fd)
         return first, second
 
     def run_pair(self, system: str, size: int) -> Result:
         cfg, path = self.config(system, size)
-        roles = [sys.executable, "-m", "hetros.bench._roles", system]
+        role_system, env = self.variant(system)
+        roles = [sys.executable, "-m", "hetros.bench._roles", role_system]
         pass_fds = pipe_fds(cfg) if system == "mp-pipe" else ()
         path.write_text(json.dumps(cfg))
         timeout = 600
@@ -156,7 +162,7 @@ class Bench:
             cmd = ["/usr/bin/python3", str(HERE / "_rospy_peer.py")]
             echo, ping = self.spawn_pair([*cmd, "echo", str(path)], [*cmd, "ping", str(path)], (), delay=0.5)
         else:
-            echo, ping = self.spawn_pair([*roles, "echo", str(path)], [*roles, "ping", str(path)], pass_fds)
+            echo, ping = self.spawn_pair([*roles, "echo", str(path)], [*roles, "ping", str(path)], pass_fds, env=env)
         try:
             _, ping_err = ping.communicate(timeout=timeout)
             _, echo_err = echo.communicate(timeout=30)
@@ -264,13 +270,20 @@ class Bench:
 
     # -- throughput and idle CPU -------------------------------------------------------------
 
+    def variant(self, system: str) -> tuple[str, dict[str, str]]:
+        """The system the roles run and their environment: a ``-py`` row is its base row in pure Python."""
+        if system.endswith(PURE_PYTHON):
+            return system.removesuffix(PURE_PYTHON), {**self.env, "HETROS_PURE_PYTHON": "1"}
+        return system, self.env
+
     def throughput(self, system: str, size: int, seconds: float) -> dict[str, Any]:
         cfg, path = self.config(system, size)
         cfg["seconds"] = seconds
         pass_fds = pipe_fds(cfg) if system == "mp-pipe" else ()
         path.write_text(json.dumps(cfg))
-        cmd = [sys.executable, "-m", "hetros.bench._throughput", system]
-        sub, pub = self.spawn_pair([*cmd, "sub", str(path)], [*cmd, "pub", str(path)], pass_fds)
+        role_system, env = self.variant(system)
+        cmd = [sys.executable, "-m", "hetros.bench._throughput", role_system]
+        sub, pub = self.spawn_pair([*cmd, "sub", str(path)], [*cmd, "pub", str(path)], pass_fds, env=env)
         _, pub_err = pub.communicate(timeout=120)
         _, sub_err = sub.communicate(timeout=60)
         if pub.returncode or sub.returncode:
@@ -352,8 +365,7 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
             _table(lines, f"Speed-up of {ours} (p50 one-way) over each peer: peer p50 / {ours} p50",
                    peers, sizes, ratio(ours, "one_way", "p50"))
     if "iceoryx2" in shown:
-        ours_shm: list[str] = [s for s in ("hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb")
-                               if s in shown]
+        ours_shm: list[str] = [s for s in HETROS_SHM if s in shown]
 
         def overhead(size: int, ours: str) -> str:
             return ratio(ours, "rtt", "mean", invert=True)(size, "iceoryx2")
@@ -449,7 +461,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")
                 print(f"[bench] {system:16} {SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
         tp_seconds = 1.0 if args.quick else 3.0
-        for system in ("hetros-shm", "hetros-shm-loan", "iceoryx2", "mp-pipe"):
+        for system in ("hetros-shm", "hetros-shm-loan", "hetros-shm-py", "iceoryx2", "mp-pipe"):
             if system in systems:
                 for size in (64, 1024 * 1024):
                     run.throughput.append(bench.throughput(system, size, tp_seconds))

@@ -44,6 +44,9 @@ def test_the_extension_is_built_wherever_a_compiler_is() -> None:
     if shutil.which("cc") is None and shutil.which("gcc") is None:
         pytest.skip("no C compiler on this machine: the pure-Python codecs serve")
     assert _compiled._ccdr is not None, "the C compiler is there, but hetros.msg._ccdr was not built"
+    from hetros.transport.shm import _cslot  # type: ignore[attr-defined]  # raises when it was not built
+
+    assert _cslot.Memory is not None
 
 
 def test_pure_python_is_chosen_by_the_environment() -> None:

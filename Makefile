@@ -70,7 +70,9 @@ lint: install-test
 	$(VENV)/bin/ruff check src tests examples benchmarks
 	$(VENV)/bin/mypy --strict src
 
+# the conformance suite once more on the pure-Python path (what runs where no C compiler is)
 test: lint
+	HETROS_PURE_PYTHON=1 $(VENV)/bin/pytest -q -p no:cacheprovider tests/conformance
 	$(VENV)/bin/pytest -q
 
 clean:

@@ -11,6 +11,7 @@ from pathlib import Path
 import yaml
 
 from .._errors import CheckError, Error, HardwareError
+from ..msg import _compiled as compiled_codecs
 from ..msg import registry
 from ..plan import Plan
 
@@ -180,7 +181,17 @@ def cmd_msg_layout(args: argparse.Namespace) -> int:
     from ..msg import flat_layout
 
     _load_types(args)
-    print(flat_layout(registry(), args.type).describe())
+    types = registry()
+    print(flat_layout(types, args.type).describe())
+    codec = types.codec(args.type)
+    if codec.compiled:
+        how = "compiled (hetros.msg._ccdr)"
+    elif codec.generated:
+        why = "HETROS_PURE_PYTHON is set" if not compiled_codecs.wanted() else "the C extension is not built"
+        how = f"generated Python ({why})"
+    else:
+        how = "rosbags (a field the generator does not cover)"
+    print(f"codec: {how}")
     return 0
 
 

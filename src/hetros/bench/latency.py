@@ -72,6 +72,24 @@ class Result:
     one_way: Stats | None = None
     rtt: Stats | None = None
     error: str = ""
+    # the samples behind the statistics, so that rounds can be pooled
+    one_way_ns: list[int] = field(default_factory=list, repr=False)
+    rtt_ns: list[int] = field(default_factory=list, repr=False)
+
+    @classmethod
+    def measured(cls, system: str, size: int, one_way_ns: list[int], rtt_ns: list[int] | None) -> Result:
+        return cls(system, size, Stats.of(one_way_ns), Stats.of(rtt_ns) if rtt_ns else None,
+                   one_way_ns=list(one_way_ns), rtt_ns=list(rtt_ns or []))
+
+
+def pooled(results: list[Result]) -> Result:
+    """One system and size measured in several rounds: their samples as one result (an error wins)."""
+    failed = next((r for r in results if r.error), None)
+    if failed is not None:
+        return failed
+    first = results[0]
+    return Result.measured(first.system, first.size, [v for r in results for v in r.one_way_ns],
+                           [v for r in results for v in r.rtt_ns] or None)
 
 
 @dataclass
@@ -157,7 +175,7 @@ class Bench:
             if proc.returncode != 0:
                 return Result(system, size, error=proc.stderr.strip()[-400:])
             data = json.loads(Path(cfg["inproc_out"]).read_text())
-            return Result(system, size, Stats.of(data["one_way_ns"]), Stats.of(data["rtt_ns"]))
+            return Result.measured(system, size, data["one_way_ns"], data["rtt_ns"])
         if system == "rospy":
             cmd = ["/usr/bin/python3", str(HERE / "_rospy_peer.py")]
             echo, ping = self.spawn_pair([*cmd, "echo", str(path)], [*cmd, "ping", str(path)], (), delay=0.5)
@@ -174,7 +192,7 @@ class Bench:
             return Result(system, size, error=(ping_err + echo_err).strip()[-400:])
         rtt = json.loads(Path(cfg["ping_out"]).read_text())["rtt_ns"]
         one_way = json.loads(Path(cfg["echo_out"]).read_text())["one_way_ns"]
-        return Result(system, size, Stats.of(one_way), Stats.of(rtt))
+        return Result.measured(system, size, one_way, rtt)
 
     def run_dora(self, size: int) -> Result:
         cfg, path = self.config("dora-rs", size)
@@ -206,7 +224,7 @@ class Bench:
             one_way = json.loads(Path(cfg["echo_out"]).read_text())["one_way_ns"]
         except (OSError, KeyError, json.JSONDecodeError):
             return Result("dora-rs", size, error=(proc.stderr or proc.stdout).strip()[-400:] or "no results")
-        return Result("dora-rs", size, Stats.of(one_way), Stats.of(rtt))
+        return Result.measured("dora-rs", size, one_way, rtt)
 
     def run_numpy_copy(self, size: int) -> Result:
         warmup, reps = self.reps_for(size)
@@ -218,7 +236,7 @@ class Bench:
             np.copyto(dst, src)
             if i >= warmup:
                 times.append(time.monotonic_ns() - start)
-        return Result("numpy-copy", size, Stats.of(times), None)
+        return Result.measured("numpy-copy", size, times, None)
 
     def start_rosmaster(self) -> str:
         if not Path("/usr/bin/rosmaster").exists():
@@ -439,7 +457,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="out/bench", help="folder for latency.jsonl, latency.md, latency.png")
     parser.add_argument("--systems", help="comma-separated subset of: " + ", ".join(SYSTEMS))
     parser.add_argument("--no-pin", action="store_true", help="do not pin ping and echo to separate CPUs")
+    parser.add_argument("--rounds", type=int, default=1,
+                        help="go round every system and size this many times and pool each one's samples "
+                             "(this machine's speed drifts in phases; rounds spread the drift over all rows)")
     args = parser.parse_args(argv)
+    if args.rounds < 1:
+        parser.error(f"--rounds must be at least 1, not {args.rounds}")
     systems = args.systems.split(",") if args.systems else list(SYSTEMS)
     sizes = [4, 3072, 196608, 3145728] if args.quick else SIZES
     cpus = None if args.no_pin or (os.cpu_count() or 1) < 2 else [0, 1]
@@ -453,13 +476,17 @@ def main(argv: list[str] | None = None) -> int:
             if why:
                 run.missing[system] = why
                 print(f"[bench] {system}: missing: {why}", flush=True)
-                continue
-            for size in sizes:
-                result = bench.run_system(system, size)
-                run.results.append(result)
-                status = result.error.splitlines()[-1][:120] if result.error else (
-                    f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")
-                print(f"[bench] {system:16} {SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
+        rounds: dict[tuple[str, int], list[Result]] = {}
+        for number in range(1, args.rounds + 1):
+            for system in (s for s in systems if s not in run.missing):
+                for size in sizes:
+                    result = bench.run_system(system, size)
+                    rounds.setdefault((system, size), []).append(result)
+                    status = result.error.splitlines()[-1][:120] if result.error else (
+                        f"p50 {result.one_way.p50:.1f} µs" if result.one_way else "")
+                    where = f" (round {number}/{args.rounds})" if args.rounds > 1 else ""
+                    print(f"[bench] {system:16} {SIZE_LABELS.get(size, size):>8}: {status}{where}", flush=True)
+        run.results = [pooled(results) for results in rounds.values()]
         tp_seconds = 1.0 if args.quick else 3.0
         for system in ("hetros-shm", "hetros-shm-loan", "hetros-shm-py", "iceoryx2", "mp-pipe"):
             if system in systems:

@@ -242,6 +242,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         return dds(forwarded)
     if args.systems:
         forwarded += ["--systems", args.systems]
+    if args.rounds:
+        forwarded += ["--rounds", str(args.rounds)]
     return latency(forwarded)
 
 
@@ -289,6 +291,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.add_argument("--systems", help="comma-separated subset")
+    p.add_argument("--rounds", type=int, help="interleaved rounds whose samples are pooled (default 1)")
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("hw", help="hardware topics: simulated transfer times and Yosys resources vs fpgaDDS")
     p.add_argument("--quick", action="store_true", help="sizes up to 196 kB, two networks")

@@ -678,7 +678,7 @@ static PyObject *seal_array_function;  /* hetros.msg._message._seal_array */
 static PyObject *frozenlist_type;      /* hetros.msg._message.FrozenList */
 static PyObject *str_base, *str_flags, *str_writeable, *str_hetros_seal;
 
-/* hetros' own memory: a view (of views) on a LoanBuffer; -1 on error */
+/* hetros' own memory: an array (or views of one) on a LoanBuffer, directly or through a memoryview; -1 on error */
 static int is_loaned(PyObject *array)
 {
     PyObject *base = PyObject_GetAttr(array, str_base);
@@ -689,8 +689,9 @@ static int is_loaned(PyObject *array)
     }
     if (base == NULL)
         return -1;
-    int loaned = PyMemoryView_Check(base) && PyMemoryView_GET_BASE(base) != NULL
-                 && Py_IS_TYPE(PyMemoryView_GET_BASE(base), loan_buffer_type);
+    int loaned = Py_IS_TYPE(base, loan_buffer_type)
+                 || (PyMemoryView_Check(base) && PyMemoryView_GET_BASE(base) != NULL
+                     && Py_IS_TYPE(PyMemoryView_GET_BASE(base), loan_buffer_type));
     Py_DECREF(base);
     return loaned;
 }

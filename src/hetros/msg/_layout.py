@@ -159,7 +159,10 @@ def get_path(message: Any, path: tuple[str, ...]) -> Any:
 
 def set_path(message: Any, path: tuple[str, ...], value: object) -> None:
     """Set the field at ``path``; works on read-only (frozen) messages too, for transports."""
-    object.__setattr__(get_path(message, path[:-1]), path[-1], value)
+    holder = message
+    for name in path[:-1] if len(path) > 1 else ():  # a top-level field (most loans) walks nothing
+        holder = getattr(holder, name)
+    object.__setattr__(holder, path[-1], value)
 
 
 def array_fields(types: TypeRegistry, typename: str) -> list[ArrayField]:

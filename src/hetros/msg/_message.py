@@ -112,14 +112,14 @@ def loaned_array(length: int, dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
     """
     if not length:
         return np.zeros(0, dtype)
-    return np.frombuffer(LoanBuffer(length * dtype.itemsize), dtype)
+    return np.ndarray((length,), dtype, LoanBuffer(length * dtype.itemsize))
 
 
 def _is_loaned(array: np.ndarray[Any, Any]) -> bool:
     base: Any = array.base
     while type(base) is np.ndarray:
         base = base.base
-    return type(base) is memoryview and type(base.obj) is LoanBuffer
+    return type(base) is LoanBuffer or (type(base) is memoryview and type(base.obj) is LoanBuffer)
 
 
 def _callers(array: np.ndarray[Any, Any]) -> bool:

@@ -70,6 +70,8 @@ class Publisher(Generic[M]):
         self.typename = _typename(msg_type)
         self._short = self.typename.rsplit("/", 1)[-1]
         self._writer = writer
+        # a writer that can lend memory (shm, inproc fan-out); others get a plain message
+        self._lend: Callable[[type[M], dict[str, int]], M] | None = getattr(writer, "loan", None)
 
     def publish(self, message: M) -> None:
         """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
@@ -88,11 +90,9 @@ class Publisher(Generic[M]):
         smaller ones live in memory hetros owns and are copied once into the slot. After
         ``publish`` the loaned message is handed over: its arrays are no longer yours.
         """
-        loan = getattr(self._writer, "loan", None)
-        if loan is None:
+        if self._lend is None:
             return self.msg_type()
-        message: M = loan(self.msg_type, sizes)
-        return message
+        return self._lend(self.msg_type, sizes)
 
     def close(self) -> None:
         self._writer.close()

@@ -18,6 +18,7 @@
 #include <Python.h>
 #include <structmember.h>
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -55,7 +56,6 @@ typedef struct {
     char *data;
     Py_ssize_t len;
     int ros1;
-    int lean;
 } Out;
 
 typedef struct {
@@ -201,6 +201,26 @@ static inline int put_u32(Out *out, Py_ssize_t *pos, uint32_t value)
     return 0;
 }
 
+/* the integer kinds' ranges, by primitive code (P_U64 is read unsigned) */
+static const long long int_min[P_COUNT] = {0, 0, INT8_MIN, INT16_MIN, 0, INT32_MIN, 0, LLONG_MIN, 0, 0, 0};
+static const long long int_max[P_COUNT] = {0, UINT8_MAX, INT8_MAX, INT16_MAX, UINT16_MAX, INT32_MAX, UINT32_MAX,
+                                           LLONG_MAX, 0, 0, 0};
+
+/* an int of the primitive's range, as its two's complement bits; REFUSE when it is not */
+static int as_int(PyObject *value, int prim, unsigned long long *bits)
+{
+    if (prim == P_U64) {
+        *bits = PyLong_AsUnsignedLongLong(value);
+        return *bits == (unsigned long long)-1 && PyErr_Occurred() ? REFUSE : 0;
+    }
+    int overflow = 0;
+    long long number = PyLong_AsLongLongAndOverflow(value, &overflow);
+    if (overflow || (number == -1 && PyErr_Occurred()) || number < int_min[prim] || number > int_max[prim])
+        return REFUSE;
+    *bits = (unsigned long long)number;
+    return 0;
+}
+
 static int put_prim(Out *out, Py_ssize_t *pos, int prim, PyObject *value)
 {
     int size = prim_size[prim];
@@ -239,54 +259,11 @@ static int put_prim(Out *out, Py_ssize_t *pos, int prim, PyObject *value)
     }
     if (!PyLong_Check(value))
         return REFUSE; /* numpy integers and other __index__ objects: the Python path */
-    if (prim == P_U64) {
-        unsigned long long word = PyLong_AsUnsignedLongLong(value);
-        if (word == (unsigned long long)-1 && PyErr_Occurred())
-            return REFUSE;
-        memcpy(at, &word, 8);
-        return 0;
-    }
-    int overflow = 0;
-    long long number = PyLong_AsLongLongAndOverflow(value, &overflow);
-    if (overflow || (number == -1 && PyErr_Occurred()))
+    unsigned long long bits;
+    if (as_int(value, prim, &bits) < 0)
         return REFUSE;
-    switch (prim) {
-    case P_U8:
-        if (number < 0 || number > UINT8_MAX) return REFUSE;
-        *at = (char)(uint8_t)number;
-        return 0;
-    case P_I8:
-        if (number < INT8_MIN || number > INT8_MAX) return REFUSE;
-        *at = (char)(int8_t)number;
-        return 0;
-    case P_I16: {
-        if (number < INT16_MIN || number > INT16_MAX) return REFUSE;
-        int16_t word = (int16_t)number;
-        memcpy(at, &word, 2);
-        return 0;
-    }
-    case P_U16: {
-        if (number < 0 || number > UINT16_MAX) return REFUSE;
-        uint16_t word = (uint16_t)number;
-        memcpy(at, &word, 2);
-        return 0;
-    }
-    case P_I32: {
-        if (number < INT32_MIN || number > INT32_MAX) return REFUSE;
-        int32_t word = (int32_t)number;
-        memcpy(at, &word, 4);
-        return 0;
-    }
-    case P_U32: {
-        if (number < 0 || number > UINT32_MAX) return REFUSE;
-        uint32_t word = (uint32_t)number;
-        memcpy(at, &word, 4);
-        return 0;
-    }
-    default: /* P_I64 */
-        memcpy(at, &number, 8);
-        return 0;
-    }
+    memcpy(at, &bits, size); /* the low bytes: the host is little-endian (the codecs are built only there) */
+    return 0;
 }
 
 static int put_string(Out *out, Py_ssize_t *pos, PyObject *value)
@@ -565,25 +542,8 @@ static PyObject *str_dtype, *str_size;
 
 static int check_int(PyObject *value, int prim)
 {
-    if (!PyLong_CheckExact(value))
-        return REFUSE;
-    if (prim == P_U64) {
-        unsigned long long word = PyLong_AsUnsignedLongLong(value);
-        return word == (unsigned long long)-1 && PyErr_Occurred() ? REFUSE : 0;
-    }
-    int overflow = 0;
-    long long number = PyLong_AsLongLongAndOverflow(value, &overflow);
-    if (overflow || (number == -1 && PyErr_Occurred()))
-        return REFUSE;
-    switch (prim) {
-    case P_U8: return number < 0 || number > UINT8_MAX ? REFUSE : 0;
-    case P_I8: return number < INT8_MIN || number > INT8_MAX ? REFUSE : 0;
-    case P_I16: return number < INT16_MIN || number > INT16_MAX ? REFUSE : 0;
-    case P_U16: return number < 0 || number > UINT16_MAX ? REFUSE : 0;
-    case P_I32: return number < INT32_MIN || number > INT32_MAX ? REFUSE : 0;
-    case P_U32: return number < 0 || number > UINT32_MAX ? REFUSE : 0;
-    default: return 0; /* P_I64 */
-    }
+    unsigned long long bits;
+    return PyLong_CheckExact(value) ? as_int(value, prim, &bits) : REFUSE;
 }
 
 static int check_prim(PyObject *value, int prim)
@@ -867,7 +827,7 @@ static PyObject *codec_sizes(Codec *self, PyObject *const *args, Py_ssize_t narg
     int which = lean ? F_SIZE_LEAN : F_SIZE;
     if (nargs != 1)
         return call_fallback(self, which, args, nargs);
-    Out out = {NULL, 0, self->ros1, lean};
+    Out out = {NULL, 0, self->ros1};
     Py_ssize_t pos = 0;
     if (put_message(&out, &pos, self->type, args[0], lean) < 0)
         return call_fallback(self, which, args, nargs);
@@ -898,7 +858,7 @@ static PyObject *codec_encodes(Codec *self, PyObject *const *args, Py_ssize_t na
     Py_buffer view;
     if (PyObject_GetBuffer(args[1], &view, PyBUF_WRITABLE) < 0)
         return call_fallback(self, which, args, nargs);
-    Out out = {view.buf, view.len, self->ros1, lean};
+    Out out = {view.buf, view.len, self->ros1};
     int status = pos < 0 || pos > view.len ? REFUSE : put_message(&out, &pos, self->type, args[0], lean);
     PyBuffer_Release(&view);
     if (status < 0)

@@ -5,8 +5,8 @@ A program describes one message type the way the code generator in ``_cdr`` walk
 primitive kind, fixed length or bound, and the nested type's program. The interpreter
 hands every call it cannot finish (a value of an unexpected type, bytes that do not fit,
 invalid UTF-8) to the generated Python function it stands in for, so errors and edge
-cases stay the generated code's; ``tests/unit/test_cdr.py`` checks both paths against
-each other and against rosbags.
+cases stay the generated code's; ``tests/unit/test_compiled_codec.py`` checks both paths
+against each other (and ``tests/unit/test_cdr.py`` the codecs against rosbags).
 
 The extension is built by ``pip install`` when a C compiler is there. Without it, or with
 ``HETROS_PURE_PYTHON=1`` in the environment, every codec is the generated Python one.
@@ -109,21 +109,26 @@ def compile_codec(types: TypeRegistry, typename: str, ros1: bool, size: Callable
                        size_lean=size_lean, encode_lean=encode_lean, decode=decode)
 
 
+def _stand_in(types: TypeRegistry, typename: str, role: str, fallback: Callable[..., Any]) -> Any:
+    """The interpreter's ``role`` method for ``typename`` in front of ``fallback`` (``fallback``
+    itself when the extension is missing or has no op for one of the type's fields)."""
+    if _ccdr is None:
+        return fallback
+    try:
+        spec = program(types, typename)
+    except NotCompilable:
+        return fallback
+    return getattr(_ccdr.Codec(spec, False, np.frombuffer, FrozenList, **{role: fallback}), role)
+
+
 def compile_validator(types: TypeRegistry, typename: str, validate: Callable[..., None]) -> Callable[..., None]:
     """The compiled validator of ``typename``, standing in for the generated ``validate``.
 
     It accepts a message the generated validator would pass unchanged (exact types, in range,
     arrays of the field's dtype and length); anything else, it hands to ``validate``, which
-    converts, refuses with the field's path, or accepts. ``validate`` itself where the
-    interpreter has no op for a field.
+    converts, refuses with the field's path, or accepts.
     """
-    if _ccdr is None:
-        return validate
-    try:
-        spec = program(types, typename)
-    except NotCompilable:
-        return validate
-    checker: Callable[..., None] = _ccdr.Codec(spec, False, np.frombuffer, FrozenList, validate=validate).validate
+    checker: Callable[..., None] = _stand_in(types, typename, "validate", validate)
     return checker
 
 
@@ -136,11 +141,5 @@ def compile_sealer(types: TypeRegistry, typename: str, seal: Callable[[Message, 
     Arrays: loaned ones become read-only; under ``_KEEP`` the caller's are left alone; the
     other cases go through ``_message._seal_array``, as in the generated code.
     """
-    if _ccdr is None:
-        return seal
-    try:
-        spec = program(types, typename)
-    except NotCompilable:
-        return seal
-    sealer: Callable[[Message, int], Message] = _ccdr.Codec(spec, False, np.frombuffer, FrozenList, seal=seal).seal
+    sealer: Callable[[Message, int], Message] = _stand_in(types, typename, "seal", seal)
     return sealer

@@ -27,10 +27,9 @@ class MessageCodec(Codec):
         self._arrays: list[ArrayField] | None = None
         # a decoded message keeps no view on its bytes (see ``msg.CdrCodec``)
         self.decode_copies = self._cdr.decode_copies
-        # the generated functions, held directly: every transport's hot path runs through here
-        self._body_size, self._encode, self._decode = self._cdr.size, self._cdr.encode, self._cdr.decode
-        # ``decode_body(buffer, at, end)``: the body alone, the encapsulation already checked
-        self.decode_body = self._cdr.decode
+        # the generated functions, held directly: every transport's hot path runs through here;
+        # ``decode_body(buffer, at, end)`` decodes the body alone, the encapsulation already checked
+        self._body_size, self._encode, self.decode_body = self._cdr.size, self._cdr.encode, self._cdr.decode
 
     @property
     def arrays(self) -> list[ArrayField]:
@@ -55,7 +54,7 @@ class MessageCodec(Codec):
         """Decode ``buffer[at:end]`` in place (``at + 4`` must be a multiple of 8)."""
         if end - at < 4 or buffer[at + 1] != 1:
             self._refuse_encapsulation(buffer, at, end)
-        return self._decode(buffer, at + 4, end)  # type: ignore[no-any-return]
+        return self.decode_body(buffer, at + 4, end)  # type: ignore[no-any-return]
 
     def _refuse_encapsulation(self, buffer: memoryview, at: int, end: int) -> NoReturn:
         raise SerializationError(
@@ -77,7 +76,7 @@ class MessageCodec(Codec):
         """Decode CDR into a read-only message; primitive arrays are views on ``data`` (no copy)."""
         if len(data) < 4 or data[1] != 1:
             self._refuse_encapsulation(data, 0, len(data))
-        return self._decode(data[4:])  # type: ignore[no-any-return]
+        return self.decode_body(data[4:])  # type: ignore[no-any-return]
 
 
 _ENVELOPE = struct.Struct("<QH")

@@ -74,32 +74,45 @@ class _FanoutWriter(Writer):
         self._types = types
         self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
         self._local = any(p is not self._shm for p in parts)
-        self._loans: dict[tuple[type[Message], tuple[tuple[str, int], ...]], Any] = {}
+        self._loans: dict[tuple[Any, ...], Callable[[], Message]] = {}
         if len(parts) == 1:
             # the common case, one transport: a loan needs no copy for other parts
             self.write = self._write_one  # type: ignore[method-assign]
+            self._write_part = parts[0].write
 
     def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
         """A message to fill in place: its arrays live in a shared-memory slot when a process
         reads it and they are large; otherwise in memory hetros owns (sent inline)."""
-        key = (cls, tuple(sizes.items()))
-        cached = self._loans.get(key)
-        if cached is None:
-            named = {name.replace("__", "."): length for name, length in sizes.items()}
-            in_slot = self._shm is not None and self._shm.slot_loan_pays(named)
-            cached = (named, None if in_slot else self._arrays_of(cls, named))
+        key = (cls, *sizes.items())
+        make = self._loans.get(key)
+        if make is None:
+            make = self._loan_maker(cls, {name.replace("__", "."): length for name, length in sizes.items()})
             if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
                 self._loans.clear()
-            self._loans[key] = cached
-        named, arrays = cached
-        if arrays is None:
-            assert self._shm is not None
-            message: Message = self._shm.loan(named)
+            self._loans[key] = make
+        return make()
+
+    def _loan_maker(self, cls: type[Message], sizes: dict[str, int]) -> Callable[[], Message]:
+        """What makes a loan of these array lengths: a slot loan, or hetros' memory per array."""
+        shm = self._shm
+        if shm is not None and shm.slot_loan_pays(sizes):
+            return lambda: shm.loan(sizes)
+        arrays = self._arrays_of(cls, sizes)
+        if len(arrays) == 1 and len(arrays[0][0]) == 1:  # one top-level array, the common loan
+            (name,), dtype, length = arrays[0]
+
+            def one_array() -> Message:
+                message = cls()
+                object.__setattr__(message, name, loaned_array(length, dtype))
+                return message
+            return one_array
+
+        def each_array() -> Message:
+            message = cls()
+            for path, dtype, length in arrays:
+                set_path(message, path, loaned_array(length, dtype))
             return message
-        message = cls()
-        for path, dtype, length in arrays:
-            set_path(message, path, loaned_array(length, dtype))
-        return message
+        return each_array
 
     def _arrays_of(self, cls: type[Message], sizes: dict[str, int]) -> list[tuple[tuple[str, ...], Any, int]]:
         wanted = dict(sizes)
@@ -114,7 +127,11 @@ class _FanoutWriter(Writer):
         return arrays
 
     def _write_one(self, message: Any) -> None:
-        self._parts[0].write(_hand_over(message, self._local))
+        if isinstance(message, Message):  # a topic's message: sealed here without looking for an envelope
+            hand_over(message, self._local)
+        else:
+            _hand_over(message, self._local)
+        self._write_part(message)
 
     def write(self, message: Any) -> None:
         if self._shm is not None and has_loan(message):

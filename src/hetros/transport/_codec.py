@@ -27,9 +27,10 @@ class MessageCodec(Codec):
         self._arrays: list[ArrayField] | None = None
         # a decoded message keeps no view on its bytes (see ``msg.CdrCodec``)
         self.decode_copies = self._cdr.decode_copies
-        # the generated functions, held directly: every transport's hot path runs through here;
-        # ``decode_body(buffer, at, end)`` decodes the body alone, the encapsulation already checked
-        self._body_size, self._encode, self.decode_body = self._cdr.size, self._cdr.encode, self._cdr.decode
+        # the generated functions, held directly: every transport's hot path runs through here.
+        # They see the body alone: ``body_size(message)``, ``encode_body(message, buffer, at)``
+        # after the caller wrote the encapsulation, ``decode_body(buffer, at, end)`` after it checked it.
+        self.body_size, self.encode_body, self.decode_body = self._cdr.size, self._cdr.encode, self._cdr.decode
 
     @property
     def arrays(self) -> list[ArrayField]:
@@ -39,16 +40,16 @@ class MessageCodec(Codec):
         return self._arrays
 
     def size(self, message: Any) -> int:
-        return 4 + self._body_size(message)
+        return 4 + self.body_size(message)
 
     def encode_into(self, message: Any, buffer: memoryview) -> None:
         buffer[:4] = CDR_LE
-        self._encode(message, buffer[4:])
+        self.encode_body(message, buffer[4:])
 
     def encode_at(self, message: Any, buffer: memoryview, at: int) -> None:
         """Encapsulation at ``at``, the body after it (``at + 4`` must be a multiple of 8)."""
         buffer[at:at + 4] = CDR_LE
-        self._encode(message, buffer, at + 4)
+        self.encode_body(message, buffer, at + 4)
 
     def decode_at(self, buffer: memoryview, at: int, end: int) -> Message:
         """Decode ``buffer[at:end]`` in place (``at + 4`` must be a multiple of 8)."""

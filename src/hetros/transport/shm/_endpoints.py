@@ -81,15 +81,6 @@ class _Loan:
         self.writer = writer
 
 
-def take_loan(message: Any, writer: ShmWriter | None = None) -> _Loan | None:
-    """Detach the loan of ``message`` (of ``writer``, when given); None when it has none."""
-    loan: _Loan | None = getattr(message, "_hetros_loan", None)
-    if loan is None or (writer is not None and loan.writer is not writer):
-        return None
-    object.__setattr__(message, "_hetros_loan", None)
-    return loan
-
-
 def has_loan(message: Any) -> bool:
     return getattr(message, "_hetros_loan", None) is not None
 
@@ -121,23 +112,27 @@ class ShmWriter(Writer):
         self._cdr = codec if isinstance(codec, MessageCodec) else None
         self._loan_slot = service.loan_scratch
         self._send = service.send
+        self._send_cdr = service.send_cdr
         service.publisher()
 
     def write(self, message: Any) -> None:
-        loan = take_loan(message, self)
-        if loan is not None:
+        cdr = self._cdr
+        if cdr is None:  # a service envelope: one contiguous sample
+            size = HEADER.size + self._codec.size(message)
+            sample, memory = self._loan_slot(size)
+            self._codec.encode_into(message, memory[HEADER.size:size])
+            self._send(sample, memory, LAYOUT_CDR, self._slot)
+            return
+        loan = message._hetros_loan
+        if loan is not None and loan.writer is self:
+            object.__setattr__(message, "_hetros_loan", None)
             self._send_loan(message, loan)
             return
-        size = HEADER.size + self._codec.size(message)
-        if self._arrays and size > INLINE_LIMIT:
+        body_size = cdr.body_size(message)
+        if self._arrays and body_size > INLINE_LIMIT:
             self._send_copy(message)
             return
-        sample, memory = self._loan_slot(size)
-        if self._cdr is not None:
-            self._cdr.encode_at(message, memory, HEADER.size)
-        else:
-            self._codec.encode_into(message, memory[HEADER.size:size])
-        self._send(sample, memory, LAYOUT_CDR, self._slot)
+        self._send_cdr(message, body_size, cdr.encode_body, self._slot)
 
     def _place(self, plan: _SlotPlan) -> tuple[Any, memoryview, list[tuple[tuple[str, ...], np.ndarray[Any, Any]]]]:
         """A slot laid out by ``plan``, its table written, and views on its blobs."""

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ...msg._compiled import wanted as _compiled_wanted
+from .._codec import CDR_LE
 from .._qos import QoS
 
 try:  # the compiled slot buffer (built by pip where a C compiler is); ctypes serves otherwise
@@ -21,6 +22,7 @@ SHM_DIR = Path("/dev/shm")
 # Every sample: sequence number, publisher slot, layout, padding; then the message. With the
 # CDR layout the 4-byte encapsulation sits at 28..32 so the CDR body starts 8-byte aligned.
 HEADER = struct.Struct("<QII12x")
+CDR_BODY_AT = HEADER.size + len(CDR_LE)
 LAYOUT_CDR = 0
 LAYOUT_SPLIT = 1
 # The split layout (loaned messages): small part as CDR, primitive arrays as separate blobs

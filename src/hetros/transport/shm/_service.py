@@ -7,9 +7,11 @@ import hashlib
 import os
 import threading
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..._errors import PublishTimeoutError, ShutdownError, TransportError
+from .._codec import CDR_LE
 from .._qos import QoS
 from ._credits import Credits, pid_alive
 from ._events import (
@@ -19,8 +21,10 @@ from ._events import (
 from ._iceoryx import assume_init, iox2, loan_slice, log
 from ._sample import (
     BORROW_LIMIT,
+    CDR_BODY_AT,
     HEADER,
     INITIAL_SLOT,
+    LAYOUT_CDR,
     MAX_LOANS,
     MAX_PUBLISHERS_PER_SERVICE,
     MAX_SUBSCRIBER_SLOTS,
@@ -180,12 +184,19 @@ class Service:
         sample = self._loan_sample(size)
         return sample, self._scratch.at(sample.payload_ptr, size)
 
+    def send_cdr(self, message: Any, body_size: int, encode_body: Callable[[Any, memoryview, int], object],
+                 publisher_slot: int) -> None:
+        """The inline path as one call (the hot path of small messages): a slot, the message
+        in it as ``LAYOUT_CDR`` (encapsulation, then the body ``encode_body`` writes), sent."""
+        sample = self._loan_sample(CDR_BODY_AT + body_size)
+        memory = self._scratch.at(sample.payload_ptr, CDR_BODY_AT + body_size)
+        memory[HEADER.size:CDR_BODY_AT] = CDR_LE
+        encode_body(message, memory, CDR_BODY_AT)
+        self.send(sample, memory, LAYOUT_CDR, publisher_slot)
+
     def _loan_sample(self, size: int) -> Any:
-        publisher = self._publisher
-        if publisher is None:
-            publisher = self.publisher()
         try:
-            return loan_slice(publisher, size)
+            return loan_slice(self._publisher or self.publisher(), size)
         except iox2.LoanError as exc:
             raise TransportError(
                 f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "

@@ -260,3 +260,58 @@ def test_damaged_samples_get_a_serialization_error(pair: Any, layout: int, body:
     service.send(sample, memory, layout, 0)
     with pytest.raises(SerializationError, match=expected):
         reader.try_take()
+
+
+def test_a_gap_in_a_reliable_stream_is_reported_not_skipped(pair: Any) -> None:
+    """Sequence numbers are checked on every take (compiled or not): a missing one raises."""
+    from hetros import TransportError
+
+    writer, reader = pair
+    Image = registry().get(TYPE)
+    writer.write(Image(width=1))
+    assert reader.try_take().width == 1
+    writer._service.next_seq += 2  # as if two samples had gone missing in iceoryx2
+    writer.write(Image(width=2))
+    with pytest.raises(TransportError, match=r"2 message\(s\) from target 'pub' \(from #2\) never reached"):
+        reader.try_take()
+
+
+def test_a_waiting_publisher_is_woken_by_the_take_that_frees_room(shm_session: str) -> None:
+    """A subscriber that finds the publisher waiting (credits 'waiting') signals it once half
+    its FIFO is free, whichever path took the sample."""
+    codec = MessageCodec(registry(), TYPE)
+    publishing, subscribing = ShmDomain(shm_session, "pub"), ShmDomain(shm_session, "sub")
+    qos = QoS(depth=4)
+    try:
+        reader = subscribing.open_reader("/img", ["pub"], qos, codec, 0, lambda: None, "sub")
+        writer = publishing.open_writer("/img", "pub", qos, codec)
+        Image = registry().get(TYPE)
+        for width in range(4):
+            writer.write(Image(width=width))
+        woken = threading.Event()
+        sent = threading.Thread(target=lambda: (writer.write(Image(width=4)), woken.set()), daemon=True)
+        sent.start()
+        time.sleep(0.2)
+        assert not woken.is_set(), "a keep_all publisher must wait while the FIFO is full"
+        assert writer._service.credits.waiting
+        taken = [reader.try_take().width for _ in range(3)]
+        assert woken.wait(5.0), "the takes freed room but the publisher was not woken"
+        sent.join(5.0)
+        taken += [m.width for m in drain(reader)]
+        assert taken == [0, 1, 2, 3, 4]
+    finally:
+        subscribing.close()
+        publishing.close()
+        remove_session_segments(shm_session)
+
+
+def test_the_compiled_hot_path_shares_the_sample_layout() -> None:
+    """_cslot writes and reads the header and credits words by offset: the layout it was told."""
+    from hetros.transport.shm import _hotpath
+    from hetros.transport.shm._credits import Credits
+    from hetros.transport.shm._sample import CDR_BODY_AT, HEADER
+
+    assert HEADER.format == "<QII12x" and CDR_BODY_AT == HEADER.size + 4 == 32
+    assert (Credits.HEAD, Credits.SLOT_WORDS) == (4, 4)
+    if os.environ.get("HETROS_PURE_PYTHON") == "1":
+        assert _hotpath.send_cdr is None and _hotpath.take_cdr is None

@@ -6,6 +6,7 @@ hands every case it does not take (odd values, damaged bytes) to the Python one.
 
 from __future__ import annotations
 
+import os
 import random
 import shutil
 import struct
@@ -47,6 +48,10 @@ def test_the_extension_is_built_wherever_a_compiler_is() -> None:
     from hetros.transport.shm import _cslot  # type: ignore[attr-defined]  # raises when it was not built
 
     assert _cslot.Memory is not None
+    from hetros.transport.shm import _hotpath
+
+    if not os.environ.get("HETROS_PURE_PYTHON"):
+        assert _hotpath.send_cdr is not None and _hotpath.take_cdr is not None, "built, but not in use"
 
 
 def test_pure_python_is_chosen_by_the_environment() -> None:

@@ -41,6 +41,7 @@ class Credits:
     """
 
     HEAD = 4
+    SLOT_WORDS = _SLOT_WORDS
     SIZE = 8 * (HEAD + _SLOT_WORDS * MAX_SUBSCRIBER_SLOTS)
 
     def __init__(self, path: Path) -> None:

@@ -1,12 +1,20 @@
 /*
- * hetros.transport.shm._cslot: the bytes of a shared-memory slot as a buffer that keeps its
- * sample alive.
+ * hetros.transport.shm._cslot: the compiled hot path of the shared-memory transport.
  *
- * A received sample goes back to iceoryx2 when its Python object dies; every view and numpy
- * array made from a slot must therefore hold the sample. ``Memory`` is that holder: a
- * buffer over (address, size) that keeps ``keepalive`` (the sample) and, when given a
- * list, counts itself in it while it lives (the reader's count of borrowed samples). The
- * pure-Python fallback (_sample.py) builds the same from a ctypes array type per size.
+ * ``Memory`` is the bytes of a slot as a buffer that keeps its sample alive. A received
+ * sample goes back to iceoryx2 when its Python object dies; every view and numpy array made
+ * from a slot must therefore hold the sample. ``Memory`` is that holder: a buffer over
+ * (address, size) that keeps ``keepalive`` (the sample) and, when given a list, counts itself
+ * in it while it lives (the reader's count of borrowed samples). The pure-Python fallback
+ * (_sample.py) builds the same from a ctypes array type per size.
+ *
+ * ``send_cdr`` and ``take_cdr`` are the common case of ``Service.send_cdr`` and
+ * ``ShmReader._take_from`` (_service.py, _endpoints.py), which stay the reference: they run
+ * without a compiler and do every case these decline. These read and write the state of
+ * those Python objects (sequence numbers, room, expected sequence) so there is one state
+ * and one set of rules; the sample layout and credits offsets come from ``configure``.
+ * Whatever is unusual (no room, a stale wake list, a gap, a waiting publisher, a damaged
+ * sample) is handed back before it has any effect the Python code would not also have had.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -97,14 +105,416 @@ static PyTypeObject MemoryType = {
     .tp_as_sequence = &memory_as_sequence,
 };
 
-static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "hetros.transport.shm._cslot", "Shared-memory slots as buffers that hold their sample.",
-    -1, NULL,
+/* -- the hot path of publishing and taking --------------------------------------------- */
+
+enum { NOT_HANDLED = 0, SENT = 1, SENT_STALE_WAKES = 2 };
+
+static PyObject *loan_slice_function, *assume_init_function;
+static Py_ssize_t header_size = -1, cdr_body_at, credits_head, slot_words, subscriber_slots, borrow_limit;
+static PyObject *str_publisher, *str_credits_at, *str_blocking, *str_room, *str_next_seq, *str_wakes_version,
+    *str_wakes, *str_payload_ptr, *str_send, *str_receive, *str_header, *str_number_of_elements, *str_subscriber,
+    *str_service, *str_expected, *str_suspect_since, *str_depth;
+
+static const char CDR_LE[4] = {0, 1, 0, 0};
+
+static PyObject *configure(PyObject *module, PyObject *args)
+{
+    (void)module;
+    PyObject *loan_slice, *assume_init;
+    Py_ssize_t header, body_at, head, words, slots, limit;
+    if (!PyArg_ParseTuple(args, "OOnnnnnn", &loan_slice, &assume_init, &header, &body_at, &head, &words, &slots,
+                          &limit))
+        return NULL;
+    if (header < 16 || body_at != header + 4 || head < 3 || words < 2 || slots < 1 || limit < 2) {
+        PyErr_Format(PyExc_ValueError, "the sample header must be at least 16 bytes with the CDR body 4 bytes after "
+                     "it, not %zd and %zd", header, body_at);
+        return NULL;
+    }
+    Py_XSETREF(loan_slice_function, Py_NewRef(loan_slice));
+    Py_XSETREF(assume_init_function, Py_NewRef(assume_init));
+    header_size = header;
+    cdr_body_at = body_at;
+    credits_head = head;
+    slot_words = words;
+    subscriber_slots = slots;
+    borrow_limit = limit;
+    Py_RETURN_NONE;
+}
+
+/* An int attribute of obj as unsigned 64 bits; -1 with an exception set on failure */
+static int get_u64(PyObject *obj, PyObject *name, unsigned long long *value)
+{
+    PyObject *attr = PyObject_GetAttr(obj, name);
+    if (attr == NULL)
+        return -1;
+    *value = PyLong_AsUnsignedLongLong(attr);
+    Py_DECREF(attr);
+    return *value == (unsigned long long)-1 && PyErr_Occurred() ? -1 : 0;
+}
+
+static int set_i64(PyObject *obj, PyObject *name, long long value)
+{
+    PyObject *number = PyLong_FromLongLong(value);
+    if (number == NULL)
+        return -1;
+    int status = PyObject_SetAttr(obj, name, number);
+    Py_DECREF(number);
+    return status;
+}
+
+static PyObject *call_method0(PyObject *obj, PyObject *name)
+{
+    return PyObject_VectorcallMethod(name, &obj, 1 | PY_VECTORCALL_ARGUMENTS_OFFSET, NULL);
+}
+
+/* Sends a reliable keep_all publisher can make before a subscriber's FIFO may be full: depth
+   less the fullest live FIFO, as ``Service.wait_for_space`` counts it when no FIFO is full;
+   0 when one is (the reference path then waits, and checks whether that subscriber lives). */
+static long long room_left(uint64_t *credits, uint64_t published, long long depth)
+{
+    long long fullest = 0;
+    for (Py_ssize_t slot = 0; slot < subscriber_slots; slot++) {
+        uint64_t *words = credits + credits_head + slot_words * slot;
+        if (__atomic_load_n(&words[1], __ATOMIC_ACQUIRE) == 0) /* no live subscriber (pid 0) */
+            continue;
+        long long fill = (long long)(published - __atomic_load_n(&words[0], __ATOMIC_ACQUIRE));
+        if (fill >= depth)
+            return 0;
+        if (fill > fullest)
+            fullest = fill;
+    }
+    if (__atomic_load_n(&credits[1], __ATOMIC_ACQUIRE) != 0)
+        __atomic_store_n(&credits[1], 0, __ATOMIC_SEQ_CST); /* nobody waits any more */
+    return depth - fullest;
+}
+
+/* send_cdr(service, message, body_size, encode_body, publisher_slot), the service's lock held */
+static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)module;
+    if (nargs != 5 || header_size < 0) {
+        PyErr_SetString(PyExc_TypeError, "send_cdr(service, message, body_size, encode_body, publisher_slot) "
+                        "after configure()");
+        return NULL;
+    }
+    PyObject *service = args[0];
+    Py_ssize_t body_size = PyLong_AsSsize_t(args[2]);
+    unsigned long publisher_slot = PyLong_AsUnsignedLong(args[4]);
+    if (PyErr_Occurred())
+        return NULL;
+    unsigned long long credits_at;
+    if (get_u64(service, str_credits_at, &credits_at) < 0)
+        return NULL;
+    PyObject *publisher = PyObject_GetAttr(service, str_publisher);
+    if (publisher == NULL)
+        return NULL;
+    PyObject *blocking_attr = PyObject_GetAttr(service, str_blocking);
+    int blocking = blocking_attr == NULL ? -1 : PyObject_IsTrue(blocking_attr);
+    Py_XDECREF(blocking_attr);
+    long long room = 0;
+    if (blocking < 0)
+        goto error;
+    if (blocking) {
+        PyObject *room_attr = PyObject_GetAttr(service, str_room);
+        if (room_attr == NULL)
+            goto error;
+        room = PyLong_AsLongLong(room_attr);
+        Py_DECREF(room_attr);
+        if (room == -1 && PyErr_Occurred())
+            goto error;
+    }
+    if (blocking && room <= 0 && credits_at != 0) {
+        unsigned long long next_seq;
+        PyObject *depth_attr = PyObject_GetAttr(service, str_depth);
+        long long depth = depth_attr == NULL ? -1 : PyLong_AsLongLong(depth_attr);
+        Py_XDECREF(depth_attr);
+        if (PyErr_Occurred() || get_u64(service, str_next_seq, &next_seq) < 0)
+            goto error;
+        room = room_left((uint64_t *)(uintptr_t)credits_at, (uint64_t)next_seq - 1, depth);
+        if (room > 0 && set_i64(service, str_room, room) < 0)
+            goto error;
+    }
+    if (publisher == Py_None || credits_at == 0 || (blocking && room <= 0)) {
+        Py_DECREF(publisher);
+        return PyLong_FromLong(NOT_HANDLED);
+    }
+    Py_ssize_t size = cdr_body_at + body_size;
+    PyObject *size_obj = PyLong_FromSsize_t(size);
+    if (size_obj == NULL)
+        goto error;
+    PyObject *loan_args[2] = {publisher, size_obj};
+    PyObject *sample = PyObject_Vectorcall(loan_slice_function, loan_args, 2, NULL);
+    Py_DECREF(size_obj);
+    Py_CLEAR(publisher);
+    if (sample == NULL)
+        return NULL;
+    unsigned long long address;
+    if (get_u64(sample, str_payload_ptr, &address) < 0)
+        goto error_sample;
+    char *slot = (char *)(uintptr_t)address;
+    PyObject *memory = PyMemoryView_FromMemory(slot, size, PyBUF_WRITE);
+    PyObject *at = PyLong_FromSsize_t(cdr_body_at);
+    if (memory == NULL || at == NULL) {
+        Py_XDECREF(memory);
+        Py_XDECREF(at);
+        goto error_sample;
+    }
+    memcpy(slot + header_size, CDR_LE, 4);
+    PyObject *encode_args[3] = {args[1], memory, at};
+    PyObject *end = PyObject_Vectorcall(args[3], encode_args, 3, NULL);
+    Py_DECREF(memory);
+    Py_DECREF(at);
+    if (end == NULL)
+        goto error_sample;
+    Py_DECREF(end);
+    if (blocking && set_i64(service, str_room, room - 1) < 0)
+        goto error_sample;
+    unsigned long long seq;
+    if (get_u64(service, str_next_seq, &seq) < 0)
+        goto error_sample;
+    uint32_t words[2] = {(uint32_t)publisher_slot, 0 /* the CDR layout */};
+    memcpy(slot, &seq, 8);
+    memcpy(slot + 8, words, 8);
+    memset(slot + 16, 0, (size_t)(header_size - 16));
+    PyObject *initialized = PyObject_Vectorcall(assume_init_function, &sample, 1, NULL);
+    Py_DECREF(sample);
+    if (initialized == NULL)
+        return NULL;
+    PyObject *sent = call_method0(initialized, str_send);
+    Py_DECREF(initialized);
+    if (sent == NULL)
+        return NULL;
+    Py_DECREF(sent);
+    if (set_i64(service, str_next_seq, (long long)seq + 1) < 0)
+        return NULL;
+    uint64_t *credits = (uint64_t *)(uintptr_t)credits_at;
+    __atomic_store_n(&credits[0], (uint64_t)seq, __ATOMIC_RELEASE);
+    unsigned long long version = __atomic_load_n(&credits[2], __ATOMIC_ACQUIRE), known;
+    PyObject *known_attr = PyObject_GetAttr(service, str_wakes_version);
+    if (known_attr == NULL)
+        return NULL;
+    known = PyLong_AsUnsignedLongLong(known_attr);
+    Py_DECREF(known_attr);
+    if (known == (unsigned long long)-1 && PyErr_Occurred()) {
+        PyErr_Clear(); /* -1 before the first wake list: stale */
+        return PyLong_FromLong(SENT_STALE_WAKES);
+    }
+    if (known != version)
+        return PyLong_FromLong(SENT_STALE_WAKES);
+    PyObject *wakes = PyObject_GetAttr(service, str_wakes);
+    if (wakes == NULL)
+        return NULL;
+    if (!PyList_Check(wakes)) {
+        Py_DECREF(wakes);
+        return PyLong_FromLong(SENT_STALE_WAKES);
+    }
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(wakes); i++) {
+        PyObject *wake = PyList_GET_ITEM(wakes, i);
+        if (!PyTuple_Check(wake) || PyTuple_GET_SIZE(wake) != 2) {
+            Py_DECREF(wakes);
+            PyErr_Format(PyExc_TypeError, "a wake must be (notify, event id), not %R", wake);
+            return NULL;
+        }
+        PyObject *result = PyObject_Vectorcall(PyTuple_GET_ITEM(wake, 0), &PyTuple_GET_ITEM(wake, 1), 1, NULL);
+        if (result == NULL) {
+            Py_DECREF(wakes);
+            return NULL;
+        }
+        Py_DECREF(result);
+    }
+    Py_DECREF(wakes);
+    return PyLong_FromLong(SENT);
+
+error_sample:
+    Py_DECREF(sample);
+    return NULL;
+error:
+    Py_XDECREF(publisher);
+    return NULL;
+}
+
+/* Nothing received: None when that is surely all (nothing published past what the port
+   expects, no suspicion pending: what a polling loop meets), else False for the reference
+   path's check of a publisher iceoryx2 may have failed to connect. */
+static PyObject *nothing_taken(PyObject *port)
+{
+    PyObject *service = PyObject_GetAttr(port, str_service);
+    if (service == NULL)
+        return NULL;
+    PyObject *blocking_attr = PyObject_GetAttr(service, str_blocking);
+    int blocking = blocking_attr == NULL ? -1 : PyObject_IsTrue(blocking_attr);
+    Py_XDECREF(blocking_attr);
+    unsigned long long credits_at = 0, expected = 0;
+    int failed = blocking < 0 || get_u64(service, str_credits_at, &credits_at) < 0 ||
+                 get_u64(port, str_expected, &expected) < 0;
+    Py_DECREF(service);
+    if (failed)
+        return NULL;
+    if (!blocking)
+        Py_RETURN_NONE;
+    PyObject *suspect = PyObject_GetAttr(port, str_suspect_since);
+    double since = suspect == NULL ? -1.0 : PyFloat_AsDouble(suspect);
+    Py_XDECREF(suspect);
+    if (PyErr_Occurred())
+        return NULL;
+    if (since == 0.0 && credits_at != 0 &&
+        __atomic_load_n((uint64_t *)(uintptr_t)credits_at, __ATOMIC_ACQUIRE) < expected)
+        Py_RETURN_NONE;
+    Py_RETURN_FALSE;
+}
+
+/* take_cdr(port, subscriber_slot, copies, borrowed, decode_body), the reader's lock held.
+
+   Returns the decoded message; None when nothing is there (False: see nothing_taken); or
+   (memory, size) for the reference path to finish when the sample is anything but the
+   common case. */
+static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)module;
+    if (nargs != 5 || header_size < 0 || !PyList_Check(args[3])) {
+        PyErr_SetString(PyExc_TypeError, "take_cdr(port, subscriber_slot, copies, borrowed: list, decode_body) "
+                        "after configure()");
+        return NULL;
+    }
+    PyObject *port = args[0], *borrowed = args[3];
+    Py_ssize_t subscriber_slot = PyLong_AsSsize_t(args[1]);
+    int copies = PyObject_IsTrue(args[2]);
+    if (PyErr_Occurred())
+        return NULL;
+    PyObject *subscriber = PyObject_GetAttr(port, str_subscriber);
+    if (subscriber == NULL)
+        return NULL;
+    PyObject *sample = call_method0(subscriber, str_receive);
+    Py_DECREF(subscriber);
+    if (sample == Py_None) {
+        Py_DECREF(sample);
+        return nothing_taken(port);
+    }
+    if (sample == NULL)
+        return NULL;
+    PyObject *header = PyObject_GetAttr(sample, str_header);
+    unsigned long long size = 0, address = 0;
+    int failed = header == NULL || get_u64(header, str_number_of_elements, &size) < 0 ||
+                 get_u64(sample, str_payload_ptr, &address) < 0;
+    Py_XDECREF(header);
+    if (failed)
+        goto error_sample;
+    char *slot = (char *)(uintptr_t)address;
+    int common = (Py_ssize_t)size >= cdr_body_at && (Py_ssize_t)size <= PY_SSIZE_T_MAX &&
+                 PyList_GET_SIZE(borrowed) < borrow_limit - 2;
+    unsigned long long seq = 0, expected = 0, credits_at = 0;
+    PyObject *service = NULL;
+    if (common) {
+        uint32_t layout;
+        memcpy(&seq, slot, 8);
+        memcpy(&layout, slot + 12, 4);
+        common = layout == 0 && slot[header_size + 1] == 1; /* the CDR layout, little endian */
+    }
+    if (common) {
+        PyObject *suspect = PyObject_GetAttr(port, str_suspect_since);
+        double since = suspect == NULL ? -1.0 : PyFloat_AsDouble(suspect);
+        Py_XDECREF(suspect);
+        service = PyObject_GetAttr(port, str_service);
+        if (PyErr_Occurred() || service == NULL || get_u64(port, str_expected, &expected) < 0 ||
+            get_u64(service, str_credits_at, &credits_at) < 0)
+            goto error_service;
+        PyObject *blocking_attr = PyObject_GetAttr(service, str_blocking);
+        int blocking = blocking_attr == NULL ? -1 : PyObject_IsTrue(blocking_attr);
+        Py_XDECREF(blocking_attr);
+        if (blocking < 0)
+            goto error_service;
+        uint64_t *credits = (uint64_t *)(uintptr_t)credits_at;
+        common = since == 0.0 && credits_at != 0 && !(blocking && seq > expected);
+        if (common) {
+            if (set_i64(port, str_expected, (long long)seq + 1) < 0)
+                goto error_service;
+            /* taken, then waiting, in this order (as the publisher announces, then rereads):
+               a publisher that waits for room is the reference path's to wake, which
+               repeats these two steps harmlessly */
+            __atomic_store_n(&credits[credits_head + slot_words * subscriber_slot], (uint64_t)seq, __ATOMIC_SEQ_CST);
+            common = __atomic_load_n(&credits[1], __ATOMIC_SEQ_CST) == 0;
+        }
+        Py_CLEAR(service);
+    }
+    PyObject *memory;
+    if (common && copies) {
+        /* the message will keep nothing of the sample: it goes back once decoded */
+        memory = PyMemoryView_FromMemory(slot, (Py_ssize_t)size, PyBUF_READ);
+    } else {
+        Memory *leased = (Memory *)MemoryType.tp_alloc(&MemoryType, 0);
+        if (leased == NULL || PyList_Append(borrowed, Py_None) < 0) {
+            Py_XDECREF(leased);
+            goto error_sample;
+        }
+        leased->borrowed = Py_NewRef(borrowed);
+        leased->address = slot;
+        leased->size = (Py_ssize_t)size;
+        leased->readonly = 1;
+        leased->keepalive = Py_NewRef(sample);
+        memory = PyMemoryView_FromObject((PyObject *)leased);
+        Py_DECREF(leased);
+    }
+    if (memory == NULL)
+        goto error_sample;
+    if (!common) {
+        Py_DECREF(sample);
+        PyObject *unusual = Py_BuildValue("(NK)", memory, size);
+        return unusual;
+    }
+    PyObject *decode_args[3] = {memory, PyLong_FromSsize_t(cdr_body_at), PyLong_FromUnsignedLongLong(size)};
+    PyObject *message = NULL;
+    if (decode_args[1] != NULL && decode_args[2] != NULL)
+        message = PyObject_Vectorcall(args[4], decode_args, 3, NULL);
+    Py_XDECREF(decode_args[1]);
+    Py_XDECREF(decode_args[2]);
+    Py_DECREF(memory);
+    Py_DECREF(sample);
+    return message;
+
+error_service:
+    Py_XDECREF(service);
+error_sample:
+    Py_DECREF(sample);
+    return NULL;
+}
+
+static PyMethodDef module_functions[] = {
+    {"configure", configure, METH_VARARGS,
+     "configure(loan_slice, assume_init, header_size, cdr_body_at, credits_head, slot_words, subscriber_slots, "
+     "borrow_limit)"},
+    {"send_cdr", (PyCFunction)(void (*)(void))send_cdr, METH_FASTCALL,
+     "send_cdr(service, message, body_size, encode_body, publisher_slot) -> 0 not handled, 1 sent, "
+     "2 sent but the wake list is stale"},
+    {"take_cdr", (PyCFunction)(void (*)(void))take_cdr, METH_FASTCALL,
+     "take_cdr(port, subscriber_slot, copies, borrowed, decode_body) -> message, None, False (nothing, but "
+     "check the publisher) or (memory, size) to finish"},
+    {NULL, NULL, 0, NULL},
 };
+
+static struct PyModuleDef module = {
+    PyModuleDef_HEAD_INIT, "hetros.transport.shm._cslot", "The compiled hot path of the shared-memory transport.",
+    -1, module_functions,
+};
+
+static int intern_names(void)
+{
+    struct { PyObject **slot; const char *text; } names[] = {
+        {&str_publisher, "_publisher"}, {&str_credits_at, "credits_at"}, {&str_blocking, "blocking"},
+        {&str_room, "room"}, {&str_next_seq, "next_seq"}, {&str_wakes_version, "_wakes_version"},
+        {&str_wakes, "_wakes"}, {&str_payload_ptr, "payload_ptr"}, {&str_send, "send"}, {&str_receive, "receive"},
+        {&str_header, "header"}, {&str_number_of_elements, "number_of_elements"}, {&str_subscriber, "subscriber"},
+        {&str_service, "service"}, {&str_expected, "expected"}, {&str_suspect_since, "suspect_since"},
+        {&str_depth, "depth"},
+    };
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if ((*names[i].slot = PyUnicode_InternFromString(names[i].text)) == NULL)
+            return -1;
+    return 0;
+}
 
 PyMODINIT_FUNC PyInit__cslot(void)
 {
-    if (PyType_Ready(&MemoryType) < 0)
+    if (PyType_Ready(&MemoryType) < 0 || intern_names() < 0)
         return NULL;
     PyObject *mod = PyModule_Create(&module);
     if (mod == NULL)

@@ -17,6 +17,7 @@ from ._events import (
     WakeChannel,
     fd_hint,
 )
+from ._hotpath import take_cdr
 from ._iceoryx import iox2
 from ._sample import (
     BLOB,
@@ -278,6 +279,8 @@ class ShmReader(Reader):
         # so the sample is read through a reused view and returned at once
         self._copies = self._cdr is not None and self._cdr.decode_copies
         self._decode_body = self._cdr.decode_body if self._cdr is not None else None
+        if take_cdr is not None and self._decode_body is not None:
+            self._take_from = self._take_compiled  # type: ignore[method-assign]
         self._scratch = ScratchViews(readonly=True)
         self.topic = services[0].topic if services else ""
         for service in services:
@@ -305,14 +308,12 @@ class ShmReader(Reader):
 
     def _take_from(self, port: _Port) -> Any | None:
         """The next message of one publishing target (``self._lock`` held), None when it has none."""
-        service = port.service
         try:
             sample = port.subscriber.receive()
         except iox2.ReceiveError as exc:
-            raise TransportError(f"cannot receive on {service.topic} from target {service.target!r}: "
-                                 f"{exc}; {fd_hint()}") from exc
+            raise self._receive_failed(port, exc) from exc
         if sample is None:
-            if service.blocking:
+            if port.service.blocking:
                 self._check_arrival(port)
             return None
         size = sample.header.number_of_elements
@@ -322,6 +323,31 @@ class ShmReader(Reader):
         else:
             memory = leased_memory(sample.payload_ptr, size, sample, self._borrowed)
             del sample
+        return self._took(port, memory, size)
+
+    def _take_compiled(self, port: _Port) -> Any | None:
+        """``_take_from`` with its common case compiled (``_hotpath``); the rest goes to ``_took``."""
+        assert take_cdr is not None
+        try:
+            got = take_cdr(port, self._slot, self._copies, self._borrowed, self._decode_body)
+        except iox2.ReceiveError as exc:
+            raise self._receive_failed(port, exc) from exc
+        if got is None:
+            return None
+        if got is False:
+            self._check_arrival(port)
+            return None
+        if type(got) is tuple:
+            return self._took(port, *got)
+        return got
+
+    def _receive_failed(self, port: _Port, exc: Exception) -> TransportError:
+        return TransportError(f"cannot receive on {port.service.topic} from target {port.service.target!r}: "
+                              f"{exc}; {fd_hint()}")
+
+    def _took(self, port: _Port, memory: memoryview, size: int) -> Any:
+        """A received sample's bytes to a message, its sequence number and the credits accounted."""
+        service = port.service
         if size < HEADER.size:
             raise SerializationError(f"a {size}-byte sample on {service.topic} from target "
                                      f"{service.target!r} is shorter than hetros' {HEADER.size}-byte header")

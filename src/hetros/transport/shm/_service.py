@@ -18,6 +18,7 @@ from ._events import (
     WakeChannel,
     fd_hint,
 )
+from ._hotpath import SENT_STALE_WAKES, send_cdr
 from ._iceoryx import assume_init, iox2, loan_slice, log
 from ._sample import (
     BORROW_LIMIT,
@@ -55,6 +56,7 @@ class Service:
         # credits bound the fill at `depth`, the slack absorbs a subscriber's join race.
         self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
         self.blocking = qos.blocks_publisher
+        self.depth = qos.depth
         self.room = 0
         self.lock = threading.Lock()
         self.space = threading.Condition(self.lock)
@@ -77,6 +79,8 @@ class Service:
                 f"{type(exc).__name__}: {exc}; all endpoints of a topic must use the same QoS; {fd_hint()}"
             ) from exc
         self.credits = Credits(SHM_DIR / f"{segment_prefix(domain.session)}{digest}")
+        # where the compiled hot path finds the credits words; 0 once they are unmapped
+        self.credits_at = int(self.credits.words.ctypes.data)
         self._publisher: Any = None
         self._scratch = ScratchViews()
         self._wakes: list[tuple[Any, Any]] = []
@@ -188,6 +192,19 @@ class Service:
                  publisher_slot: int) -> None:
         """The inline path as one call (the hot path of small messages): a slot, the message
         in it as ``LAYOUT_CDR`` (encapsulation, then the body ``encode_body`` writes), sent."""
+        if send_cdr is not None and self._publisher is not None:
+            with self.lock:
+                try:
+                    status = send_cdr(self, message, body_size, encode_body, publisher_slot)
+                except iox2.LoanError as exc:
+                    raise self._no_slot(CDR_BODY_AT + body_size, exc) from exc
+                except iox2.SendError as exc:
+                    raise self._not_sent(exc) from exc
+                if status == SENT_STALE_WAKES:
+                    self._wake_subscribers(self.credits.version)
+                if status:
+                    return
+        # without the compiled path, or what it leaves (no publisher yet, a full FIFO to wait for)
         sample = self._loan_sample(CDR_BODY_AT + body_size)
         memory = self._scratch.at(sample.payload_ptr, CDR_BODY_AT + body_size)
         memory[HEADER.size:CDR_BODY_AT] = CDR_LE
@@ -198,11 +215,17 @@ class Service:
         try:
             return loan_slice(self._publisher or self.publisher(), size)
         except iox2.LoanError as exc:
-            raise TransportError(
-                f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "
-                f"at most {MAX_LOANS} unpublished loans at once; publish the loaned messages you hold, or "
-                "drop them (a dropped loan returns its slot when the message is garbage-collected)"
-            ) from exc
+            raise self._no_slot(size, exc) from exc
+
+    def _no_slot(self, size: int, exc: Exception) -> TransportError:
+        return TransportError(
+            f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "
+            f"at most {MAX_LOANS} unpublished loans at once; publish the loaned messages you hold, or "
+            "drop them (a dropped loan returns its slot when the message is garbage-collected)"
+        )
+
+    def _not_sent(self, exc: Exception) -> TransportError:
+        return TransportError(f"iceoryx2 could not send on {self.topic}: {exc}")
 
     def send(self, sample: Any, memory: memoryview, layout: int, publisher_slot: int) -> None:
         """Stamp the header and send; blocks first while a reliable keep_all FIFO is full."""
@@ -216,14 +239,17 @@ class Service:
             try:
                 assume_init(sample).send()
             except iox2.SendError as exc:
-                raise TransportError(f"iceoryx2 could not send on {self.topic}: {exc}") from exc
+                raise self._not_sent(exc) from exc
             self.next_seq = seq + 1
-            version = self.credits.publish(seq)
-            if version != self._wakes_version:
-                self._wakes_version = version
-                self._wakes = [self.domain.notifier(key, event) for key, event in self.credits.subscribers()]
-            for notify, event_id in self._wakes:
-                notify(event_id)
+            self._wake_subscribers(self.credits.publish(seq))
+
+    def _wake_subscribers(self, version: int) -> None:
+        """Notify every subscriber, after rereading who they are if ``version`` says they changed."""
+        if version != self._wakes_version:
+            self._wakes_version = version
+            self._wakes = [self.domain.notifier(key, event) for key, event in self.credits.subscribers()]
+        for notify, event_id in self._wakes:
+            notify(event_id)
 
     # -- subscribing side ------------------------------------------------------------------
 
@@ -250,6 +276,7 @@ class Service:
         self._scratch.clear()
         self._wakes = []  # they hold notifiers, and so other nodes' event services
         self.data = None
+        self.credits_at = 0
         self.credits.close()
 
 

@@ -1,0 +1,32 @@
+"""The compiled hot path of this transport (``_cslot``), told the sample layout; None without it.
+
+``send_cdr`` and ``take_cdr`` do the common case of ``Service.send_cdr`` and
+``ShmReader._take_from`` and hand every other case back to them, so both paths share one
+state and one set of rules; the conformance suite runs each (``HETROS_PURE_PYTHON=1``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from ...msg._compiled import wanted
+from ._credits import Credits
+from ._iceoryx import assume_init, loan_slice
+from ._sample import BORROW_LIMIT, CDR_BODY_AT, HEADER, MAX_SUBSCRIBER_SLOTS
+
+SENT = 1
+SENT_STALE_WAKES = 2
+
+send_cdr: Callable[..., int] | None = None
+take_cdr: Callable[..., Any] | None = None
+try:  # built by pip where a C compiler is
+    from . import _cslot
+except ImportError:
+    _cslot = None
+if _cslot is not None and wanted():
+    _cslot.configure(loan_slice, assume_init, HEADER.size, CDR_BODY_AT, Credits.HEAD, Credits.SLOT_WORDS,
+                     MAX_SUBSCRIBER_SLOTS, BORROW_LIMIT)
+    send_cdr, take_cdr = _cslot.send_cdr, _cslot.take_cdr
+
+__all__ = ["SENT", "SENT_STALE_WAKES", "send_cdr", "take_cdr"]

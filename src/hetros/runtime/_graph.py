@@ -14,8 +14,11 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from .._errors import TransportError, UndeclaredEndpointError
 from ..msg import (
+    LoanBuffer,
     Message,
     TypeRegistry,
     array_fields,
@@ -74,36 +77,28 @@ class _FanoutWriter(Writer):
         self._types = types
         self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
         self._local = any(p is not self._shm for p in parts)
-        self._loans: dict[tuple[Any, ...], Callable[[], Message]] = {}
         if len(parts) == 1:
             # the common case, one transport: a loan needs no copy for other parts
             self.write = self._write_one  # type: ignore[method-assign]
             self._write_part = parts[0].write
 
-    def loan(self, cls: type[Message], sizes: dict[str, int]) -> Message:
-        """A message to fill in place: its arrays live in a shared-memory slot when a process
-        reads it and they are large; otherwise in memory hetros owns (sent inline)."""
-        key = (cls, *sizes.items())
-        make = self._loans.get(key)
-        if make is None:
-            make = self._loan_maker(cls, {name.replace("__", "."): length for name, length in sizes.items()})
-            if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
-                self._loans.clear()
-            self._loans[key] = make
-        return make()
-
-    def _loan_maker(self, cls: type[Message], sizes: dict[str, int]) -> Callable[[], Message]:
-        """What makes a loan of these array lengths: a slot loan, or hetros' memory per array."""
+    def loan_maker(self, cls: type[Message], sizes: dict[str, int]) -> Callable[[], Message]:
+        """What makes loans of these array lengths (``Publisher.loan`` keeps it): messages to
+        fill in place, their arrays in a shared-memory slot when a process reads them and
+        they are large, otherwise in memory hetros owns (sent inline)."""
+        sizes = {name.replace("__", "."): length for name, length in sizes.items()}
         shm = self._shm
         if shm is not None and shm.slot_loan_pays(sizes):
             return lambda: shm.loan(sizes)
         arrays = self._arrays_of(cls, sizes)
-        if len(arrays) == 1 and len(arrays[0][0]) == 1:  # one top-level array, the common loan
+        if len(arrays) == 1 and len(arrays[0][0]) == 1 and arrays[0][2]:  # one top-level array, the common loan
             (name,), dtype, length = arrays[0]
+            nbytes = length * dtype.itemsize
+            shape = (length,)
 
             def one_array() -> Message:
                 message = cls()
-                object.__setattr__(message, name, loaned_array(length, dtype))
+                object.__setattr__(message, name, np.ndarray(shape, dtype, LoanBuffer(nbytes)))
                 return message
             return one_array
 

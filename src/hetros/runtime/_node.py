@@ -71,7 +71,9 @@ class Publisher(Generic[M]):
         self._short = self.typename.rsplit("/", 1)[-1]
         self._writer = writer
         # a writer that can lend memory (shm, inproc fan-out); others get a plain message
-        self._lend: Callable[[type[M], dict[str, int]], M] | None = getattr(writer, "loan", None)
+        self._loan_maker: Callable[[type[M], dict[str, int]], Callable[[], M]] | None = \
+            getattr(writer, "loan_maker", None)
+        self._loans: dict[tuple[tuple[str, int], ...], Callable[[], M]] = {}
 
     def publish(self, message: M) -> None:
         """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
@@ -90,9 +92,15 @@ class Publisher(Generic[M]):
         smaller ones live in memory hetros owns and are copied once into the slot. After
         ``publish`` the loaned message is handed over: its arrays are no longer yours.
         """
-        if self._lend is None:
-            return self.msg_type()
-        return self._lend(self.msg_type, sizes)
+        make = self._loans.get(tuple(sizes.items()))
+        if make is None:
+            if self._loan_maker is None:
+                return self.msg_type()
+            make = self._loan_maker(self.msg_type, sizes)
+            if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
+                self._loans.clear()
+            self._loans[tuple(sizes.items())] = make
+        return make()
 
     def close(self) -> None:
         self._writer.close()

@@ -291,7 +291,10 @@ class ShmReader(Reader):
     # -- taking ----------------------------------------------------------------------------
 
     def pending(self) -> bool:
-        return any(port.subscriber.has_samples() for port in self._ports)
+        for port in self._ports:  # a loop, not any(generator): this runs on every poll of a hot node
+            if port.subscriber.has_samples():
+                return True
+        return False
 
     def try_take(self) -> Any | None:
         with self._lock:

@@ -98,6 +98,23 @@ class Run:
     missing: dict[str, str] = field(default_factory=dict)
     throughput: list[dict[str, Any]] = field(default_factory=list)
     cpu: list[dict[str, Any]] = field(default_factory=list)
+    # each round's result per (system, size), for ratios that compare a round with itself
+    rounds: dict[tuple[str, int], list[Result]] = field(default_factory=dict)
+
+
+def round_ratio(run: Run, ours: str, theirs: str, size: int) -> float | None:
+    """Our round trip mean over theirs, round by round, the median of the rounds.
+
+    Both rows of a round ran back to back, so they met the same speed phase of the machine;
+    a phase that hit one round of ours but not theirs moves one ratio, not the median.
+    """
+    mine, other = run.rounds.get((ours, size), []), run.rounds.get((theirs, size), [])
+    ratios = sorted(a.rtt.mean / b.rtt.mean for a, b in zip(mine, other, strict=False)
+                    if a.rtt is not None and b.rtt is not None and b.rtt.mean > 0)
+    if not ratios:
+        return None
+    middle = len(ratios) // 2
+    return ratios[middle] if len(ratios) % 2 else (ratios[middle - 1] + ratios[middle]) / 2
 
 
 def free_port() -> int:
@@ -386,10 +403,11 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
         ours_shm: list[str] = [s for s in HETROS_SHM if s in shown]
 
         def overhead(size: int, ours: str) -> str:
-            return ratio(ours, "rtt", "mean", invert=True)(size, "iceoryx2")
+            value = round_ratio(run, ours, "iceoryx2", size)
+            return "-" if value is None else f"{value:.2f}x"
 
-        _table(lines, "Framework overhead: hetros round trip / iceoryx2 round trip (mean, same wait strategy)",
-               ours_shm, sizes, overhead)
+        _table(lines, "Framework overhead: hetros round trip / iceoryx2 round trip (mean, same wait strategy; "
+                      "with rounds, the median of the rounds' ratios)", ours_shm, sizes, overhead)
     if run.throughput:
         lines += ["", "### Throughput, one publisher, one subscriber in another process", ""]
         lines.append("| system | size | messages/s | MiB/s |")
@@ -476,7 +494,7 @@ def main(argv: list[str] | None = None) -> int:
             if why:
                 run.missing[system] = why
                 print(f"[bench] {system}: missing: {why}", flush=True)
-        rounds: dict[tuple[str, int], list[Result]] = {}
+        rounds = run.rounds
         for number in range(1, args.rounds + 1):
             # every system at one size back to back: this machine switches between speed phases
             # (measured: 3 MiB across processes took 0.14 ms, then 1.4 ms for every system, raw

@@ -1,0 +1,39 @@
+"""The latency report's arithmetic: pooled rounds and the per-round overhead ratio."""
+
+from __future__ import annotations
+
+from hetros.bench.latency import Result, Run, pooled, render, round_ratio
+
+
+def _result(system: str, rtt_us: list[float], size: int = 4) -> Result:
+    samples = [int(v * 1000) for v in rtt_us]
+    return Result.measured(system, size, samples, samples)
+
+
+def test_a_phase_that_hit_one_round_of_one_row_moves_one_ratio_not_the_median() -> None:
+    run = Run()
+    run.rounds[("hetros-shm", 4)] = [_result("hetros-shm", [20.0]), _result("hetros-shm", [200.0]),
+                                     _result("hetros-shm", [22.0])]
+    run.rounds[("iceoryx2", 4)] = [_result("iceoryx2", [10.0]), _result("iceoryx2", [10.0]),
+                                   _result("iceoryx2", [10.0])]
+    assert round_ratio(run, "hetros-shm", "iceoryx2", 4) == 2.2
+    pooled_mean = pooled(run.rounds[("hetros-shm", 4)]).rtt
+    assert pooled_mean is not None and round(pooled_mean.mean, 6) == 80.666667, "pooling keeps every sample"
+
+
+def test_an_even_number_of_rounds_takes_the_middle_two_and_a_missing_row_gives_no_ratio() -> None:
+    run = Run()
+    run.rounds[("hetros-shm", 4)] = [_result("hetros-shm", [v]) for v in (20.0, 30.0)]
+    run.rounds[("iceoryx2", 4)] = [_result("iceoryx2", [10.0]) for _ in range(2)]
+    assert round_ratio(run, "hetros-shm", "iceoryx2", 4) == 2.5
+    assert round_ratio(run, "hetros-shm-loan", "iceoryx2", 4) is None
+
+
+def test_the_overhead_table_shows_the_median_ratio() -> None:
+    run = Run()
+    for system, values in (("hetros-shm", (20.0, 200.0, 22.0)), ("iceoryx2", (10.0, 10.0, 10.0))):
+        run.rounds[(system, 4)] = [_result(system, [v]) for v in values]
+    run.results = [pooled(results) for results in run.rounds.values()]
+    report = render(run, ["hetros-shm", "iceoryx2"], [4])
+    overhead = report.split("### Framework overhead")[1]
+    assert "| 4 B | 2.20x |" in overhead

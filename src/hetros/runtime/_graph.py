@@ -14,11 +14,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
 from .._errors import TransportError, UndeclaredEndpointError
 from ..msg import (
-    LoanBuffer,
     Message,
     TypeRegistry,
     array_fields,
@@ -91,14 +88,12 @@ class _FanoutWriter(Writer):
         if shm is not None and shm.slot_loan_pays(sizes):
             return lambda: shm.loan(sizes)
         arrays = self._arrays_of(cls, sizes)
-        if len(arrays) == 1 and len(arrays[0][0]) == 1 and arrays[0][2]:  # one top-level array, the common loan
+        if len(arrays) == 1 and len(arrays[0][0]) == 1:  # one top-level array, the common loan
             (name,), dtype, length = arrays[0]
-            nbytes = length * dtype.itemsize
-            shape = (length,)
 
             def one_array() -> Message:
                 message = cls()
-                object.__setattr__(message, name, np.ndarray(shape, dtype, LoanBuffer(nbytes)))
+                object.__setattr__(message, name, loaned_array(length, dtype))
                 return message
             return one_array
 

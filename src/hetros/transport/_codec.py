@@ -46,11 +46,6 @@ class MessageCodec(Codec):
         buffer[:4] = CDR_LE
         self.encode_body(message, buffer[4:])
 
-    def encode_at(self, message: Any, buffer: memoryview, at: int) -> None:
-        """Encapsulation at ``at``, the body after it (``at + 4`` must be a multiple of 8)."""
-        buffer[at:at + 4] = CDR_LE
-        self.encode_body(message, buffer, at + 4)
-
     def decode_at(self, buffer: memoryview, at: int, end: int) -> Message:
         """Decode ``buffer[at:end]`` in place (``at + 4`` must be a multiple of 8)."""
         if end - at < 4 or buffer[at + 1] != 1:

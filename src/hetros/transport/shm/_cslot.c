@@ -141,15 +141,51 @@ static PyObject *configure(PyObject *module, PyObject *args)
     Py_RETURN_NONE;
 }
 
-/* An int attribute of obj as unsigned 64 bits; -1 with an exception set on failure */
-static int get_u64(PyObject *obj, PyObject *name, unsigned long long *value)
+/* An int attribute of obj as signed 64 bits; -1 with an exception set on failure */
+static int get_i64(PyObject *obj, PyObject *name, long long *value)
 {
     PyObject *attr = PyObject_GetAttr(obj, name);
     if (attr == NULL)
         return -1;
-    *value = PyLong_AsUnsignedLongLong(attr);
+    *value = PyLong_AsLongLong(attr);
     Py_DECREF(attr);
-    return *value == (unsigned long long)-1 && PyErr_Occurred() ? -1 : 0;
+    return *value == -1 && PyErr_Occurred() ? -1 : 0;
+}
+
+/* The same for a count or an address (user-space addresses are below 2**63) */
+static int get_u64(PyObject *obj, PyObject *name, unsigned long long *value)
+{
+    long long number;
+    if (get_i64(obj, name, &number) < 0)
+        return -1;
+    if (number < 0) {
+        PyErr_Format(PyExc_ValueError, "%U must be at least 0, not %lld", name, number);
+        return -1;
+    }
+    *value = (unsigned long long)number;
+    return 0;
+}
+
+/* A truth attribute of obj: 1, 0, or -1 with an exception set */
+static int get_flag(PyObject *obj, PyObject *name)
+{
+    PyObject *attr = PyObject_GetAttr(obj, name);
+    if (attr == NULL)
+        return -1;
+    int flag = PyObject_IsTrue(attr);
+    Py_DECREF(attr);
+    return flag;
+}
+
+/* A float attribute of obj; -1.0 with an exception set on failure */
+static double get_double(PyObject *obj, PyObject *name)
+{
+    PyObject *attr = PyObject_GetAttr(obj, name);
+    if (attr == NULL)
+        return -1.0;
+    double value = PyFloat_AsDouble(attr);
+    Py_DECREF(attr);
+    return value;
 }
 
 static int set_i64(PyObject *obj, PyObject *name, long long value)
@@ -208,27 +244,16 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     PyObject *publisher = PyObject_GetAttr(service, str_publisher);
     if (publisher == NULL)
         return NULL;
-    PyObject *blocking_attr = PyObject_GetAttr(service, str_blocking);
-    int blocking = blocking_attr == NULL ? -1 : PyObject_IsTrue(blocking_attr);
-    Py_XDECREF(blocking_attr);
+    int blocking = get_flag(service, str_blocking);
     long long room = 0;
     if (blocking < 0)
         goto error;
-    if (blocking) {
-        PyObject *room_attr = PyObject_GetAttr(service, str_room);
-        if (room_attr == NULL)
-            goto error;
-        room = PyLong_AsLongLong(room_attr);
-        Py_DECREF(room_attr);
-        if (room == -1 && PyErr_Occurred())
-            goto error;
-    }
+    if (blocking && get_i64(service, str_room, &room) < 0)
+        goto error;
     if (blocking && room <= 0 && credits_at != 0) {
         unsigned long long next_seq;
-        PyObject *depth_attr = PyObject_GetAttr(service, str_depth);
-        long long depth = depth_attr == NULL ? -1 : PyLong_AsLongLong(depth_attr);
-        Py_XDECREF(depth_attr);
-        if (PyErr_Occurred() || get_u64(service, str_next_seq, &next_seq) < 0)
+        long long depth;
+        if (get_i64(service, str_depth, &depth) < 0 || get_u64(service, str_next_seq, &next_seq) < 0)
             goto error;
         room = room_left((uint64_t *)(uintptr_t)credits_at, (uint64_t)next_seq - 1, depth);
         if (room > 0 && set_i64(service, str_room, room) < 0)
@@ -289,17 +314,11 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         return NULL;
     uint64_t *credits = (uint64_t *)(uintptr_t)credits_at;
     __atomic_store_n(&credits[0], (uint64_t)seq, __ATOMIC_RELEASE);
-    unsigned long long version = __atomic_load_n(&credits[2], __ATOMIC_ACQUIRE), known;
-    PyObject *known_attr = PyObject_GetAttr(service, str_wakes_version);
-    if (known_attr == NULL)
+    uint64_t version = __atomic_load_n(&credits[2], __ATOMIC_ACQUIRE);
+    long long known; /* -1 before the first wake list */
+    if (get_i64(service, str_wakes_version, &known) < 0)
         return NULL;
-    known = PyLong_AsUnsignedLongLong(known_attr);
-    Py_DECREF(known_attr);
-    if (known == (unsigned long long)-1 && PyErr_Occurred()) {
-        PyErr_Clear(); /* -1 before the first wake list: stale */
-        return PyLong_FromLong(SENT_STALE_WAKES);
-    }
-    if (known != version)
+    if (known < 0 || (uint64_t)known != version)
         return PyLong_FromLong(SENT_STALE_WAKES);
     PyObject *wakes = PyObject_GetAttr(service, str_wakes);
     if (wakes == NULL)
@@ -341,9 +360,7 @@ static PyObject *nothing_taken(PyObject *port)
     PyObject *service = PyObject_GetAttr(port, str_service);
     if (service == NULL)
         return NULL;
-    PyObject *blocking_attr = PyObject_GetAttr(service, str_blocking);
-    int blocking = blocking_attr == NULL ? -1 : PyObject_IsTrue(blocking_attr);
-    Py_XDECREF(blocking_attr);
+    int blocking = get_flag(service, str_blocking);
     unsigned long long credits_at = 0, expected = 0;
     int failed = blocking < 0 || get_u64(service, str_credits_at, &credits_at) < 0 ||
                  get_u64(port, str_expected, &expected) < 0;
@@ -352,9 +369,7 @@ static PyObject *nothing_taken(PyObject *port)
         return NULL;
     if (!blocking)
         Py_RETURN_NONE;
-    PyObject *suspect = PyObject_GetAttr(port, str_suspect_since);
-    double since = suspect == NULL ? -1.0 : PyFloat_AsDouble(suspect);
-    Py_XDECREF(suspect);
+    double since = get_double(port, str_suspect_since);
     if (PyErr_Occurred())
         return NULL;
     if (since == 0.0 && credits_at != 0 &&
@@ -411,16 +426,12 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         common = layout == 0 && slot[header_size + 1] == 1; /* the CDR layout, little endian */
     }
     if (common) {
-        PyObject *suspect = PyObject_GetAttr(port, str_suspect_since);
-        double since = suspect == NULL ? -1.0 : PyFloat_AsDouble(suspect);
-        Py_XDECREF(suspect);
+        double since = get_double(port, str_suspect_since);
         service = PyObject_GetAttr(port, str_service);
         if (PyErr_Occurred() || service == NULL || get_u64(port, str_expected, &expected) < 0 ||
             get_u64(service, str_credits_at, &credits_at) < 0)
             goto error_service;
-        PyObject *blocking_attr = PyObject_GetAttr(service, str_blocking);
-        int blocking = blocking_attr == NULL ? -1 : PyObject_IsTrue(blocking_attr);
-        Py_XDECREF(blocking_attr);
+        int blocking = get_flag(service, str_blocking);
         if (blocking < 0)
             goto error_service;
         uint64_t *credits = (uint64_t *)(uintptr_t)credits_at;

@@ -27,7 +27,7 @@ from .._errors import (
 from ..msg import ActionType, Message, ServiceType
 from ..plan import reply_channel, request_channel
 from ..transport import QoS, Reader, Writer
-from ._executor import YIELD_EVERY, AdaptiveSpin, Executor
+from ._executor import AdaptiveSpin, Executor
 from ._graph import Graph
 from ._log import node_logger
 
@@ -195,15 +195,12 @@ class Subscription(Generic[M]):
         spin = self._spin.budget()
         if spin:
             spin_end = time.perf_counter() + spin
-            polls = 0
             while time.perf_counter() < spin_end:
                 message = self.try_take()
                 if message is not None:
                     self._spin.arrived()
                     return message
-                polls += 1
-                if not polls % YIELD_EVERY:  # a publishing thread gets the GIL (sleep(0) naps ~90 µs)
-                    os.sched_yield()
+                os.sched_yield()  # lets a publishing thread have the GIL (sleep(0) naps ~90 µs)
         while True:
             seen = executor.generation
             message = self.try_take()

@@ -357,6 +357,27 @@ def test_delivered_messages_are_read_only(make: Callable[[QoS], Harness]) -> Non
         got.width = 3
 
 
+def test_a_received_message_and_a_message_nested_in_one_can_be_published_again(
+        make: Callable[[QoS], Harness]) -> None:
+    """What a node received (decoded, frozen) is republished as it is: a relay, or the image
+    of a service response forwarded on a topic, whichever decoder built it."""
+    types = registry()
+    codec = MessageCodec(types, "stereo_msgs/msg/DisparityImage")
+    outer = types.get("stereo_msgs/msg/DisparityImage")(image=image(0, 3))
+    encoded = bytearray(codec.size(outer))
+    codec.encode_into(outer, memoryview(encoded))
+    nested = codec.decode(memoryview(bytes(encoded))).image
+    h = make(QoS(depth=4))
+    reader = h.reader()
+    writer = h.writer()
+    writer.write(nested)
+    relayed = reader.try_take()
+    assert relayed is not None and relayed.width == 3 and list(relayed.data) == [3] * 8
+    writer.write(relayed)
+    again = reader.try_take()
+    assert again is not None and again.width == 3 and list(again.data) == [3] * 8
+
+
 def test_pending_is_false_only_when_a_take_finds_nothing(make: Callable[[QoS], Harness]) -> None:
     """The executor trusts a False: it does not queue the subscription again until a wake-up."""
     h = make(QoS(depth=4))

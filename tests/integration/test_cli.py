@@ -89,7 +89,8 @@ def test_msg_layout_prints_offsets() -> None:
     assert "fixed size, 344 bytes" in result.stdout
     assert "56    288  float64[36]  covariance" in result.stdout
     assert result.stdout.splitlines()[-1] in ("codec: compiled (hetros.msg._ccdr)",
-                                              "codec: generated Python (the C extension is not built)")
+                                              "codec: generated Python (the C extension is not built)",
+                                              "codec: generated Python (HETROS_PURE_PYTHON is set)")
 
 
 def test_msg_build_handles_python_names_and_refuses_invalid_type_names(tmp_path: Path) -> None:

@@ -139,7 +139,6 @@ class _Generator:
         short = typename.rsplit("/", 1)[-1]
         if self.mode == "decode":
             root = body.new_object(typename)
-            body.emit(f"{root}._hetros_loan = None")
             body.walk(typename, root, short)
             body.flush()
             body.finish_objects()
@@ -250,6 +249,7 @@ class _Body:
         local = self.gen.unique("o")
         thawed = self.gen.constant("_C", cls)
         self.emit(f"{local} = _new({thawed})")
+        self.emit(f"{local}._hetros_loan = None")  # as __init__ sets it: a transport reads it unguarded
         self.objects.append((local, self.gen.constant("_F", cls._frozen_class)))
         return local
 

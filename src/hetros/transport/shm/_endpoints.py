@@ -124,7 +124,7 @@ class ShmWriter(Writer):
             self._codec.encode_into(message, memory[HEADER.size:size])
             self._send(sample, memory, LAYOUT_CDR, self._slot)
             return
-        loan = message._hetros_loan
+        loan = getattr(message, "_hetros_loan", None)  # set by every decoder and __init__; guarded all the same
         if loan is not None and loan.writer is self:
             object.__setattr__(message, "_hetros_loan", None)
             self._send_loan(message, loan)

@@ -113,7 +113,7 @@ static PyObject *loan_slice_function, *assume_init_function;
 static Py_ssize_t header_size = -1, cdr_body_at, credits_head, slot_words, subscriber_slots, borrow_limit;
 static PyObject *str_publisher, *str_credits_at, *str_blocking, *str_room, *str_next_seq, *str_wakes_version,
     *str_wakes, *str_payload_ptr, *str_send, *str_receive, *str_header, *str_number_of_elements, *str_subscriber,
-    *str_service, *str_expected, *str_suspect_since, *str_depth;
+    *str_service, *str_expected, *str_suspect_since, *str_depth, *str_qos;
 
 static const char CDR_LE[4] = {0, 1, 0, 0};
 
@@ -252,8 +252,12 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         goto error;
     if (blocking && room <= 0 && credits_at != 0) {
         unsigned long long next_seq;
-        long long depth;
-        if (get_i64(service, str_depth, &depth) < 0 || get_u64(service, str_next_seq, &next_seq) < 0)
+        long long depth = -1;
+        PyObject *qos = PyObject_GetAttr(service, str_qos); /* the rare path: room used up */
+        int failed = qos == NULL || get_i64(qos, str_depth, &depth) < 0 ||
+                     get_u64(service, str_next_seq, &next_seq) < 0;
+        Py_XDECREF(qos);
+        if (failed)
             goto error;
         room = room_left((uint64_t *)(uintptr_t)credits_at, (uint64_t)next_seq - 1, depth);
         if (room > 0 && set_i64(service, str_room, room) < 0)
@@ -515,7 +519,7 @@ static int intern_names(void)
         {&str_wakes, "_wakes"}, {&str_payload_ptr, "payload_ptr"}, {&str_send, "send"}, {&str_receive, "receive"},
         {&str_header, "header"}, {&str_number_of_elements, "number_of_elements"}, {&str_subscriber, "subscriber"},
         {&str_service, "service"}, {&str_expected, "expected"}, {&str_suspect_since, "suspect_since"},
-        {&str_depth, "depth"},
+        {&str_depth, "depth"}, {&str_qos, "qos"},
     };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if ((*names[i].slot = PyUnicode_InternFromString(names[i].text)) == NULL)

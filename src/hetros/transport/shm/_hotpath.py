@@ -15,7 +15,7 @@ from ._credits import Credits
 from ._iceoryx import assume_init, loan_slice
 from ._sample import BORROW_LIMIT, CDR_BODY_AT, HEADER, MAX_SUBSCRIBER_SLOTS
 
-SENT = 1
+# what send_cdr returns besides 0 (not handled) and 1 (sent): sent, but who to wake has changed
 SENT_STALE_WAKES = 2
 
 send_cdr: Callable[..., int] | None = None
@@ -29,4 +29,4 @@ if _cslot is not None and wanted():
                      MAX_SUBSCRIBER_SLOTS, BORROW_LIMIT)
     send_cdr, take_cdr = _cslot.send_cdr, _cslot.take_cdr
 
-__all__ = ["SENT", "SENT_STALE_WAKES", "send_cdr", "take_cdr"]
+__all__ = ["SENT_STALE_WAKES", "send_cdr", "take_cdr"]

@@ -56,7 +56,6 @@ class Service:
         # credits bound the fill at `depth`, the slack absorbs a subscriber's join race.
         self.buffer = qos.depth + 2 if qos.blocks_publisher else qos.depth
         self.blocking = qos.blocks_publisher
-        self.depth = qos.depth
         self.room = 0
         self.lock = threading.Lock()
         self.space = threading.Condition(self.lock)

@@ -180,12 +180,15 @@ class ImportedAction:
         self._goal = peer.advertise(f"{self.name}/goal", kind.goal)
         self._cancel = peer.advertise(f"{self.name}/cancel", kind.cancel)
         peer.subscribe(f"{self.name}/status", kind.status, lambda _status: self._server_seen.set())
-        peer.subscribe(f"{self.name}/feedback", kind.feedback, self._on_feedback)
-        peer.subscribe(f"{self.name}/result", kind.result, self._on_result)
+        self._feedback = peer.subscribe(f"{self.name}/feedback", kind.feedback, self._on_feedback)
+        self._result = peer.subscribe(f"{self.name}/result", kind.result, self._on_result)
         node.create_action_server(action_type, name, self._execute, max_goals=64)
 
     def _connected(self) -> bool:
-        return bool(self._server_seen.is_set() and self._goal.subscribers and self._cancel.subscribers)
+        """The server hears goals and cancels, and its feedback and result reach us: a goal sent
+        before the feedback connection is up would lose its first feedback messages (not latched)."""
+        return bool(self._server_seen.is_set() and self._goal.subscribers and self._cancel.subscribers
+                    and self._feedback.publishers and self._result.publishers)
 
     def _execute(self, handle: ServerGoalHandle) -> Any:
         kind = self._kind

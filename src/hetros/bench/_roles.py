@@ -202,7 +202,7 @@ class Iceoryx2Endpoint(Endpoint):
         while True:
             sample = self.sub.receive()
             if sample is not None:
-                self.spin.arrived()
+                self.spin.arrived(time.perf_counter())
                 size = sample.header.number_of_elements
                 stamp, seq = PREFIX.unpack_from((ctypes.c_uint8 * PREFIX.size).from_address(sample.payload_ptr))
                 return stamp, seq, (sample, size)

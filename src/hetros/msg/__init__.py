@@ -2,7 +2,7 @@
 
 from ._definitions import find_packages, read_package
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
-from ._message import FrozenMessage, Message, copy, freeze, hand_over, loaned_array
+from ._message import FrozenMessage, LoanBuffer, Message, copy, freeze, hand_over, loaned_array
 from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
 from ._validate import convert_array, validate
 
@@ -12,6 +12,7 @@ __all__ = [
     "FlatLayout",
     "FrozenMessage",
     "LayoutField",
+    "LoanBuffer",
     "Message",
     "ServiceType",
     "TypeRegistry",

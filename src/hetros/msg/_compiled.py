@@ -30,8 +30,17 @@ try:
     from . import _ccdr  # type: ignore[attr-defined]
 except ImportError:  # built by pip where a C compiler is; the generated Python codecs serve otherwise
     _ccdr = None
+    ARRAY_HEAD_READ = False
 else:
-    _ccdr.configure(LoanBuffer, _seal_array, FrozenList)
+    def _configure() -> bool:
+        """Tell the interpreter what sealing needs, and let it check numpy's array head on a probe."""
+        owner = np.arange(7, dtype=np.float64)
+        view = owner[:]
+        view.flags.writeable = False
+        return bool(_ccdr.configure(LoanBuffer, _seal_array, FrozenList, owner, view, owner.ctypes.data, owner.size,
+                                    owner.dtype))
+
+    ARRAY_HEAD_READ = _configure()
 
 # the interpreter's op kinds and primitive codes (``_ccdr.c`` has the same enums)
 _PRIM, _STRING, _NESTED, _PRIM_ARRAY, _PRIM_SEQ, _STR_ARRAY, _STR_SEQ, _MSG_ARRAY, _MSG_SEQ = range(9)

@@ -41,13 +41,13 @@ class AdaptiveSpin:
         self.gap = 0.0
 
     def budget(self) -> float:
-        if self.gap > self.HOT or time.monotonic() - self.last > self.HOT:
+        if self.gap > self.HOT or time.perf_counter() - self.last > self.HOT:
             return 0.0
         return min(max(2.0 * self.gap, self.LOW), self.HIGH)
 
-    def arrived(self) -> None:
-        """Track the typical gap: it falls at once to a shorter gap and rises slowly on a longer one."""
-        now = time.monotonic()
+    def arrived(self, now: float) -> None:
+        """Track the typical gap (``now`` from ``time.perf_counter``, which the caller has read
+        anyway): it falls at once to a shorter gap and rises slowly on a longer one."""
         gap = now - self.last
         self.gap = gap if self.gap == 0.0 or gap < self.gap else 0.8 * self.gap + 0.2 * gap
         self.last = now
@@ -186,7 +186,7 @@ class Executor:
                 return True
             if entity is not None:
                 if entity.dispatch():
-                    self._spin.arrived()
+                    self._spin.arrived(time.perf_counter())
                     # asked instead of dispatching again to find the FIFO empty; later arrivals wake it
                     if entity.pending():
                         self.notify(entity)

@@ -181,31 +181,36 @@ class Subscription(Generic[M]):
 
     def take(self, timeout: float | None = None) -> M:
         """Block for the next message; raise TakeTimeoutError, or ShutdownError on shutdown."""
+        now = time.perf_counter()
         if self._returned_at:
-            self.stats.add(time.perf_counter() - self._returned_at)
-            self._returned_at = 0.0
-        message = self._take(timeout)
+            self.stats.add(now - self._returned_at)
+        reader = self._reader
+        message = None if reader is None else reader.try_take()
+        if message is None:
+            message = self._wait_for_message(timeout)
+        else:  # a message was already waiting: the common case of a busy loop, without the waiting machinery
+            self._spin.arrived(now)
         self._returned_at = time.perf_counter()
         return message
 
-    def _take(self, timeout: float | None) -> M:
+    def _wait_for_message(self, timeout: float | None) -> M:
         deadline = None if timeout is None else time.monotonic() + timeout
         stop = self.node.graph.stop
         executor = self.node.executor
         spin = self._spin.budget()
         if spin:
             spin_end = time.perf_counter() + spin
-            while time.perf_counter() < spin_end:
+            while (now := time.perf_counter()) < spin_end:
                 message = self.try_take()
                 if message is not None:
-                    self._spin.arrived()
+                    self._spin.arrived(now)
                     return message
                 os.sched_yield()  # lets a publishing thread have the GIL (sleep(0) naps ~90 µs)
         while True:
             seen = executor.generation
             message = self.try_take()
             if message is not None:
-                self._spin.arrived()
+                self._spin.arrived(time.perf_counter())
                 return message
             if stop.is_set():
                 raise ShutdownError(f"take on {self.topic} interrupted: the graph is shutting down")

@@ -297,7 +297,9 @@ class ShmReader(Reader):
         return False
 
     def try_take(self) -> Any | None:
-        with self._lock:
+        lock = self._lock
+        lock.acquire()  # not ``with``: this runs on every poll of a hot node, and ``with`` costs 0.08 µs more
+        try:
             ports = self._ports
             if len(ports) == 1:  # one publishing target, the common case: no rotation
                 return self._take_from(ports[0])
@@ -308,6 +310,8 @@ class ShmReader(Reader):
                 if message is not None:
                     return message
             return None
+        finally:
+            lock.release()
 
     def _take_from(self, port: _Port) -> Any | None:
         """The next message of one publishing target (``self._lock`` held), None when it has none."""

@@ -1,8 +1,17 @@
-"""The rospy peer of the latency benchmark (TCPROS through a Debian rosmaster).
+"""The rospy peer of the latency benchmarks (TCPROS through a Debian rosmaster).
 
 Runs under the system interpreter (/usr/bin/python3), where Debian's rospy lives,
-so it imports nothing from hetros; the protocol matches ``_roles``: a 16-byte
-prefix (stamp, sequence number) in a std_msgs/UInt8MultiArray.
+so it imports nothing from hetros; the protocol matches ``_roles`` and ``_ros1_nodes``:
+a 16-byte prefix (stamp, sequence number) in a std_msgs/UInt8MultiArray.
+
+A sequence number carries the sender's ``tag`` in its top 32 bits (0 when one sender
+is alone, as in ``latency.py``); the low bits count, or say PROBE or STOP. An echo
+replies to tag t on ``/bench_recv`` (t = 0) or ``/bench_recv<t>``; in ``serve`` mode it
+keeps one-way samples per tag, writes them all at every STOP, and runs until killed.
+A sender given ``turns`` (two FIFOs) waits for a byte on the first before each ``block``
+of exchanges and writes one to the second after it: the ROS 1 benchmark alternates two
+senders that way, against one echo. The first exchange of a block is not measured (the
+receiver wakes from the other sender's block).
 """
 
 import json
@@ -13,8 +22,20 @@ import sys
 import time
 
 PREFIX = struct.Struct("<qq")
-PROBE = -1
-STOP = -2
+TAG_SHIFT = 32
+COUNT = (1 << TAG_SHIFT) - 1
+PROBE = COUNT
+STOP = COUNT - 1
+
+
+def reply_topic(tag):
+    return "/bench_recv" if tag == 0 else f"/bench_recv{tag}"
+
+
+def measured(cfg, count):
+    """Whether exchange ``count`` is measured: past the warm-up, not the first of a block."""
+    block = cfg.get("block", 0)
+    return count >= cfg["warmup"] and not (block and count % block == 0)
 
 
 def main():
@@ -26,15 +47,18 @@ def main():
     import rospy
     from std_msgs.msg import UInt8MultiArray
 
-    rospy.init_node("bench_" + role, anonymous=False, disable_signals=True)
+    tag = cfg.get("tag", 0)
+    rospy.init_node(f"bench_{role}{tag or ''}", anonymous=False, disable_signals=True)
     inbox = queue.Queue()
-    out_topic, in_topic = ("/bench_send", "/bench_recv") if role == "ping" else ("/bench_recv", "/bench_send")
-    pub = rospy.Publisher(out_topic, UInt8MultiArray, queue_size=16, tcp_nodelay=True)
-    rospy.Subscriber(in_topic, UInt8MultiArray, lambda m: inbox.put((time.monotonic_ns(), m.data)),
+    if role == "ping":
+        pubs = {tag: rospy.Publisher("/bench_send", UInt8MultiArray, queue_size=16, tcp_nodelay=True)}
+        into = reply_topic(tag)
+    else:
+        pubs = {t: rospy.Publisher(reply_topic(t), UInt8MultiArray, queue_size=16, tcp_nodelay=True)
+                for t in cfg.get("tags", [0])}
+        into = "/bench_send"
+    rospy.Subscriber(into, UInt8MultiArray, lambda m: inbox.put((time.monotonic_ns(), m.data)),
                      queue_size=16, tcp_nodelay=True)
-
-    def send(stamp, seq, payload):
-        pub.publish(UInt8MultiArray(data=PREFIX.pack(stamp, seq) + payload))
 
     def recv(timeout):
         try:
@@ -44,54 +68,86 @@ def main():
         stamp, seq = PREFIX.unpack_from(data)
         return arrival, stamp, seq, data
 
-    result = {}
     if role == "ping":
+        pub = pubs[tag]
+        top = tag << TAG_SHIFT
+
+        def send(count, payload):
+            stamp = time.monotonic_ns()
+            pub.publish(UInt8MultiArray(data=PREFIX.pack(stamp, top | count) + payload))
+            return stamp
+
         payload = bytes(cfg["size"])
         deadline = time.monotonic() + 60
         while True:
-            send(time.monotonic_ns(), PROBE, payload)
+            send(PROBE, payload)
             if recv(0.2) is not None:
                 break
             if time.monotonic() > deadline:
                 raise SystemExit("rospy: the echo side never answered")
         while recv(0.1) is not None:
             pass
+        go, done = open_turns(cfg)
         rtt = []
-        for seq in range(cfg["warmup"] + cfg["reps"]):
+        total, block = cfg["warmup"] + cfg["reps"], cfg.get("block", 0) or 1
+        for count in range(total):
+            if go is not None and count % block == 0:
+                os.read(go, 1)
             settled = time.monotonic() + cfg.get("settle_s", 0.0)
             while time.monotonic() < settled:  # awake: the echo finishes its reply, this CPU stays warm
                 pass
-            start = time.monotonic_ns()
-            send(start, seq, payload)
+            start = send(count, payload)
             while True:
                 got = recv(10.0)
                 if got is None:
-                    raise SystemExit(f"rospy: reply {seq} lost")
-                if got[2] == seq:
+                    raise SystemExit(f"rospy: reply {count} lost")
+                if got[2] == top | count:
                     break
-            if seq >= cfg["warmup"]:
+            if measured(cfg, count):
                 rtt.append(time.monotonic_ns() - start)
+            if done is not None and (count % block == block - 1 or count == total - 1):
+                os.write(done, b"d")
             if cfg.get("gap_s"):
                 time.sleep(cfg["gap_s"])
-        send(time.monotonic_ns(), STOP, b"")
+        send(STOP, b"")
         time.sleep(0.2)
-        result["rtt_ns"] = rtt
+        write(cfg, role, {"rtt_ns": rtt})
     else:
-        one_way = []
+        one_way = {}
         while True:
             got = recv(120.0)
             if got is None:
                 raise SystemExit("rospy: echo waited 120 s")
             arrival, stamp, seq, data = got
-            if seq == STOP:
+            sender, count = seq >> TAG_SHIFT, seq & COUNT
+            if count == STOP:
+                write(cfg, role, {"one_way_ns": one_way} if cfg.get("serve") else
+                      {"one_way_ns": one_way.get("0", [])})
+                if cfg.get("serve"):
+                    continue
                 break
-            if seq >= cfg["warmup"]:
-                one_way.append(arrival - stamp)
-            pub.publish(UInt8MultiArray(data=bytes(data)))
-        result["one_way_ns"] = one_way
-    with open(cfg[role + "_out"], "w") as handle:
-        json.dump(result, handle)
+            if count != PROBE and measured(cfg, count):
+                one_way.setdefault(str(sender), []).append(arrival - stamp)
+            pubs[sender].publish(UInt8MultiArray(data=bytes(data)))
     os._exit(0)
+
+
+def open_turns(cfg):
+    """The FIFOs a sender takes turns by (None, None when alone); says it is ready on the second."""
+    turns = cfg.get("turns")
+    if not turns:
+        return None, None
+    done = os.open(turns[1], os.O_WRONLY)
+    os.write(done, b"r")
+    return os.open(turns[0], os.O_RDONLY), done
+
+
+def write(cfg, role, result):
+    """The result file, replaced whole (a serving echo rewrites it while the bench reads it)."""
+    path = cfg[role + "_out"]
+    with open(path + ".part", "w") as handle:
+        json.dump(result, handle)
+    os.replace(path + ".part", path)
 
 
 if __name__ == "__main__":

@@ -235,7 +235,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         forwarded += ["--out", args.out]
     if args.bench == "ros1":
         rounds = ["--rounds", str(args.rounds)] if args.rounds else []
-        return ros1([*forwarded, *rounds, "--gap-ms", str(args.gap_ms), "--settle-us", str(args.settle_us)])
+        return ros1([*forwarded, *rounds, "--gap-ms", str(args.gap_ms), "--settle-us", str(args.settle_us),
+                     *(["--steady-malloc"] if args.steady_malloc else [])])
     if args.bench == "dds":
         from ..bench.dds import main as dds
 
@@ -307,6 +308,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="sender's wait, awake, after each reply (default 50; 0: back-to-back exchanges)")
     p.add_argument("--gap-ms", type=float, default=0.0, help="sender's pause after each reply (isolated messages)")
     p.add_argument("--rounds", type=int, help="interleaved rounds over every pair and size, pooled (default 3)")
+    p.add_argument("--steady-malloc", action="store_true",
+                   help="every process keeps large buffers mapped (GLIBC_TUNABLES; see benchmarks/ros1.py)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
     hw = sub.add_parser("hw", help="fpga targets: topic networks as RTL").add_subparsers(dest="hw", required=True)

@@ -87,6 +87,25 @@ def test_take_try_take_and_iterator(graph: Graph) -> None:
     assert [m.data for m in sub] == [2]
 
 
+def test_take_loop_node_time_runs_from_a_take_returning_to_the_next_take(graph: Graph) -> None:
+    """A take that times out ends the interval it was called in and starts none: the wait
+    for the next message is not the node's work."""
+    sub = Node("s", graph).create_subscription(Int32, "/n")
+    pub = Node("p", graph).create_publisher(Int32, "/n")
+    pub.publish(Int32(data=1))
+    sub.take(timeout=1)
+    assert sub.stats.summary()[0] == 0
+    with pytest.raises(TakeTimeoutError):
+        sub.take(timeout=0.05)
+    assert sub.stats.summary()[0] == 1
+    pub.publish(Int32(data=2))
+    sub.take(timeout=1)
+    assert sub.stats.summary()[0] == 1, "the timed-out wait was counted as node time"
+    pub.publish(Int32(data=3))
+    sub.take(timeout=1)
+    assert sub.stats.summary()[0] == 2
+
+
 def test_published_message_is_handed_over_read_only(graph: Graph) -> None:
     sub = Node("s", graph).create_subscription(String, "/x")
     pub = Node("p", graph).create_publisher(String, "/x")

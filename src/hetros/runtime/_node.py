@@ -184,6 +184,7 @@ class Subscription(Generic[M]):
         now = time.perf_counter()
         if self._returned_at:
             self.stats.add(now - self._returned_at)
+            self._returned_at = 0.0  # a take that times out or is interrupted starts no node time
         reader = self._reader
         message = None if reader is None else reader.try_take()
         if message is None:

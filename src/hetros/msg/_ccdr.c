@@ -555,7 +555,8 @@ typedef struct {
     PyObject *descr;
     int flags;
 } ArrayHead;
-#define ARRAY_WRITEABLE 0x0400 /* NPY_ARRAY_WRITEABLE */
+#define ARRAY_WRITEABLE 0x0400          /* NPY_ARRAY_WRITEABLE */
+#define ARRAY_WARN_ON_WRITE 0x80000000u /* NPY_ARRAY_WARN_ON_WRITE */
 #define HEAD(array) ((ArrayHead *)(array))
 static int array_head_checked;
 
@@ -699,8 +700,8 @@ static int is_loaned(PyObject *array)
 
 static int make_read_only(PyObject *array)
 {
-    if (array_head_checked) { /* what numpy's own setter does for False: clear the flag */
-        HEAD(array)->flags &= ~ARRAY_WRITEABLE;
+    if (array_head_checked) { /* what numpy's own setter does for False: clear both flags */
+        HEAD(array)->flags = (int)((unsigned)HEAD(array)->flags & ~(ARRAY_WRITEABLE | ARRAY_WARN_ON_WRITE));
         return 0;
     }
     PyObject *flags = PyObject_GetAttr(array, str_flags);

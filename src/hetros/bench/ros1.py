@@ -16,11 +16,11 @@ and a PNG plot. Report ratios, not absolute numbers.
 
 One receiver process serves both senders at once, which take turns of eight exchanges
 (through FIFOs the bench drives; who goes first alternates; the first exchange of a turn
-is not measured). That matters for rospy: a rospy receiver reads each connection in a
-thread of its own, and per thread (glibc gives threads arenas of their own) and by chance
-its 196 kB buffers come from a heap that stays mapped or from pages returned to the kernel
-after each message and faulted in again (about 100 µs more; page faults are slow on these
-VMs). With a receiver process per pair, a hetros -> rospy figure held its receiver's luck
+is not measured). That matters for rospy: per connection and by chance, a rospy
+receiver's 196 kB buffers come from a heap that stays mapped or from pages returned to
+the kernel after each message and faulted in again (about 100 µs more; page faults are
+slow on these VMs); rospy reads each connection in a thread of its own, and glibc gives
+threads arenas of their own. With a receiver process per pair, a hetros -> rospy figure held its receiver's luck
 against rospy -> rospy's (0.63x once in five runs, 1.06-1.10x otherwise); with both
 senders in turn at the same receiver, the machine's drift and the process's state are the
 same for both, and only the connection's luck remains (see the README's figures).

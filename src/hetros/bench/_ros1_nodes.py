@@ -1,19 +1,15 @@
 """hetros's side of the ROS 1 benchmark: nodes on ``kind: ros1`` targets, written as users write them.
 
-They speak the rospy peer's protocol (``_rospy_peer``): a std_msgs/UInt8MultiArray whose
-first 16 bytes are the sender's ``monotonic_ns`` stamp and a sequence number, the
-sender's ``tag`` in its top bits (replies to tag t go to ``/bench_recv<t>``). The echo
-node is a subscription callback that publishes the data back; it serves every tagged
-sender at once, writing its one-way samples per tag at every STOP, until the launch is
-stopped. A ping node given ``turns`` takes turns with another sender through two FIFOs,
-a ``block`` of exchanges at a time (the first of each not measured).
+They speak the protocol of ``_ros1_protocol``, as the rospy peer does. The echo node is a
+subscription callback that publishes the data back; it serves every tagged sender at
+once, writing its one-way samples per tag at every STOP, until the launch is stopped. A
+ping node given ``turns`` takes turns with another sender, a ``block`` of exchanges at a
+time.
 """
 
 from __future__ import annotations
 
-import json
 import os
-import struct
 import time
 from typing import Any
 
@@ -21,38 +17,9 @@ import numpy as np
 
 from ..msg import registry
 from ..runtime import Node
+from ._ros1_protocol import COUNT, PREFIX, PROBE, STOP, TAG_SHIFT, measured, open_turns, reply_topic, write_result
 
 UInt8MultiArray = registry().get("std_msgs/msg/UInt8MultiArray")
-PREFIX = struct.Struct("<qq")
-TAG_SHIFT = 32
-COUNT = (1 << TAG_SHIFT) - 1
-PROBE = COUNT
-STOP = COUNT - 1
-
-
-def reply_topic(tag: int) -> str:
-    return "/bench_recv" if tag == 0 else f"/bench_recv{tag}"
-
-
-def measured(count: int, warmup: int, block: int) -> bool:
-    """Whether exchange ``count`` is measured: past the warm-up, not the first of a block."""
-    return count >= warmup and not (block and count % block == 0)
-
-
-def _write(path: str, result: dict[str, Any]) -> None:
-    """Replaced whole: the bench may read it while the echo rewrites it."""
-    with open(path + ".part", "w") as out:
-        json.dump(result, out)
-    os.replace(path + ".part", path)
-
-
-def _open_turns(turns: list[str] | None) -> tuple[int | None, int | None]:
-    """The FIFOs this sender takes turns by (None, None when alone); says it is ready on the second."""
-    if not turns:
-        return None, None
-    done = os.open(turns[1], os.O_WRONLY)
-    os.write(done, b"r")
-    return os.open(turns[0], os.O_RDONLY), done
 
 
 def ping(node: Node) -> None:
@@ -86,7 +53,7 @@ def ping(node: Node) -> None:
             replies.take(timeout=0.1)
         except TimeoutError:
             break
-    go, done = _open_turns(node.get_parameter("turns", None))
+    go, done = open_turns(node.get_parameter("turns", None))
     rtt = []
     total, turn = warmup + reps, block or 1
     for count in range(total):
@@ -106,7 +73,7 @@ def ping(node: Node) -> None:
             time.sleep(gap)
     send(STOP)
     time.sleep(0.2)
-    _write(node.get_parameter("out"), {"rtt_ns": rtt})
+    write_result(node.get_parameter("out"), {"rtt_ns": rtt})
 
 
 def echo(node: Node) -> None:
@@ -122,7 +89,7 @@ def echo(node: Node) -> None:
         stamp, seq = PREFIX.unpack_from(message.data)
         sender, count = seq >> TAG_SHIFT, seq & COUNT
         if count == STOP:
-            _write(out, {"one_way_ns": one_way})
+            write_result(out, {"one_way_ns": one_way})
             return
         if count != PROBE and measured(count, warmup, block):
             one_way.setdefault(str(sender), []).append(arrival - stamp)

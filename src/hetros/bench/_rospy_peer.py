@@ -1,41 +1,20 @@
 """The rospy peer of the latency benchmarks (TCPROS through a Debian rosmaster).
 
 Runs under the system interpreter (/usr/bin/python3), where Debian's rospy lives,
-so it imports nothing from hetros; the protocol matches ``_roles`` and ``_ros1_nodes``:
-a 16-byte prefix (stamp, sequence number) in a std_msgs/UInt8MultiArray.
-
-A sequence number carries the sender's ``tag`` in its top 32 bits (0 when one sender
-is alone, as in ``latency.py``); the low bits count, or say PROBE or STOP. An echo
-replies to tag t on ``/bench_recv`` (t = 0) or ``/bench_recv<t>``; in ``serve`` mode it
-keeps one-way samples per tag, writes them all at every STOP, and runs until killed.
-A sender given ``turns`` (two FIFOs) waits for a byte on the first before each ``block``
-of exchanges and writes one to the second after it: the ROS 1 benchmark alternates two
-senders that way, against one echo. The first exchange of a block is not measured (the
-receiver wakes from the other sender's block).
+so it imports nothing from hetros: the protocol it shares with ``_ros1_nodes`` is
+``_ros1_protocol`` beside it (standard library only). In ``serve`` mode an echo keeps
+one-way samples per sender tag, writes them all at every STOP, and runs until killed;
+otherwise it stops at the first STOP (``latency.py``'s rospy rows, one sender, tag 0).
 """
 
 import json
 import os
 import queue
-import struct
 import sys
 import time
 
-PREFIX = struct.Struct("<qq")
-TAG_SHIFT = 32
-COUNT = (1 << TAG_SHIFT) - 1
-PROBE = COUNT
-STOP = COUNT - 1
-
-
-def reply_topic(tag):
-    return "/bench_recv" if tag == 0 else f"/bench_recv{tag}"
-
-
-def measured(cfg, count):
-    """Whether exchange ``count`` is measured: past the warm-up, not the first of a block."""
-    block = cfg.get("block", 0)
-    return count >= cfg["warmup"] and not (block and count % block == 0)
+# the script's folder is on sys.path: the protocol module beside it, without hetros
+from _ros1_protocol import COUNT, PREFIX, PROBE, STOP, TAG_SHIFT, measured, open_turns, reply_topic, write_result
 
 
 def main():
@@ -87,7 +66,7 @@ def main():
                 raise SystemExit("rospy: the echo side never answered")
         while recv(0.1) is not None:
             pass
-        go, done = open_turns(cfg)
+        go, done = open_turns(cfg.get("turns"))
         rtt = []
         total, block = cfg["warmup"] + cfg["reps"], cfg.get("block", 0) or 1
         for count in range(total):
@@ -103,7 +82,7 @@ def main():
                     raise SystemExit(f"rospy: reply {count} lost")
                 if got[2] == top | count:
                     break
-            if measured(cfg, count):
+            if measured(count, cfg["warmup"], cfg.get("block", 0)):
                 rtt.append(time.monotonic_ns() - start)
             if done is not None and (count % block == block - 1 or count == total - 1):
                 os.write(done, b"d")
@@ -111,7 +90,7 @@ def main():
                 time.sleep(cfg["gap_s"])
         send(STOP, b"")
         time.sleep(0.2)
-        write(cfg, role, {"rtt_ns": rtt})
+        write_result(cfg["ping_out"], {"rtt_ns": rtt})
     else:
         one_way = {}
         while True:
@@ -121,33 +100,15 @@ def main():
             arrival, stamp, seq, data = got
             sender, count = seq >> TAG_SHIFT, seq & COUNT
             if count == STOP:
-                write(cfg, role, {"one_way_ns": one_way} if cfg.get("serve") else
-                      {"one_way_ns": one_way.get("0", [])})
+                write_result(cfg["echo_out"], {"one_way_ns": one_way} if cfg.get("serve") else
+                             {"one_way_ns": one_way.get("0", [])})
                 if cfg.get("serve"):
                     continue
                 break
-            if count != PROBE and measured(cfg, count):
+            if count != PROBE and measured(count, cfg["warmup"], cfg.get("block", 0)):
                 one_way.setdefault(str(sender), []).append(arrival - stamp)
             pubs[sender].publish(UInt8MultiArray(data=bytes(data)))
     os._exit(0)
-
-
-def open_turns(cfg):
-    """The FIFOs a sender takes turns by (None, None when alone); says it is ready on the second."""
-    turns = cfg.get("turns")
-    if not turns:
-        return None, None
-    done = os.open(turns[1], os.O_WRONLY)
-    os.write(done, b"r")
-    return os.open(turns[0], os.O_RDONLY), done
-
-
-def write(cfg, role, result):
-    """The result file, replaced whole (a serving echo rewrites it while the bench reads it)."""
-    path = cfg[role + "_out"]
-    with open(path + ".part", "w") as handle:
-        json.dump(result, handle)
-    os.replace(path + ".part", path)
 
 
 if __name__ == "__main__":

@@ -54,7 +54,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ._ros1_nodes import measured, reply_topic
+from ._ros1_protocol import measured, reply_topic
 from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt, log_axes
 
 SIZES = [4, 3 * 1024, 192 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
@@ -240,8 +240,7 @@ def wait_all(procs: list[subprocess.Popen[str]], timeout: float) -> list[str]:
                     proc.kill()
             break
         time.sleep(0.05)
-    return [(p.communicate()[1] or "").strip()[-400:] or f"exit code {p.returncode}"
-            for p in procs if p.wait() != 0]
+    return [_last_words(p) for p in procs if p.wait() != 0]
 
 
 def _project(role: str, cpus: list[int], parameters: dict[str, Any]) -> str:

@@ -2,7 +2,7 @@
 
 from ._definitions import find_packages, read_package
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
-from ._message import FrozenMessage, LoanBuffer, Message, copy, freeze, hand_over, loaned_array
+from ._message import FrozenMessage, LoanBuffer, Message, copy, default_maker, freeze, hand_over, loaned_array
 from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
 from ._validate import convert_array, validate
 
@@ -19,6 +19,7 @@ __all__ = [
     "array_fields",
     "convert_array",
     "copy",
+    "default_maker",
     "find_packages",
     "flat_layout",
     "freeze",

@@ -807,7 +807,91 @@ static int seal_message(PyObject *message, const Type *type, int callers, PyObje
 }
 
 /* ---------------------------------------------------------------------------------------- */
+/* copy: what _message.copy does, for messages whose every value is as validation accepts   */
+
+static PyObject *str_copy;
+
+static PyObject *copy_message(PyObject *message, const Type *type);
+
+/* a writable list of copies of ``items`` (strings shared, messages copied); NULL with no
+   error set when an item is not what the field holds */
+static PyObject *copy_items(PyObject *items, const Op *op)
+{
+    if (!PyList_Check(items))
+        return NULL;
+    Py_ssize_t count = PyList_GET_SIZE(items);
+    int fixed = op->kind == OP_STR_ARRAY || op->kind == OP_MSG_ARRAY;
+    if (op->length && (fixed ? count != op->length : count > op->length))
+        return NULL;
+    PyObject *copied = PyList_New(count);
+    if (copied == NULL)
+        return NULL;
+    for (Py_ssize_t k = 0; k < count; k++) {
+        PyObject *item = PyList_GET_ITEM(items, k), *value = NULL;
+        if (op->sub != NULL)
+            value = copy_message(item, op->sub);
+        else if (PyUnicode_CheckExact(item))
+            value = Py_NewRef(item);
+        if (value == NULL) {
+            Py_DECREF(copied);
+            return NULL;
+        }
+        PyList_SET_ITEM(copied, k, value);
+    }
+    return copied;
+}
+
+/* A writable deep copy, built slot by slot. NULL with no error set means "not the common
+   case": a value the generated constructor would convert or refuse, which copy() must see. */
+static PyObject *copy_message(PyObject *message, const Type *type)
+{
+    if (!is_type(message, type) || !array_head_checked)
+        return NULL;
+    PyObject *copied = type->cls->tp_alloc(type->cls, 0);
+    if (copied == NULL)
+        return NULL;
+    SLOT(copied, type->loan_offset) = Py_NewRef(Py_None);
+    for (Py_ssize_t i = 0; i < type->nops; i++) {
+        const Op *op = &type->ops[i];
+        PyObject *value = SLOT(message, op->offset), *own = NULL;
+        if (value == NULL) {
+            Py_DECREF(copied);
+            return NULL;
+        }
+        switch (op->kind) {
+        case OP_PRIM:
+            if (check_prim(value, op->prim) == 0)
+                own = Py_NewRef(value);
+            break;
+        case OP_STRING:
+            if (PyUnicode_CheckExact(value))
+                own = Py_NewRef(value);
+            break;
+        case OP_NESTED:
+            own = copy_message(value, op->sub);
+            break;
+        case OP_PRIM_ARRAY:
+        case OP_PRIM_SEQ:
+            if (check_array(value, op) == 0 && HEAD(value)->nd == 1)
+                own = PyObject_CallMethodNoArgs(value, str_copy);
+            break;
+        default:
+            own = copy_items(value, op);
+            break;
+        }
+        if (own == NULL) {
+            Py_DECREF(copied);
+            return NULL;
+        }
+        SLOT(copied, op->offset) = own;
+    }
+    return copied;
+}
+
+/* ---------------------------------------------------------------------------------------- */
 /* the Python object                                                                          */
+
+enum { F_SIZE, F_ENCODE, F_SIZE_LEAN, F_ENCODE_LEAN, F_DECODE, F_VALIDATE, F_SEAL, F_COPY, F_COUNT };
 
 typedef struct {
     PyObject_HEAD
@@ -815,10 +899,9 @@ typedef struct {
     int ros1;
     PyObject *frombuffer, *frozenlist;
     /* the generated Python functions this stands in for (None where it has none) */
-    PyObject *fallback[7];
+    PyObject *fallback[F_COUNT];
 } Codec;
 
-enum { F_SIZE, F_ENCODE, F_SIZE_LEAN, F_ENCODE_LEAN, F_DECODE, F_VALIDATE, F_SEAL, F_COUNT };
 
 static void codec_dealloc(Codec *self)
 {
@@ -833,14 +916,14 @@ static void codec_dealloc(Codec *self)
 static PyObject *codec_new(PyTypeObject *cls, PyObject *args, PyObject *kwargs)
 {
     static char *names[] = {"program", "ros1", "frombuffer", "frozenlist", "size", "encode", "size_lean",
-                            "encode_lean", "decode", "validate", "seal", NULL};
+                            "encode_lean", "decode", "validate", "seal", "copy", NULL};
     PyObject *spec, *frombuffer, *frozenlist, *fallback[F_COUNT];
     int ros1;
     for (int i = 0; i < F_COUNT; i++)
         fallback[i] = Py_None;
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OpOO|$OOOOOOO", names, &spec, &ros1, &frombuffer, &frozenlist,
-                                     &fallback[0], &fallback[1], &fallback[2], &fallback[3], &fallback[4],
-                                     &fallback[5], &fallback[6]))
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OpOO|$OOOOOOOO", names, &spec, &ros1, &frombuffer,
+                                     &frozenlist, &fallback[0], &fallback[1], &fallback[2], &fallback[3],
+                                     &fallback[4], &fallback[5], &fallback[6], &fallback[7]))
         return NULL;
     Codec *self = (Codec *)cls->tp_alloc(cls, 0);
     if (self == NULL)
@@ -969,6 +1052,14 @@ static PyObject *codec_seal(Codec *self, PyObject *const *args, Py_ssize_t nargs
     return Py_NewRef(args[0]);
 }
 
+static PyObject *codec_copy(Codec *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    PyObject *copied = nargs == 1 ? copy_message(args[0], self->type) : NULL;
+    if (copied == NULL)
+        return call_fallback(self, F_COPY, args, nargs);
+    return copied;
+}
+
 static PyMethodDef codec_methods[] = {
     {"seal", (PyCFunction)(void (*)(void))codec_seal, METH_FASTCALL,
      "seal(message, callers) -> message, frozen in place as the generated sealer does"},
@@ -981,6 +1072,8 @@ static PyMethodDef codec_methods[] = {
      "size_lean(message): the size with top-level primitive sequences left empty"},
     {"encode_lean", (PyCFunction)(void (*)(void))codec_encode_lean, METH_FASTCALL,
      "encode_lean(message, buffer, pos=0) -> end, top-level primitive sequences left empty"},
+    {"copy", (PyCFunction)(void (*)(void))codec_copy, METH_FASTCALL,
+     "copy(message) -> a deep, writable copy, as hetros.msg.copy makes it"},
     {"decode", (PyCFunction)(void (*)(void))codec_decode, METH_FASTCALL,
      "decode(buffer, pos=0, end=-1) -> a read-only message; primitive arrays are views on buffer"},
     {NULL, NULL, 0, NULL},
@@ -1053,7 +1146,8 @@ PyMODINIT_FUNC PyInit__ccdr(void)
     str_flags = PyUnicode_InternFromString("flags");
     str_writeable = PyUnicode_InternFromString("writeable");
     str_hetros_seal = PyUnicode_InternFromString("_hetros_seal");
-    if (str_base == NULL || str_flags == NULL || str_writeable == NULL || str_hetros_seal == NULL)
+    str_copy = PyUnicode_InternFromString("copy");
+    if (str_copy == NULL || str_base == NULL || str_flags == NULL || str_writeable == NULL || str_hetros_seal == NULL)
         goto fail;
     PyObject *numpy = PyImport_ImportModule("numpy");
     if (str_dtype == NULL || str_size == NULL || numpy == NULL)

@@ -152,3 +152,14 @@ def compile_sealer(types: TypeRegistry, typename: str, seal: Callable[[Message, 
     """
     sealer: Callable[[Message, int], Message] = _stand_in(types, typename, "seal", seal)
     return sealer
+
+
+def compile_copier(types: TypeRegistry, typename: str, copy: Callable[[Message], Any]) -> Callable[[Message], Any]:
+    """The compiled copier of ``typename``, standing in for ``_message._copy_reference``.
+
+    It copies a message whose values are all as validation accepts them (strings and numbers
+    shared, arrays and lists copied, nested messages copied alike) and hands ``copy`` any
+    other, whose generated constructor converts or keeps what it is given.
+    """
+    copier: Callable[[Message], Any] = _stand_in(types, typename, "copy", copy)
+    return copier

@@ -10,6 +10,7 @@ changing what another subscriber sees.
 from __future__ import annotations
 
 import copy as _copy
+import functools
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -40,6 +41,8 @@ class Message:
 
     # replaced per type by a generated sealer on first use (see build_sealer)
     _hetros_seal: ClassVar[Callable[[Message, int], Message]]
+    # replaced per type by the compiled copier on first use, where there is one
+    _hetros_copy: ClassVar[Callable[[Message], Any]]
 
     def copy(self) -> Any:
         """Return a deep, writable copy (use it to keep a delivered message).
@@ -93,6 +96,19 @@ class FrozenMessage(Message):
 
 def copy(message: Message) -> Any:
     """A deep, writable copy of any message, whatever its field names."""
+    return type(message)._hetros_copy(message)
+
+
+def default_maker(cls: type[Message]) -> Callable[[], Any]:
+    """What makes messages as ``cls()`` does, copying one made once: where compiled, a
+    third of the cost of the generated constructor (a loan makes one per publish)."""
+    template = cls()
+    copy(template)  # builds the type's copier, which replaces itself on its first use
+    return functools.partial(cls._hetros_copy, template)
+
+
+def _copy_reference(message: Message) -> Any:
+    """``copy`` as the generated constructor makes it: the reference the compiled copier stands in for."""
     cls = message._thawed_class
     values = [_thaw_value(getattr(message, name)) for name in message.__fieldnames__]
     return cls(*values)
@@ -219,6 +235,7 @@ def _first_seal(message: Message, callers: int) -> Message:
 
 
 Message._hetros_seal = staticmethod(_first_seal)
+Message._hetros_copy = staticmethod(_copy_reference)
 
 
 def hand_over(message: Message, copy_arrays: bool) -> Message:

@@ -27,7 +27,7 @@ from .._errors import DefinitionError, SerializationError, UnknownTypeError
 from . import _compiled as compiled_codecs
 from ._cdr import CdrCodec, Ros1Codec, build_codec, build_ros1_codec
 from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
-from ._message import FrozenMessage, Message, build_sealer
+from ._message import FrozenMessage, Message, _copy_reference, build_sealer
 from ._validate import Validator, build_validator, convert_array
 
 NUMPY_DTYPES = {
@@ -333,8 +333,9 @@ class TypeRegistry:
         cls._list_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
                                 and a not in cls._array_names)
         setattr(cls, "_hetros_validate", staticmethod(self._lazy_validator(full, cls)))  # noqa: B010
-        if self.compiled:  # else the class keeps Message's generated sealer, built on first use
+        if self.compiled:  # else the class keeps Message's generated sealer, built on first use, and copier
             cls._hetros_seal = frozen._hetros_seal = staticmethod(self._lazy_sealer(full, cls))
+            cls._hetros_copy = frozen._hetros_copy = staticmethod(self._lazy_copier(full, cls))
         self._classes[full] = cls
         self.store.types[full] = cls
         self.store.cache.pop(full, None)
@@ -347,6 +348,16 @@ class TypeRegistry:
             sealer = compiled_codecs.compile_sealer(self, full, build_sealer(cls))
             cls._hetros_seal = cls._frozen_class._hetros_seal = staticmethod(sealer)
             return sealer(message, callers)
+
+        return first_use
+
+    def _lazy_copier(self, full: str, cls: type[Message]) -> Callable[[Message], Any]:
+        """Builds the type's compiled copier on its first use."""
+
+        def first_use(message: Message) -> Any:
+            copier = compiled_codecs.compile_copier(self, full, _copy_reference)
+            cls._hetros_copy = cls._frozen_class._hetros_copy = staticmethod(copier)
+            return copier(message)
 
         return first_use
 

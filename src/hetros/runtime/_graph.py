@@ -22,6 +22,7 @@ from ..msg import (
     Message,
     TypeRegistry,
     array_fields,
+    default_maker,
     freeze,
     hand_over,
     loaned_array,
@@ -91,18 +92,19 @@ class _FanoutWriter(Writer):
         if shm is not None and shm.slot_loan_pays(sizes):
             return lambda: shm.loan(sizes)
         arrays = self._arrays_of(cls, sizes)
+        blank = default_maker(cls)
         if len(arrays) == 1 and len(arrays[0][0]) == 1:  # one top-level array, the common loan
             (name,), dtype, length = arrays[0]
             shape, nbytes = (length,), length * dtype.itemsize
 
             def one_array() -> Message:  # loaned_array inlined: a third of a small loan's cost
-                message = cls()
+                message: Message = blank()
                 setattr(message, name, np.ndarray(shape, dtype, LoanBuffer(nbytes)))
                 return message
             return one_array
 
         def each_array() -> Message:
-            message = cls()
+            message: Message = blank()
             for path, dtype, length in arrays:
                 set_path(message, path, loaned_array(length, dtype))
             return message

@@ -74,6 +74,8 @@ class Publisher(Generic[M]):
         self._loan_maker: Callable[[type[M], dict[str, int]], Callable[[], M]] | None = \
             getattr(writer, "loan_maker", None)
         self._loans: dict[tuple[tuple[str, int], ...], Callable[[], M]] = {}
+        self._last_sizes: dict[str, int] | None = None
+        self._last_make: Callable[[], M] = msg_type
 
     def publish(self, message: M) -> None:
         """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
@@ -92,14 +94,17 @@ class Publisher(Generic[M]):
         smaller ones live in memory hetros owns and are copied once into the slot. After
         ``publish`` the loaned message is handed over: its arrays are no longer yours.
         """
+        if sizes == self._last_sizes:  # the same lengths as last time, the common loop: one comparison
+            return self._last_make()
+        if self._loan_maker is None:
+            return self.msg_type()
         make = self._loans.get(tuple(sizes.items()))
         if make is None:
-            if self._loan_maker is None:
-                return self.msg_type()
             make = self._loan_maker(self.msg_type, sizes)
             if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
                 self._loans.clear()
             self._loans[tuple(sizes.items())] = make
+        self._last_sizes, self._last_make = sizes, make
         return make()
 
     def close(self) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import struct
 import threading
 import time
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -279,13 +279,16 @@ class ShmReader(Reader):
         # so the sample is read through a reused view and returned at once
         self._copies = self._cdr is not None and self._cdr.decode_copies
         self._decode_body = self._cdr.decode_body if self._cdr is not None else None
-        if take_cdr is not None and self._decode_body is not None:
-            self._take_from = self._take_compiled  # type: ignore[method-assign]
         self._scratch = ScratchViews(readonly=True)
         self.topic = services[0].topic if services else ""
         for service in services:
             subscriber, start = service.subscriber(slot, channel, self.event)
             self._ports.append(_Port(service, subscriber, start))
+        self._only_port = self._ports[0] if len(self._ports) == 1 else None
+        if take_cdr is not None and self._decode_body is not None:
+            self._take_from = self._take_compiled  # type: ignore[method-assign]
+            if self._only_port is not None:  # one publishing target, the common case: one call per message
+                self.try_take = self._try_take_only_port  # type: ignore[method-assign]
         wake()
 
     # -- taking ----------------------------------------------------------------------------
@@ -310,6 +313,27 @@ class ShmReader(Reader):
                 if message is not None:
                     return message
             return None
+        finally:
+            lock.release()
+
+    def _try_take_only_port(self) -> Any | None:
+        """``try_take`` with one port and the compiled path: ``_take_compiled`` inlined."""
+        lock = self._lock
+        lock.acquire()
+        try:
+            port = self._only_port
+            if port is None:  # closed
+                return None
+            try:
+                got = take_cdr(port, self._slot, self._copies, self._borrowed,  # type: ignore[misc]
+                               self._decode_body)
+            except iox2.ReceiveError as exc:
+                raise self._receive_failed(port, exc) from exc
+            if got is None:
+                return None
+            if got is False or type(got) is tuple:
+                return self._finish_compiled(port, got)
+            return got
         finally:
             lock.release()
 
@@ -341,12 +365,16 @@ class ShmReader(Reader):
             raise self._receive_failed(port, exc) from exc
         if got is None:
             return None
+        if got is False or type(got) is tuple:
+            return self._finish_compiled(port, got)
+        return got
+
+    def _finish_compiled(self, port: _Port, got: Literal[False] | tuple[memoryview, int]) -> Any | None:
+        """What ``take_cdr`` leaves to the reference path: a publisher to check, a sample to finish."""
         if got is False:
             self._check_arrival(port)
             return None
-        if type(got) is tuple:
-            return self._took(port, *got)
-        return got
+        return self._took(port, *got)
 
     def _receive_failed(self, port: _Port, exc: Exception) -> TransportError:
         return TransportError(f"cannot receive on {port.service.topic} from target {port.service.target!r}: "
@@ -444,5 +472,6 @@ class ShmReader(Reader):
         for port in self._ports:
             port.service.credits.leave(self._slot)
         self._ports.clear()
+        self._only_port = None
 
 

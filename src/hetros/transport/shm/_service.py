@@ -192,17 +192,20 @@ class Service:
         """The inline path as one call (the hot path of small messages): a slot, the message
         in it as ``LAYOUT_CDR`` (encapsulation, then the body ``encode_body`` writes), sent."""
         if send_cdr is not None and self._publisher is not None:
-            with self.lock:
-                try:
-                    status = send_cdr(self, message, body_size, encode_body, publisher_slot)
-                except iox2.LoanError as exc:
-                    raise self._no_slot(CDR_BODY_AT + body_size, exc) from exc
-                except iox2.SendError as exc:
-                    raise self._not_sent(exc) from exc
+            lock = self.lock
+            lock.acquire()  # not ``with``: once per small message, and ``with`` costs 0.08 µs more
+            try:
+                status = send_cdr(self, message, body_size, encode_body, publisher_slot)
                 if status == SENT_STALE_WAKES:
                     self._wake_subscribers(self.credits.version)
-                if status:
-                    return
+            except iox2.LoanError as exc:
+                raise self._no_slot(CDR_BODY_AT + body_size, exc) from exc
+            except iox2.SendError as exc:
+                raise self._not_sent(exc) from exc
+            finally:
+                lock.release()
+            if status:
+                return
         # without the compiled path, or what it leaves (no publisher yet, a full FIFO to wait for)
         sample = self._loan_sample(CDR_BODY_AT + body_size)
         memory = self._scratch.at(sample.payload_ptr, CDR_BODY_AT + body_size)

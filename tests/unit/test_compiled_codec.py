@@ -53,6 +53,11 @@ def test_the_extension_is_built_wherever_a_compiler_is() -> None:
     if not os.environ.get("HETROS_PURE_PYTHON"):
         assert _hotpath.send_cdr is not None and _hotpath.take_cdr is not None, "built, but not in use"
         assert _compiled.ARRAY_HEAD_READ, "numpy's array head differs from what _ccdr.c reads: attributes serve"
+        from hetros.transport.shm._endpoints import _Port
+        from hetros.transport.shm._service import Service
+
+        # the state the hot path reads and writes per message is in slots it reaches in place
+        assert (_cslot.bind_slots(Service), _cslot.bind_slots(_Port)) == (8, 4)
 
 
 def test_pure_python_is_chosen_by_the_environment() -> None:

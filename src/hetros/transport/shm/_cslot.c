@@ -18,6 +18,7 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <structmember.h>
 
 typedef struct {
     PyObject_HEAD
@@ -141,10 +142,83 @@ static PyObject *configure(PyObject *module, PyObject *args)
     Py_RETURN_NONE;
 }
 
+/* The slots of the state classes (``Service``, ``_Port``) that the hot path reads and writes,
+   found by ``bind_slots``: read and written in place, as the classes' own member descriptors
+   do, instead of through a name lookup each (a dozen per message). An object of another
+   class, or an empty slot, goes through the attribute protocol. */
+#define SLOT(obj, offset) (*(PyObject **)((char *)(obj) + (offset)))
+static struct {
+    PyObject *name;
+    PyTypeObject *owner;
+    Py_ssize_t offset;
+} bound_slots[32];
+static int bound_count;
+
+static PyObject *get_attr(PyObject *obj, PyObject *name)
+{
+    for (int i = 0; i < bound_count; i++)
+        if (bound_slots[i].name == name && Py_IS_TYPE(obj, bound_slots[i].owner)) {
+            PyObject *value = SLOT(obj, bound_slots[i].offset);
+            if (value != NULL)
+                return Py_NewRef(value);
+            break;
+        }
+    return PyObject_GetAttr(obj, name);
+}
+
+static int set_attr(PyObject *obj, PyObject *name, PyObject *value)
+{
+    for (int i = 0; i < bound_count; i++)
+        if (bound_slots[i].name == name && Py_IS_TYPE(obj, bound_slots[i].owner)) {
+            Py_XSETREF(SLOT(obj, bound_slots[i].offset), Py_NewRef(value));
+            return 0;
+        }
+    return PyObject_SetAttr(obj, name, value);
+}
+
+/* bind_slots(cls): remember where cls keeps each attribute the hot path uses that is a slot */
+static PyObject *bind_slots(PyObject *module, PyObject *cls)
+{
+    (void)module;
+    if (!PyType_Check(cls)) {
+        PyErr_Format(PyExc_TypeError, "bind_slots takes a class, not %R", cls);
+        return NULL;
+    }
+    PyObject *names[] = {str_publisher, str_credits_at, str_blocking, str_room, str_next_seq, str_wakes_version,
+                         str_wakes, str_subscriber, str_service, str_expected, str_suspect_since, str_qos};
+    int bound = 0;
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        PyObject *descr = PyObject_GetAttr(cls, names[i]);
+        if (descr == NULL) {
+            PyErr_Clear();
+            continue;
+        }
+        int is_slot = Py_IS_TYPE(descr, &PyMemberDescr_Type) &&
+                      ((PyMemberDescrObject *)descr)->d_member->type == T_OBJECT_EX &&
+                      PyType_IsSubtype((PyTypeObject *)cls, PyDescr_TYPE(descr));
+        bound += is_slot;
+        for (int k = 0; k < bound_count && is_slot; k++)
+            is_slot = bound_slots[k].name != names[i] || bound_slots[k].owner != (PyTypeObject *)cls;
+        if (is_slot) { /* and not bound before */
+            if (bound_count >= (int)(sizeof bound_slots / sizeof bound_slots[0])) {
+                Py_DECREF(descr);
+                PyErr_SetString(PyExc_OverflowError, "too many slots bound");
+                return NULL;
+            }
+            bound_slots[bound_count].name = names[i];
+            bound_slots[bound_count].owner = (PyTypeObject *)Py_NewRef(cls); /* kept for the process' life */
+            bound_slots[bound_count].offset = ((PyMemberDescrObject *)descr)->d_member->offset;
+            bound_count++;
+        }
+        Py_DECREF(descr);
+    }
+    return PyLong_FromLong(bound);
+}
+
 /* An int attribute of obj as signed 64 bits; -1 with an exception set on failure */
 static int get_i64(PyObject *obj, PyObject *name, long long *value)
 {
-    PyObject *attr = PyObject_GetAttr(obj, name);
+    PyObject *attr = get_attr(obj, name);
     if (attr == NULL)
         return -1;
     *value = PyLong_AsLongLong(attr);
@@ -169,7 +243,7 @@ static int get_u64(PyObject *obj, PyObject *name, unsigned long long *value)
 /* A truth attribute of obj: 1, 0, or -1 with an exception set */
 static int get_flag(PyObject *obj, PyObject *name)
 {
-    PyObject *attr = PyObject_GetAttr(obj, name);
+    PyObject *attr = get_attr(obj, name);
     if (attr == NULL)
         return -1;
     int flag = PyObject_IsTrue(attr);
@@ -180,7 +254,7 @@ static int get_flag(PyObject *obj, PyObject *name)
 /* A float attribute of obj; -1.0 with an exception set on failure */
 static double get_double(PyObject *obj, PyObject *name)
 {
-    PyObject *attr = PyObject_GetAttr(obj, name);
+    PyObject *attr = get_attr(obj, name);
     if (attr == NULL)
         return -1.0;
     double value = PyFloat_AsDouble(attr);
@@ -193,7 +267,7 @@ static int set_i64(PyObject *obj, PyObject *name, long long value)
     PyObject *number = PyLong_FromLongLong(value);
     if (number == NULL)
         return -1;
-    int status = PyObject_SetAttr(obj, name, number);
+    int status = set_attr(obj, name, number);
     Py_DECREF(number);
     return status;
 }
@@ -241,7 +315,7 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     unsigned long long credits_at;
     if (get_u64(service, str_credits_at, &credits_at) < 0)
         return NULL;
-    PyObject *publisher = PyObject_GetAttr(service, str_publisher);
+    PyObject *publisher = get_attr(service, str_publisher);
     if (publisher == NULL)
         return NULL;
     int blocking = get_flag(service, str_blocking);
@@ -253,7 +327,7 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     if (blocking && room <= 0 && credits_at != 0) {
         unsigned long long next_seq;
         long long depth = -1;
-        PyObject *qos = PyObject_GetAttr(service, str_qos); /* the rare path: room used up */
+        PyObject *qos = get_attr(service, str_qos); /* the rare path: room used up */
         int failed = qos == NULL || get_i64(qos, str_depth, &depth) < 0 ||
                      get_u64(service, str_next_seq, &next_seq) < 0;
         Py_XDECREF(qos);
@@ -324,7 +398,7 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         return NULL;
     if (known < 0 || (uint64_t)known != version)
         return PyLong_FromLong(SENT_STALE_WAKES);
-    PyObject *wakes = PyObject_GetAttr(service, str_wakes);
+    PyObject *wakes = get_attr(service, str_wakes);
     if (wakes == NULL)
         return NULL;
     if (!PyList_Check(wakes)) {
@@ -361,7 +435,7 @@ error:
    path's check of a publisher iceoryx2 may have failed to connect. */
 static PyObject *nothing_taken(PyObject *port)
 {
-    PyObject *service = PyObject_GetAttr(port, str_service);
+    PyObject *service = get_attr(port, str_service);
     if (service == NULL)
         return NULL;
     int blocking = get_flag(service, str_blocking);
@@ -400,7 +474,7 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     int copies = PyObject_IsTrue(args[2]);
     if (PyErr_Occurred())
         return NULL;
-    PyObject *subscriber = PyObject_GetAttr(port, str_subscriber);
+    PyObject *subscriber = get_attr(port, str_subscriber);
     if (subscriber == NULL)
         return NULL;
     PyObject *sample = call_method0(subscriber, str_receive);
@@ -431,7 +505,7 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     }
     if (common) {
         double since = get_double(port, str_suspect_since);
-        service = PyObject_GetAttr(port, str_service);
+        service = get_attr(port, str_service);
         if (PyErr_Occurred() || service == NULL || get_u64(port, str_expected, &expected) < 0 ||
             get_u64(service, str_credits_at, &credits_at) < 0)
             goto error_service;
@@ -497,6 +571,8 @@ static PyMethodDef module_functions[] = {
     {"configure", configure, METH_VARARGS,
      "configure(loan_slice, assume_init, header_size, cdr_body_at, credits_head, slot_words, subscriber_slots, "
      "borrow_limit)"},
+    {"bind_slots", bind_slots, METH_O,
+     "bind_slots(cls) -> how many of the attributes the hot path uses are slots of cls, read in place from now on"},
     {"send_cdr", (PyCFunction)(void (*)(void))send_cdr, METH_FASTCALL,
      "send_cdr(service, message, body_size, encode_body, publisher_slot) -> 0 not handled, 1 sent, "
      "2 sent but the wake list is stale"},

@@ -17,7 +17,7 @@ from ._events import (
     WakeChannel,
     fd_hint,
 )
-from ._hotpath import take_cdr
+from ._hotpath import bind_slots, take_cdr
 from ._iceoryx import iox2
 from ._sample import (
     BLOB,
@@ -252,6 +252,9 @@ class _Port:
         self.subscriber = subscriber
         self.expected = start + 1
         self.suspect_since = 0.0
+
+
+bind_slots(_Port)
 
 
 class ShmReader(Reader):

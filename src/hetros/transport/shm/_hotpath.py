@@ -18,6 +18,12 @@ from ._sample import BORROW_LIMIT, CDR_BODY_AT, HEADER, MAX_SUBSCRIBER_SLOTS
 # what send_cdr returns besides 0 (not handled) and 1 (sent): sent, but who to wake has changed
 SENT_STALE_WAKES = 2
 
+def bind_slots(cls: type) -> None:
+    """Let the compiled path read and write ``cls``'s slots in place (a state class it is handed)."""
+    if _cslot is not None and wanted():
+        _cslot.bind_slots(cls)
+
+
 send_cdr: Callable[..., int] | None = None
 take_cdr: Callable[..., Any] | None = None
 try:  # built by pip where a C compiler is
@@ -29,4 +35,4 @@ if _cslot is not None and wanted():
                      MAX_SUBSCRIBER_SLOTS, BORROW_LIMIT)
     send_cdr, take_cdr = _cslot.send_cdr, _cslot.take_cdr
 
-__all__ = ["SENT_STALE_WAKES", "send_cdr", "take_cdr"]
+__all__ = ["SENT_STALE_WAKES", "bind_slots", "send_cdr", "take_cdr"]

@@ -18,7 +18,7 @@ from ._events import (
     WakeChannel,
     fd_hint,
 )
-from ._hotpath import SENT_STALE_WAKES, send_cdr
+from ._hotpath import SENT_STALE_WAKES, bind_slots, send_cdr
 from ._iceoryx import assume_init, iox2, loan_slice, log
 from ._sample import (
     BORROW_LIMIT,
@@ -44,6 +44,10 @@ FULL_SPIN = 100e-6
 
 class Service:
     """One (topic, publishing target) service: the data, its credits, and who to wake."""
+
+    # slots, which the compiled send path reads and writes in place (``_hotpath.bind_slots``)
+    __slots__ = ("_closed", "_publisher", "_scratch", "_wakes", "_wakes_version", "blocking", "buffer", "credits",
+                 "credits_at", "data", "domain", "lock", "next_seq", "qos", "room", "space", "target", "topic")
 
     def __init__(self, domain: ShmDomain, node: Any, topic: str, target: str, qos: QoS) -> None:
         self.domain = domain
@@ -282,3 +286,5 @@ class Service:
         self.credits.close()
 
 
+
+bind_slots(Service)

@@ -95,6 +95,8 @@ class Executor:
         self._timers: list[tuple[float, int, Callable[[], float | None]]] = []
         self._counter = itertools.count()
         self._spin = AdaptiveSpin()
+        self._polled: list[Dispatchable] = []
+        self._next_polled = 0
         self.entities = 0
 
     @property
@@ -149,6 +151,15 @@ class Executor:
                 self._listener = None
                 self._woken()
 
+    def poll_while_spinning(self, entity: Dispatchable) -> None:
+        """Let a hot spin dispatch ``entity`` (a subscription callback) as soon as it has a
+        message, instead of through its wake function and the ready queue: that round
+        cost a callback 3.7 µs per message, as much as taking the message itself."""
+        self._polled = [*self._polled, entity]
+
+    def stop_polling(self, entity: Dispatchable) -> None:
+        self._polled = [polled for polled in self._polled if polled is not entity]
+
     def add_timer(self, first_due: float, fire: Callable[[], float | None]) -> None:
         """``fire`` runs at ``first_due``; it returns its next due time, or None to stop."""
         with self._lock:
@@ -191,27 +202,43 @@ class Executor:
                     if entity.pending():
                         self.notify(entity)
                 return True
-            if not self._spin_for_work(seen, wait):
+            spun = self._spin_for_work(seen, wait)
+            if spun is _DISPATCHED:
+                return True
+            if spun is _NOTHING:
                 self.wait(seen, wait)
 
-    def _spin_for_work(self, seen: int, wait: float | None) -> bool:
-        """On a hot stream, poll awake for a while instead of blocking; True when work came.
+    def _spin_for_work(self, seen: int, wait: float | None) -> object:
+        """On a hot stream, poll awake for a while instead of blocking: ``_DISPATCHED`` when it
+        ran a polled callback, ``_WORK`` when other work came, else ``_NOTHING``.
 
         Polling a reader costs ~0.2 µs, a blocking wake-up of another CPU tens of
         microseconds: it pays only when messages come about that often (see AdaptiveSpin).
         """
         budget = self._spin.budget()
         if not budget:
-            return False
+            return _NOTHING
         end = time.perf_counter() + (budget if wait is None else min(budget, wait))
         source = self._source
         while time.perf_counter() < end:
+            polled = self._polled
+            count = len(polled)
+            for turn in range(count):  # round robin: a busy subscription cannot starve the others
+                index = (self._next_polled + turn) % count
+                if polled[index].dispatch():
+                    self._next_polled = index + 1
+                    self._spin.arrived(time.perf_counter())
+                    return _DISPATCHED
             if source is not None:
                 source.poll()
             if self._generation != seen or self._stop.is_set():
-                return True
+                return _WORK
             # lets a publishing thread of this process have the GIL: yielding only every few
             # polls cost the in-process hop 1.3 µs (10.3 against 9.0) and gained nothing measurable
             # between processes
             os.sched_yield()
-        return False
+        return _NOTHING
+
+
+# what Executor._spin_for_work found
+_DISPATCHED, _WORK, _NOTHING = object(), object(), object()

@@ -240,6 +240,7 @@ class Subscription(Generic[M]):
             self._reader = None
             if self.callback is not None:
                 self.node.executor.entities -= 1
+                self.node.executor.stop_polling(self)
 
 
 class Timer:
@@ -448,6 +449,7 @@ class Node:
         subscription = Subscription(self, msg_type, topic, callback)
         if callback is not None:
             self.executor.entities += 1
+            self.executor.poll_while_spinning(subscription)
         subscription._attach(self.graph.open_reader(topic, self.name, typename, subscription._on_wake, qos=qos))
         self._closables.append(subscription)
         return subscription

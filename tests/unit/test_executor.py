@@ -1,0 +1,80 @@
+"""The executor's hot spin: polled callbacks run straight from the spin, in turn, and only while it is hot."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+from hetros.runtime._executor import Executor
+
+
+class _Queue:
+    """A dispatchable with ``count`` messages waiting: each dispatch runs one and records its name."""
+
+    def __init__(self, name: str, count: int, ran: list[str]) -> None:
+        self.name = name
+        self.count = count
+        self.ran = ran
+
+    def dispatch(self) -> bool:
+        if not self.count:
+            return False
+        self.count -= 1
+        self.ran.append(self.name)
+        return True
+
+    def pending(self) -> bool:
+        return self.count > 0
+
+
+def _hot(executor: Executor) -> None:
+    """As after a burst of messages: the spin has a budget."""
+    now = time.perf_counter()
+    executor._spin.arrived(now - 10e-6)
+    executor._spin.arrived(now)
+
+
+def test_a_hot_spin_runs_polled_callbacks_in_turn() -> None:
+    executor = Executor(threading.Event())
+    ran: list[str] = []
+    for name in "abc":
+        executor.poll_while_spinning(_Queue(name, 100, ran))
+    _hot(executor)
+    for _ in range(9):
+        assert executor.spin_once(1.0)
+    assert ran == list("abcabcabc"), "a busy subscription must not starve the others"
+
+
+def test_a_polled_callback_that_stops_being_polled_is_left_alone() -> None:
+    executor = Executor(threading.Event())
+    ran: list[str] = []
+    busy, other = _Queue("busy", 100, ran), _Queue("other", 100, ran)
+    executor.poll_while_spinning(busy)
+    executor.poll_while_spinning(other)
+    executor.stop_polling(busy)
+    _hot(executor)
+    assert executor.spin_once(1.0)
+    assert ran == ["other"]
+
+
+def test_an_idle_spin_gives_up_and_times_out() -> None:
+    executor = Executor(threading.Event())
+    ran: list[str] = []
+    executor.poll_while_spinning(_Queue("empty", 0, ran))
+    _hot(executor)
+    start = time.monotonic()
+    assert not executor.spin_once(0.05)
+    assert ran == [] and time.monotonic() - start < 1.0
+
+
+def test_a_cold_executor_does_not_poll() -> None:
+    """Without a hot stream the spin has no budget: work arrives through notify, not polling."""
+    executor = Executor(threading.Event())
+    ran: list[str] = []
+    queue = _Queue("q", 5, ran)
+    executor.poll_while_spinning(queue)
+    assert not executor.spin_once(0.02)
+    assert ran == []
+    executor.notify(queue)
+    assert executor.spin_once(0.02)
+    assert ran == ["q"]

@@ -5,12 +5,13 @@ from __future__ import annotations
 import struct
 import threading
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from ..._errors import SerializationError, TransportError
-from ...msg import get_path, set_path
+from ...msg import default_maker, get_path, set_path
 from .._base import Codec, Reader, Wake, Writer
 from .._codec import MessageCodec
 from ._events import (
@@ -110,6 +111,7 @@ class ShmWriter(Writer):
         self._arrays = [(index, field) for index, field in enumerate(codec.arrays) if field.length is None] \
             if isinstance(codec, MessageCodec) else []
         self._loan_plans: dict[tuple[tuple[str, int], ...], _SlotPlan] = {}
+        self._blank: Callable[[], Any] | None = None  # what a loan's message is copied from, made on the first loan
         self._cdr = codec if isinstance(codec, MessageCodec) else None
         self._loan_slot = service.loan_scratch
         self._send = service.send
@@ -185,7 +187,9 @@ class ShmWriter(Writer):
         assert isinstance(self._codec, MessageCodec)
         codec = self._codec
         sample, memory, views = self._place(plan)
-        message = codec.cls()
+        if self._blank is None:
+            self._blank = default_maker(codec.cls)
+        message = self._blank()
         for path, view in views:
             set_path(message, path, view)
         object.__setattr__(message, "_hetros_loan", _Loan(sample, memory, plan, views, self))

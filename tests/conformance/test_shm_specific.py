@@ -276,9 +276,10 @@ def test_a_gap_in_a_reliable_stream_is_reported_not_skipped(pair: Any) -> None:
         reader.try_take()
 
 
-def test_a_waiting_publisher_is_woken_by_the_take_that_frees_room(shm_session: str) -> None:
+@pytest.mark.parametrize("layout", ["cdr", "split"])
+def test_a_waiting_publisher_is_woken_by_the_take_that_frees_room(shm_session: str, layout: str) -> None:
     """A subscriber that finds the publisher waiting (credits 'waiting') signals it once half
-    its FIFO is free, whichever path took the sample."""
+    its FIFO is free, whichever path took the sample, for small messages and large loans."""
     codec = MessageCodec(registry(), TYPE)
     publishing, subscribing = ShmDomain(shm_session, "pub"), ShmDomain(shm_session, "sub")
     qos = QoS(depth=4)
@@ -286,19 +287,30 @@ def test_a_waiting_publisher_is_woken_by_the_take_that_frees_room(shm_session: s
         reader = subscribing.open_reader("/img", ["pub"], qos, codec, 0, lambda: None, "sub")
         writer = publishing.open_writer("/img", "pub", qos, codec)
         Image = registry().get(TYPE)
+
+        def message(width: int) -> Any:
+            if layout == "cdr":
+                return Image(width=width)
+            loaned = writer.loan({"data": 100_000})  # beyond the inline limit: the split layout
+            loaned.width, loaned.data[-1] = width, width
+            return freeze(loaned)
+
         for width in range(4):
-            writer.write(Image(width=width))
+            writer.write(message(width))
         woken = threading.Event()
-        sent = threading.Thread(target=lambda: (writer.write(Image(width=4)), woken.set()), daemon=True)
+        last = message(4)
+        sent = threading.Thread(target=lambda: (writer.write(last), woken.set()), daemon=True)
         sent.start()
         time.sleep(0.2)
         assert not woken.is_set(), "a keep_all publisher must wait while the FIFO is full"
         assert writer._service.credits.waiting
-        taken = [reader.try_take().width for _ in range(3)]
+        got = [reader.try_take() for _ in range(3)]
         assert woken.wait(5.0), "the takes freed room but the publisher was not woken"
         sent.join(5.0)
-        taken += [m.width for m in drain(reader)]
-        assert taken == [0, 1, 2, 3, 4]
+        got += drain(reader)
+        assert [m.width for m in got] == [0, 1, 2, 3, 4]
+        if layout == "split":
+            assert [int(m.data[-1]) for m in got] == [0, 1, 2, 3, 4] and in_shared_memory(got[0].data)
     finally:
         subscribing.close()
         publishing.close()

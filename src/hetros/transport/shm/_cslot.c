@@ -298,33 +298,23 @@ static long long room_left(uint64_t *credits, uint64_t published, long long dept
     return depth - fullest;
 }
 
-/* send_cdr(service, message, body_size, encode_body, publisher_slot), the service's lock held */
-static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+/* Whether the compiled path may send on ``service`` now: 1 (with its publisher in *publisher,
+   a new reference, and the room it counted), 0 when the reference path must (no publisher
+   yet, or a full reliable FIFO to wait for), -1 with an exception set. */
+static int may_send(PyObject *service, PyObject **publisher, unsigned long long *credits_at, int *blocking,
+                    long long *room)
 {
-    (void)module;
-    if (nargs != 5 || header_size < 0) {
-        PyErr_SetString(PyExc_TypeError, "send_cdr(service, message, body_size, encode_body, publisher_slot) "
-                        "after configure()");
-        return NULL;
-    }
-    PyObject *service = args[0];
-    Py_ssize_t body_size = PyLong_AsSsize_t(args[2]);
-    unsigned long publisher_slot = PyLong_AsUnsignedLong(args[4]);
-    if (PyErr_Occurred())
-        return NULL;
-    unsigned long long credits_at;
-    if (get_u64(service, str_credits_at, &credits_at) < 0)
-        return NULL;
-    PyObject *publisher = get_attr(service, str_publisher);
-    if (publisher == NULL)
-        return NULL;
-    int blocking = get_flag(service, str_blocking);
-    long long room = 0;
-    if (blocking < 0)
+    *publisher = NULL;
+    *room = 0;
+    if (get_u64(service, str_credits_at, credits_at) < 0)
+        return -1;
+    *publisher = get_attr(service, str_publisher);
+    if (*publisher == NULL)
+        return -1;
+    *blocking = get_flag(service, str_blocking);
+    if (*blocking < 0 || (*blocking && get_i64(service, str_room, room) < 0))
         goto error;
-    if (blocking && get_i64(service, str_room, &room) < 0)
-        goto error;
-    if (blocking && room <= 0 && credits_at != 0) {
+    if (*blocking && *room <= 0 && *credits_at != 0) {
         unsigned long long next_seq;
         long long depth = -1;
         PyObject *qos = get_attr(service, str_qos); /* the rare path: room used up */
@@ -333,54 +323,37 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         Py_XDECREF(qos);
         if (failed)
             goto error;
-        room = room_left((uint64_t *)(uintptr_t)credits_at, (uint64_t)next_seq - 1, depth);
-        if (room > 0 && set_i64(service, str_room, room) < 0)
+        *room = room_left((uint64_t *)(uintptr_t)*credits_at, (uint64_t)next_seq - 1, depth);
+        if (*room > 0 && set_i64(service, str_room, *room) < 0)
             goto error;
     }
-    if (publisher == Py_None || credits_at == 0 || (blocking && room <= 0)) {
-        Py_DECREF(publisher);
-        return PyLong_FromLong(NOT_HANDLED);
+    if (*publisher == Py_None || *credits_at == 0 || (*blocking && *room <= 0)) {
+        Py_CLEAR(*publisher);
+        return 0;
     }
-    Py_ssize_t size = cdr_body_at + body_size;
-    PyObject *size_obj = PyLong_FromSsize_t(size);
-    if (size_obj == NULL)
-        goto error;
-    PyObject *loan_args[2] = {publisher, size_obj};
-    PyObject *sample = PyObject_Vectorcall(loan_slice_function, loan_args, 2, NULL);
-    Py_DECREF(size_obj);
-    Py_CLEAR(publisher);
-    if (sample == NULL)
-        return NULL;
-    unsigned long long address;
-    if (get_u64(sample, str_payload_ptr, &address) < 0)
-        goto error_sample;
-    char *slot = (char *)(uintptr_t)address;
-    PyObject *memory = PyMemoryView_FromMemory(slot, size, PyBUF_WRITE);
-    PyObject *at = PyLong_FromSsize_t(cdr_body_at);
-    if (memory == NULL || at == NULL) {
-        Py_XDECREF(memory);
-        Py_XDECREF(at);
-        goto error_sample;
-    }
-    memcpy(slot + header_size, CDR_LE, 4);
-    PyObject *encode_args[3] = {args[1], memory, at};
-    PyObject *end = PyObject_Vectorcall(args[3], encode_args, 3, NULL);
-    Py_DECREF(memory);
-    Py_DECREF(at);
-    if (end == NULL)
-        goto error_sample;
-    Py_DECREF(end);
+    return 1;
+error:
+    Py_CLEAR(*publisher);
+    return -1;
+}
+
+/* Stamp the header of the loaned ``sample`` (its payload at ``slot``), send it, publish its
+   sequence number in the credits and wake the subscribers, as ``Service.send`` does:
+   SENT, SENT_STALE_WAKES (the reference path must reread who to wake), or NULL. */
+static PyObject *stamp_and_send(PyObject *service, PyObject *sample, char *slot, uint32_t layout,
+                                unsigned long publisher_slot, unsigned long long credits_at, int blocking,
+                                long long room)
+{
     if (blocking && set_i64(service, str_room, room - 1) < 0)
-        goto error_sample;
+        return NULL;
     unsigned long long seq;
     if (get_u64(service, str_next_seq, &seq) < 0)
-        goto error_sample;
-    uint32_t words[2] = {(uint32_t)publisher_slot, 0 /* the CDR layout */};
+        return NULL;
+    uint32_t words[2] = {(uint32_t)publisher_slot, layout};
     memcpy(slot, &seq, 8);
     memcpy(slot + 8, words, 8);
     memset(slot + 16, 0, (size_t)(header_size - 16));
     PyObject *initialized = PyObject_Vectorcall(assume_init_function, &sample, 1, NULL);
-    Py_DECREF(sample);
     if (initialized == NULL)
         return NULL;
     PyObject *sent = call_method0(initialized, str_send);
@@ -421,13 +394,94 @@ static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     }
     Py_DECREF(wakes);
     return PyLong_FromLong(SENT);
+}
 
-error_sample:
+/* send_cdr(service, message, body_size, encode_body, publisher_slot), the service's lock held */
+static PyObject *send_cdr(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)module;
+    if (nargs != 5 || header_size < 0) {
+        PyErr_SetString(PyExc_TypeError, "send_cdr(service, message, body_size, encode_body, publisher_slot) "
+                        "after configure()");
+        return NULL;
+    }
+    PyObject *service = args[0];
+    Py_ssize_t body_size = PyLong_AsSsize_t(args[2]);
+    unsigned long publisher_slot = PyLong_AsUnsignedLong(args[4]);
+    if (PyErr_Occurred())
+        return NULL;
+    PyObject *publisher;
+    unsigned long long credits_at;
+    int blocking;
+    long long room;
+    int may = may_send(service, &publisher, &credits_at, &blocking, &room);
+    if (may <= 0)
+        return may < 0 ? NULL : PyLong_FromLong(NOT_HANDLED);
+    Py_ssize_t size = cdr_body_at + body_size;
+    PyObject *size_obj = PyLong_FromSsize_t(size);
+    if (size_obj == NULL) {
+        Py_DECREF(publisher);
+        return NULL;
+    }
+    PyObject *loan_args[2] = {publisher, size_obj};
+    PyObject *sample = PyObject_Vectorcall(loan_slice_function, loan_args, 2, NULL);
+    Py_DECREF(size_obj);
+    Py_DECREF(publisher);
+    if (sample == NULL)
+        return NULL;
+    PyObject *status = NULL;
+    unsigned long long address;
+    if (get_u64(sample, str_payload_ptr, &address) < 0)
+        goto done;
+    char *slot = (char *)(uintptr_t)address;
+    PyObject *memory = PyMemoryView_FromMemory(slot, size, PyBUF_WRITE);
+    PyObject *at = PyLong_FromSsize_t(cdr_body_at);
+    if (memory == NULL || at == NULL) {
+        Py_XDECREF(memory);
+        Py_XDECREF(at);
+        goto done;
+    }
+    memcpy(slot + header_size, CDR_LE, 4);
+    PyObject *encode_args[3] = {args[1], memory, at};
+    PyObject *end = PyObject_Vectorcall(args[3], encode_args, 3, NULL);
+    Py_DECREF(memory);
+    Py_DECREF(at);
+    if (end == NULL)
+        goto done;
+    Py_DECREF(end);
+    status = stamp_and_send(service, sample, slot, 0 /* the CDR layout */, publisher_slot, credits_at, blocking,
+                            room);
+done:
     Py_DECREF(sample);
-    return NULL;
-error:
-    Py_XDECREF(publisher);
-    return NULL;
+    return status;
+}
+
+/* send_slot(service, sample, layout, publisher_slot), the service's lock held: a slot loaned
+   and filled by the reference path (the split layout), sent as ``Service.send`` sends it */
+static PyObject *send_slot(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)module;
+    if (nargs != 4 || header_size < 0) {
+        PyErr_SetString(PyExc_TypeError, "send_slot(service, sample, layout, publisher_slot) after configure()");
+        return NULL;
+    }
+    PyObject *service = args[0], *sample = args[1];
+    unsigned long layout = PyLong_AsUnsignedLong(args[2]);
+    unsigned long publisher_slot = PyLong_AsUnsignedLong(args[3]);
+    if (PyErr_Occurred())
+        return NULL;
+    PyObject *publisher;
+    unsigned long long credits_at, address;
+    int blocking;
+    long long room;
+    int may = may_send(service, &publisher, &credits_at, &blocking, &room);
+    if (may <= 0)
+        return may < 0 ? NULL : PyLong_FromLong(NOT_HANDLED);
+    Py_DECREF(publisher);
+    if (get_u64(sample, str_payload_ptr, &address) < 0)
+        return NULL;
+    return stamp_and_send(service, sample, (char *)(uintptr_t)address, (uint32_t)layout, publisher_slot, credits_at,
+                          blocking, room);
 }
 
 /* Nothing received: None when that is surely all (nothing published past what the port
@@ -496,12 +550,13 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     int common = (Py_ssize_t)size >= cdr_body_at && (Py_ssize_t)size <= PY_SSIZE_T_MAX &&
                  PyList_GET_SIZE(borrowed) < borrow_limit - 2;
     unsigned long long seq = 0, expected = 0, credits_at = 0;
+    uint32_t layout = 0;
     PyObject *service = NULL;
     if (common) {
-        uint32_t layout;
         memcpy(&seq, slot, 8);
         memcpy(&layout, slot + 12, 4);
-        common = layout == 0 && slot[header_size + 1] == 1; /* the CDR layout, little endian */
+        /* the CDR layout, little endian; or the split layout, whose accounting is the same */
+        common = (layout == 0 && slot[header_size + 1] == 1) || layout == 1;
     }
     if (common) {
         double since = get_double(port, str_suspect_since);
@@ -526,7 +581,7 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         Py_CLEAR(service);
     }
     PyObject *memory;
-    if (common && copies) {
+    if (common && copies && layout == 0) {
         /* the message will keep nothing of the sample: it goes back once decoded */
         memory = PyMemoryView_FromMemory(slot, (Py_ssize_t)size, PyBUF_READ);
     } else {
@@ -545,8 +600,10 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
     }
     if (memory == NULL)
         goto error_sample;
-    if (!common) {
+    if (!common || layout != 0) {
         Py_DECREF(sample);
+        if (common) /* accounted for: the split layout's arrays are left to the reference decoder */
+            return Py_BuildValue("(NKI)", memory, size, layout);
         PyObject *unusual = Py_BuildValue("(NK)", memory, size);
         return unusual;
     }
@@ -576,9 +633,12 @@ static PyMethodDef module_functions[] = {
     {"send_cdr", (PyCFunction)(void (*)(void))send_cdr, METH_FASTCALL,
      "send_cdr(service, message, body_size, encode_body, publisher_slot) -> 0 not handled, 1 sent, "
      "2 sent but the wake list is stale"},
+    {"send_slot", (PyCFunction)(void (*)(void))send_slot, METH_FASTCALL,
+     "send_slot(service, sample, layout, publisher_slot) -> 0 not handled, 1 sent, 2 sent but the wake list is "
+     "stale"},
     {"take_cdr", (PyCFunction)(void (*)(void))take_cdr, METH_FASTCALL,
      "take_cdr(port, subscriber_slot, copies, borrowed, decode_body) -> message, None, False (nothing, but "
-     "check the publisher) or (memory, size) to finish"},
+     "check the publisher), (memory, size) to finish, or (memory, size, layout) accounted for, to decode"},
     {NULL, NULL, 0, NULL},
 };
 

@@ -376,12 +376,16 @@ class ShmReader(Reader):
             return self._finish_compiled(port, got)
         return got
 
-    def _finish_compiled(self, port: _Port, got: Literal[False] | tuple[memoryview, int]) -> Any | None:
-        """What ``take_cdr`` leaves to the reference path: a publisher to check, a sample to finish."""
+    def _finish_compiled(self, port: _Port, got: Literal[False] | tuple[memoryview, int] | tuple[memoryview, int, int]
+                         ) -> Any | None:
+        """What ``take_cdr`` leaves to the reference path: a publisher to check, a sample to
+        finish, or one accounted for (a split-layout sample) to decode."""
         if got is False:
             self._check_arrival(port)
             return None
-        return self._took(port, *got)
+        if len(got) == 3:
+            return self._decode(got[0], got[2])
+        return self._took(port, got[0], got[1])
 
     def _receive_failed(self, port: _Port, exc: Exception) -> TransportError:
         return TransportError(f"cannot receive on {port.service.topic} from target {port.service.target!r}: "

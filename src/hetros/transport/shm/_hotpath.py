@@ -1,7 +1,7 @@
 """The compiled hot path of this transport (``_cslot``), told the sample layout; None without it.
 
-``send_cdr`` and ``take_cdr`` do the common case of ``Service.send_cdr`` and
-``ShmReader._take_from`` and hand every other case back to them, so both paths share one
+``send_cdr``, ``send_slot`` and ``take_cdr`` do the common case of ``Service.send_cdr``,
+``Service.send`` and ``ShmReader._take_from`` and hand every other case back to them, so both paths share one
 state and one set of rules; the conformance suite runs each (``HETROS_PURE_PYTHON=1``).
 """
 
@@ -25,6 +25,7 @@ def bind_slots(cls: type) -> None:
 
 
 send_cdr: Callable[..., int] | None = None
+send_slot: Callable[..., int] | None = None
 take_cdr: Callable[..., Any] | None = None
 try:  # built by pip where a C compiler is
     from . import _cslot
@@ -33,6 +34,6 @@ except ImportError:
 if _cslot is not None and wanted():
     _cslot.configure(loan_slice, assume_init, HEADER.size, CDR_BODY_AT, Credits.HEAD, Credits.SLOT_WORDS,
                      MAX_SUBSCRIBER_SLOTS, BORROW_LIMIT)
-    send_cdr, take_cdr = _cslot.send_cdr, _cslot.take_cdr
+    send_cdr, send_slot, take_cdr = _cslot.send_cdr, _cslot.send_slot, _cslot.take_cdr
 
-__all__ = ["SENT_STALE_WAKES", "bind_slots", "send_cdr", "take_cdr"]
+__all__ = ["SENT_STALE_WAKES", "bind_slots", "send_cdr", "send_slot", "take_cdr"]

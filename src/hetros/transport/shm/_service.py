@@ -18,7 +18,7 @@ from ._events import (
     WakeChannel,
     fd_hint,
 )
-from ._hotpath import SENT_STALE_WAKES, bind_slots, send_cdr
+from ._hotpath import SENT_STALE_WAKES, bind_slots, send_cdr, send_slot
 from ._iceoryx import assume_init, iox2, loan_slice, log
 from ._sample import (
     BORROW_LIMIT,
@@ -235,6 +235,16 @@ class Service:
 
     def send(self, sample: Any, memory: memoryview, layout: int, publisher_slot: int) -> None:
         """Stamp the header and send; blocks first while a reliable keep_all FIFO is full."""
+        if send_slot is not None and self._publisher is not None:
+            with self.lock:
+                try:
+                    status = send_slot(self, sample, layout, publisher_slot)
+                except iox2.SendError as exc:
+                    raise self._not_sent(exc) from exc
+                if status == SENT_STALE_WAKES:
+                    self._wake_subscribers(self.credits.version)
+            if status:
+                return
         with self.lock:
             if self.blocking:
                 if self.room <= 0:

@@ -170,6 +170,28 @@ def test_default_values_are_honoured(tmp_path: Path) -> None:
     assert cls(x=6).x == 6
 
 
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "pure"])
+def test_default_maker_makes_what_the_constructor_makes(tmp_path: Path, compiled: bool) -> None:
+    """Loans start from these: declared defaults, and nothing mutable shared between two messages."""
+    from hetros.msg import default_maker
+
+    pkg = write_pkg(tmp_path, {"msg/Defaults.msg": (
+        "int32 x 5\nstring name 'robot'\nint16[3] triple [1, 2, 3]\nuint8[] bytes [7, 8]\n"
+        "string[] words ['a', 'b']\nstd_msgs/Header header\n")})
+    types = TypeRegistry(compiled=compiled)
+    types.load_folder(pkg)
+    cls = types.get("my_pkg/msg/Defaults")
+    make = default_maker(cls)
+    first, second = make(), make()
+    assert first == cls() and not first.is_frozen
+    first.triple[0], first.bytes[0] = 9, 9
+    first.words.append("c")
+    first.header.frame_id = "changed"
+    assert second == cls() and make() == cls(), "a made message shares no array, list or nested message"
+    if not compiled:
+        assert make is cls, "without the compiled copier the constructor is the faster maker"
+
+
 def test_fields_named_like_python_and_message_internals_work(tmp_path: Path) -> None:
     pkg = write_pkg(tmp_path, {"msg/Odd.msg": "int32 self\nint32 np\nfloat64[] copy\nint32 is_frozen\n"})
     types = TypeRegistry()

@@ -104,6 +104,8 @@ def default_maker(cls: type[Message]) -> Callable[[], Any]:
     third of the cost of the generated constructor (a loan makes one per publish)."""
     template = cls()
     copy(template)  # builds the type's copier, which replaces itself on its first use
+    if cls._hetros_copy is _copy_reference:  # no compiled copier: the constructor is faster
+        return cls
     return functools.partial(cls._hetros_copy, template)
 
 

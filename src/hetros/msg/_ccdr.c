@@ -902,7 +902,6 @@ typedef struct {
     PyObject *fallback[F_COUNT];
 } Codec;
 
-
 static void codec_dealloc(Codec *self)
 {
     type_free(self->type);

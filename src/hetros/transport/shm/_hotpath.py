@@ -1,8 +1,10 @@
 """The compiled hot path of this transport (``_cslot``), told the sample layout; None without it.
 
 ``send_cdr``, ``send_slot`` and ``take_cdr`` do the common case of ``Service.send_cdr``,
-``Service.send`` and ``ShmReader._take_from`` and hand every other case back to them, so both paths share one
-state and one set of rules; the conformance suite runs each (``HETROS_PURE_PYTHON=1``).
+``Service.send`` and ``ShmReader._take_from`` and hand every other case back to them, so
+both paths share one state and one set of rules; the conformance suite runs each
+(``HETROS_PURE_PYTHON=1``). The state they read and write per message lives in slots of
+``Service`` and ``_Port``, which ``bind_slots`` tells them where to find.
 """
 
 from __future__ import annotations
@@ -15,14 +17,8 @@ from ._credits import Credits
 from ._iceoryx import assume_init, loan_slice
 from ._sample import BORROW_LIMIT, CDR_BODY_AT, HEADER, MAX_SUBSCRIBER_SLOTS
 
-# what send_cdr returns besides 0 (not handled) and 1 (sent): sent, but who to wake has changed
+# what send_cdr and send_slot return besides 0 (not handled) and 1 (sent): sent, but who to wake has changed
 SENT_STALE_WAKES = 2
-
-def bind_slots(cls: type) -> None:
-    """Let the compiled path read and write ``cls``'s slots in place (a state class it is handed)."""
-    if _cslot is not None and wanted():
-        _cslot.bind_slots(cls)
-
 
 send_cdr: Callable[..., int] | None = None
 send_slot: Callable[..., int] | None = None
@@ -35,5 +31,12 @@ if _cslot is not None and wanted():
     _cslot.configure(loan_slice, assume_init, HEADER.size, CDR_BODY_AT, Credits.HEAD, Credits.SLOT_WORDS,
                      MAX_SUBSCRIBER_SLOTS, BORROW_LIMIT)
     send_cdr, send_slot, take_cdr = _cslot.send_cdr, _cslot.send_slot, _cslot.take_cdr
+
+
+def bind_slots(cls: type) -> None:
+    """Let the compiled path read and write ``cls``'s slots in place (a state class it is handed)."""
+    if _cslot is not None and wanted():
+        _cslot.bind_slots(cls)
+
 
 __all__ = ["SENT_STALE_WAKES", "bind_slots", "send_cdr", "send_slot", "take_cdr"]

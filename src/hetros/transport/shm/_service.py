@@ -296,5 +296,4 @@ class Service:
         self.credits.close()
 
 
-
 bind_slots(Service)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from hetros.bench.latency import Result, Run, pooled, render, round_ratio
+import pytest
+
+from hetros.bench.latency import SIZES, Result, Run, parse_sizes, pooled, render, round_ratio
 
 
 def _result(system: str, rtt_us: list[float], size: int = 4) -> Result:
@@ -37,3 +39,9 @@ def test_the_overhead_table_shows_the_median_ratio() -> None:
     report = render(run, ["hetros-shm", "iceoryx2"], [4])
     overhead = report.split("### Framework overhead")[1]
     assert "| 4 B | 2.20x |" in overhead
+
+
+def test_sizes_are_chosen_by_label_or_bytes_in_the_benchmarks_order_and_an_unknown_one_is_named() -> None:
+    assert parse_sizes("3146kB, 4B,196608", SIZES) == [4, 196608, 3145728]
+    with pytest.raises(ValueError, match=r"--sizes: each size must be one of 4B, .* not '5kB'"):
+        parse_sizes("4B,5kB", SIZES)

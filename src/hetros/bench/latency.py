@@ -354,6 +354,22 @@ class Bench:
 
 # -- report ------------------------------------------------------------------------------------
 
+def parse_sizes(text: str, known: list[int]) -> list[int]:
+    """``--sizes`` as the user wrote it (bytes or the tables' labels, comma-separated), in ``known``'s order.
+
+    Raises ValueError naming the size that is not one of ``known``.
+    """
+    by_name = {str(size): size for size in known} | {SIZE_LABELS[size].replace(" ", ""): size
+                                                      for size in known if size in SIZE_LABELS}
+    chosen = set()
+    for word in (w.strip().replace(" ", "") for w in text.split(",")):
+        if word not in by_name:
+            choices = ", ".join(SIZE_LABELS.get(size, str(size)).replace(" ", "") for size in known)
+            raise ValueError(f"--sizes: each size must be one of {choices} (or its bytes), not {word!r}")
+        chosen.add(by_name[word])
+    return [size for size in known if size in chosen]
+
+
 def fmt(value: float) -> str:
     return f"{value:.1f}" if value < 1000 else f"{value:,.0f}"
 
@@ -475,6 +491,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="out/bench", help="folder for latency.jsonl, latency.md, latency.png")
     parser.add_argument("--systems", help="comma-separated subset of: " + ", ".join(SYSTEMS))
     parser.add_argument("--no-pin", action="store_true", help="do not pin ping and echo to separate CPUs")
+    parser.add_argument("--sizes", help="comma-separated subset of the sizes, as the tables label them or in "
+                                        "bytes (e.g. 4B,196kB)")
     parser.add_argument("--rounds", type=int, default=1,
                         help="go round every system and size this many times and pool each one's samples "
                              "(this machine's speed drifts in phases; rounds spread the drift over all rows)")
@@ -483,6 +501,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--rounds must be at least 1, not {args.rounds}")
     systems = args.systems.split(",") if args.systems else list(SYSTEMS)
     sizes = [4, 3072, 196608, 3145728] if args.quick else SIZES
+    if args.sizes:
+        try:
+            sizes = parse_sizes(args.sizes, SIZES)
+        except ValueError as exc:
+            parser.error(str(exc))
     cpus = None if args.no_pin or (os.cpu_count() or 1) < 2 else [0, 1]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

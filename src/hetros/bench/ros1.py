@@ -55,7 +55,7 @@ from pathlib import Path
 from typing import Any
 
 from ._ros1_protocol import measured, reply_topic
-from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt, log_axes
+from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt, log_axes, parse_sizes
 
 SIZES = [4, 3 * 1024, 192 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
 # buffers up to 32 MiB from the heap, and the heap never trimmed below 128 MiB
@@ -324,7 +324,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--gap-ms", type=float, default=0.0,
                         help="pause of the sender after each reply: 0 (default) measures back-to-back exchanges, "
                              "a few ms isolated messages (every receiver then wakes from idle)")
+    parser.add_argument("--sizes", help="comma-separated subset of the sizes, as the tables label them or in "
+                                        "bytes (e.g. 196kB,3146kB)")
     args = parser.parse_args(argv)
+    sizes = SIZES
+    if args.sizes:
+        try:
+            sizes = parse_sizes(args.sizes, SIZES)
+        except ValueError as exc:
+            parser.error(str(exc))
     cpus = None if (os.cpu_count() or 1) < 2 else [0, 1]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -342,7 +350,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             for round_number in range(1, rounds + 1):
                 turn = 1 if round_number % 2 == 0 else -1  # who goes first changes every round
-                for size in SIZES:
+                for size in sizes:
                     for receiver in ["rospy", "hetros"][::turn]:
                         senders = [sender for sender in ["rospy", "hetros"][::turn]
                                    if (pair_name(sender, receiver), size) not in failed]
@@ -364,14 +372,14 @@ def main(argv: list[str] | None = None) -> int:
                                   f"{SIZE_LABELS.get(size, size):>8}: {status}", flush=True)
     finally:
         bench.close()
-    for size in SIZES:
+    for size in sizes:
         for sender, receiver in PAIRS:
             key = (pair_name(sender, receiver), size)
             if key in failed:
                 results.append(Result(key[0], size, error=failed[key]))
             elif key in samples:
                 results.append(Result(key[0], size, Stats.of(samples[key][0]), Stats.of(samples[key][1])))
-    report = render(results, SIZES, missing, STEADY_MALLOC if args.steady_malloc else "")
+    report = render(results, sizes, missing, STEADY_MALLOC if args.steady_malloc else "")
     print()
     print(report)
     (out / "ros1.md").write_text(report + "\n")

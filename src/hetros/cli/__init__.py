@@ -233,6 +233,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     forwarded = ["--quick"] if args.quick else []
     if args.out:
         forwarded += ["--out", args.out]
+    if getattr(args, "sizes", None):  # latency and ros1 take it, dds does not
+        forwarded += ["--sizes", args.sizes]
     if args.bench == "ros1":
         rounds = ["--rounds", str(args.rounds)] if args.rounds else []
         return ros1([*forwarded, *rounds, "--gap-ms", str(args.gap_ms), "--settle-us", str(args.settle_us),
@@ -246,6 +248,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.rounds:
         forwarded += ["--rounds", str(args.rounds)]
     return latency(forwarded)
+
+
+_SIZES_HELP = "comma-separated subset of the sizes, as the tables label them or in bytes (e.g. 4B,196kB)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -293,6 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output folder (default out/bench)")
     p.add_argument("--systems", help="comma-separated subset")
     p.add_argument("--rounds", type=int, help="interleaved rounds whose samples are pooled (default 1)")
+    p.add_argument("--sizes", help=_SIZES_HELP)
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("hw", help="hardware topics: simulated transfer times and Yosys resources vs fpgaDDS")
     p.add_argument("--quick", action="store_true", help="sizes up to 196 kB, two networks")
@@ -310,6 +316,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rounds", type=int, help="interleaved rounds over every pair and size, pooled (default 3)")
     p.add_argument("--steady-malloc", action="store_true",
                    help="every process keeps large buffers mapped (GLIBC_TUNABLES; see benchmarks/ros1.py)")
+    p.add_argument("--sizes", help=_SIZES_HELP)
     p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
     hw = sub.add_parser("hw", help="fpga targets: topic networks as RTL").add_subparsers(dest="hw", required=True)

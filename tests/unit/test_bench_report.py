@@ -45,3 +45,17 @@ def test_sizes_are_chosen_by_label_or_bytes_in_the_benchmarks_order_and_an_unkno
     assert parse_sizes("3146kB, 4B,196608", SIZES) == [4, 196608, 3145728]
     with pytest.raises(ValueError, match=r"--sizes: each size must be one of 4B, .* not '5kB'"):
         parse_sizes("4B,5kB", SIZES)
+
+
+@pytest.mark.parametrize("bench", ["latency", "ros1"])
+def test_the_cli_forwards_sizes_to_the_benchmark(bench: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    import hetros.bench.latency
+    import hetros.bench.ros1
+    from hetros.cli import build_parser
+
+    seen: list[list[str]] = []
+    module = hetros.bench.latency if bench == "latency" else hetros.bench.ros1
+    monkeypatch.setattr(module, "main", lambda argv: seen.append(argv) or 0)
+    args = build_parser().parse_args(["bench", bench, "--sizes", "4B,196kB"])
+    assert args.func(args) == 0
+    assert seen and seen[0][seen[0].index("--sizes") + 1] == "4B,196kB"

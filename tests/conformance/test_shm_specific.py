@@ -262,6 +262,34 @@ def test_damaged_samples_get_a_serialization_error(pair: Any, layout: int, body:
         reader.try_take()
 
 
+@pytest.mark.parametrize(("field", "value", "expected"), [
+    (5, 2**40, r"blob 0 at offset \d+ \(1099511627776 bytes\) does not fit a \d+-byte sample of sensor_msgs/msg/Image"),
+    (2, 7, r"blob 7 at offset \d+ \(100000 bytes\) does not fit a \d+-byte sample"),
+    (3, 61, r"the small part at offset 61 \(\d+ bytes\) does not fit"),
+])
+def test_a_loan_whose_table_was_damaged_in_flight_is_refused(pair: Any, field: int, value: int,
+                                                              expected: str) -> None:
+    """A one-array split sample is decoded in one unpack when it is sound; damage to any field of
+    its table (blob length, array index, small part's place) still gets the refusal naming it."""
+    from hetros import SerializationError
+    from hetros.transport.shm._sample import HEADER, SPLIT_ONE
+
+    writer, reader = pair
+    message = writer.loan({"data": 100_000})
+    table = list(SPLIT_ONE.unpack_from(message._hetros_loan.memory, HEADER.size))
+    assert table[1] == 1, "one array: the table the one-unpack decode reads"
+    table[field] = value
+    SPLIT_ONE.pack_into(message._hetros_loan.memory, HEADER.size, *table)
+    writer.write(message)
+    with pytest.raises(SerializationError, match=expected):
+        reader.try_take()
+    sound = writer.loan({"data": 100_000})
+    sound.data[:] = 7
+    writer.write(sound)
+    taken = reader.try_take()
+    assert taken.data.size == 100_000 and int(taken.data.sum()) == 700_000 and not taken.data.flags.writeable
+
+
 def test_a_gap_in_a_reliable_stream_is_reported_not_skipped(pair: Any) -> None:
     """Sequence numbers are checked on every take (compiled or not): a missing one raises."""
     from hetros import TransportError

@@ -90,7 +90,7 @@ class _FanoutWriter(Writer):
         sizes = {name.replace("__", "."): length for name, length in sizes.items()}
         shm = self._shm
         if shm is not None and shm.slot_loan_pays(sizes):
-            return lambda: shm.loan(sizes)
+            return shm.loan_maker(sizes)
         arrays = self._arrays_of(cls, sizes)
         blank = default_maker(cls)
         if len(arrays) == 1 and len(arrays[0][0]) == 1:  # one top-level array, the common loan

@@ -30,6 +30,7 @@ from ._sample import (
     LOAN_RESERVE,
     LOSS_GRACE,
     SPLIT,
+    SPLIT_ONE,
     ScratchViews,
     align,
     blob_table,
@@ -141,8 +142,7 @@ class ShmWriter(Writer):
         """A slot laid out by ``plan``, its table written, and views on its blobs."""
         sample, memory = self._service.loan(plan.size)
         memory[HEADER.size:HEADER.size + len(plan.table)] = plan.table
-        views = [(path, np.frombuffer(memory, dtype=dtype, count=length, offset=at))
-                 for path, dtype, length, at in plan.blobs]
+        views = [(path, np.frombuffer(memory, dtype, length, at)) for path, dtype, length, at in plan.blobs]
         return sample, memory, views
 
     def _send_copy(self, message: Any) -> None:
@@ -183,17 +183,28 @@ class ShmWriter(Writer):
 
     def loan(self, sizes: dict[str, int]) -> Any:
         """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""
+        return self.loan_maker(sizes)()
+
+    def loan_maker(self, sizes: dict[str, int]) -> Callable[[], Any]:
+        """What makes such loans of these array lengths, their slot plan resolved once
+        (``Publisher.loan`` keeps it per lengths: a loan in a loop looks nothing up)."""
         plan = self._plan_for(sizes)
         assert isinstance(self._codec, MessageCodec)
-        codec = self._codec
-        sample, memory, views = self._place(plan)
         if self._blank is None:
-            self._blank = default_maker(codec.cls)
-        message = self._blank()
-        for path, view in views:
-            set_path(message, path, view)
-        object.__setattr__(message, "_hetros_loan", _Loan(sample, memory, plan, views, self))
-        return message
+            self._blank = default_maker(self._codec.cls)
+        blank, service_loan, size, blobs = self._blank, self._service.loan, plan.size, plan.blobs
+        table, table_end = plan.table, HEADER.size + len(plan.table)
+
+        def make() -> Any:
+            sample, memory = service_loan(size)
+            memory[HEADER.size:table_end] = table
+            views = [(path, np.frombuffer(memory, dtype, length, at)) for path, dtype, length, at in blobs]
+            message = blank()
+            for path, view in views:
+                set_path(message, path, view)
+            object.__setattr__(message, "_hetros_loan", _Loan(sample, memory, plan, views, self))
+            return message
+        return make
 
     def _loan_plan(self, codec: MessageCodec, sizes: dict[str, int]) -> _SlotPlan:
         wanted = dict(sizes)
@@ -441,10 +452,27 @@ class ShmReader(Reader):
         )
 
     def _decode(self, memory: memoryview, layout: int) -> Any:
+        cdr = self._cdr
         if layout == LAYOUT_CDR:
-            if self._cdr is not None:
-                return self._cdr.decode_at(memory, HEADER.size, len(memory))
+            if cdr is not None:
+                return cdr.decode_at(memory, HEADER.size, len(memory))
             return self._codec.decode(memory[HEADER.size:])
+        end = len(memory)
+        if layout == LAYOUT_SPLIT and cdr is not None and end >= HEADER.size + SPLIT_ONE.size:
+            # one array, every check of the general path passed: decoded here in one unpack
+            room, count, index, small_at, offset, nbytes = SPLIT_ONE.unpack_from(memory, HEADER.size)
+            arrays = cdr.arrays
+            if count == 1 and index < len(arrays) and small_at % 8 == 4 and small_at + room <= end \
+                    and offset + nbytes <= end:
+                message = cdr.decode_at(memory, small_at, small_at + room)
+                field = arrays[index]
+                dtype = field.dtype
+                set_path(message, field.path, np.frombuffer(memory, dtype, nbytes // dtype.itemsize, offset))
+                return message
+        return self._decode_split(memory, layout)
+
+    def _decode_split(self, memory: memoryview, layout: int) -> Any:
+        """The split layout's general case, and every refusal of a damaged sample."""
         if layout != LAYOUT_SPLIT or not isinstance(self._codec, MessageCodec):
             raise SerializationError(f"unknown shared-memory layout {layout} at offset 12 of the sample header")
         arrays = self._codec.arrays
@@ -463,16 +491,17 @@ class ShmReader(Reader):
                 f"sample of {self._codec.typename} (the table at offset {HEADER.size} is damaged)"
             )
         message = self._codec.decode_at(memory, small_at, small_at + room)
+        end = len(memory)
         for position in range(0, 4 * count, 4):
             index, _small_at, offset, nbytes = table[position:position + 4]
-            if index >= len(arrays) or offset + nbytes > len(memory):
+            if index >= len(arrays) or offset + nbytes > end:
                 raise SerializationError(
                     f"blob {index} at offset {offset} ({nbytes} bytes) does not fit a "
-                    f"{len(memory)}-byte sample of {self._codec.typename}"
+                    f"{end}-byte sample of {self._codec.typename}"
                 )
             field = arrays[index]
-            view = np.frombuffer(memory, dtype=field.dtype, count=nbytes // field.dtype.itemsize, offset=offset)
-            set_path(message, field.path, view)
+            dtype = field.dtype
+            set_path(message, field.path, np.frombuffer(memory, dtype, nbytes // dtype.itemsize, offset))
         return message
 
     def close(self) -> None:

@@ -29,6 +29,8 @@ LAYOUT_SPLIT = 1
 # at 64-byte aligned offsets, each named by its index in the type's array list.
 SPLIT = struct.Struct("<II")
 BLOB = struct.Struct("<IIQQ")
+# the table of a message with one array (most loans), read in one unpack
+SPLIT_ONE = struct.Struct("<" + SPLIT.format[1:] + BLOB.format[1:])
 LOAN_RESERVE = 4096
 # Plain messages up to this size are one contiguous CDR (one encode, arrays inline and read
 # in place as views); larger ones use the split layout, whose blobs need no zeroing.

@@ -5,7 +5,10 @@ from __future__ import annotations
 import threading
 import time
 
-from hetros.runtime._executor import Executor
+import pytest
+
+from hetros.runtime import _executor as executor_module
+from hetros.runtime._executor import SPARSE_YIELD, Executor
 
 
 class _Queue:
@@ -78,3 +81,46 @@ def test_a_cold_executor_does_not_poll() -> None:
     executor.notify(queue)
     assert executor.spin_once(0.02)
     assert ran == ["q"]
+
+
+class _Empty:
+    """A polled subscription with nothing to take: counts the polls of a hot spin."""
+
+    def __init__(self) -> None:
+        self.polls = 0
+
+    def dispatch(self) -> bool:
+        self.polls += 1
+        return False
+
+    def pending(self) -> bool:
+        return False
+
+
+def test_a_hot_spin_hands_the_gil_over_at_every_poll_only_once_a_thread_of_this_process_woke_the_node(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    executor = Executor(threading.Event())
+    empty = _Empty()
+    executor.poll_while_spinning(empty)
+    yields: list[int] = []
+    monkeypatch.setattr(executor_module.os, "sched_yield", lambda: yields.append(1))
+
+    def spin() -> None:
+        empty.polls, yields[:] = 0, []
+        executor._spin.gap, executor._spin.last = 400e-6, time.perf_counter()  # a budget of 0.8 ms
+        executor.spin_once(0.01)
+
+    spin()
+    assert empty.polls >= 2 * SPARSE_YIELD and len(yields) == empty.polls // SPARSE_YIELD, \
+        "fed from other processes only: the GIL is handed over every few polls"
+    executor.wake()  # from the spinning thread itself (a shared-memory wake-up): no change
+    executor.hot_spin(True)
+    executor.wake()
+    assert executor.yield_every == SPARSE_YIELD
+    waker = threading.Thread(target=executor.wake)  # an in-process publisher, while a thread spins
+    waker.start()
+    waker.join()
+    executor.hot_spin(False)
+    assert executor.yield_every == 1
+    spin()
+    assert empty.polls >= 2 and len(yields) == empty.polls, "an in-process publisher gets the GIL at every poll"

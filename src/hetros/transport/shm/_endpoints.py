@@ -84,6 +84,14 @@ class _Loan:
         self.writer = writer
 
 
+def _placed(loan_slot: Callable[[int], tuple[Any, memoryview]], plan: _SlotPlan
+            ) -> tuple[Any, memoryview, list[tuple[tuple[str, ...], np.ndarray[Any, Any]]]]:
+    """A slot laid out by ``plan``, its table written, and views on its blobs."""
+    sample, memory = loan_slot(plan.size)
+    memory[HEADER.size:HEADER.size + len(plan.table)] = plan.table
+    return sample, memory, [(path, np.frombuffer(memory, dtype, length, at)) for path, dtype, length, at in plan.blobs]
+
+
 def has_loan(message: Any) -> bool:
     return getattr(message, "_hetros_loan", None) is not None
 
@@ -138,13 +146,6 @@ class ShmWriter(Writer):
             return
         self._send_cdr(message, body_size, cdr.encode_body, self._slot)
 
-    def _place(self, plan: _SlotPlan) -> tuple[Any, memoryview, list[tuple[tuple[str, ...], np.ndarray[Any, Any]]]]:
-        """A slot laid out by ``plan``, its table written, and views on its blobs."""
-        sample, memory = self._service.loan(plan.size)
-        memory[HEADER.size:HEADER.size + len(plan.table)] = plan.table
-        views = [(path, np.frombuffer(memory, dtype, length, at)) for path, dtype, length, at in plan.blobs]
-        return sample, memory, views
-
     def _send_copy(self, message: Any) -> None:
         """Large arrays go as aligned blobs (no zeroing, no CDR walk over them)."""
         codec = self._codec
@@ -155,7 +156,7 @@ class ShmWriter(Writer):
             if array.size:
                 arrays.append((index, field.path, field.dtype, int(array.size)))
         plan = _SlotPlan(arrays, codec.lean_size(message))
-        sample, memory, views = self._place(plan)
+        sample, memory, views = _placed(self._service.loan, plan)
         for path, view in views:
             np.copyto(view, get_path(message, path), casting="unsafe")
         self._finish(message, _Loan(sample, memory, plan, views, None))
@@ -192,13 +193,10 @@ class ShmWriter(Writer):
         assert isinstance(self._codec, MessageCodec)
         if self._blank is None:
             self._blank = default_maker(self._codec.cls)
-        blank, service_loan, size, blobs = self._blank, self._service.loan, plan.size, plan.blobs
-        table, table_end = plan.table, HEADER.size + len(plan.table)
+        blank, service_loan = self._blank, self._service.loan
 
         def make() -> Any:
-            sample, memory = service_loan(size)
-            memory[HEADER.size:table_end] = table
-            views = [(path, np.frombuffer(memory, dtype, length, at)) for path, dtype, length, at in blobs]
+            sample, memory, views = _placed(service_loan, plan)
             message = blank()
             for path, view in views:
                 set_path(message, path, view)

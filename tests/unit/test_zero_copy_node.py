@@ -113,3 +113,35 @@ def test_small_loans_live_in_process_memory_and_travel_inline(graphs: tuple[Grap
         with pytest.raises(ValueError, match="read-only"):
             message.data[0] = 1  # handed over
         assert frames.take(timeout=2.0).data[0] == value
+
+
+def test_a_slot_loan_read_in_this_process_too_reaches_both_readers_whole(shm_session: str) -> None:
+    """The shared-memory writer lends the slot; an in-process reader of the same publisher gets
+    its own frozen copy, since the slot leaves with the shared-memory send."""
+    plan = Plan(
+        "zc", "/", (),
+        {"p1": TargetPlan("p1", "process"), "p2": TargetPlan("p2", "process")},
+        {"cam": NodePlan("cam", "m:f", "p1", publish={"/img": "sensor_msgs/msg/Image"}),
+         "local": NodePlan("local", "m:f", "p1", subscribe={"/img": "sensor_msgs/msg/Image"}),
+         "viewer": NodePlan("viewer", "m:f", "p2", subscribe={"/img": "sensor_msgs/msg/Image"})},
+        {"/img": ChannelPlan("/img", "sensor_msgs/msg/Image", "topic", QoS(depth=3), ("cam",),
+                             ("local", "viewer"))},
+        (EdgePlan("/img", "cam", "local", "inproc"), EdgePlan("/img", "cam", "viewer", "shm")),
+    )
+    first, second = Graph(plan, "p1", shm_session), Graph(plan, "p2", shm_session)
+    try:
+        remote = Node("viewer", second).create_subscription(Image, "/img")
+        local = Node("local", first).create_subscription(Image, "/img")
+        pub = Node("cam", first).create_publisher(Image, "/img")
+        frame = pub.loan(data=300_000)
+        assert in_shared_memory(frame.data)
+        frame.data[:] = 9
+        pub.publish(frame)
+        there, here = remote.take(timeout=5), local.take(timeout=5)
+        assert in_shared_memory(there.data) and not in_shared_memory(here.data)
+        assert int(there.data.sum()) == int(here.data.sum()) == 9 * 300_000
+        assert not here.data.flags.writeable and not there.data.flags.writeable
+    finally:
+        second.close()
+        first.close()
+        remove_session_segments(shm_session)

@@ -40,11 +40,9 @@ from ..transport import (
     QoS,
     Reader,
     ShmDomain,
-    ShmWriter,
     Wake,
     Writer,
     carried_message,
-    has_loan,
 )
 from ..transport.dds import HOST_LEASE, DdsDomain, DdsEdgeReader, DdsEdgeWriter, edge_topic
 from ..transport.tcpros import (
@@ -76,8 +74,8 @@ class _FanoutWriter(Writer):
     def __init__(self, parts: list[Writer], types: TypeRegistry) -> None:
         self._parts = parts
         self._types = types
-        self._shm = next((p for p in parts if isinstance(p, ShmWriter)), None)
-        self._local = any(p is not self._shm for p in parts)
+        self._lender = next((p for p in parts if p.lends_slots), None)
+        self._local = any(p is not self._lender for p in parts)
         if len(parts) == 1:
             # the common case, one transport: a loan needs no copy for other parts
             self.write = self._write_one  # type: ignore[method-assign]
@@ -88,9 +86,10 @@ class _FanoutWriter(Writer):
         fill in place, their arrays in a shared-memory slot when a process reads them and
         they are large, otherwise in memory hetros owns (sent inline)."""
         sizes = {name.replace("__", "."): length for name, length in sizes.items()}
-        shm = self._shm
-        if shm is not None and shm.slot_loan_pays(sizes):
-            return shm.loan_maker(sizes)
+        lender = self._lender
+        slot_maker = None if lender is None else lender.slot_loan_maker(sizes)
+        if slot_maker is not None:
+            return slot_maker
         arrays = self._arrays_of(cls, sizes)
         blank = default_maker(cls)
         if len(arrays) == 1 and len(arrays[0][0]) == 1:  # one top-level array, the common loan
@@ -130,15 +129,15 @@ class _FanoutWriter(Writer):
         self._write_part(message)
 
     def write(self, message: Any) -> None:
-        if self._shm is not None and has_loan(message):
-            others = [part for part in self._parts if part is not self._shm]
+        lender = self._lender
+        if lender is not None and lender.owns_loan(message):
+            others = [part for part in self._parts if part is not lender]
             if others:
                 # the slot leaves with the shared-memory send: in-process readers get their own copy
                 local = freeze(copy_message(message))
                 for part in others:
                     part.write(local)
-            assert self._shm is not None
-            self._shm.write(_hand_over(message, copy_arrays=False))
+            lender.write(_hand_over(message, copy_arrays=False))
             return
         _hand_over(message, copy_arrays=self._local)
         for part in self._parts:

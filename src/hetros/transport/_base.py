@@ -19,9 +19,22 @@ Wake = Callable[[], None]
 class Writer(ABC):
     """Publishing end of one topic (or service channel) for one endpoint."""
 
+    # whether the transport lends its own memory for messages to be filled in place
+    # (``slot_loan_maker``, ``owns_loan``): shared memory does, in-process delivery need not
+    lends_slots = False
+
     @abstractmethod
     def write(self, message: Any) -> None:
         """Deliver ``message`` to every subscriber; may block per QoS, then raise."""
+
+    def slot_loan_maker(self, sizes: dict[str, int]) -> Callable[[], Any] | None:
+        """What makes messages of these array lengths whose arrays live in the transport's
+        memory (a zero-copy publish), or None where a loan there does not pay."""
+        return None
+
+    def owns_loan(self, message: Any) -> bool:
+        """Whether ``message`` came from ``slot_loan_maker`` and has not been published yet."""
+        return False
 
     @abstractmethod
     def close(self) -> None: ...

@@ -112,6 +112,8 @@ def _empty(dtype: np.dtype[Any]) -> np.ndarray[Any, Any]:
 class ShmWriter(Writer):
     """Publishes into one service: arrays go into the slot as blobs (one copy, or none when loaned)."""
 
+    lends_slots = True
+
     def __init__(self, service: Service, codec: Codec, slot: int) -> None:
         self._service = service
         self._codec = codec
@@ -181,6 +183,12 @@ class ShmWriter(Writer):
                 self._loan_plans.clear()
             self._loan_plans[key] = plan
         return plan
+
+    def slot_loan_maker(self, sizes: dict[str, int]) -> Callable[[], Any] | None:
+        return self.loan_maker(sizes) if self.slot_loan_pays(sizes) else None
+
+    def owns_loan(self, message: Any) -> bool:
+        return has_loan(message)
 
     def loan(self, sizes: dict[str, int]) -> Any:
         """A message whose primitive arrays live in a shared-memory slot (zero-copy publish)."""

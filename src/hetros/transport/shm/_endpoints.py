@@ -163,14 +163,6 @@ class ShmWriter(Writer):
             np.copyto(view, get_path(message, path), casting="unsafe")
         self._finish(message, _Loan(sample, memory, plan, views, None))
 
-    def slot_loan_pays(self, sizes: dict[str, int]) -> bool:
-        """Whether a loan of these array lengths should live in a slot (the split layout).
-
-        Below ``INLINE_LIMIT`` a loan is better made in process memory and sent inline: one
-        copy of a few kilobytes costs less than the split layout's bookkeeping.
-        """
-        return self._plan_for(sizes).size > INLINE_LIMIT
-
     def _plan_for(self, sizes: dict[str, int]) -> _SlotPlan:
         codec = self._codec
         if not isinstance(codec, MessageCodec):
@@ -185,7 +177,10 @@ class ShmWriter(Writer):
         return plan
 
     def slot_loan_maker(self, sizes: dict[str, int]) -> Callable[[], Any] | None:
-        return self.loan_maker(sizes) if self.slot_loan_pays(sizes) else None
+        """Slot loans (the split layout) only above ``INLINE_LIMIT``: below it a loan is better
+        made in process memory and sent inline, one copy of a few kilobytes costing less than
+        the split layout's bookkeeping."""
+        return self.loan_maker(sizes) if self._plan_for(sizes).size > INLINE_LIMIT else None
 
     def owns_loan(self, message: Any) -> bool:
         return has_loan(message)

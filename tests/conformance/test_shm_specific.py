@@ -352,6 +352,6 @@ def test_the_compiled_hot_path_shares_the_sample_layout() -> None:
     from hetros.transport.shm._sample import CDR_BODY_AT, HEADER
 
     assert HEADER.format == "<QII12x" and CDR_BODY_AT == HEADER.size + 4 == 32
-    assert (Credits.HEAD, Credits.SLOT_WORDS) == (4, 4)
+    assert (Credits.HEAD, Credits.SLOT_WORDS) == (5, 4)
     if os.environ.get("HETROS_PURE_PYTHON") == "1":
         assert _hotpath.send_cdr is None and _hotpath.take_cdr is None

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..transport import cleanup_stale, remove_session_segments
+from ..transport import cleanup_stale, new_session, remove_session_segments
 
 SIZES = [4, 3 * 1024, 12 * 1024, 48 * 1024, 192 * 1024, 768 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
 SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "196 kB",
@@ -154,7 +154,7 @@ class Bench:
     def config(self, system: str, size: int) -> tuple[dict[str, Any], Path]:
         warmup, reps = self.reps_for(size)
         tag = f"{system}-{size}"
-        session = f"{os.getpid()}x{os.urandom(3).hex()}"
+        session = new_session()
         self.sessions.append(session)
         cfg: dict[str, Any] = {
             "size": size, "warmup": warmup, "reps": reps, "cpus": self.cpus,

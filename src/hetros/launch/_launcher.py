@@ -13,7 +13,6 @@ import json
 import logging
 import os
 import queue
-import secrets
 import signal
 import subprocess
 import sys
@@ -27,7 +26,7 @@ from typing import IO, Any
 from .._errors import LaunchError
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
-from ..transport import cleanup_stale, remove_session_segments
+from ..transport import cleanup_stale, new_session, remove_session_segments
 from ._hosts import HostLink, local_host
 
 log = logging.getLogger("hetros.launch")
@@ -53,7 +52,7 @@ class Launcher:
     def __init__(self, plan: Plan, *, duration: float | None = None) -> None:
         self.plan = plan
         self.duration = duration
-        self.session = f"{os.getpid()}x{secrets.token_hex(3)}"
+        self.session = new_session()
         self.events: queue.Queue[dict[str, Any]] = queue.Queue()
         self.children: dict[str, _Child] = {}
         self.failures: list[str] = []

@@ -75,6 +75,8 @@ def main(argv: list[str] | None = None) -> int:
     stop.wait()
     stuck = host.stop()
     failed = [t.spec.name for t in host.threads if t.failed]
+    if host.unacknowledged:
+        failed.append(f"target {args.target} (reliable messages left untaken)")
     report("stopped", stuck=stuck, failed=failed)
     try:
         status.close()

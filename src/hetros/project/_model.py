@@ -12,6 +12,7 @@ from .._errors import MessageError, ProjectError
 from ..msg import normalize_typename
 from ..plan import ACTION_PREFIX, LAUNCHER, action_endpoints
 from ..transport import QoS
+from ._names import plain_name_problem
 
 # goals an action server executes at once unless the project file says otherwise
 DEFAULT_MAX_GOALS = 8
@@ -227,11 +228,29 @@ class Project(_Strict):
     def shm_budget_bytes(self) -> int:
         return parse_size(self.shm_budget)
 
+    @field_validator("name")
+    @classmethod
+    def _name(cls, value: str) -> str:
+        if problem := plain_name_problem("a project", value):
+            raise ValueError(problem)
+        return value
+
     @field_validator("targets")
     @classmethod
     def _targets(cls, value: dict[str, TargetSpec]) -> dict[str, TargetSpec]:
         if LAUNCHER in value:
             raise ValueError(f"{LAUNCHER!r} is reserved for the launching process; pick another name")
+        for target in value:
+            if problem := plain_name_problem("a target", target):
+                raise ValueError(problem)
+        return value
+
+    @field_validator("hosts")
+    @classmethod
+    def _hosts(cls, value: dict[str, HostSpec]) -> dict[str, HostSpec]:
+        for host in value:
+            if problem := plain_name_problem("a host", host):
+                raise ValueError(problem)
         return value
 
 
@@ -370,12 +389,13 @@ def load_project(path: str | Path) -> LoadedProject:
             loc = [str(p) for p in error["loc"] if p not in _UNION_TAGS]
             if error["loc"] and error["loc"][-1] == "str" and tuple(map(str, error["loc"][:-1])) in branches:
                 continue
-            message = error["msg"]
+            message = error["msg"].removeprefix("Value error, ")
             if error["type"] == "extra_forbidden":
                 message = f"unknown key {loc[-1]!r}; check its spelling against the documented keys"
             elif error["type"] == "missing":
                 message = f"required key {loc[-1]!r} is missing"
-            elif isinstance(error.get("input"), str | int | float | bool | None):
+            elif isinstance(error.get("input"), str | int | float | bool | None) and \
+                    f"not {error.get('input')!r}" not in message:
                 message = f"{message}, not {error.get('input')!r}"
             problems.append(f"{loaded.where(*loc)}: {message}")
         raise ProjectError("invalid project file:\n" + "\n".join(f"  - {p}" for p in problems)) from None

@@ -7,6 +7,11 @@ import re
 
 MAX_NAME = 255
 _TOKEN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+# project, target and host names become parts of file, shared-memory and DDS topic names
+MAX_PLAIN_NAME = 63
+_PLAIN = re.compile(r"[A-Za-z][A-Za-z0-9_-]*\Z")
+PLAIN_NAME_RULE = (f"an ASCII letter, then ASCII letters, digits, '_' or '-', at most {MAX_PLAIN_NAME} "
+                   "characters in all")
 
 
 def topic_name_problem(name: str) -> str | None:
@@ -41,3 +46,14 @@ def node_name_problem(name: str) -> str | None:
         return (f"node name {name!r} is not a ROS name: node names use only ASCII letters, digits and '_', "
                 "and start with a letter or '_'")
     return None
+
+
+def plain_name_problem(what: str, name: object) -> str | None:
+    """Why ``name`` cannot name a project, target or host (``what``), or None when it can.
+
+    These names end up in file names, iceoryx2 service names and DDS topic names
+    (``hetros/<project>/<host>/<channel>``), so one rule keeps them safe in all three.
+    """
+    if isinstance(name, str) and len(name) <= MAX_PLAIN_NAME and _PLAIN.match(name):
+        return None
+    return f"{what} name must be {PLAIN_NAME_RULE}, not {name!r}"

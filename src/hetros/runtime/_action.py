@@ -158,6 +158,10 @@ class ServerGoalHandle:
         self.result: Any = None
         self.finished_at = 0.0
         self._waiting: list[tuple[int, str]] = []  # get_result requests answered when the goal ends
+        # inside an execute callback, succeed/abort/canceled decide how the goal ends and the
+        # callback's return value is its result (rclpy's contract): the goal ends on return
+        self._in_execute = False
+        self._decided: tuple[int, Any] | None = None
 
     def __repr__(self) -> str:
         return f"<goal {_short(self.goal_id)} of {self.server.name}: {STATUS_NAMES[self.status]}>"
@@ -168,7 +172,20 @@ class ServerGoalHandle:
 
     @property
     def is_active(self) -> bool:
+        """Not ended, nor decided to end by ``succeed``/``abort``/``canceled`` (as in rclpy)."""
+        return self.status not in _TERMINAL and self._decided is None
+
+    @property
+    def _open(self) -> bool:
+        """Not ended yet (a goal decided inside its execute callback ends when that returns)."""
         return self.status not in _TERMINAL
+
+    @property
+    def _ended(self) -> int | None:
+        """How the goal ended or was decided to end; None while it is open."""
+        if self._decided is not None:
+            return self._decided[0]
+        return None if self.status not in _TERMINAL else int(self.status)
 
     def publish_feedback(self, feedback: Any) -> None:
         self.server.publish_feedback(self, feedback)
@@ -187,9 +204,12 @@ class ActionServer:
     """Serves one action.
 
     Callback style: ``execute(goal_handle)`` runs in a thread of its own per goal (at most
-    ``max_goals`` at once; later goals wait, accepted) and returns the result; a goal it
-    leaves without ``succeed``/``abort``/``canceled`` succeeds, or is canceled when a cancel
-    was requested; one that raises is aborted and logged. Thread style (no ``execute``): the
+    ``max_goals`` at once; later goals wait, accepted) and returns the result, as in rclpy:
+    ``succeed()``/``abort()``/``canceled()`` called inside it say how the goal ends, and the
+    goal ends with the returned value when the callback returns (``succeed(result)``'s
+    argument stands where it returns None). A goal it leaves without one of them succeeds,
+    or is canceled when a cancel was requested; one that raises, or returns something that
+    is not the action's result, is aborted and logged. Thread style (no ``execute``): the
     node takes goals with :meth:`take_goal` and ends them with :meth:`succeed` and friends.
     """
 
@@ -286,7 +306,7 @@ class ActionServer:
         goal_id = bytes(request.goal_id.uuid)
         with self._lock:
             handle = self._goals.get(goal_id)
-            if handle is not None and handle.is_active:
+            if handle is not None and handle._open:
                 handle._waiting.append((request_id, client))
                 return
         if handle is None:
@@ -311,7 +331,7 @@ class ActionServer:
                       if everything or (any(goal_id) and h.goal_id == goal_id)
                       or (before and _stamp_ns(h.stamp) <= before)]
             for handle in chosen:
-                if not handle.is_active:
+                if not handle._open:
                     continue
                 if handle.status == CANCELING:
                     canceling.append(handle)
@@ -332,7 +352,7 @@ class ActionServer:
                 known = self._goals.get(goal_id) if any(goal_id) else None
                 if any(goal_id) and known is None and not before:
                     code = _CANCEL_UNKNOWN
-                elif known is not None and not known.is_active and not before:
+                elif known is not None and not known._open and not before:
                     code = _CANCEL_TERMINATED
                 else:
                     code = _CANCEL_REJECTED
@@ -358,26 +378,31 @@ class ActionServer:
 
     def _execute(self, handle: ServerGoalHandle) -> None:
         assert self.execute is not None
+        handle._in_execute = True
+        status: int = ABORTED
+        result: Any = None
         try:
-            result = self.execute(handle)
+            returned = self.execute(handle)
+            if returned is not None:
+                self._check_result(returned)
         except ShutdownError:
-            result = None
+            pass
         except Exception:
             log.error("action %s: execute raised; goal %s aborted:\n%s", self.name, _short(handle.goal_id),
                       traceback.format_exc())
-            if handle.is_active:
-                self.abort(handle, None)
         else:
-            if handle.is_active:
-                if handle.is_cancel_requested:
-                    self.canceled(handle, result)
-                else:
-                    self.succeed(handle, result)
+            decided = handle._decided
+            if decided is not None:
+                status, result = decided[0], returned if returned is not None else decided[1]
+            else:
+                status, result = (CANCELED if handle.is_cancel_requested else SUCCEEDED), returned
         finally:
             with self._lock:
                 self._threads.pop(handle.goal_id, None)
-                if handle.is_active:  # interrupted by shutdown
-                    self._finish(handle, ABORTED, None)
+                handle._in_execute = False
+                if handle._open:  # else ended outside the callback meanwhile
+                    self._finish(handle, status, result)
+                    self._publish_status()
             self._start_goals()
 
     def take_goal(self, timeout: float | None = None) -> ServerGoalHandle:
@@ -426,14 +451,21 @@ class ActionServer:
                               "call succeed() or abort()")
         self._end(handle, CANCELED, result)
 
+    def _check_result(self, result: Any) -> None:
+        _check_type(result, _typename(self.type.Result), f"the result of action {self.name}")
+        result._hetros_validate(result, f"the result of {self.name}")
+
     def _end(self, handle: ServerGoalHandle, status: int, result: Any) -> None:
         if result is not None:
-            _check_type(result, _typename(self.type.Result), f"the result of action {self.name}")
-            result._hetros_validate(result, f"the result of {self.name}")
+            self._check_result(result)
         with self._lock:
-            if not handle.is_active:
+            ended = handle._ended
+            if ended is not None:
                 raise ActionError(f"goal {_short(handle.goal_id)} of {self.name} already ended "
-                                  f"({STATUS_NAMES[handle.status]})")
+                                  f"({STATUS_NAMES[ended]}); a goal ends once")
+            if handle._in_execute:
+                handle._decided = (status, result)  # ends with the callback's return value
+                return
             self._finish(handle, status, result)
             self._publish_status()
 
@@ -453,7 +485,7 @@ class ActionServer:
     def _expire(self) -> None:
         now = time.monotonic()
         with self._lock:
-            finished = [h for h in self._goals.values() if not h.is_active]
+            finished = [h for h in self._goals.values() if not h._open]
             excess = len(finished) - MAX_KEPT_RESULTS
             expired = [h for i, h in enumerate(finished)
                        if i < excess or now - h.finished_at > self.result_timeout]
@@ -497,7 +529,7 @@ class ActionServer:
             thread.join(max(deadline - time.monotonic(), 0.0))
         with self._lock:
             for handle in self._goals.values():
-                if handle.is_active:
+                if handle._open:
                     if self.node.failing:
                         handle._waiting.clear()
                     self._finish(handle, ABORTED, None)

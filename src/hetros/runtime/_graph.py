@@ -473,6 +473,30 @@ class Graph:
             parts.append(remote_reader)
         return parts[0] if len(parts) == 1 else _MergedReader(parts)
 
+    def linger(self) -> list[str]:
+        """Keep this process' reliable writers until their subscribers have taken what was
+        published (the process' nodes have all returned); what was given up, as error lines
+        naming topic, subscriber and count. Ends at once when the graph stops."""
+        with self._lock:
+            domain = self._shm
+            dds_writers = dict(self._dds_writers)
+        lost: list[str] = []
+        if domain is not None:
+            for miss in domain.linger(self.stop):
+                channel = self.plan.channels.get(miss.topic) if self.plan is not None else None
+                subscriber = (channel.subscribers[miss.slot] if channel is not None
+                              and miss.slot < len(channel.subscribers) else f"slot {miss.slot}")
+                lost.append(
+                    f"reliable topic {miss.topic}: subscriber {subscriber!r} (pid {miss.pid}) took nothing "
+                    f"for publish_timeout and has {miss.count} message(s) of this process left to take; "
+                    "they are lost as this process ends (make the subscriber take them, or raise "
+                    f"topics.{miss.topic}.publish_timeout)")
+        for name, writer in dds_writers.items():
+            if not writer.linger(self.stop):
+                lost.append(f"reliable topic {name}: a subscriber on another host did not acknowledge "
+                            f"every message within publish_timeout; the rest may be lost as this process ends")
+        return lost
+
     def close(self) -> None:
         self.shutdown()
         with self._lock:

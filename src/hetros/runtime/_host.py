@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import logging
 import sys
 import threading
 import traceback
@@ -17,6 +18,8 @@ from ..plan import NodePlan, Plan
 from ._graph import Graph
 from ._log import node_logger
 from ._node import Node
+
+log = logging.getLogger("hetros.launch")
 
 FailureReport = Callable[[str, str, bool], None]
 DoneReport = Callable[[str], None]
@@ -39,11 +42,12 @@ def resolve(run: str, root: str) -> Callable[..., Any]:
 
 
 def run_node_body(factory: Callable[..., Any], node: Node) -> None:
-    """Call a node function or construct a node class; spin when it left callbacks behind."""
+    """Call a node function or construct a node class; spin when it left callbacks behind
+    that it never spun itself (one that ran its own spin loop and returned is done)."""
     result = factory(node)
     if inspect.isclass(factory) and hasattr(result, "run"):
         result.run()
-    if node.executor.entities and node.ok():
+    if node.executor.entities and not node.spun and node.ok():
         node.spin()
 
 
@@ -109,6 +113,8 @@ class Host:
                  on_all_exited: Callable[[], None] = lambda: None,
                  on_done: DoneReport = lambda node: None) -> None:
         self._running = 0
+        # what this process' reliable writers could not deliver before it ended (``Graph.linger``)
+        self.unacknowledged: list[str] = []
         self._count_lock = threading.Lock()
         self._on_all_exited = on_all_exited
         types = registry()
@@ -126,6 +132,11 @@ class Host:
             self._running -= 1
             done = self._running == 0
         if done:
+            if not self.graph.stop.is_set():
+                # every node returned: what they published reliably must reach its subscribers first
+                self.unacknowledged = self.graph.linger()
+                for line in self.unacknowledged:
+                    log.error("%s", line)
             self._on_all_exited()
 
     def start(self) -> None:

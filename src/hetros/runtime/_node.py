@@ -437,6 +437,8 @@ class Node:
         # set when the node raised and the graph will stop for it: what it leaves unfinished is
         # then explained by the graph's stop reason rather than answered
         self.failing = False
+        # whether the node's own code spun its executor (else a function that returns is spun for it)
+        self.spun = False
         self.action_clients: dict[str, ActionClient] = {}
 
     # -- endpoints -------------------------------------------------------------------------
@@ -554,6 +556,7 @@ class Node:
 
     def spin(self, timeout: float | None = None) -> None:
         """Run this node's callbacks, one at a time, until shutdown (or ``timeout``)."""
+        self.spun = True
         deadline = None if timeout is None else time.monotonic() + timeout
         while not self.graph.stop.is_set():
             left = None if deadline is None else deadline - time.monotonic()
@@ -562,6 +565,7 @@ class Node:
             self.executor.spin_once(left)
 
     def spin_once(self, timeout: float | None = None) -> bool:
+        self.spun = True
         return self.executor.spin_once(timeout)
 
     # -- parameters ------------------------------------------------------------------------

@@ -5,18 +5,21 @@ from ._codec import EnvelopeCodec, MessageCodec, carried_message
 from ._inproc import InprocTopic, Mailbox
 from ._qos import DEFAULT_QOS, QoS
 from .shm import (
+    SESSION_TAG_VARIABLE,
     ShmDomain,
     ShmReader,
     ShmWriter,
     WakeChannel,
     cleanup_stale,
     has_loan,
+    new_session,
     raise_open_file_limit,
     remove_session_segments,
     reserved_bytes,
 )
 
 __all__ = [
+    "SESSION_TAG_VARIABLE",
     "DEFAULT_QOS",
     "Codec",
     "EnvelopeCodec",
@@ -34,6 +37,7 @@ __all__ = [
     "carried_message",
     "cleanup_stale",
     "has_loan",
+    "new_session",
     "raise_open_file_limit",
     "remove_session_segments",
     "reserved_bytes",

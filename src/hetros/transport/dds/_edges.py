@@ -8,18 +8,19 @@ so a reader subscribes only to the hosts the plan says feed it, and a subscriber
 gets a host's messages through shared memory never gets them twice.
 
 Reliability is DDS's: reliable and keep_all, with ``depth`` unacknowledged samples at most
-in the writer's history, so a network or host that does not keep up holds back the writer
-(which raises after ``publish_timeout``). The reader's history is not bounded: Cyclone
-delivers on its receive thread, and a full reader would stall that thread, and with it
-every other topic and the hosts' leases. A subscriber that does not take its messages
-therefore grows its process' memory rather than losing them; the node's ``try_take``
-drains it.
+in the writer's history and ``depth`` samples at most in the reader's (Cyclone leaves a
+sample it cannot store unacknowledged, so the writer resends it later, and the receive
+thread goes on with other topics), so a network, host or subscriber that does not keep up
+holds back the writer, which raises after ``publish_timeout``. Memory stays bounded on both
+sides.
 """
 
 from __future__ import annotations
 
+import logging
 import struct
 import threading
+import time
 from collections import deque
 from typing import Any
 
@@ -38,8 +39,10 @@ from ._endpoints import ANY_STATE, padded, write_sample
 
 _sequence: Any = idl.sequence
 _SAMPLE = make_idl_struct("HetrosSample", "hetros::dds_::Sample_", {"data": _sequence[idl.uint8]})
+log = logging.getLogger("hetros.dds")
 _LENGTH = struct.Struct("<I")
 _HEAD = 8  # encapsulation, then the sequence's length
+ACK_SLICE_NS = 20_000_000
 
 
 def edge_topic(project: str, host: str, channel: str) -> str:
@@ -49,8 +52,9 @@ def edge_topic(project: str, host: str, channel: str) -> str:
 
 def _edge_qos(qos: QoS, writer: bool) -> Qos:
     policies = list(dds_qos(qos))
-    if writer and qos.history == "keep_all":
-        # at most ``depth`` samples in flight; beyond that the writer waits: back-pressure
+    if qos.history == "keep_all":
+        # at most ``depth`` samples in the writer's history and in the reader's: a reader that
+        # does not take leaves the rest unacknowledged, and the writer waits (back-pressure)
         policies.append(Policy.ResourceLimits(max_samples=qos.depth, max_instances=1,
                                               max_samples_per_instance=qos.depth))
     return Qos(*policies)
@@ -63,6 +67,7 @@ class DdsEdgeWriter(Writer):
         self.topic = topic
         self._codec = codec
         self._timeout = qos.publish_timeout
+        self.reliable = qos.reliability == "reliable"
         self._lock = threading.Lock()
         self.writer = DataWriter(domain.participant, domain.topic(topic, _SAMPLE), qos=_edge_qos(qos, writer=True))
         self.sent = 0
@@ -80,6 +85,21 @@ class DdsEdgeWriter(Writer):
     def matched(self) -> int:
         return len(self.writer.get_matched_subscriptions())
 
+    def linger(self, stop: threading.Event) -> bool:
+        """Wait until every matched reader acknowledged what this reliable writer sent (at most
+        ``publish_timeout``); whether they all did. The wait is cut in short slices: the binding
+        holds the GIL inside ``dds_wait_for_acks``."""
+        if not self.reliable:
+            return True
+        deadline = time.monotonic() + self._timeout
+        while not stop.is_set():
+            if self.writer.wait_for_acks(ACK_SLICE_NS):
+                return True
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.005)
+        return True
+
     def close(self) -> None:
         """Writers are shared per channel and deleted with the process' DDS participant."""
 
@@ -88,48 +108,87 @@ class DdsEdgeReader(Reader):
     """Takes one channel from the hosts that publish it to this subscriber.
 
     The participant's waiting thread moves arriving samples into a queue and wakes the node;
-    the node's ``try_take`` decodes from the queue (no DDS call on the node's thread).
+    the node's ``try_take`` decodes from the queue. Both sides are bounded: the queue holds
+    at most ``depth`` samples, and on a reliable keep_all channel what does not fit stays
+    in the DDS reader, whose history is ``depth`` samples too, so a subscriber that does not
+    take holds back the remote writer (which raises after ``publish_timeout``) instead of
+    growing this process; the node's takes pull the rest in. A keep_last channel keeps the
+    newest ``depth``. A sample that is not hetros's framing or does not decode is dropped,
+    counted (``dropped``) and logged; the reader goes on with the next one.
     """
 
     def __init__(self, domain: DdsDomain, topics: list[str], codec: Codec, qos: QoS, wake: Wake) -> None:
         self._codec = codec
         self._wake = wake
-        self._queue: deque[tuple[str, bytes]] = deque()
+        self._depth = qos.depth
+        self._blocks = qos.blocks_publisher
+        self._queue: deque[tuple[str, bytes]] = deque(maxlen=None if self._blocks else qos.depth)
+        self._lock = threading.Lock()
         self.received = 0
+        self.dropped = 0
         self.readers = [DataReader(domain.participant, domain.topic(topic, _SAMPLE), qos=_edge_qos(qos, writer=False))
                         for topic in topics]
         for reader in self.readers:
             domain.watch(reader, self._arrived)
 
-    def _arrived(self) -> None:
+    def _fill(self) -> bool:
+        """Move samples from the DDS readers into the queue while it has room; whether any came."""
         arrived = False
-        for reader in self.readers:
-            while (taken := _take_one(reader)) is not None:
-                data, valid = taken
-                if valid:
-                    self._queue.append((reader.topic.name, data))
-                    arrived = True
-        if arrived:
+        with self._lock:
+            for reader in self.readers:
+                while not self._blocks or len(self._queue) < self._depth:
+                    taken = _take_one(reader)
+                    if taken is None:
+                        break
+                    data, valid = taken
+                    if valid:
+                        self._queue.append((reader.topic.name, data))
+                        arrived = True
+        return arrived
+
+    def _arrived(self) -> None:
+        if self._fill():
             self._wake()
 
     def try_take(self) -> Any | None:
-        try:
-            topic, data = self._queue.popleft()
-        except IndexError:
-            return None
+        while True:
+            try:
+                topic, data = self._queue.popleft()
+            except IndexError:
+                if not self._blocks or not self._fill():
+                    return None
+                continue
+            if self._blocks and len(self._queue) < self._depth // 2 + 1:
+                self._fill()  # what waited in the DDS reader for room
+            try:
+                message = self._decode(topic, data)
+            except SerializationError as exc:
+                self.dropped += 1
+                log.error("%s: dropped a malformed sample from another host (%d so far): %s", topic,
+                          self.dropped, exc)
+                continue
+            self.received += 1
+            return message
+
+    def _decode(self, topic: str, data: bytes) -> Any:
         if len(data) < _HEAD or data[1] != 1:
             raise SerializationError(f"a sample of {topic} is not hetros's framing (starts {data[:_HEAD].hex(' ')})")
         (size,) = _LENGTH.unpack_from(data, 4)
         if _HEAD + size > len(data):
             raise SerializationError(f"a sample of {topic} says {size} bytes and holds {len(data) - _HEAD}")
-        self.received += 1
         return self._codec.decode(memoryview(data)[_HEAD:_HEAD + size])
+
+    def pending(self) -> bool:
+        # every take refills the queue from the DDS readers before it runs dry, and an arrival
+        # into a queue with room wakes the node: an empty queue means nothing is known waiting
+        return bool(self._queue)
 
     def matched(self) -> int:
         return sum(len(r.get_matched_publications()) for r in self.readers)
 
     def close(self) -> None:
-        readers, self.readers = self.readers, []
+        with self._lock:
+            readers, self.readers = self.readers, []
         for reader in readers:
             delete_entity(reader)
 

@@ -33,18 +33,21 @@ reserved); the message follows in the codec's format (CDR for messages).
 """
 
 
-from ._domain import ShmDomain, cleanup_stale, remove_session_segments
+from ._domain import ShmDomain, Unacknowledged, cleanup_stale, remove_session_segments
 from ._endpoints import ShmReader, ShmWriter, has_loan
 from ._events import WakeChannel, raise_open_file_limit
-from ._sample import reserved_bytes
+from ._sample import SESSION_TAG_VARIABLE, new_session, reserved_bytes
 
 __all__ = [
+    "SESSION_TAG_VARIABLE",
     "ShmDomain",
     "ShmReader",
     "ShmWriter",
+    "Unacknowledged",
     "WakeChannel",
     "cleanup_stale",
     "has_loan",
+    "new_session",
     "raise_open_file_limit",
     "remove_session_segments",
     "reserved_bytes",

@@ -35,12 +35,14 @@ class Credits:
     Layout (little endian u64): ``published`` sequence number, ``waiting`` (a publisher is
     blocked on a full FIFO, so takers must signal), ``version`` (bumped by every subscriber
     that joins or leaves, so the publisher rereads the slots only then), ``back_event`` (the
-    publisher's event id on its process' back channel); then per subscriber slot: taken, pid,
+    publisher's event id on its process' back channel), ``publisher_pid`` (so a subscriber
+    that misses messages can tell a publishing process that ended from a lost connection);
+    then per subscriber slot: taken, pid,
     wake channel key, event id. Each word has one writer: the publishing process writes the
     head (but ``version``), a subscriber writes its own slot and bumps ``version``.
     """
 
-    HEAD = 4
+    HEAD = 5
     SLOT_WORDS = _SLOT_WORDS
     SIZE = 8 * (HEAD + _SLOT_WORDS * MAX_SUBSCRIBER_SLOTS)
 
@@ -89,6 +91,14 @@ class Credits:
     def back_event(self, event: int) -> None:
         self.words[3] = event
 
+    @property
+    def publisher_pid(self) -> int:
+        return int(self.words[4])
+
+    @publisher_pid.setter
+    def publisher_pid(self, pid: int) -> None:
+        self.words[4] = pid
+
     def slot(self, index: int) -> tuple[int, int]:
         taken, pid, _key, _event = self.slots[index]
         return int(taken), int(pid)
@@ -116,6 +126,13 @@ class Credits:
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
         return max((published - words[i] for i in range(0, len(words), _SLOT_WORDS) if words[i + 1]),
                    default=0)
+
+    def behind(self, published: int) -> list[tuple[int, int, int]]:
+        """(slot, pid, messages not taken yet) of every live subscriber that has not taken all
+        of ``published``."""
+        words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
+        return [(i // _SLOT_WORDS, words[i + 1], published - words[i]) for i in range(0, len(words), _SLOT_WORDS)
+                if words[i + 1] and words[i] < published]
 
     def full_slots(self, published: int, depth: int) -> list[int]:
         """Slots of live subscribers whose FIFO holds ``depth`` messages already."""

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +29,19 @@ from ._sample import (
     segment_prefix,
 )
 from ._service import Service
+
+# how often a lingering process rereads its subscribers' progress (a shutdown path, not a hot one)
+LINGER_POLL = 0.005
+
+
+@dataclass(frozen=True)
+class Unacknowledged:
+    """Messages a reliable publisher sent that subscriber ``slot`` (in process ``pid``) never took."""
+
+    topic: str
+    slot: int
+    pid: int
+    count: int
 
 
 class ShmDomain:
@@ -117,6 +132,33 @@ class ShmDomain:
         reader = ShmReader(self, services, codec, slot, wake, self.wake_channel(owner))
         self._readers.append(reader)
         return reader
+
+    def linger(self, stop: threading.Event) -> list[Unacknowledged]:
+        """Wait until every subscriber has taken what this process published on reliable topics.
+
+        iceoryx2 frees a publisher's samples with its process, so a process whose nodes have
+        all returned must not end before its subscribers took what it sent, as a DDS reliable
+        writer lingers until acknowledged. A topic is given up once none of its subscribers
+        took anything for its ``publish_timeout``; what is left is returned. ``stop`` (the graph
+        shutting down) ends the wait at once.
+        """
+        with self._lock:
+            waiting = {service: service.behind() for service in self._services.values()}
+        waiting = {service: behind for service, behind in waiting.items() if behind}
+        progress = {service: time.monotonic() for service in waiting}
+        left: list[Unacknowledged] = []
+        while waiting and not stop.wait(LINGER_POLL):
+            now = time.monotonic()
+            for service, before in list(waiting.items()):
+                behind = service.behind()
+                if not behind:
+                    del waiting[service]
+                elif behind != before:
+                    waiting[service], progress[service] = behind, now
+                elif now - progress[service] > service.qos.publish_timeout:
+                    del waiting[service]
+                    left += [Unacknowledged(service.topic, slot, pid, count) for slot, pid, count in behind]
+        return left
 
     def close(self) -> None:
         with self._lock:

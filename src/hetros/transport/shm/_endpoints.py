@@ -14,6 +14,7 @@ from ..._errors import SerializationError, TransportError
 from ...msg import default_maker, get_path, set_path
 from .._base import Codec, Reader, Wake, Writer
 from .._codec import MessageCodec
+from ._credits import pid_alive
 from ._events import (
     WakeChannel,
     fd_hint,
@@ -445,11 +446,19 @@ class ShmReader(Reader):
             self._lost(port, published - port.expected + 1)
 
     def _lost(self, port: _Port, count: int) -> None:
+        service = port.service
+        publisher = service.credits.publisher_pid
+        if publisher and not pid_alive(publisher):
+            cause = (f"the publishing process (pid {publisher}) ended before this subscriber took them (a "
+                     "process whose nodes returned waits for its subscribers while they keep taking, and "
+                     f"gives up after {service.qos.publish_timeout:g} s without progress; a killed one "
+                     "cannot wait)")
+        else:
+            cause = ("iceoryx2 could not deliver them, most often because a process ran out of file "
+                     f"descriptors ({fd_hint()})")
         raise TransportError(
-            f"reliable topic {port.service.topic}: {count} message(s) from target {port.service.target!r} "
-            f"(from #{port.expected}) never reached this subscriber although the publisher sent them; "
-            f"iceoryx2 could not deliver them, most often because a process ran out of file descriptors "
-            f"({fd_hint()})"
+            f"reliable topic {service.topic}: {count} message(s) from target {service.target!r} "
+            f"(from #{port.expected}) never reached this subscriber although the publisher sent them; {cause}"
         )
 
     def _decode(self, memory: memoryview, layout: int) -> Any:

@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import ctypes
+import os
+import re
+import secrets
 import struct
 from pathlib import Path
 from typing import Any
 
+from ..._errors import TransportError
 from ...msg._compiled import wanted as _compiled_wanted
 from .._codec import CDR_LE
 from .._qos import QoS
@@ -69,6 +73,21 @@ def reserved_bytes(qos: QoS, message_size: int | None) -> int:
 
 def segment_prefix(session: str) -> str:
     return f"hetros-{session}-"
+
+
+# a tag that every session this process starts carries (``new_session``): a test suite sets it
+# to find exactly the shared memory it made, whatever else runs on the machine
+SESSION_TAG_VARIABLE = "HETROS_SESSION_TAG"
+
+
+def new_session() -> str:
+    """A launch's session name: ``<pid>x<tag><random>``; the pid lets a later launch remove
+    what a crashed one left, the tag is ``$HETROS_SESSION_TAG`` (lowercase letters and digits)."""
+    tag = os.environ.get(SESSION_TAG_VARIABLE, "")
+    if tag and not re.fullmatch(r"[a-wyz0-9]{1,16}", tag):
+        raise TransportError(f"{SESSION_TAG_VARIABLE} must be at most 16 lowercase letters (but 'x') and "
+                             f"digits, not {tag!r}")
+    return f"{os.getpid()}x{tag}{secrets.token_hex(3)}"
 
 
 _BLOB_TABLES: dict[int, struct.Struct] = {}

@@ -110,8 +110,24 @@ class Service:
                     raise TransportError(f"cannot create a shared-memory publisher on {self.topic}: "
                                          f"{type(exc).__name__}: {exc}; {fd_hint()}") from exc
                 self.credits.back_event = self.domain.back_channel().register(self)
+                self.credits.publisher_pid = os.getpid()
                 self.next_seq = self.credits.published + 1
             return self._publisher
+
+    def behind(self) -> list[tuple[int, int, int]]:
+        """(slot, pid, count) of each live subscriber that has not taken everything this process
+        published reliably: what would be lost if the process ended now. Subscribers whose
+        process is gone are let go."""
+        if self._publisher is None or self.qos.reliability != "reliable":
+            return []
+        credits = self.credits
+        behind = []
+        for slot, pid, count in credits.behind(self.next_seq - 1):
+            if pid_alive(pid):
+                behind.append((slot, pid, count))
+            else:
+                credits.leave(slot)
+        return behind
 
     def subscriber_moved(self) -> None:
         """A subscriber took or joined: recount the room, wake a blocked send, send history."""

@@ -19,8 +19,8 @@ from .shm import (
 )
 
 __all__ = [
-    "SESSION_TAG_VARIABLE",
     "DEFAULT_QOS",
+    "SESSION_TAG_VARIABLE",
     "Codec",
     "EnvelopeCodec",
     "InprocTopic",

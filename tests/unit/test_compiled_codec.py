@@ -319,3 +319,23 @@ def test_compiled_copier_agrees_with_the_generated_one(typename: str, pure: Type
                 states.append(_copied(freeze(message)))
         assert states[:len(states) // 2] == states[len(states) // 2:]
     assert "Codec" in repr(COMPILED.get(typename)._hetros_copy)
+
+
+@pytest.mark.parametrize("ros1", [False, True], ids=["cdr", "ros1"])
+def test_a_forged_element_count_allocates_nothing_before_it_is_refused(ros1: bool, pure: TypeRegistry) -> None:
+    """A 4-byte count of 2**28 messages in an 8-byte body: the compiled decoder made a list of
+    that many slots (gigabytes, seconds with the GIL held) before it found the bytes missing."""
+    import tracemalloc
+
+    typename = "std_msgs/msg/MultiArrayLayout"  # MultiArrayDimension[] dim, uint32 data_offset
+    body = struct.pack("<II", 2**28, 0)
+    for registry in (COMPILED, pure):
+        codec = registry.ros1_codec(typename) if ros1 else registry.codec(typename)
+        tracemalloc.start()
+        try:
+            with pytest.raises(SerializationError):
+                codec.decode(memoryview(body))
+            _current, peak = tracemalloc.get_traced_memory()
+        finally:
+            tracemalloc.stop()
+        assert peak < 1 << 20, f"decoding a forged count allocated {peak} bytes"

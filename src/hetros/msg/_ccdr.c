@@ -469,6 +469,11 @@ static PyObject *get_message(const In *in, Py_ssize_t *pos, const Type *type);
 
 static PyObject *get_items(const In *in, Py_ssize_t *pos, const Op *op, Py_ssize_t count)
 {
+    /* every string and (but ROS 1's empty messages) every message takes at least a byte: a
+       count beyond the bytes left is refused before anything is allocated for it (a forged
+       4-byte count made a list of 4 billion slots); the Python path decides the rare rest */
+    if (count > in->end - *pos)
+        return NULL;
     PyObject *items = PyList_New(count);
     if (items == NULL)
         return NULL;

@@ -12,7 +12,7 @@ import numpy as np
 from hetros.interfaces.autoware_msgs.msg import Lane, LaneArray, Waypoint
 from hetros.interfaces.geometry_msgs.msg import PoseStamped, TwistStamped
 
-from hetros import Node, QoS
+from hetros import Node, QoS, ShutdownError
 
 DT = 0.1
 LANE_WIDTH = 3.5
@@ -197,10 +197,13 @@ def vehicle(node: Node) -> None:
         msg.pose.orientation.z, msg.pose.orientation.w = float(np.sin(yaw / 2)), float(np.cos(yaw / 2))
         sent = time.monotonic()
         pose_pub.publish(msg)
-        while True:
-            command = commands.take(timeout=5.0)
-            if command.header.frame_id == msg.header.frame_id:
-                break
+        try:
+            while True:
+                command = commands.take(timeout=5.0)
+                if command.header.frame_id == msg.header.frame_id:
+                    break
+        except ShutdownError:  # the launch ended (--duration) while this cycle waited: report what drove
+            break
         latency = time.monotonic() - sent
         latencies.append(latency * 1000.0)
         misses += latency > 0.1
@@ -211,5 +214,5 @@ def vehicle(node: Node) -> None:
             break
     node.log.info("drove to x=%.1f m in %d cycles; lateral error mean %.3f m, max %.3f m, max after 5 s %.3f m; "
                   "chain latency %.1f ± %.1f ms; %d deadline misses (100 ms)",
-                  x, len(errors), float(np.mean(errors)), float(np.max(errors)), float(np.max(errors[50:])),
+                  x, len(errors), float(np.mean(errors)), float(np.max(errors)), float(np.max(errors[50:], initial=0.0)),
                   float(np.mean(latencies)), float(np.std(latencies)), misses)

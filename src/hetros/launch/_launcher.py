@@ -46,6 +46,7 @@ class _Child:
     status: IO[str]
     ready: bool = False
     stopping: bool = False
+    reader: threading.Thread | None = None
 
 
 class Launcher:
@@ -74,7 +75,8 @@ class Launcher:
                                 start_new_session=True)
         os.close(write_fd)
         child = _Child(target, proc, os.fdopen(read_fd, "r"))
-        threading.Thread(target=self._read_status, args=(child,), daemon=True).start()
+        child.reader = threading.Thread(target=self._read_status, args=(child,), daemon=True)
+        child.reader.start()
         threading.Thread(target=self._watch_exit, args=(child,), daemon=True).start()
         return child
 
@@ -115,6 +117,7 @@ class Launcher:
         except KeyboardInterrupt:
             pass
         finally:
+            failed_before = len(self.failures)
             unclean = self._shutdown(result.reason)
             if in_main:
                 for sig, handler in previous.items():
@@ -124,6 +127,11 @@ class Launcher:
             result.failures.extend(t for t in unclean if t not in result.failures)
             result.exit_code = result.exit_code or 1
             result.reason += f"; {', '.join(unclean)} did not stop in time"
+        late = self.failures[failed_before:]
+        if late:  # nodes that raised while the graph stopped: logged by their process, and a failure
+            result.failures.extend(f for f in late if f not in result.failures)
+            result.exit_code = result.exit_code or 1
+            result.reason += f"; {', '.join(late)} failed during shutdown"
         return result
 
     def _supervise(self) -> LaunchResult:
@@ -279,6 +287,9 @@ class Launcher:
         except (BrokenPipeError, OSError, ValueError):
             pass
 
+    def _failed_at_shutdown(self, nodes: Any) -> None:
+        self.failures.extend(node for node in nodes if node not in self.failures)
+
     def _shutdown(self, reason: str) -> list[str]:
         """Stop everything in order; return the targets and nodes that had to be abandoned or killed.
 
@@ -309,9 +320,14 @@ class Launcher:
                     child.proc.stdin.close()
                 except OSError:
                     pass
+            if child.reader is not None:
+                child.reader.join(timeout=1.0)  # its last status lines are in the queue then
+        if self.host is not None:
+            self._failed_at_shutdown(t.spec.name for t in self.host.threads if t.failed)
         while (event := self._next_event(0)) is not None:
             if event["event"] == "stopped":
                 stuck.extend(f"node {node} (target {event['target']})" for node in event.get("stuck", []))
+                self._failed_at_shutdown(event.get("failed", []))
         if stuck:
             log.error("%s did not stop within 5 s of shutdown", ", ".join(stuck))
         if self.link is not None:

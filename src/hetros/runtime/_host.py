@@ -51,6 +51,13 @@ def run_node_body(factory: Callable[..., Any], node: Node) -> None:
         node.spin()
 
 
+def _user_frame(exc: BaseException) -> str:
+    """``file:line`` of the innermost frame of ``exc``'s traceback outside hetros itself."""
+    package = str(Path(__file__).resolve().parent.parent)
+    frames = [f for f in traceback.extract_tb(exc.__traceback__) if not f.filename.startswith(package)]
+    return f"{frames[-1].filename}:{frames[-1].lineno}" if frames else "inside hetros"
+
+
 class NodeThread:
     """One node in its own thread, restarted per its ``restart`` policy."""
 
@@ -84,10 +91,16 @@ class NodeThread:
                 if not self.graph.stop.is_set():
                     self.on_done(self.spec.name)
                 return
-            except ShutdownError:
+            except ShutdownError as exc:
+                if self.graph.stop.is_set():
+                    # a blocking call ended by the shutdown: say where, since the code after it did not run
+                    log.info("node %s ended at shutdown (%s): %s", self.spec.name, _user_frame(exc), exc)
                 return
             except BaseException:
                 if self.graph.stop.is_set():
+                    # the graph was stopping, but a node that raises is still a failure: never swallowed
+                    self.failed = True
+                    log.error("node %s raised during shutdown:\n%s", self.spec.name, traceback.format_exc())
                     return
                 restart = self.spec.restart == "on-failure" and restarts < self.spec.max_restarts
                 self.on_failure(self.spec.name, traceback.format_exc(), restart)

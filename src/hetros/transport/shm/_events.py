@@ -161,7 +161,9 @@ class WakeChannel:
             else:
                 fired = self._listener.timed_wait(iox2.Duration.from_secs_f64(max(timeout, 0.0)))
         except iox2.ListenerWaitError as exc:
-            raise TransportError(f"waiting on the wake channel of node {self.owner!r} failed: {exc}") from exc
+            if not interrupted(exc):
+                raise TransportError(f"waiting on the wake channel of node {self.owner!r} failed: {exc}") from exc
+            fired = []  # a signal (SIGCONT after SIGSTOP, a debugger): the caller rechecks and waits again
         events = {activation.id.as_value for activation in fired}
         with self._lock:
             events |= self._suspects
@@ -174,6 +176,11 @@ class WakeChannel:
 
 
 _INTERRUPT = iox2.EventId.new(INTERRUPT_EVENT)
+
+
+def interrupted(exc: Exception) -> bool:
+    """Whether an iceoryx2 wait ended because a signal came (EINTR): retried, never an error."""
+    return "Interrupt" in str(exc) or "Interrupt" in type(exc).__name__
 
 
 def wake_channel_name(session: str, key: int) -> str:
@@ -209,7 +216,11 @@ class BackChannel:
         while not self._closed:
             try:
                 fired = self._listener.blocking_wait()
-            except Exception:  # iceoryx2's wait failed: nothing left to watch
+            except iox2.ListenerWaitError as exc:
+                if interrupted(exc):
+                    continue
+                log.error("the back channel of this process failed (%s): blocked publishers now recheck "
+                          "their subscribers every 10 ms instead of being woken", exc)
                 return
             for service in self._services.targets({activation.id.as_value for activation in fired}):
                 service.subscriber_moved()

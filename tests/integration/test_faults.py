@@ -1,0 +1,93 @@
+"""Faults a user's machine brings: a stopped and continued worker, exceptions at shutdown."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+
+
+def _ready_pids(proc: subprocess.Popen[str], count: int) -> tuple[dict[str, int], list[str]]:
+    lines: list[str] = []
+    assert proc.stdout is not None
+    pids: dict[str, int] = {}
+    while len(pids) < count:
+        line = proc.stdout.readline()
+        assert line, "".join(lines)
+        lines.append(line)
+        if match := re.search(r"target (\S+) ready \(pid (\d+)", line):
+            pids[match.group(1)] = int(match.group(2))
+    return pids, lines
+
+
+@pytest.mark.timeout(120)
+def test_a_worker_stopped_and_continued_goes_on(tmp_path: Path) -> None:
+    """SIGSTOP then SIGCONT (a debugger, a suspended laptop) interrupts iceoryx2's waits: they
+    are retried, and the graph goes on (it used to stop with "failed: InterruptSignal")."""
+    proc = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(EXAMPLES / "talker_listener/project.yaml"),
+                             "--duration", "8"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    pids, lines = _ready_pids(proc, 2)
+    time.sleep(1.5)
+    for _ in range(4):
+        for pid in pids.values():
+            os.kill(pid, signal.SIGSTOP)
+        time.sleep(0.3)
+        for pid in pids.values():
+            os.kill(pid, signal.SIGCONT)
+        time.sleep(0.3)
+    output, _ = proc.communicate(timeout=60)
+    output = "".join(lines) + output
+    assert proc.returncode == 0, output[-3000:]
+    assert "InterruptSignal" not in output and "[ERROR]" not in output, output[-3000:]
+    heard = [int(n) for n in re.findall(r"\[listener2\]: I heard: \[hello world (\d+)\]", output)]
+    assert heard and heard == list(range(heard[0], heard[0] + len(heard))), "listener2 lost messages"
+    assert heard[-1] > 40, f"the graph did not go on after the signals (last heard: {heard[-1]})"
+
+
+AFTER_LOOP = textwrap.dedent('''
+    from hetros import Node
+    from hetros.interfaces.std_msgs.msg import Int32
+
+
+    def looper(node: Node) -> None:
+        pub = node.create_publisher(Int32, "/n")
+        for i in node.rate(50.0):
+            pub.publish(Int32(data=i))
+        node.log.info("after the loop")
+        raise ValueError("the summary after the loop is wrong")
+
+
+    def reader(node: Node) -> None:
+        sub = node.create_subscription(Int32, "/n")
+        for _ in node.rate(50.0):
+            sub.try_take()
+        node.log.info("reader summary: done")
+''')
+
+
+@pytest.mark.parametrize("mapping", ["thread", "process"])
+def test_an_exception_after_shutdown_is_reported_and_sets_the_exit_code(tmp_path: Path, mapping: str) -> None:
+    (tmp_path / "after.py").write_text(AFTER_LOOP)
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+        name: after
+        targets: {{a: {{kind: {mapping}}}, b: {{kind: {mapping}}}}}
+        nodes:
+          looper: {{run: "after:looper", target: a, publish: {{/n: std_msgs/msg/Int32}}}}
+          reader: {{run: "after:reader", target: b, subscribe: {{/n: std_msgs/msg/Int32}}}}
+    """))
+    proc = subprocess.run([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"), "--duration", "2"],
+                          capture_output=True, text=True, timeout=60)
+    assert "after the loop" in proc.stderr and "reader summary: done" in proc.stderr, proc.stderr[-3000:]
+    assert "ValueError: the summary after the loop is wrong" in proc.stderr, proc.stderr[-3000:]
+    assert "node looper" in proc.stderr and "raised during shutdown" in proc.stderr, proc.stderr[-3000:]
+    assert proc.returncode == 1, proc.stderr[-3000:]

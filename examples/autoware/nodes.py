@@ -214,5 +214,5 @@ def vehicle(node: Node) -> None:
             break
     node.log.info("drove to x=%.1f m in %d cycles; lateral error mean %.3f m, max %.3f m, max after 5 s %.3f m; "
                   "chain latency %.1f ± %.1f ms; %d deadline misses (100 ms)",
-                  x, len(errors), float(np.mean(errors)), float(np.max(errors)), float(np.max(errors[50:], initial=0.0)),
-                  float(np.mean(latencies)), float(np.std(latencies)), misses)
+                  x, len(errors), float(np.mean(errors)), float(np.max(errors)),
+                  float(np.max(errors[50:], initial=0.0)), float(np.mean(latencies)), float(np.std(latencies)), misses)

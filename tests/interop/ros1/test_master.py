@@ -43,6 +43,31 @@ def test_rospy_nodes_and_ros_tools_work_against_hetros_master(master: tuple[str,
         stop(talker)
 
 
+def test_a_rospy_node_that_exits_disappears_from_the_graph(master: tuple[str, dict[str, str]],
+                                                          tmp_path: Path) -> None:
+    """rospy unregisters at shutdown with one ``system.multicall``; stock roscore serves it."""
+    uri, env = master
+    (tmp_path / "talker.py").write_text(TALKER)
+    (tmp_path / "listener.py").write_text(LISTENER)
+    talker = subprocess.Popen([ROS_PYTHON, str(tmp_path / "talker.py")], env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        assert run_ros(env, ROS_PYTHON, str(tmp_path / "listener.py")).startswith("got 5 hello ")
+        deadline = time.monotonic() + 10
+        while "/listener" in run_ros(env, "rosnode", "list").split():
+            assert time.monotonic() < deadline, "the exited listener is still in rosnode list"
+            time.sleep(0.2)
+        subscribers = {topic: nodes for topic, nodes in xmlrpc.client.ServerProxy(uri).getSystemState("/t")[2][1]}
+        assert "/listener" not in subscribers.get("/chatter", [])
+        calls = xmlrpc.client.MultiCall(xmlrpc.client.ServerProxy(uri))
+        calls.getUri("/t")
+        calls.lookupNode("/t", "/nobody")
+        first, second = calls().results  # type: ignore[attr-defined]
+        assert first[0][0] == 1 and second[0][0] == -1
+    finally:
+        stop(talker)
+
+
 def test_a_node_registered_again_under_its_name_shuts_the_old_one_down(master: tuple[str, dict[str, str]],
                                                                        tmp_path: Path) -> None:
     _uri, env = master

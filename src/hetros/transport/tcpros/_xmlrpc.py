@@ -78,8 +78,10 @@ def serve(host: str, port: int, api: object | None = None) -> SimpleXMLRPCServer
 
 
 def register(server: SimpleXMLRPCServer, api: object) -> None:
-    """Serve ``api``'s public methods, each call checked against the method's signature first."""
+    """Serve ``api``'s public methods, each call checked against the method's signature first,
+    and ``system.multicall`` over them (rospy unregisters that way at shutdown)."""
     server.register_instance(_Checked(api))
+    server.register_multicall_functions()
 
 
 class _Checked:

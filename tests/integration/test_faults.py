@@ -91,3 +91,34 @@ def test_an_exception_after_shutdown_is_reported_and_sets_the_exit_code(tmp_path
     assert "ValueError: the summary after the loop is wrong" in proc.stderr, proc.stderr[-3000:]
     assert "node looper" in proc.stderr and "raised during shutdown" in proc.stderr, proc.stderr[-3000:]
     assert proc.returncode == 1, proc.stderr[-3000:]
+
+
+NO_MASTER_NODES = textwrap.dedent('''
+    from hetros import Node
+    from hetros.interfaces.std_msgs.msg import String
+
+
+    def talk(node: Node) -> None:
+        pub = node.create_publisher(String, "/x")
+        for i in node.rate(5.0):
+            pub.publish(String(data=str(i)))
+''')
+
+
+@pytest.mark.timeout(60)
+def test_a_ros1_target_without_a_master_says_what_to_start_and_duration_holds(tmp_path: Path) -> None:
+    (tmp_path / "nodes.py").write_text(NO_MASTER_NODES)
+    (tmp_path / "project.yaml").write_text(textwrap.dedent("""
+        name: nomaster
+        targets: {legacy: {kind: ros1}}
+        external: {ros1: {master: "http://127.0.0.1:1"}}
+        nodes:
+          talker: {run: nodes:talk, target: legacy, publish: {/x: std_msgs/msg/String}}
+    """))
+    started = time.monotonic()
+    proc = subprocess.run([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"), "--duration", "3"],
+                          capture_output=True, text=True, timeout=50)
+    assert time.monotonic() - started < 12, f"--duration 3 did not hold:\n{proc.stderr[-3000:]}"
+    assert "start `hetros master` or roscore" in proc.stderr, proc.stderr[-3000:]
+    assert "did not stop within" not in proc.stderr, proc.stderr[-3000:]
+    assert proc.returncode == 1, proc.stderr[-3000:]

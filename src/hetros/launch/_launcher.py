@@ -143,10 +143,16 @@ class Launcher:
                              lambda: self.events.put({"event": "local_done"}),
                              lambda node: self.events.put({"event": "node_done", "node": node}))
         waiting = set(self.children)
-        deadline = time.monotonic() + 60.0
+        # --duration bounds the whole launch, start-up included (a target may wait on a ROS master)
+        patience = 60.0 if self.duration is None else min(60.0, self.duration)
+        deadline = time.monotonic() + patience
         while waiting:
             event = self._next_event(deadline - time.monotonic())
             if event is None:
+                if patience < 60.0:
+                    sys.stderr.write(f"[ERROR] [launch]: --duration {self.duration:g} s passed while target(s) "
+                                     f"{', '.join(sorted(waiting))} were still starting; stopping\n")
+                    return LaunchResult(1, sorted(waiting), "duration elapsed during start-up")
                 raise LaunchError(f"targets {sorted(waiting)} did not start within 60 s")
             if event["event"] == "ready":
                 waiting.discard(event["target"])

@@ -46,6 +46,27 @@ def main(argv: list[str] | None = None) -> int:
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
+    go = threading.Event()
+    orphaned = threading.Event()
+    stop_reason = [""]
+    hosts: list[Host] = []  # the host once built: a stop's reason reaches its graph before the stop
+
+    def control() -> None:
+        """The launcher's word, heard from the start: a stop during start-up (a ROS master that
+        is not there, a slow import) ends the start instead of waiting to be killed."""
+        for line in sys.stdin:
+            if line.strip() == "go":
+                go.set()
+            elif line.split(" ", 1)[0].strip() == "stop":
+                stop_reason[0] = line[4:].strip()
+                for built in hosts:
+                    built.graph.stop_reason = stop_reason[0]
+                break
+        else:
+            orphaned.set()  # end of input without "stop": the launcher died
+        stop.set()
+
+    threading.Thread(target=control, name="control", daemon=True).start()
     try:
         host = Host(plan, args.target, args.session,
                     lambda node, tb, restarting: report("node_failed", node=node, traceback=tb,
@@ -54,24 +75,20 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:
         import traceback
 
-        report("start_failed", error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
-        return 2
-    report("ready", pid=os.getpid(), cpus=sorted(os.sched_getaffinity(0)))
-
-    orphaned = threading.Event()
-
-    def control() -> None:
-        for line in sys.stdin:
-            if line.strip() == "go":
-                host.start()
-            elif line.split(" ", 1)[0].strip() == "stop":
-                host.graph.stop_reason = line[4:].strip()
-                break
+        if not stop.is_set():
+            report("start_failed", error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
         else:
-            orphaned.set()  # end of input without "stop": the launcher died
-        stop.set()
-
-    threading.Thread(target=control, name="control", daemon=True).start()
+            sys.stderr.write(f"[WARN] [{args.target}]: stopped while starting: {type(exc).__name__}: {exc}\n")
+        if orphaned.is_set():
+            remove_session_segments(args.session)
+        return 2
+    hosts.append(host)
+    host.graph.stop_reason = stop_reason[0]
+    report("ready", pid=os.getpid(), cpus=sorted(os.sched_getaffinity(0)))
+    while not stop.is_set():
+        if go.wait(0.05):
+            host.start()
+            break
     stop.wait()
     stuck = host.stop()
     failed = [t.spec.name for t in host.threads if t.failed]

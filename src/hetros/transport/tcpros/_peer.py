@@ -351,7 +351,9 @@ class Ros1Peer:
                     raise TransportError(f"the ROS master at {self.master_uri} is unreachable ({exc}); start "
                                          "`hetros master` or roscore, or fix ROS_MASTER_URI") from None
                 if not logged:
-                    log.warning("ROS master at %s unreachable (%s); retrying", self.master_uri, exc)
+                    log.warning("ROS master at %s unreachable (%s); retrying for %g s: start `hetros master` "
+                                "or roscore there, or fix external.ros1.master / ROS_MASTER_URI",
+                                self.master_uri, exc, retry_for)
                     logged = True
                 time.sleep(0.5)
                 continue

@@ -568,7 +568,7 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         if (blocking < 0)
             goto error_service;
         uint64_t *credits = (uint64_t *)(uintptr_t)credits_at;
-        common = since == 0.0 && credits_at != 0 && !(blocking && seq > expected);
+        common = since == 0.0 && credits_at != 0 && !(blocking && seq != expected); /* else: the reference path */
         if (common) {
             if (set_i64(port, str_expected, (long long)seq + 1) < 0)
                 goto error_service;

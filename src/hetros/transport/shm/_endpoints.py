@@ -20,7 +20,7 @@ from ._events import (
     fd_hint,
 )
 from ._hotpath import bind_slots, take_cdr
-from ._iceoryx import iox2
+from ._iceoryx import iox2, log
 from ._sample import (
     BLOB,
     BORROW_LIMIT,
@@ -288,6 +288,7 @@ class ShmReader(Reader):
         self._slot = slot
         self._closed = False
         self._channel = channel
+        self.dropped = 0  # damaged samples dropped (a same-user process wrote into the segment)
         self._wake = wake
         self._ports: list[_Port] = []
         self.event = channel.register(wake, self.pending)
@@ -344,16 +345,20 @@ class ShmReader(Reader):
             port = self._only_port
             if port is None:  # closed
                 return None
-            try:
-                got = take_cdr(port, self._slot, self._copies, self._borrowed,  # type: ignore[misc]
-                               self._decode_body)
-            except iox2.ReceiveError as exc:
-                raise self._receive_failed(port, exc) from exc
-            if got is None:
-                return None
-            if got is False or type(got) is tuple:
-                return self._finish_compiled(port, got)
-            return got
+            while True:
+                try:
+                    got = take_cdr(port, self._slot, self._copies, self._borrowed,  # type: ignore[misc]
+                                   self._decode_body)
+                except iox2.ReceiveError as exc:
+                    raise self._receive_failed(port, exc) from exc
+                except SerializationError as exc:  # accounted for, then its body did not decode
+                    self._count_damaged(port, str(exc))
+                    continue
+                if got is None:
+                    return None
+                if got is False or type(got) is tuple:
+                    return self._finish_compiled(port, got)
+                return got
         finally:
             lock.release()
 
@@ -383,6 +388,9 @@ class ShmReader(Reader):
             got = take_cdr(port, self._slot, self._copies, self._borrowed, self._decode_body)
         except iox2.ReceiveError as exc:
             raise self._receive_failed(port, exc) from exc
+        except SerializationError as exc:  # accounted for, then its body did not decode
+            self._count_damaged(port, str(exc))
+            return self._take_compiled(port)
         if got is None:
             return None
         if got is False or type(got) is tuple:
@@ -397,7 +405,11 @@ class ShmReader(Reader):
             self._check_arrival(port)
             return None
         if len(got) == 3:
-            return self._decode(got[0], got[2])
+            try:
+                return self._decode(got[0], got[2])
+            except SerializationError as exc:
+                self._count_damaged(port, str(exc))
+                return self._take_from(port)
         return self._took(port, got[0], got[1])
 
     def _receive_failed(self, port: _Port, exc: Exception) -> TransportError:
@@ -408,11 +420,21 @@ class ShmReader(Reader):
         """A received sample's bytes to a message, its sequence number and the credits accounted."""
         service = port.service
         if size < HEADER.size:
-            raise SerializationError(f"a {size}-byte sample on {service.topic} from target "
-                                     f"{service.target!r} is shorter than hetros' {HEADER.size}-byte header")
+            return self._skip_damaged(port, f"a {size}-byte sample is shorter than hetros' {HEADER.size}-byte "
+                                            "header")
         seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
-        if service.blocking and seq != port.expected and seq > port.expected:
-            self._lost(port, seq - port.expected)
+        if service.blocking and seq > port.expected:
+            # sends are serialised and the credits say "published" right after each: a sequence
+            # number beyond published+1 was not written by the publisher
+            published = service.credits.published
+            if seq > published + 1:
+                return self._skip_damaged(port, f"sequence number {seq} at offset 0 is beyond the "
+                                                f"{published} published")
+            missed, port.expected = seq - port.expected, seq + 1
+            self._account(port, seq)
+            self._lost(port, missed, seq - missed)
+        # one sent before this reader joined may come after the join's mark: never count backwards
+        seq = max(seq, port.expected - 1)
         port.expected = seq + 1
         if port.suspect_since:
             port.suspect_since = 0.0
@@ -425,10 +447,33 @@ class ShmReader(Reader):
             self._domain.notify_back(service.target, credits.back_event)
         if len(self._borrowed) >= BORROW_LIMIT - 2:
             memory = memoryview(bytes(memory))
-        if layout == LAYOUT_CDR and self._decode_body is not None and size >= HEADER.size + 4 and \
-                memory[HEADER.size + 1] == 1:  # little-endian CDR: straight to the type's decoder
-            return self._decode_body(memory, HEADER.size + 4, size)
-        return self._decode(memory, layout)
+        try:
+            if layout == LAYOUT_CDR and self._decode_body is not None and size >= HEADER.size + 4 and \
+                    memory[HEADER.size + 1] == 1:  # little-endian CDR: straight to the type's decoder
+                return self._decode_body(memory, HEADER.size + 4, size)
+            return self._decode(memory, layout)
+        except SerializationError as exc:
+            self._count_damaged(port, str(exc))
+            return self._take_from(port)
+
+    def _account(self, port: _Port, seq: int) -> None:
+        """Record ``seq`` as taken, and wake the publisher if it waits for room here."""
+        service = port.service
+        if port.service.credits.set_taken(self._slot, seq) and service.blocking:
+            self._domain.notify_back(service.target, service.credits.back_event)
+
+    def _count_damaged(self, port: _Port, why: str) -> None:
+        self.dropped += 1
+        log.error("topic %s: dropped a damaged sample from target %r (%d so far): %s", port.service.topic,
+                  port.service.target, self.dropped, why)
+
+    def _skip_damaged(self, port: _Port, why: str) -> Any | None:
+        """Drop a sample whose header is damaged as if it were the one expected (its credit is
+        given back, so neither the publisher nor the next takes wait for it) and take the next."""
+        self._count_damaged(port, why)
+        self._account(port, port.expected)
+        port.expected += 1
+        return self._take_from(port)
 
     def _check_arrival(self, port: _Port) -> None:
         """Nothing to receive: is that true, or did iceoryx2 fail to connect to the publisher?"""
@@ -443,9 +488,14 @@ class ShmReader(Reader):
             port.suspect_since = now
             self._channel.suspect(self.event, True)
         elif now - port.suspect_since > LOSS_GRACE:
-            self._lost(port, published - port.expected + 1)
+            missed, first = published - port.expected + 1, port.expected
+            port.expected = published + 1  # reported once: a restarted node goes on from here
+            port.suspect_since = 0.0
+            self._channel.suspect(self.event, False)
+            self._account(port, published)
+            self._lost(port, missed, first)
 
-    def _lost(self, port: _Port, count: int) -> None:
+    def _lost(self, port: _Port, count: int, first: int) -> None:
         service = port.service
         publisher = service.credits.publisher_pid
         if publisher and not pid_alive(publisher):
@@ -458,7 +508,7 @@ class ShmReader(Reader):
                      f"descriptors ({fd_hint()})")
         raise TransportError(
             f"reliable topic {service.topic}: {count} message(s) from target {service.target!r} "
-            f"(from #{port.expected}) never reached this subscriber although the publisher sent them; {cause}"
+            f"(from #{first}) never reached this subscriber although the publisher sent them; {cause}"
         )
 
     def _decode(self, memory: memoryview, layout: int) -> Any:

@@ -13,7 +13,6 @@ per host: its project hash and its phase) with a DDS liveliness lease, so:
 from __future__ import annotations
 
 import json
-import logging
 import socket
 import threading
 from collections.abc import Callable
@@ -26,10 +25,11 @@ from cyclonedds.sub import DataReader
 from cyclonedds.util import duration
 
 from .._errors import LaunchError
+from .._log import get_logger
 from ..plan import Plan
 from ..transport.dds import HOST_LEASE, DdsDomain
 
-log = logging.getLogger("hetros.hosts")
+log = get_logger("hetros.hosts")
 
 # how long a host's silence means it is gone (its launcher renews this lease automatically)
 LIVELINESS = 0.5

@@ -10,7 +10,6 @@ reverse: stop every node, wait, then remove the shared memory of the session.
 from __future__ import annotations
 
 import json
-import logging
 import os
 import queue
 import signal
@@ -24,12 +23,13 @@ from pathlib import Path
 from typing import IO, Any
 
 from .._errors import LaunchError
+from .._log import get_logger
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
 from ..transport import cleanup_stale, new_session, remove_session_segments
 from ._hosts import HostLink, local_host
 
-log = logging.getLogger("hetros.launch")
+log = get_logger("hetros.launch")
 
 
 @dataclass

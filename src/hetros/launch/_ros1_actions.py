@@ -11,13 +11,13 @@ side and hetros' UUIDs on the other.
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
 
 from .._errors import Error
+from .._log import get_logger
 from ..msg import ActionType
 from ..runtime import ClientGoalHandle, GoalStatus, Node, ServerGoalHandle
 from ..transport.tcpros import Ros1Peer
@@ -34,7 +34,7 @@ from ..transport.tcpros._actions import (
     Ros1ActionType,
 )
 
-log = logging.getLogger("hetros.ros1.actions")
+log = get_logger("hetros.ros1.actions")
 # how long actionlib servers keep a finished goal in their status list
 STATUS_KEPT = 5.0
 # how long an imported action waits for its ROS 1 server to be connected before aborting a goal

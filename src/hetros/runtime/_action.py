@@ -13,7 +13,6 @@ when the node's own thread is busy in a long callback or in a loop that never sp
 from __future__ import annotations
 
 import enum
-import logging
 import os
 import threading
 import time
@@ -34,6 +33,7 @@ from .._errors import (
     TopicTypeError,
     UndeclaredEndpointError,
 )
+from .._log import get_logger
 from ..msg import ActionType, registry
 from ..plan import action_endpoints, request_channel
 from ..transport import Reader
@@ -67,7 +67,7 @@ _TICK = 0.5
 # how long closing a server waits for executing goals to notice the cancel and end
 _CLOSE_GRACE = 2.0
 
-log = logging.getLogger("hetros.action")
+log = get_logger("hetros.action")
 
 
 def _short(goal_id: bytes) -> str:

@@ -8,7 +8,6 @@ of them; a reader drains all of them.
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from collections.abc import Callable
@@ -17,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import TransportError, UndeclaredEndpointError
+from .._log import get_logger
 from ..msg import (
     LoanBuffer,
     Message,
@@ -57,7 +57,7 @@ from ..transport.tcpros import (
 )
 from ._executor import WaitSource
 
-log = logging.getLogger("hetros.graph")
+log = get_logger("hetros.graph")
 
 
 def _hand_over(item: Any, copy_arrays: bool) -> Any:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import importlib
 import inspect
-import logging
 import sys
 import threading
 import traceback
@@ -13,13 +12,14 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import LaunchError, ShutdownError
+from .._log import get_logger
 from ..msg import registry
 from ..plan import NodePlan, Plan
 from ._graph import Graph
 from ._log import node_logger
 from ._node import Node
 
-log = logging.getLogger("hetros.launch")
+log = get_logger("hetros.launch")
 
 FailureReport = Callable[[str, str, bool], None]
 DoneReport = Callable[[str], None]

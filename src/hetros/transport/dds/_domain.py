@@ -9,7 +9,6 @@ as for any ROS 2 node, and hetros then takes that file instead.
 from __future__ import annotations
 
 import fcntl
-import logging
 import os
 import socket
 import stat
@@ -24,6 +23,7 @@ from cyclonedds.domain import Domain, DomainParticipant
 from cyclonedds.topic import Topic
 
 from ..._errors import TransportError
+from ..._log import get_logger
 from .._qos import QoS
 from ._waiter import Waiter
 
@@ -32,7 +32,7 @@ MAX_DOMAIN_ID = 232
 # stock ROS 2 peers only accept XCDR1: a writer offering XCDR2 is discovered and never matched
 _XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 
-log = logging.getLogger("hetros.dds")
+log = get_logger("hetros.dds")
 
 _domains_lock = threading.Lock()
 _domains: dict[int, Domain] = {}

@@ -17,7 +17,6 @@ sides.
 
 from __future__ import annotations
 
-import logging
 import struct
 import threading
 import time
@@ -32,6 +31,7 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 
 from ..._errors import SerializationError, TransportError
+from ..._log import get_logger
 from .._base import Codec, Reader, Wake, Writer
 from .._qos import QoS
 from ._domain import DdsDomain, dds_qos, delete_entity
@@ -39,7 +39,7 @@ from ._endpoints import ANY_STATE, padded, write_sample
 
 _sequence: Any = idl.sequence
 _SAMPLE = make_idl_struct("HetrosSample", "hetros::dds_::Sample_", {"data": _sequence[idl.uint8]})
-log = logging.getLogger("hetros.dds")
+log = get_logger("hetros.dds")
 _LENGTH = struct.Struct("<I")
 _HEAD = 8  # encapsulation, then the sequence's length
 ACK_SLICE_NS = 20_000_000

@@ -12,7 +12,6 @@ only decodes and hands over; hetros's own transports do the rest.
 from __future__ import annotations
 
 import itertools
-import logging
 import struct
 import threading
 import time
@@ -26,6 +25,7 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 
 from ..._errors import Error, PublishTimeoutError, SerializationError, TransportError
+from ..._log import get_logger
 from ...msg import TypeRegistry
 from .._codec import CDR_LE, MessageCodec
 from .._qos import QoS
@@ -33,7 +33,7 @@ from ._domain import SERVICE_QOS, DdsDomain, dds_qos
 from ._idl import idl_type
 from ._names import reply_topic, request_topic, topic_name
 
-log = logging.getLogger("hetros.dds")
+log = get_logger("hetros.dds")
 
 _HEADER = struct.Struct("<Qq")  # rmw_cyclonedds: client id, sequence number
 ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any

@@ -10,7 +10,6 @@ thread waits on a waitset without the GIL, then takes, holding no Cyclone lock.
 
 from __future__ import annotations
 
-import logging
 import threading
 import weakref
 from collections.abc import Callable
@@ -19,7 +18,9 @@ from typing import Any
 from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.util import duration
 
-log = logging.getLogger("hetros.dds")
+from ..._log import get_logger
+
+log = get_logger("hetros.dds")
 
 _ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-import logging
 import os
 
 os.environ.setdefault("IOX2_LOG_LEVEL", "Error")
 import iceoryx2 as iox2
 
+from ..._log import get_logger
+
 iox2.set_log_level(iox2.LogLevel.Error)
 
-log = logging.getLogger("hetros.transport.shm")
+log = get_logger("hetros.transport.shm")
 
 # The binding's Python wrappers recheck the payload type on every call (~0.3 µs each). Every
 # hetros service carries byte slices, so the hot path calls the methods they wrap, when this

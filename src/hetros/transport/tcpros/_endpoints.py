@@ -12,13 +12,13 @@ thread, whose answer (or error) comes back as a reply envelope.
 from __future__ import annotations
 
 import itertools
-import logging
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any
 
 from ..._errors import Error, ShutdownError, TransportError
+from ..._log import get_logger
 from ...msg import hand_over
 from .._base import Reader, Wake, Writer
 from .._inproc import Mailbox
@@ -28,7 +28,7 @@ from ._peer import Ros1Peer, Ros1Publication
 from ._stream import Ros1StreamReader, SocketWaiter
 from ._types import Ros1ServiceType, Ros1Type
 
-log = logging.getLogger("hetros.ros1")
+log = get_logger("hetros.ros1")
 
 # the client name a ROSRPC caller gets in a request envelope (no hetros node has it: names have no ':')
 ROSRPC_CLIENT = "rosrpc:"

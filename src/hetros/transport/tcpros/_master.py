@@ -12,7 +12,6 @@ stalls a registration.
 
 from __future__ import annotations
 
-import logging
 import os
 import queue
 import socket
@@ -22,9 +21,10 @@ from collections.abc import Callable
 from typing import Any
 
 from ..._errors import TransportError
+from ..._log import get_logger
 from ._xmlrpc import proxy, register, serve
 
-log = logging.getLogger("hetros.master")
+log = get_logger("hetros.master")
 
 MASTER_ID = "/master"
 DEFAULT_PORT = 11311

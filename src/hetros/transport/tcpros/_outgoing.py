@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import logging
 import select
 import socket
 import threading
@@ -10,10 +9,11 @@ import time
 from collections import deque
 
 from ..._errors import PublishTimeoutError
+from ..._log import get_logger
 from .._qos import QoS
 from ._types import Payload
 
-log = logging.getLogger("hetros.ros1")
+log = get_logger("hetros.ros1")
 
 # how long a publisher keeps writing a frame the subscriber is taking, before the rest is copied aside
 _PATIENCE = 0.05

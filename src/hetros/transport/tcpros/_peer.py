@@ -10,65 +10,34 @@ the master going away, as in ROS 1.
 
 from __future__ import annotations
 
-import logging
+import functools
 import os
 import socket
 import threading
 import time
 import xmlrpc.client
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from ..._errors import ProtocolError, PublishTimeoutError, SerializationError, ServiceTimeoutError, TransportError
+from ..._log import get_logger
 from .._qos import QoS
 from ._header import FRAME, decode_header, encode_header, frame_length, header_length, require
 from ._outgoing import SubscriberLink, send_parts
 from ._types import Payload, Ros1Kind, Ros1ServiceType
 from ._xmlrpc import CALL_TIMEOUT, proxy, serve
 
-log = logging.getLogger("hetros.ros1")
+log = get_logger("hetros.ros1")
 
 # connections accepted but not yet past their header; beyond them a new one waits a second, then is closed
 MAX_HANDSHAKES = 64
+# threads of one node that reach announced publishers (requestTopic and the header) at once
+MAX_CONNECTORS = 8
 
 
-class _Throttled:
-    """Log lines about misbehaving peers, at most ``burst`` per ``period`` seconds.
-
-    A flood of bad connections must not become a flood of log lines (a blocked log pipe
-    would stall every thread that logs); what is not printed is counted and summarized.
-    """
-
-    def __init__(self, burst: int = 20, period: float = 10.0) -> None:
-        self._burst = burst
-        self._period = period
-        self._lock = threading.Lock()
-        self._start = time.monotonic()
-        self._count = 0
-        self._unlogged = 0
-
-    def __call__(self, level: int, text: str, *args: Any) -> None:
-        with self._lock:
-            now = time.monotonic()
-            unlogged = 0
-            if now - self._start > self._period:
-                unlogged, self._unlogged = self._unlogged, 0
-                self._start, self._count = now, 0
-            logged = self._count < self._burst
-            if logged:
-                self._count += 1
-            else:
-                self._unlogged += 1
-        if unlogged:
-            log.warning("%d more ROS 1 connection problems in the last %g s were not logged", unlogged,
-                        self._period)
-        if logged:
-            log.log(level, text, *args)
-
-
-_refused = _Throttled()
 
 
 def get_ros1_parameter(master_uri: str, caller_id: str, key: str) -> Any:
@@ -238,9 +207,8 @@ class Ros1Subscription:
             for uri in gone:
                 hang_up(self._connections.pop(uri))
             new = [uri for uri in publishers if uri not in self._connections and uri != self.peer.uri]
-        for uri in new:
-            threading.Thread(target=self._connect, args=(uri,), name=f"hetros-ros1-in {self.topic}",
-                             daemon=True).start()
+        for uri in new:  # a few threads for the whole node, however many publishers are announced
+            self.peer.connect_later(functools.partial(self._connect, uri))
 
     def _connect(self, publisher: str) -> None:
         try:
@@ -276,7 +244,10 @@ class Ros1Subscription:
                 if self._connections.get(publisher) is sock:
                     del self._connections[publisher]
 
-        self._attach(sock, peer, gone)
+        # a live connection is read on a thread of its own (the bridge's receive loop lasts as long
+        # as the connection): the connecting threads stay free for the next publisher
+        threading.Thread(target=self._attach, args=(sock, peer, gone), name=f"hetros-ros1-in {self.topic}",
+                         daemon=True).start()
 
     @property
     def publishers(self) -> list[str]:
@@ -299,7 +270,7 @@ def receive_loop(kind: Ros1Kind, callback: Callable[[Any], None]) -> Attach:
                 length = _frame_length(_receive_exactly(sock, 4), peer)
                 callback(kind.deserialize(_receive_exactly(sock, length)))
         except (ProtocolError, SerializationError) as exc:
-            _refused(logging.ERROR, "%s; disconnected", exc)
+            log.error("%s; disconnected", exc)
         except OSError:
             pass  # the publisher went away or we closed the connection
         finally:
@@ -325,6 +296,8 @@ class Ros1Peer:
         self._closed = False
         self._stop = stop
         self._handshakes = threading.BoundedSemaphore(MAX_HANDSHAKES)
+        self._to_connect: deque[Callable[[], None]] = deque()
+        self._connectors = 0
         self._slave = serve(host, 0, _SlaveApi(self))
         self.uri = f"http://{host}:{self._slave.server_address[1]}/"
         self._tcpros = socket.create_server((host, 0))
@@ -336,6 +309,25 @@ class Ros1Peer:
         ]
         for thread in self._threads:
             thread.start()
+
+    def connect_later(self, connect: Callable[[], None]) -> None:
+        """Run ``connect`` (reaching one publisher) on one of at most ``MAX_CONNECTORS`` threads:
+        a ``publisherUpdate`` naming a thousand dead publishers costs a few threads, not a thousand."""
+        with self._lock:
+            self._to_connect.append(connect)
+            if self._connectors >= MAX_CONNECTORS:
+                return
+            self._connectors += 1
+        threading.Thread(target=self._connecting, name="hetros-ros1-connect", daemon=True).start()
+
+    def _connecting(self) -> None:
+        while True:
+            with self._lock:
+                if not self._to_connect or self._closed:
+                    self._connectors -= 1
+                    return
+                connect = self._to_connect.popleft()
+            connect()
 
     # -- master ----------------------------------------------------------------------------
 
@@ -425,7 +417,7 @@ class Ros1Peer:
             except OSError:
                 return
             if not self._handshakes.acquire(timeout=1.0):
-                _refused(logging.WARNING, "%s: %d connections are still introducing themselves; dropped one "
+                log.warning("%s: %d connections are still introducing themselves; dropped one "
                          "from %s:%s", self.name, MAX_HANDSHAKES, *address[:2])
                 sock.close()
                 continue
@@ -470,14 +462,14 @@ class Ros1Peer:
             sock.settimeout(None)
             publication._add(sock, fields["callerid"])
         except (ProtocolError, SerializationError) as exc:
-            _refused(logging.ERROR, "%s; disconnected", exc)
+            log.error("%s; disconnected", exc)
             try:
                 sock.sendall(encode_header({"error": str(exc)}))
             except OSError:
                 pass
             sock.close()
         except OSError as exc:
-            _refused(logging.INFO, "%s: %s", peer, exc)
+            log.info("%s: %s", peer, exc)
             sock.close()
 
     def _serve(self, sock: socket.socket, fields: dict[str, str], address: str, done: Callable[[], None]) -> None:

@@ -13,7 +13,6 @@ small frames at once), as ROS 1's ``queue_size`` does.
 
 from __future__ import annotations
 
-import logging
 import os
 import select
 import socket
@@ -26,12 +25,13 @@ from typing import Any
 import numpy as np
 
 from ..._errors import ProtocolError, SerializationError
+from ..._log import get_logger
 from .._base import Reader, Wake
 from .._qos import QoS
 from ._header import FRAME, frame_length
 from ._types import Ros1Kind
 
-log = logging.getLogger("hetros.ros1")
+log = get_logger("hetros.ros1")
 
 # frames up to this size are assembled in the connection's buffer; larger ones in memory of their own
 _CHUNK = 1 << 16

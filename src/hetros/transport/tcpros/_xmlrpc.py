@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import inspect
-import logging
 import threading
 import xmlrpc.client
 from socketserver import ThreadingMixIn
 from typing import Any
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
-log = logging.getLogger("hetros.ros1")
+from ..._log import get_logger
+
+log = get_logger("hetros.ros1")
 
 CALL_TIMEOUT = 5.0
 
@@ -106,6 +107,9 @@ class _Checked:
                 return -1, f"{method}: {name} must be a string, not {type(value).__name__}", 0
             if expected.startswith("list") and not isinstance(value, list):
                 return -1, f"{method}: {name} must be a list, not {type(value).__name__}", 0
+            if expected == "list[str]" and not all(isinstance(item, str) for item in value):
+                bad = next(item for item in value if not isinstance(item, str))
+                return -1, f"{method}: {name} must be a list of strings, not one holding {bad!r}", 0
         return function(*params)
 
 

@@ -4,6 +4,7 @@ limited log lines. Real sockets on loopback, an in-process `hetros master`."""
 from __future__ import annotations
 
 import logging
+import socket
 import threading
 import time
 import xmlrpc.client
@@ -48,3 +49,55 @@ def test_a_thousand_dead_publishers_cost_a_few_threads_and_twenty_lines(peer: Ro
 def test_a_publisher_list_that_is_not_strings_is_refused_with_roses_error_code(peer: Ros1Peer) -> None:
     code, message, _ = xmlrpc.client.ServerProxy(peer.uri).publisherUpdate("/master", "/x", [1, 2, 3])
     assert code == -1 and "must be a list of strings" in message
+
+
+def _dawdle(address: tuple[str, int], count: int, stop: threading.Event, start: bytes) -> list[socket.socket]:
+    """``count`` connections that send ``start`` a byte at a time, every 0.2 s, until ``stop``."""
+    socks = [socket.create_connection(address, timeout=5) for _ in range(count)]
+
+    def trickle() -> None:
+        for index in range(len(start) * 100):
+            if stop.wait(0.2):
+                return
+            byte = start[index % len(start):index % len(start) + 1]
+            for sock in socks:
+                try:
+                    sock.send(byte)
+                except OSError:
+                    pass
+    threading.Thread(target=trickle, daemon=True).start()
+    return socks
+
+
+def test_seventy_slow_writers_do_not_keep_good_calls_from_the_master_or_a_service(
+        caplog: pytest.LogCaptureFixture) -> None:
+    """Slowloris against `hetros master` and a node's service port: each slow connection has a
+    time limit in all (not per byte), and the oldest is closed to admit a new one, so good
+    calls are served meanwhile (they used to fail for 30-40 s)."""
+    from hetros.interfaces.std_srvs.srv import SetBool
+
+    from hetros.transport.tcpros import Ros1ServiceType
+
+    master = Master(port=0)
+    node = Ros1Peer("/server", master.uri)
+    kind = Ros1ServiceType(registry(), "std_srvs/srv/SetBool")
+    node.advertise_service("/set", kind, lambda request: SetBool.Response(success=request.data, message="ok"))
+    client = Ros1Peer("/client", master.uri)
+    stop = threading.Event()
+    host, port = master.uri.split("://")[1].rstrip("/").split(":")
+    slow = _dawdle((host, int(port)), 70, stop, b"POST /RPC2 HTTP/1.0\r\nContent-Length: 100\r\n\r\n")
+    slow += _dawdle(("127.0.0.1", node.tcpros_port), 70, stop, b"\x40\x00\x00\x00\x10\x00\x00\x00callerid=/slowpoke")
+    try:
+        time.sleep(3.0)  # every slow connection is in and dawdling (the accept queue takes a while)
+        for n in range(10):
+            assert xmlrpc.client.ServerProxy(master.uri).getUri("/good")[0] == 1
+            answer = client.call_service("/set", kind, SetBool.Request(data=n % 2 == 0), timeout=5.0)
+            assert answer.success == (n % 2 == 0)
+            time.sleep(0.1)
+    finally:
+        stop.set()
+        for sock in slow:
+            sock.close()
+        client.close()
+        node.close()
+        master.close()

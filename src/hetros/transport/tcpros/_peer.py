@@ -25,6 +25,7 @@ import numpy as np
 from ..._errors import ProtocolError, PublishTimeoutError, SerializationError, ServiceTimeoutError, TransportError
 from ..._log import get_logger
 from .._qos import QoS
+from ._admission import Admission
 from ._header import FRAME, decode_header, encode_header, frame_length, header_length, require
 from ._outgoing import SubscriberLink, send_parts
 from ._types import Payload, Ros1Kind, Ros1ServiceType
@@ -295,7 +296,7 @@ class Ros1Peer:
         self._lock = threading.Lock()
         self._closed = False
         self._stop = stop
-        self._handshakes = threading.BoundedSemaphore(MAX_HANDSHAKES)
+        self._handshakes = Admission(f"ROS 1 node {self.name} (TCPROS/ROSRPC)", MAX_HANDSHAKES, CALL_TIMEOUT)
         self._to_connect: deque[Callable[[], None]] = deque()
         self._connectors = 0
         self._slave = serve(host, 0, _SlaveApi(self))
@@ -416,11 +417,7 @@ class Ros1Peer:
                 sock, address = self._tcpros.accept()
             except OSError:
                 return
-            if not self._handshakes.acquire(timeout=1.0):
-                log.warning("%s: %d connections are still introducing themselves; dropped one "
-                         "from %s:%s", self.name, MAX_HANDSHAKES, *address[:2])
-                sock.close()
-                continue
+            self._handshakes.enter(sock, f"{address[0]}:{address[1]}")
             threading.Thread(target=self._handshake, args=(sock, f"{address[0]}:{address[1]}"),
                              name="hetros-ros1-handshake", daemon=True).start()
 
@@ -432,7 +429,7 @@ class Ros1Peer:
             """The header exchange is over: free its slot (a persistent service connection lives on)."""
             if not introduced.is_set():
                 introduced.set()
-                self._handshakes.release()
+                self._handshakes.leave(sock)
 
         try:
             self._introduce(sock, address, peer, done)
@@ -526,6 +523,7 @@ class Ros1Peer:
         self._slave.shutdown()
         self._slave.server_close()
         self._tcpros.close()
+        self._handshakes.close()
 
     def _unregister(self, method: str, name: str, api: str) -> None:
         try:

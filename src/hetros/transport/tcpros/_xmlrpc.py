@@ -10,6 +10,7 @@ from typing import Any
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 from ..._log import get_logger
+from ._admission import Admission
 
 log = get_logger("hetros.ros1")
 
@@ -20,7 +21,9 @@ CALL_TIMEOUT = 5.0
 MAX_BODY = 32 << 20
 # requests served at once; a connection beyond them waits a second for a slot, then is closed
 MAX_CONCURRENT = 64
-# a request whose headers and body do not arrive within this is dropped (slowloris)
+# connections still sending their request: the oldest is closed to admit one more (slowloris)
+MAX_HALF_OPEN = 32
+# a request whose headers and body do not arrive within this, in all, is dropped (slowloris)
 REQUEST_TIMEOUT = 10.0
 
 
@@ -29,16 +32,20 @@ class _Threaded(ThreadingMixIn, SimpleXMLRPCServer):
     allow_reuse_address = True
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self.admission = Admission("XML-RPC server", MAX_HALF_OPEN, REQUEST_TIMEOUT)  # closed if binding fails
         super().__init__(*args, **kwargs)
         self._slots = threading.BoundedSemaphore(MAX_CONCURRENT)
+        self.admission.what = "XML-RPC server at {}:{}".format(*map(str, self.server_address[:2]))
 
     def process_request(self, request: Any, client_address: Any) -> None:
-        """One thread per request, at most ``MAX_CONCURRENT`` at once."""
+        """One thread per request, at most ``MAX_CONCURRENT`` at once, at most ``MAX_HALF_OPEN``
+        of them still reading their request."""
         if not self._slots.acquire(timeout=1.0):
             log.warning("XML-RPC server at %s:%s busy with %d requests; dropped a connection from %s",
                         *self.server_address[:2], MAX_CONCURRENT, client_address)
             self.shutdown_request(request)
             return
+        self.admission.enter(request, f"{client_address[0]}:{client_address[1]}")
         threading.Thread(target=self._serve_one, args=(request, client_address), daemon=True,
                          name="hetros-xmlrpc").start()
 
@@ -46,11 +53,23 @@ class _Threaded(ThreadingMixIn, SimpleXMLRPCServer):
         try:
             self.process_request_thread(request, client_address)
         finally:
+            self.admission.leave(request)
             self._slots.release()
+
+    def server_close(self) -> None:
+        self.admission.close()
+        super().server_close()
 
 
 class _Quiet(SimpleXMLRPCRequestHandler):
     timeout = REQUEST_TIMEOUT
+
+    def decode_request_content(self, data: bytes) -> bytes | None:
+        """The whole request has arrived: it no longer counts against the slow-request limits."""
+        server = self.server
+        if isinstance(server, _Threaded):
+            server.admission.leave(self.connection)
+        return super().decode_request_content(data)
 
     def do_POST(self) -> None:
         """Refuse a body that is too large or whose length is not a number before reading any of it."""

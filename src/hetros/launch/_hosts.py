@@ -7,7 +7,9 @@ per host: its project hash and its phase) with a DDS liveliness lease, so:
 - the start barrier: no host lets its nodes run before every host has opened its
   readers and writers (phase ``ready``);
 - a host that vanishes (killed, unplugged) is reported by the others within a second,
-  and a host that comes back is seen again; the project's ``on_peer_lost`` decides.
+  and a host that comes back is seen again; the project's ``on_peer_lost`` decides;
+- a host that ends in order says so first (phase ``leaving``, whether it ended well and
+  why), so the others end in order too instead of reporting a lost host.
 """
 
 from __future__ import annotations
@@ -82,8 +84,10 @@ class HostLink:
         self._reader = DataReader(self._domain.participant, topic, qos=qos)
         self._domain.watch(self._reader, self._news)
 
-    def announce(self, phase: str) -> None:
-        state = json.dumps({"hash": self.plan.project_hash, "phase": phase})
+    def announce(self, phase: str, **details: Any) -> None:
+        """Tell the other hosts this host's phase: ``ready``, ``running``, or ``leaving`` (with
+        ``ok`` and ``why``) as it ends in order, so that its going is not taken for a loss."""
+        state = json.dumps({"hash": self.plan.project_hash, "phase": phase, **details})
         self._writer.write(HostState(host=self.me, state=state))
 
     def _news(self) -> None:
@@ -95,13 +99,19 @@ class HostLink:
             event: dict[str, Any]
             with self._lock:
                 if info.valid_data:
-                    self._states[host] = json.loads(sample.state)
+                    state = self._states[host] = json.loads(sample.state)
                     back = host in self._gone
                     self._gone.discard(host)
-                    event = {"event": "host_back" if back else "host_state", "host": host}
+                    if state.get("phase") == "leaving":
+                        event = {"event": "host_leaving", "host": host, "ok": bool(state.get("ok")),
+                                 "why": str(state.get("why", ""))}
+                    else:
+                        event = {"event": "host_back" if back else "host_state", "host": host}
                 elif info.instance_state & (InstanceState.NotAliveNoWriters | InstanceState.NotAliveDisposed):
-                    self._states.pop(host, None)
+                    left = self._states.pop(host, {}).get("phase") == "leaving"
                     self._gone.add(host)
+                    if left:
+                        continue  # it said goodbye first: its going is no loss
                     event = {"event": "host_lost", "host": host}
                 else:
                     continue

@@ -117,6 +117,8 @@ class Launcher:
         except KeyboardInterrupt:
             pass
         finally:
+            if self.link is not None:
+                self.link.announce("leaving", ok=result.exit_code == 0, why=result.reason)
             failed_before = len(self.failures)
             unclean = self._shutdown(result.reason)
             if in_main:
@@ -218,7 +220,15 @@ class Launcher:
         if mismatch := self.link.mismatch():
             sys.stderr.write(f"[ERROR] [launch]: {mismatch}\n")
             return LaunchResult(1, [host], mismatch)
-        if event["event"] == "host_lost":
+        if event["event"] == "host_leaving":
+            if event["ok"]:
+                log.info("host %s (%s) finished (%s)", host, address, event["why"])
+            else:
+                sys.stderr.write(f"[ERROR] [launch]: host {host} ({address}) stopped: {event['why']}\n")
+            if self.plan.on_peer_lost == "stop":
+                return LaunchResult(0 if event["ok"] else 1, [] if event["ok"] else [host],
+                                    f"host {host} {'finished' if event['ok'] else 'failed'}")
+        elif event["event"] == "host_lost":
             if self.plan.on_peer_lost == "stop":
                 sys.stderr.write(f"[ERROR] [launch]: host {host} ({address}) is gone; shutting the graph down "
                                  "(on_peer_lost: stop)\n")
@@ -276,7 +286,7 @@ class Launcher:
                 return LaunchResult(1 if self.failures else 0, self.failures, f"required node {event['node']} finished")
             elif kind == "stopped" and event.get("failed"):
                 self.failures.extend(event["failed"])
-            elif kind in ("host_lost", "host_back", "host_state"):
+            elif kind in ("host_lost", "host_back", "host_state", "host_leaving"):
                 outcome = self._peer_news(event)
                 if outcome is not None:
                     self.failures.extend(outcome.failures)

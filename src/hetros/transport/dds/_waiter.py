@@ -15,7 +15,7 @@ import weakref
 from collections.abc import Callable
 from typing import Any
 
-from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
+from cyclonedds.core import DDSException, InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.util import duration
 
 from ..._log import get_logger
@@ -61,7 +61,12 @@ class Waiter:
                 if handler is None:
                     self._drop(ref, condition)
                     continue
-                if condition.triggered:
+                try:
+                    triggered = condition.triggered
+                except DDSException:  # its reader was deleted meanwhile (an endpoint closing)
+                    self._drop(ref, condition)
+                    continue
+                if triggered:
                     try:
                         handler()
                     except Exception:  # a handler's failure must not end every other reader's delivery

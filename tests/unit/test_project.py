@@ -139,3 +139,16 @@ def test_init_template_from_sources_checks_clean(tmp_path: Path) -> None:
     data = template_from_sources([src], src.parent, "tl")
     assert data["nodes"]["talker"]["publish"] == {"/chatter": "std_msgs/msg/String"}
     assert data["nodes"]["listener2"]["subscribe"] == {"/chatter": "std_msgs/msg/String"}
+
+
+def test_a_node_module_that_prints_and_exits_at_import_is_named_not_a_traceback(tmp_path: Path) -> None:
+    (tmp_path / "quitter.py").write_text('import os\nprint("[]", flush=True)\nos._exit(0)\n')
+    (tmp_path / "printer.py").write_text('print("{}")\nprint("[1, 2]")\n\ndef node(n):\n    pass\n')
+    for module, expected in (("quitter", "ended the interpreter before hetros could look at them"), ("printer", None)):
+        path = tmp_path / f"{module}.yaml"
+        path.write_text(f"name: q\nnodes:\n  a: {{run: '{module}:node', target: main}}\n")
+        report = check(load_project(path))
+        if expected is None:
+            assert not report.errors, report.errors
+        else:
+            assert len(report.errors) == 1 and expected in report.errors[0] and "nodes.a.run" in report.errors[0]

@@ -372,8 +372,11 @@ for run in json.loads(sys.argv[1]):
         out[run] = f"module {module_name!r} has no {attr!r}; define it or fix 'run: {run}'"
     elif not callable(target):
         out[run] = f"{run} must be a function or class taking the node, not {type(target).__name__}"
-print(json.dumps(out))
+print("\\n" + sys.argv[3] + json.dumps(out))
 """
+# the probe's answer line starts with this: a node module that prints, or ends the interpreter
+# at import, cannot be taken for the answer
+_PROBE_MARK = "hetros-probe-result: "
 _probed: dict[tuple[str, tuple[str, ...], tuple[float, ...]], dict[str, str]] = {}
 
 
@@ -394,17 +397,21 @@ def _runnable_problems(project: LoadedProject, runs: list[str]) -> dict[str, str
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
     try:
         folders = [str((project.root / m).resolve()) for m in project.model.messages]
-        done = subprocess.run([sys.executable, "-c", _PROBE, json.dumps(sorted(runs)), json.dumps(folders)],
-                              capture_output=True,
+        done = subprocess.run([sys.executable, "-c", _PROBE, json.dumps(sorted(runs)), json.dumps(folders),
+                               _PROBE_MARK], capture_output=True,
                               text=True, timeout=60, env=env, cwd=root, check=False)
     except subprocess.TimeoutExpired:
         return {run: "importing the node modules took more than 60 s; does a module block on import?"
                 for run in runs}
+    answers = [line[len(_PROBE_MARK):] for line in done.stdout.splitlines() if line.startswith(_PROBE_MARK)]
     try:
-        problems: dict[str, str] = json.loads(done.stdout.strip().splitlines()[-1])
-    except (json.JSONDecodeError, IndexError):
-        reason = (done.stderr.strip().splitlines() or ["no output"])[-1]
-        problems = {run: f"importing the node modules ended the interpreter: {reason}" for run in runs}
+        problems: dict[str, str] = json.loads(answers[-1])
+        if not isinstance(problems, dict):
+            raise ValueError(problems)
+    except (ValueError, IndexError):
+        reason = (done.stderr.strip().splitlines() or [f"exit code {done.returncode}, no error printed"])[-1]
+        problems = {run: f"importing the node modules ended the interpreter before hetros could look at "
+                         f"them ({reason}); does a module exit or kill its process at import?" for run in runs}
     _probed[key] = problems
     return problems
 

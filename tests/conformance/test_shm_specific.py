@@ -390,3 +390,28 @@ def test_the_compiled_hot_path_shares_the_sample_layout() -> None:
     assert (Credits.HEAD, Credits.SLOT_WORDS) == (5, 4)
     if os.environ.get("HETROS_PURE_PYTHON") == "1":
         assert _hotpath.send_cdr is None and _hotpath.take_cdr is None
+
+
+@pytest.mark.parametrize("pure", ["0", "1"], ids=["compiled", "pure-python"])
+@pytest.mark.parametrize(("size", "count", "past_the_segment"),
+                         [(2**34, 2**32 - 1, True), (2**63, 16, True), (2**20, 2**19, False)])
+def test_a_size_forged_in_shared_memory_is_dropped_not_a_crash(pure: str, size: int, count: int,
+                                                                past_the_segment: bool) -> None:
+    """iceoryx2's size of a sample and the array length in it, rewritten after the send: the
+    reader used to view memory past the segment and die of SIGSEGV; it now drops the sample.
+    A size that stays inside the segment is forged data (docs/SECURITY.md), read without harm."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).with_name("shm_tamper.py")
+    env = {**os.environ, "HETROS_PURE_PYTHON": pure}
+    done = subprocess.run([sys.executable, str(script), str(size), str(count)], capture_output=True, text=True,
+                          timeout=60, env=env, check=False)
+    assert done.returncode == 0, f"the reader died ({done.returncode}):\n{done.stderr[-3000:]}"
+    outcome = json.loads(done.stdout.strip().splitlines()[-1])
+    if past_the_segment:
+        assert outcome == {"first": None, "sum": None, "after": 2, "dropped": 1}, (outcome, done.stderr[-2000:])
+    else:
+        assert outcome["after"] == 2, outcome

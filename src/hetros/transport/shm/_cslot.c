@@ -118,13 +118,58 @@ static PyObject *str_publisher, *str_credits_at, *str_blocking, *str_room, *str_
 
 static const char CDR_LE[4] = {0, 1, 0, 0};
 
+/* The iceoryx2 data segments this process has mapped (MappedSegments in _sample.py): a
+   received sample's size comes from shared memory, so a sample is used only when it lies
+   inside one of them; the ranges are asked for again (``mapped_refresh``) when one does not. */
+#define MAX_MAPPED 256
+static uintptr_t mapped_low[MAX_MAPPED], mapped_high[MAX_MAPPED];
+static int mapped_count;
+static PyObject *mapped_refresh;
+
+static int in_mapped(uintptr_t address, unsigned long long size)
+{
+    for (int i = 0; i < mapped_count; i++)
+        if (address >= mapped_low[i] && size <= (unsigned long long)(mapped_high[i] - address))
+            return 1;
+    return 0;
+}
+
+/* 1: inside a mapped segment; 0: not (after asking for the ranges again); -1: error */
+static int sample_mapped(uintptr_t address, unsigned long long size)
+{
+    if (in_mapped(address, size))
+        return 1;
+    if (mapped_refresh == NULL)
+        return 0;
+    PyObject *ranges = PyObject_CallNoArgs(mapped_refresh);
+    if (ranges == NULL)
+        return -1;
+    PyObject *fast = PySequence_Fast(ranges, "mapped_refresh() must return a list of (low, high)");
+    Py_DECREF(ranges);
+    if (fast == NULL)
+        return -1;
+    mapped_count = 0;
+    for (Py_ssize_t i = 0; i < PySequence_Fast_GET_SIZE(fast) && mapped_count < MAX_MAPPED; i++) {
+        unsigned long long low, high;
+        if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(fast, i), "KK", &low, &high)) {
+            Py_DECREF(fast);
+            return -1;
+        }
+        mapped_low[mapped_count] = (uintptr_t)low;
+        mapped_high[mapped_count] = (uintptr_t)high;
+        mapped_count++;
+    }
+    Py_DECREF(fast);
+    return in_mapped(address, size);
+}
+
 static PyObject *configure(PyObject *module, PyObject *args)
 {
     (void)module;
-    PyObject *loan_slice, *assume_init;
+    PyObject *loan_slice, *assume_init, *refresh;
     Py_ssize_t header, body_at, head, words, slots, limit;
-    if (!PyArg_ParseTuple(args, "OOnnnnnn", &loan_slice, &assume_init, &header, &body_at, &head, &words, &slots,
-                          &limit))
+    if (!PyArg_ParseTuple(args, "OOnnnnnnO", &loan_slice, &assume_init, &header, &body_at, &head, &words, &slots,
+                          &limit, &refresh))
         return NULL;
     if (header < 16 || body_at != header + 4 || head < 3 || words < 2 || slots < 1 || limit < 2) {
         PyErr_Format(PyExc_ValueError, "the sample header must be at least 16 bytes with the CDR body 4 bytes after "
@@ -133,6 +178,7 @@ static PyObject *configure(PyObject *module, PyObject *args)
     }
     Py_XSETREF(loan_slice_function, Py_NewRef(loan_slice));
     Py_XSETREF(assume_init_function, Py_NewRef(assume_init));
+    Py_XSETREF(mapped_refresh, Py_NewRef(refresh));
     header_size = header;
     cdr_body_at = body_at;
     credits_head = head;
@@ -227,6 +273,17 @@ static int get_i64(PyObject *obj, PyObject *name, long long *value)
 }
 
 /* The same for a count or an address (user-space addresses are below 2**63) */
+/* a size read from shared memory: any unsigned 64-bit value (a forged one is refused later) */
+static int get_size(PyObject *obj, PyObject *name, unsigned long long *value)
+{
+    PyObject *number = PyObject_GetAttr(obj, name);
+    if (number == NULL)
+        return -1;
+    *value = PyLong_AsUnsignedLongLong(number);
+    Py_DECREF(number);
+    return *value == (unsigned long long)-1 && PyErr_Occurred() ? -1 : 0;
+}
+
 static int get_u64(PyObject *obj, PyObject *name, unsigned long long *value)
 {
     long long number;
@@ -541,11 +598,18 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         return NULL;
     PyObject *header = PyObject_GetAttr(sample, str_header);
     unsigned long long size = 0, address = 0;
-    int failed = header == NULL || get_u64(header, str_number_of_elements, &size) < 0 ||
+    int failed = header == NULL || get_size(header, str_number_of_elements, &size) < 0 ||
                  get_u64(sample, str_payload_ptr, &address) < 0;
     Py_XDECREF(header);
     if (failed)
         goto error_sample;
+    int mapped = sample_mapped((uintptr_t)address, size);
+    if (mapped < 0)
+        goto error_sample;
+    if (!mapped) { /* its size runs past its segment: released unread, the reference path counts it */
+        Py_DECREF(sample);
+        return Py_BuildValue("(OK)", Py_None, size);
+    }
     char *slot = (char *)(uintptr_t)address;
     int common = (Py_ssize_t)size >= cdr_body_at && (Py_ssize_t)size <= PY_SSIZE_T_MAX &&
                  PyList_GET_SIZE(borrowed) < borrow_limit - 2;
@@ -627,7 +691,7 @@ error_sample:
 static PyMethodDef module_functions[] = {
     {"configure", configure, METH_VARARGS,
      "configure(loan_slice, assume_init, header_size, cdr_body_at, credits_head, slot_words, subscriber_slots, "
-     "borrow_limit)"},
+     "borrow_limit, mapped_refresh)"},
     {"bind_slots", bind_slots, METH_O,
      "bind_slots(cls) -> how many of the attributes the hot path uses are slots of cls, read in place from now on"},
     {"send_cdr", (PyCFunction)(void (*)(void))send_cdr, METH_FASTCALL,

@@ -30,6 +30,7 @@ from ._sample import (
     LAYOUT_SPLIT,
     LOAN_RESERVE,
     LOSS_GRACE,
+    MAPPED,
     SPLIT,
     SPLIT_ONE,
     ScratchViews,
@@ -373,6 +374,9 @@ class ShmReader(Reader):
                 self._check_arrival(port)
             return None
         size = sample.header.number_of_elements
+        if not MAPPED.holds(sample.payload_ptr, size):
+            del sample
+            return self._skip_damaged(port, f"its size ({size} bytes) runs past the shared-memory segment it is in")
         if self._copies:
             # the message will hold no view on the sample: it goes back once decoded
             memory = self._scratch.at(sample.payload_ptr, size)[:size]
@@ -397,13 +401,17 @@ class ShmReader(Reader):
             return self._finish_compiled(port, got)
         return got
 
-    def _finish_compiled(self, port: _Port, got: Literal[False] | tuple[memoryview, int] | tuple[memoryview, int, int]
+    def _finish_compiled(self, port: _Port,
+                         got: Literal[False] | tuple[memoryview | None, int] | tuple[memoryview, int, int]
                          ) -> Any | None:
         """What ``take_cdr`` leaves to the reference path: a publisher to check, a sample to
-        finish, or one accounted for (a split-layout sample) to decode."""
+        finish, one accounted for (a split-layout sample) to decode, or (None, size) for a
+        sample whose size runs past its segment (released unread)."""
         if got is False:
             self._check_arrival(port)
             return None
+        if got[0] is None:  # the compiled path found the sample's size past its segment
+            return self._skip_damaged(port, f"its size ({got[1]} bytes) runs past the shared-memory segment it is in")
         if len(got) == 3:
             try:
                 return self._decode(got[0], got[2])

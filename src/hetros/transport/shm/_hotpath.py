@@ -15,7 +15,7 @@ from typing import Any
 from ...msg._compiled import wanted
 from ._credits import Credits
 from ._iceoryx import assume_init, loan_slice
-from ._sample import BORROW_LIMIT, CDR_BODY_AT, HEADER, MAX_SUBSCRIBER_SLOTS
+from ._sample import BORROW_LIMIT, CDR_BODY_AT, HEADER, MAPPED, MAX_SUBSCRIBER_SLOTS
 
 # what send_cdr and send_slot return besides 0 (not handled) and 1 (sent): sent, but who to wake has changed
 SENT_STALE_WAKES = 2
@@ -29,7 +29,7 @@ except ImportError:
     _cslot = None
 if _cslot is not None and wanted():
     _cslot.configure(loan_slice, assume_init, HEADER.size, CDR_BODY_AT, Credits.HEAD, Credits.SLOT_WORDS,
-                     MAX_SUBSCRIBER_SLOTS, BORROW_LIMIT)
+                     MAX_SUBSCRIBER_SLOTS, BORROW_LIMIT, MAPPED.refresh)
     send_cdr, send_slot, take_cdr = _cslot.send_cdr, _cslot.send_slot, _cslot.take_cdr
 
 

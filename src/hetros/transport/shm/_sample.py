@@ -135,6 +135,49 @@ class _Leased:
         self.borrowed.pop()
 
 
+class MappedSegments:
+    """The address ranges of the iceoryx2 data segments this process has mapped.
+
+    A received sample's place and size come from shared memory, which any process of the
+    same user can write: a size past the end of its segment made views (and then array
+    reads) of memory that is not mapped, and the process died of SIGSEGV. Each sample is
+    checked against these ranges, reread from ``/proc/self/maps`` only when a sample lies
+    outside all of them (a segment mapped since).
+    """
+
+    def __init__(self) -> None:
+        self.ranges: list[tuple[int, int]] = []
+        self._last = (0, 0)  # the range the previous sample was in: most samples are in it too
+
+    def refresh(self) -> list[tuple[int, int]]:
+        ranges = []
+        with open("/proc/self/maps", encoding="ascii", errors="replace") as maps:
+            for line in maps:
+                parts = line.split(maxsplit=5)
+                if len(parts) == 6 and parts[5].startswith("/dev/shm/iox2_"):
+                    low, high = parts[0].split("-")
+                    ranges.append((int(low, 16), int(high, 16)))
+        self.ranges = ranges
+        return ranges
+
+    def holds(self, address: int, size: int) -> bool:
+        """Whether ``size`` bytes at ``address`` lie inside one mapped data segment."""
+        low, high = self._last
+        if low <= address and address + size <= high:
+            return True
+        for attempt in (0, 1):
+            for low, high in self.ranges:
+                if low <= address and address + size <= high:
+                    self._last = (low, high)
+                    return True
+            if attempt == 0:
+                self.refresh()
+        return False
+
+
+MAPPED = MappedSegments()
+
+
 def leased_memory(address: int, size: int, sample: object, borrowed: list[None]) -> memoryview:
     """A received sample's bytes, read-only; the sample is released when nothing made from them is left."""
     if _Memory is not None:

@@ -330,7 +330,7 @@ def test_one_damaged_header_does_not_wedge_a_reliable_reader(pair: Any, damage: 
     else:
         sample, memory = service.loan(HEADER.size + 8)
         service.send(sample, memory, 0, 0)
-        HEADER.pack_into(memory, 0, 2**40, 0, 0)  # written into the sample after it was sent
+        HEADER.pack_into(memory, 0, 2**40, 0, 0, 0)  # written into the sample after it was sent
         del sample
     for width in range(1, 4 * 4):  # four FIFOs' worth: the publisher would block on a lost credit
         writer.write(Image(width=width))
@@ -386,8 +386,8 @@ def test_the_compiled_hot_path_shares_the_sample_layout() -> None:
     from hetros.transport.shm._credits import Credits
     from hetros.transport.shm._sample import CDR_BODY_AT, HEADER
 
-    assert HEADER.format == "<QII12x" and CDR_BODY_AT == HEADER.size + 4 == 32
-    assert (Credits.HEAD, Credits.SLOT_WORDS) == (5, 4)
+    assert HEADER.format == "<QIIQ4x" and CDR_BODY_AT == HEADER.size + 4 == 32
+    assert (Credits.HEAD, Credits.SLOT_WORDS) == (6, 4)
     if os.environ.get("HETROS_PURE_PYTHON") == "1":
         assert _hotpath.send_cdr is None and _hotpath.take_cdr is None
 

@@ -95,6 +95,10 @@ def test_qos_maps_one_to_one_and_always_xcdr1() -> None:
     best = list(dds_qos(QoS(reliability="best_effort", history="keep_all")))
     assert Policy.Reliability.BestEffort in best and Policy.History.KeepAll in best
     assert Policy.Durability.Volatile in best
+    timed = list(dds_qos(QoS(deadline=0.1, lifespan=2.0, liveliness="manual_by_topic", lease_duration=0.5)))
+    assert Policy.Deadline(100_000_000) in timed and Policy.Lifespan(2_000_000_000) in timed
+    assert Policy.Liveliness.ManualByTopic(500_000_000) in timed
+    assert not any(isinstance(p, Policy.Deadline | Policy.Lifespan) for p in best), "none: DDS's infinite"
 
 
 def test_discovery_is_static_and_on_loopback_by_default(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -1,10 +1,8 @@
-"""`kind: ros1` targets without a running master: checks, the plan, the runtime's refusals, throttled logs."""
+"""`kind: ros1` targets without a running master: checks, the plan, the runtime's refusals (log limits: test_log.py)."""
 
 from __future__ import annotations
 
-import logging
 import textwrap
-import threading
 from pathlib import Path
 
 import pytest
@@ -13,7 +11,6 @@ from hetros import UndeclaredEndpointError
 from hetros.plan import Plan
 from hetros.project import check, load_project, plan
 from hetros.runtime import Graph
-from hetros.transport.tcpros._peer import _Throttled
 
 NODES = textwrap.dedent('''
     def node(node):
@@ -75,15 +72,3 @@ def test_a_ros1_node_cannot_open_what_it_did_not_declare(tmp_path: Path) -> None
             graph.open_reader("/odom", "legacy", "std_msgs/msg/String", lambda: None)
     finally:
         graph.close()
-
-
-def test_refusal_logs_are_throttled_with_a_summary(caplog: pytest.LogCaptureFixture) -> None:
-    throttled = _Throttled(burst=3, period=0.2)
-    with caplog.at_level(logging.INFO, logger="hetros.ros1"):
-        for index in range(10):
-            throttled(logging.ERROR, "bad peer %d", index)
-        threading.Event().wait(0.25)
-        throttled(logging.ERROR, "bad peer %d", 10)
-    lines = [record.getMessage() for record in caplog.records]
-    assert lines == ["bad peer 0", "bad peer 1", "bad peer 2",
-                     "7 more ROS 1 connection problems in the last 0.2 s were not logged", "bad peer 10"]

@@ -63,6 +63,9 @@ class EndpointSpec(_Strict):
     type: str
     reliability: Literal["reliable", "best_effort"] | None = None
     durability: Literal["volatile", "transient_local"] | None = None
+    deadline: float | None = Field(default=None, gt=0)
+    liveliness: Literal["automatic", "manual_by_topic"] | None = None
+    lease_duration: float | None = Field(default=None, gt=0)
 
 
 class ActionSpec(_Strict):

@@ -447,32 +447,46 @@ def _check_shm_budget(project: LoadedProject, types: TypeRegistry, publishers: d
             )
 
 
+# how ROS 2 matches an offer to a request, per policy: the offer must be at least as strong
+_RANK = {"best_effort": 0, "reliable": 1, "volatile": 0, "transient_local": 1, "automatic": 0, "manual_by_topic": 1}
+_PERIODS = ("deadline", "lease_duration")  # seconds; None is infinite; the offer must be at most the request
+
+
+def _offer_falls_short(policy: str, offered: object, requested: object) -> bool:
+    if policy in _PERIODS:
+        return requested is not None and (offered is None or float(offered) > float(requested))  # type: ignore[arg-type]
+    return _RANK[str(requested)] > _RANK[str(offered)]
+
+
 def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[tuple[str, str]]],
                              subscribers: dict[str, list[tuple[str, str]]], report: CheckReport) -> None:
-    """A subscriber may not request more than a publisher offers (reliability, durability)."""
+    """A subscriber may not request more than a publisher offers, as ROS 2 matches them:
+    reliability, durability and liveliness kind by strength, deadline and lease_duration by
+    period (an offered period longer than the requested one, or none, falls short)."""
     model = project.model
-    rank = {"best_effort": 0, "reliable": 1, "volatile": 0, "transient_local": 1}
     for topic, subscribed in subscribers.items():
-        topic_spec = model.topics.get(topic)
-        for policy in ("reliability", "durability"):
-            default = getattr(topic_spec, policy) if topic_spec else ("reliable" if policy == "reliability"
-                                                                       else "volatile")
+        topic_qos = model.topics.get(topic) or QoS()
+        for policy in ("reliability", "durability", "deadline", "liveliness", "lease_duration"):
+            default = getattr(topic_qos, policy)
 
-            def effective(node: str, section: str, policy: str = policy, default: str = default,
-                          topic: str = topic) -> str:
+            def effective(node: str, section: str, policy: str = policy, default: object = default,
+                          topic: str = topic) -> object:
                 spec = model.nodes[node].endpoint(section, topic)
                 value = getattr(spec, policy) if spec else None
-                return str(value or default)
+                return default if value is None else value
+
+            def shown(value: object, policy: str = policy) -> str:
+                return ("none" if value is None else f"{value:g} s") if policy in _PERIODS else str(value)
 
             for pub, _ in publishers.get(topic, []):
                 offered = effective(pub, "publish")
                 for sub, _ in subscribed:
                     requested = effective(sub, "subscribe")
-                    if rank[requested] > rank[offered]:
+                    if _offer_falls_short(policy, offered, requested):
                         report.errors.append(
                             f"{project.where('nodes', sub, 'subscribe', topic)}: incompatible QoS on "
-                            f"{topic}: {sub} requests {policy} {requested} but {pub} offers {offered} "
-                            f"({project.where('nodes', pub, 'publish', topic)}); make them agree"
+                            f"{topic}: {sub} requests {policy} {shown(requested)} but {pub} offers "
+                            f"{shown(offered)} ({project.where('nodes', pub, 'publish', topic)}); make them agree"
                         )
 
 

@@ -5,15 +5,18 @@ from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
 from ._node import Client, Node, Publisher, Replies, Service, Subscription, Timer
+from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus
 
 __all__ = [
     "ActionClient",
     "ActionServer",
     "Client",
     "ClientGoalHandle",
+    "DeadlineMissedStatus",
     "GoalStatus",
     "Graph",
     "Host",
+    "LivelinessChangedStatus",
     "Node",
     "Publisher",
     "Replies",

@@ -143,9 +143,18 @@ class _FanoutWriter(Writer):
         for part in self._parts:
             part.write(message)
 
+    def assert_liveliness(self) -> None:
+        for part in self._parts:
+            part.assert_liveliness()
+
     def close(self) -> None:
         for part in self._parts:
             part.close()
+
+
+def _liveliness_of(parts: list[Reader]) -> tuple[int, int] | None:
+    counts = [c for c in (part.liveliness() for part in parts) if c is not None]
+    return (sum(c[0] for c in counts), sum(c[1] for c in counts)) if counts else None
 
 
 class _MergedReader(Reader):
@@ -161,6 +170,9 @@ class _MergedReader(Reader):
 
     def pending(self) -> bool:
         return any(part.pending() for part in self._parts)
+
+    def liveliness(self) -> tuple[int, int] | None:
+        return _liveliness_of(self._parts)
 
     def close(self) -> None:
         for part in self._parts:
@@ -198,6 +210,9 @@ class _Retained(Reader):
 
     def pending(self) -> bool:
         return self.inner.pending()
+
+    def liveliness(self) -> tuple[int, int] | None:
+        return self.inner.liveliness()
 
     def close(self) -> None:
         self.relay.target = None

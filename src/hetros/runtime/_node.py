@@ -30,6 +30,14 @@ from ..transport import QoS, Reader, Writer
 from ._executor import AdaptiveSpin, Executor
 from ._graph import Graph
 from ._log import node_logger
+from ._qos_events import (
+    DeadlineMissedStatus,
+    DeadlineWatch,
+    LivelinessChangedStatus,
+    LivelinessWatch,
+    WatchedReader,
+    watch_deadline,
+)
 
 if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ServerGoalHandle
@@ -76,6 +84,8 @@ class Publisher(Generic[M]):
         self._loans: dict[tuple[tuple[str, int], ...], Callable[[], M]] = {}
         self._last_sizes: dict[str, int] | None = None
         self._last_make: Callable[[], M] = msg_type
+        self.deadline: DeadlineWatch | None = None  # the topic's QoS deadline, offered (``on_deadline_missed``)
+        self.manual_liveliness = False  # each publish asserts liveliness (the topic's is manual_by_topic)
 
     def publish(self, message: M) -> None:
         """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
@@ -83,6 +93,14 @@ class Publisher(Generic[M]):
             _check_type(message, self.typename, f"topic {self.topic}")
         message._hetros_validate(message, self._short)
         self._writer.write(message)
+        if self.deadline is not None:
+            self.deadline.seen()
+        if self.manual_liveliness:
+            self._writer.assert_liveliness()
+
+    def assert_liveliness(self) -> None:
+        """Say this publisher is alive without publishing (``manual_by_topic`` liveliness)."""
+        self._writer.assert_liveliness()
 
     def loan(self, **sizes: int) -> M:
         """A message to fill in place and publish without a copy.
@@ -108,6 +126,8 @@ class Publisher(Generic[M]):
         return make()
 
     def close(self) -> None:
+        if self.deadline is not None:
+            self.deadline.stop()
         self._writer.close()
 
 
@@ -152,6 +172,7 @@ class Subscription(Generic[M]):
         self.stats = HandlingStats()
         self._returned_at = 0.0
         self._spin = AdaptiveSpin()
+        self.liveliness: LivelinessWatch | None = None  # set when its publishers' liveliness is watched
 
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
@@ -243,6 +264,8 @@ class Subscription(Generic[M]):
 
     def close(self) -> None:
         """Stop receiving; a closed callback no longer keeps the node spinning after its function returns."""
+        if self.liveliness is not None:
+            self.liveliness.stop()
         if self._reader is not None:
             self._reader.close()
             self._reader = None
@@ -443,24 +466,48 @@ class Node:
 
     # -- endpoints -------------------------------------------------------------------------
 
-    def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None) -> Publisher[M]:
+    def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None,
+                         on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None
+                         ) -> Publisher[M]:
+        """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
+        ``deadline`` and this publisher let a period pass without publishing."""
         typename = _typename(msg_type)
         self._check_declared_type(topic, typename)
         writer = self.graph.open_writer(topic, self.name, typename, qos=qos)
         publisher = Publisher(self, msg_type, topic, writer)
+        effective = self.graph.qos_of(topic, None)
+        publisher.deadline = watch_deadline(self, f"publisher of {topic} in {self.name}", effective.deadline,
+                                            on_deadline_missed)
+        publisher.manual_liveliness = effective.liveliness == "manual_by_topic"
+        if publisher.manual_liveliness:
+            writer.assert_liveliness()  # alive from its creation, as a ROS 2 publisher
         self._closables.append(publisher)
         return publisher
 
     def create_subscription(self, msg_type: type[M], topic: str,
                             callback: Callable[[M], object] | None = None, *,
-                            qos: QoS | None = None) -> Subscription[M]:
+                            qos: QoS | None = None,
+                            on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None,
+                            on_liveliness_changed: Callable[[LivelinessChangedStatus], object] | None = None
+                            ) -> Subscription[M]:
+        """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
+        ``deadline`` and a period passed without a message for this subscription;
+        ``on_liveliness_changed(status)`` when a publisher it hears from becomes alive or not
+        alive (a process that ended; a ``manual_by_topic`` publisher silent past its lease)."""
         typename = _typename(msg_type)
         self._check_declared_type(topic, typename)
         subscription = Subscription(self, msg_type, topic, callback)
         if callback is not None:
             self.executor.entities += 1
             self.executor.poll_while_spinning(subscription)
-        subscription._attach(self.graph.open_reader(topic, self.name, typename, subscription._on_wake, qos=qos))
+        reader = self.graph.open_reader(topic, self.name, typename, subscription._on_wake, qos=qos)
+        effective = self.graph.qos_of(topic, None)
+        watch = watch_deadline(self, f"subscription to {topic} in {self.name}", effective.deadline, on_deadline_missed)
+        subscription._attach(reader if watch is None else WatchedReader(reader, watch))
+        if on_liveliness_changed is not None or effective.liveliness == "manual_by_topic" or \
+                effective.lease_duration is not None:
+            subscription.liveliness = LivelinessWatch(self, f"subscription to {topic} in {self.name}", reader,
+                                                      effective.lease_duration, on_liveliness_changed)
         self._closables.append(subscription)
         return subscription
 

@@ -36,6 +36,11 @@ class Writer(ABC):
         """Whether ``message`` came from ``slot_loan_maker`` and has not been published yet."""
         return False
 
+    def assert_liveliness(self) -> None:
+        """Say this publisher is alive (a ``manual_by_topic`` topic's publish says it too);
+        a transport that cannot tell liveliness has nothing to record."""
+        return None
+
     @abstractmethod
     def close(self) -> None: ...
 
@@ -59,6 +64,11 @@ class Reader(ABC):
         wakes the reader as usual.
         """
         return True
+
+    def liveliness(self) -> tuple[int, int] | None:
+        """(alive, not alive): the publishers this reader has heard from, by the topic's
+        liveliness QoS; None where the transport cannot tell."""
+        return None
 
     @abstractmethod
     def close(self) -> None: ...

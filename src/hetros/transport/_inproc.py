@@ -25,17 +25,24 @@ class Mailbox(Reader):
         self.qos = qos
         self._wake = wake
         self._items: deque[Any] = deque()
+        # when each item was published, kept only for a topic with a lifespan
+        self._born: deque[float] | None = None if qos.lifespan is None else deque()
+        self._lifespan = qos.lifespan or 0.0
         self._cond = threading.Condition()
         self._closed = False
         self.dropped = 0
+        self.expired = 0  # items dropped unread for being older than the lifespan
+        self.source: InprocTopic | None = None  # whose writers' liveliness this mailbox reports
 
-    def put(self, item: Any, deadline: float, stop: threading.Event | None) -> None:
+    def put(self, item: Any, deadline: float, stop: threading.Event | None, born: float = 0.0) -> None:
         with self._cond:
             if self._closed:
                 return
             if len(self._items) >= self.qos.depth:
                 if not self.qos.blocks_publisher:
                     self._items.popleft()
+                    if self._born is not None:
+                        self._born.popleft()
                     self.dropped += 1
                 else:
                     while len(self._items) >= self.qos.depth and not self._closed:
@@ -53,18 +60,27 @@ class Mailbox(Reader):
                     if self._closed:
                         return
             self._items.append(item)
+            if self._born is not None:
+                self._born.append(born or time.monotonic())
         self._wake()
 
     def try_take(self) -> Any | None:
         with self._cond:
-            if not self._items:
-                return None
-            item = self._items.popleft()
-            self._cond.notify_all()
-            return item
+            while self._items:
+                item = self._items.popleft()
+                self._cond.notify_all()
+                if self._born is None:
+                    return item
+                if time.monotonic() - self._born.popleft() <= self._lifespan:
+                    return item
+                self.expired += 1
+            return None
 
     def pending(self) -> bool:
         return bool(self._items)
+
+    def liveliness(self) -> tuple[int, int] | None:
+        return None if self.source is None else self.source.liveliness()
 
     def __len__(self) -> int:
         return len(self._items)
@@ -84,35 +100,63 @@ class InprocTopic:
         self._stop = stop
         self._lock = threading.RLock()
         self._mailboxes: list[Mailbox] = []
-        self._history: deque[Any] = deque(maxlen=qos.depth)
+        self._history: deque[tuple[Any, float]] = deque(maxlen=qos.depth)
+        self._writers: list[InprocWriter] = []
 
     def open_reader(self, owner: str, wake: Wake, qos: QoS | None = None) -> Mailbox:
         mailbox = Mailbox(self.name, owner, qos or self.qos, wake)
+        mailbox.source = self
         with self._lock:
             self._mailboxes.append(mailbox)
             if self.qos.keeps_history:
-                for item in self._history:
-                    mailbox.put(item, time.monotonic() + self.qos.publish_timeout, self._stop)
+                for item, born in self._history:  # a late joiner's history keeps its age (lifespan)
+                    mailbox.put(item, time.monotonic() + self.qos.publish_timeout, self._stop, born)
         return mailbox
 
     def open_writer(self) -> InprocWriter:
-        return InprocWriter(self)
+        writer = InprocWriter(self)
+        with self._lock:
+            self._writers.append(writer)
+        return writer
+
+    def liveliness(self) -> tuple[int, int]:
+        """In one process an ``automatic`` publisher is alive until it is closed; a
+        ``manual_by_topic`` one while it asserted within ``lease_duration``."""
+        now = time.monotonic()
+        lease = self.qos.lease_duration
+        with self._lock:
+            writers = list(self._writers)
+        alive = 0
+        for writer in writers:
+            if writer.closed:
+                continue
+            if self.qos.liveliness == "manual_by_topic":
+                if writer.asserted is None or (lease is not None and now - writer.asserted > lease):
+                    continue
+            alive += 1
+        return alive, len(writers) - alive
 
     def deliver(self, item: Any) -> None:
-        deadline = time.monotonic() + self.qos.publish_timeout
+        now = time.monotonic()
+        deadline = now + self.qos.publish_timeout
         with self._lock:
             if self.qos.keeps_history:
-                self._history.append(item)
+                self._history.append((item, now))
             for mailbox in list(self._mailboxes):
-                mailbox.put(item, deadline, self._stop)
+                mailbox.put(item, deadline, self._stop, now)
 
 
 class InprocWriter(Writer):
     def __init__(self, topic: InprocTopic) -> None:
         self._topic = topic
+        self.closed = False
+        self.asserted: float | None = None  # when it last said it is alive (manual_by_topic)
 
     def write(self, message: Any) -> None:
         self._topic.deliver(message)
 
+    def assert_liveliness(self) -> None:
+        self.asserted = time.monotonic()
+
     def close(self) -> None:
-        return None
+        self.closed = True

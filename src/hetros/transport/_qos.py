@@ -7,6 +7,14 @@
   dropping the oldest; the publisher never blocks.
 * transient_local: a subscriber that joins late first gets the last ``depth``
   messages each publisher sent.
+* deadline: each publisher publishes, and each subscriber receives, at least once
+  per ``deadline`` seconds; a miss is reported to the node (``on_deadline_missed``).
+* lifespan: a message older than ``lifespan`` seconds when it would be taken is
+  dropped (counted) instead of delivered.
+* liveliness: a publisher is alive while its process is (``automatic``), or while it
+  publishes or calls ``assert_liveliness`` at least once per ``lease_duration``
+  (``manual_by_topic``); a subscriber learns when a publisher's liveliness is lost or
+  regained (``on_liveliness_changed``).
 """
 
 from __future__ import annotations
@@ -20,6 +28,7 @@ MAX_DEPTH = 1_000_000
 Reliability = Literal["reliable", "best_effort"]
 History = Literal["keep_all", "keep_last"]
 Durability = Literal["volatile", "transient_local"]
+Liveliness = Literal["automatic", "manual_by_topic"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -39,6 +48,11 @@ class QoS:
     publish_timeout: Annotated[float, Field(gt=0)] = 5.0
     # a hardware topic's FIFO in front of each subscriber, in beats (fpga targets only; none by default)
     hw_fifo: Annotated[int, Field(ge=3, le=1 << 20)] | None = None
+    # seconds; None: no deadline, no lifespan, no lease (ROS 2's "infinite")
+    deadline: Annotated[float, Field(gt=0)] | None = None
+    lifespan: Annotated[float, Field(gt=0)] | None = None
+    liveliness: Liveliness = "automatic"
+    lease_duration: Annotated[float, Field(gt=0)] | None = None
 
     def __post_init__(self) -> None:
         if self.reliability not in ("reliable", "best_effort"):
@@ -54,6 +68,12 @@ class QoS:
                              f"not {self.hw_fifo!r}")
         if not self.publish_timeout > 0:
             raise ValueError(f"publish_timeout must be positive seconds, not {self.publish_timeout!r}")
+        for name in ("deadline", "lifespan", "lease_duration"):
+            value = getattr(self, name)
+            if value is not None and not (isinstance(value, int | float) and value > 0):
+                raise ValueError(f"{name} must be positive seconds (or absent: none), not {value!r}")
+        if self.liveliness not in ("automatic", "manual_by_topic"):
+            raise ValueError(f"liveliness must be 'automatic' or 'manual_by_topic', not {self.liveliness!r}")
 
     @property
     def blocks_publisher(self) -> bool:

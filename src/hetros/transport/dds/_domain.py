@@ -21,6 +21,7 @@ from xml.sax.saxutils import quoteattr
 from cyclonedds.core import DDSException, Policy, Qos
 from cyclonedds.domain import Domain, DomainParticipant
 from cyclonedds.topic import Topic
+from cyclonedds.util import duration
 
 from ..._errors import TransportError
 from ..._log import get_logger
@@ -89,6 +90,14 @@ def dds_qos(qos: QoS, user_data: bytes = b"") -> Qos:
         Policy.Durability.TransientLocal if qos.durability == "transient_local" else Policy.Durability.Volatile,
         _XCDR1,
     ]
+    if qos.deadline is not None:
+        policies.append(Policy.Deadline(duration(seconds=qos.deadline)))
+    if qos.lifespan is not None:
+        policies.append(Policy.Lifespan(duration(seconds=qos.lifespan)))
+    if qos.liveliness != "automatic" or qos.lease_duration is not None:
+        lease = duration(seconds=qos.lease_duration) if qos.lease_duration is not None else duration(infinite=True)
+        policies.append(Policy.Liveliness.ManualByTopic(lease) if qos.liveliness == "manual_by_topic"
+                        else Policy.Liveliness.Automatic(lease))
     if user_data:
         policies.append(Policy.Userdata(data=user_data))
     return Qos(*policies)

@@ -27,6 +27,7 @@ from cyclonedds._clayer import ddspy_take
 from cyclonedds.core import Policy, Qos
 from cyclonedds.idl import make_idl_struct
 from cyclonedds.idl import types as idl
+from cyclonedds.internal import load_cyclonedds
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 
@@ -41,6 +42,8 @@ _sequence: Any = idl.sequence
 _SAMPLE = make_idl_struct("HetrosSample", "hetros::dds_::Sample_", {"data": _sequence[idl.uint8]})
 log = get_logger("hetros.dds")
 _LENGTH = struct.Struct("<I")
+# the binding has no writer call for it; Cyclone's C function does (a manual_by_topic writer)
+_assert_liveliness = load_cyclonedds().dds_assert_liveliness
 _HEAD = 8  # encapsulation, then the sequence's length
 ACK_SLICE_NS = 20_000_000
 
@@ -85,6 +88,9 @@ class DdsEdgeWriter(Writer):
     def matched(self) -> int:
         return len(self.writer.get_matched_subscriptions())
 
+    def assert_liveliness(self) -> None:
+        _assert_liveliness(self.writer._ref)
+
     def linger(self, stop: threading.Event) -> bool:
         """Wait until every matched reader acknowledged what this reliable writer sent (at most
         ``publish_timeout``); whether they all did. The wait is cut in short slices: the binding
@@ -122,7 +128,9 @@ class DdsEdgeReader(Reader):
         self._wake = wake
         self._depth = qos.depth
         self._blocks = qos.blocks_publisher
-        self._queue: deque[tuple[str, bytes]] = deque(maxlen=None if self._blocks else qos.depth)
+        self._queue: deque[tuple[str, bytes, int]] = deque(maxlen=None if self._blocks else qos.depth)
+        self._lifespan_ns = None if qos.lifespan is None else int(qos.lifespan * 1e9)
+        self.expired = 0
         self._lock = threading.Lock()
         self.received = 0
         self.dropped = 0
@@ -140,9 +148,9 @@ class DdsEdgeReader(Reader):
                     taken = _take_one(reader)
                     if taken is None:
                         break
-                    data, valid = taken
+                    data, valid, sent_ns = taken
                     if valid:
-                        self._queue.append((reader.topic.name, data))
+                        self._queue.append((reader.topic.name, data, sent_ns))
                         arrived = True
         return arrived
 
@@ -153,13 +161,16 @@ class DdsEdgeReader(Reader):
     def try_take(self) -> Any | None:
         while True:
             try:
-                topic, data = self._queue.popleft()
+                topic, data, sent_ns = self._queue.popleft()
             except IndexError:
                 if not self._blocks or not self._fill():
                     return None
                 continue
             if self._blocks and len(self._queue) < self._depth // 2 + 1:
                 self._fill()  # what waited in the DDS reader for room
+            if self._lifespan_ns is not None and time.time_ns() - sent_ns > self._lifespan_ns:
+                self.expired += 1  # Cyclone drops it from its history; here it may wait in the queue
+                continue
             try:
                 message = self._decode(topic, data)
             except SerializationError as exc:
@@ -186,6 +197,11 @@ class DdsEdgeReader(Reader):
     def matched(self) -> int:
         return sum(len(r.get_matched_publications()) for r in self.readers)
 
+    def liveliness(self) -> tuple[int, int]:
+        """Cyclone's own account, by the QoS's liveliness policy mapped one to one."""
+        statuses = [reader.get_liveliness_changed_status() for reader in self.readers]  # type: ignore[no-untyped-call]
+        return sum(s.alive_count for s in statuses), sum(s.not_alive_count for s in statuses)
+
     def close(self) -> None:
         with self._lock:
             readers, self.readers = self.readers, []
@@ -193,12 +209,13 @@ class DdsEdgeReader(Reader):
             delete_entity(reader)
 
 
-def _take_one(reader: DataReader[Any]) -> tuple[bytes, bool] | None:
+def _take_one(reader: DataReader[Any]) -> tuple[bytes, bool, int] | None:
+    """(bytes, valid, source timestamp in ns of the wall clock) of the next sample, or None."""
     batch = ddspy_take(reader._ref, ANY_STATE, 1)
     if isinstance(batch, int):
         raise TransportError(f"taking from DDS reader {reader.topic.name} failed (return code {batch})")
     if not batch:
         return None
     data, info = batch[0]
-    return data, bool(info.valid_data)
+    return data, bool(info.valid_data), int(info.source_timestamp)
 

@@ -36,13 +36,15 @@ class Credits:
     blocked on a full FIFO, so takers must signal), ``version`` (bumped by every subscriber
     that joins or leaves, so the publisher rereads the slots only then), ``back_event`` (the
     publisher's event id on its process' back channel), ``publisher_pid`` (so a subscriber
-    that misses messages can tell a publishing process that ended from a lost connection);
+    that misses messages can tell a publishing process that ended from a lost connection, and
+    whether an ``automatic`` publisher is alive), ``asserted_ns`` (CLOCK_MONOTONIC of the
+    publisher's last liveliness assertion, for ``manual_by_topic``);
     then per subscriber slot: taken, pid,
     wake channel key, event id. Each word has one writer: the publishing process writes the
     head (but ``version``), a subscriber writes its own slot and bumps ``version``.
     """
 
-    HEAD = 5
+    HEAD = 6
     SLOT_WORDS = _SLOT_WORDS
     SIZE = 8 * (HEAD + _SLOT_WORDS * MAX_SUBSCRIBER_SLOTS)
 
@@ -98,6 +100,14 @@ class Credits:
     @publisher_pid.setter
     def publisher_pid(self, pid: int) -> None:
         self.words[4] = pid
+
+    @property
+    def asserted_ns(self) -> int:
+        return int(self.words[5])
+
+    @asserted_ns.setter
+    def asserted_ns(self, when: int) -> None:
+        self.words[5] = when
 
     def slot(self, index: int) -> tuple[int, int]:
         taken, pid, _key, _event = self.slots[index]

@@ -18,6 +18,7 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <time.h>
 #include <structmember.h>
 
 typedef struct {
@@ -407,9 +408,13 @@ static PyObject *stamp_and_send(PyObject *service, PyObject *sample, char *slot,
     if (get_u64(service, str_next_seq, &seq) < 0)
         return NULL;
     uint32_t words[2] = {(uint32_t)publisher_slot, layout};
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now); /* when it was sent: a subscriber's lifespan is checked against it */
+    uint64_t sent_ns = (uint64_t)now.tv_sec * 1000000000u + (uint64_t)now.tv_nsec;
     memcpy(slot, &seq, 8);
     memcpy(slot + 8, words, 8);
-    memset(slot + 16, 0, (size_t)(header_size - 16));
+    memcpy(slot + 16, &sent_ns, 8);
+    memset(slot + 24, 0, (size_t)(header_size - 24));
     PyObject *initialized = PyObject_Vectorcall(assume_init_function, &sample, 1, NULL);
     if (initialized == NULL)
         return NULL;

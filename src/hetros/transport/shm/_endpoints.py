@@ -256,6 +256,10 @@ class ShmWriter(Writer):
             ) from None
         self._service.send(loan.sample, loan.memory, LAYOUT_SPLIT, self._slot)
 
+    def assert_liveliness(self) -> None:
+        self._service.publisher()  # a publisher that never sent is known (its pid) from now on
+        self._service.credits.asserted_ns = time.monotonic_ns()
+
     def close(self) -> None:
         return None
 
@@ -307,7 +311,11 @@ class ShmReader(Reader):
             subscriber, start = service.subscriber(slot, channel, self.event)
             self._ports.append(_Port(service, subscriber, start))
         self._only_port = self._ports[0] if len(self._ports) == 1 else None
-        if take_cdr is not None and self._decode_body is not None:
+        # a lifespan is checked by the reference path (the compiled take does not read the send time)
+        lifespan = services[0].qos.lifespan if services else None
+        self._lifespan_ns = None if lifespan is None else int(lifespan * 1e9)
+        self.expired = 0  # messages dropped unread for being older than the lifespan
+        if take_cdr is not None and self._decode_body is not None and self._lifespan_ns is None:
             self._take_from = self._take_compiled  # type: ignore[method-assign]
             if self._only_port is not None:  # one publishing target, the common case: one call per message
                 self.try_take = self._try_take_only_port  # type: ignore[method-assign]
@@ -430,7 +438,7 @@ class ShmReader(Reader):
         if size < HEADER.size:
             return self._skip_damaged(port, f"a {size}-byte sample is shorter than hetros' {HEADER.size}-byte "
                                             "header")
-        seq, _publisher_slot, layout = HEADER.unpack_from(memory, 0)
+        seq, _publisher_slot, layout, sent_ns = HEADER.unpack_from(memory, 0)
         if service.blocking and seq > port.expected:
             # sends are serialised and the credits say "published" right after each: a sequence
             # number beyond published+1 was not written by the publisher
@@ -453,6 +461,9 @@ class ShmReader(Reader):
         if credits.set_taken(self._slot, seq) and service.blocking and \
                 credits.published - seq <= service.qos.depth // 2:
             self._domain.notify_back(service.target, credits.back_event)
+        if self._lifespan_ns is not None and time.monotonic_ns() - sent_ns > self._lifespan_ns:
+            self.expired += 1  # older than the topic's lifespan: taken (its credit given back), not delivered
+            return self._take_from(port)
         if len(self._borrowed) >= BORROW_LIMIT - 2:
             memory = memoryview(bytes(memory))
         try:
@@ -571,6 +582,25 @@ class ShmReader(Reader):
             dtype = field.dtype
             set_path(message, field.path, np.frombuffer(memory, dtype, nbytes // dtype.itemsize, offset))
         return message
+
+    def liveliness(self) -> tuple[int, int]:
+        """A publishing process is alive while it runs (``automatic``) and, for
+        ``manual_by_topic``, while it asserted within ``lease_duration``; one that never
+        published is not counted."""
+        alive = gone = 0
+        now = time.monotonic_ns()
+        for port in self._ports:
+            credits, qos = port.service.credits, port.service.qos
+            pid = credits.publisher_pid
+            if not pid:
+                continue
+            ok = pid_alive(pid)
+            if ok and qos.liveliness == "manual_by_topic" and qos.lease_duration is not None:
+                ok = now - credits.asserted_ns <= qos.lease_duration * 1e9
+            elif ok and qos.lease_duration is None and qos.liveliness == "manual_by_topic":
+                ok = credits.asserted_ns != 0
+            alive, gone = alive + ok, gone + (not ok)
+        return alive, gone
 
     def close(self) -> None:
         if self._closed:

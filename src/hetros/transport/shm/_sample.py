@@ -23,9 +23,11 @@ if not _compiled_wanted():
     _Memory = None
 
 SHM_DIR = Path("/dev/shm")
-# Every sample: sequence number, publisher slot, layout, padding; then the message. With the
-# CDR layout the 4-byte encapsulation sits at 28..32 so the CDR body starts 8-byte aligned.
-HEADER = struct.Struct("<QII12x")
+# Every sample: sequence number, publisher slot, layout, when it was sent (CLOCK_MONOTONIC ns,
+# one clock for every process of the machine: a lifespan is checked against it), padding; then
+# the message. With the CDR layout the 4-byte encapsulation sits at 28..32 so the CDR body
+# starts 8-byte aligned.
+HEADER = struct.Struct("<QIIQ4x")
 CDR_BODY_AT = HEADER.size + len(CDR_LE)
 LAYOUT_CDR = 0
 LAYOUT_SPLIT = 1

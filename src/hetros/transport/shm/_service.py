@@ -267,7 +267,7 @@ class Service:
                     self.wait_for_space(time.monotonic() + self.qos.publish_timeout)
                 self.room -= 1
             seq = self.next_seq
-            HEADER.pack_into(memory, 0, seq, publisher_slot, layout)
+            HEADER.pack_into(memory, 0, seq, publisher_slot, layout, time.monotonic_ns())
             try:
                 assume_init(sample).send()
             except iox2.SendError as exc:

@@ -122,3 +122,21 @@ def test_a_ros1_target_without_a_master_says_what_to_start_and_duration_holds(tm
     assert "start `hetros master` or roscore" in proc.stderr, proc.stderr[-3000:]
     assert "did not stop within" not in proc.stderr, proc.stderr[-3000:]
     assert proc.returncode == 1, proc.stderr[-3000:]
+
+
+def _address_space_200_mb() -> None:
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (200 << 20, 200 << 20))
+
+
+@pytest.mark.timeout(60)
+def test_a_launch_out_of_memory_ends_with_an_error_not_a_traceback(tmp_path: Path) -> None:
+    """Under a 200 MB address-space limit the launcher cannot start its threads: it says so
+    and what to raise (it used to end in an unhandled "can't start new thread" traceback)."""
+    proc = subprocess.run([sys.executable, "-m", "hetros", "launch", str(EXAMPLES / "talker_listener/project.yaml"),
+                           "--duration", "3"], capture_output=True, text=True, timeout=50,
+                          preexec_fn=_address_space_200_mb)
+    assert proc.returncode == 1, proc.stderr[-3000:]
+    assert "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    assert "ran out of resources" in proc.stderr, proc.stderr[-3000:]

@@ -129,7 +129,7 @@ def test_over_dds_lifespan_is_enforced_and_liveliness_is_cyclones() -> None:
         assert taken == [2], taken
         time.sleep(0.5)
         assert reader.liveliness() == (0, 1)
-        writer.write(Int32(data=3))  # a publish asserts liveliness (a bare assertion: see docs/QOS.md)
+        writer.write(Int32(data=3))  # a publish asserts liveliness (a bare assertion: see the README, QoS)
         time.sleep(0.1)
         assert reader.liveliness() == (1, 0)
     finally:

@@ -116,6 +116,12 @@ class Launcher:
             result = self._supervise()
         except KeyboardInterrupt:
             pass
+        except (RuntimeError, MemoryError, OSError) as exc:  # no thread, process or memory to be had
+            cause = f"{type(exc).__name__}: {exc}"
+            sys.stderr.write(f"[ERROR] [launch]: the launch ran out of resources ({cause}): the machine or its "
+                             "limits (ulimit -v / -u, a cgroup's memory.max) leave no room for the graph's "
+                             "threads and processes; raise them or spread the nodes over fewer processes\n")
+            result = LaunchResult(1, [], f"out of resources ({cause})")
         finally:
             if self.link is not None:
                 self.link.announce("leaving", ok=result.exit_code == 0, why=result.reason)

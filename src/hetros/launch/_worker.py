@@ -39,7 +39,12 @@ def main(argv: list[str] | None = None) -> int:
             except (BrokenPipeError, ValueError):
                 pass  # the launcher is gone; what matters now is stopping cleanly
 
-    plan = Plan.from_json(Path(args.plan).read_text(encoding="utf-8"))
+    try:
+        plan = Plan.from_json(Path(args.plan).read_text(encoding="utf-8"))
+    except OSError as exc:  # the launcher is gone and took its plan file along
+        sys.stderr.write(f"[ERROR] [{args.target}]: cannot read the launch's plan ({exc}); the launcher ended "
+                         "before this target started\n")
+        return 2
     cpus = plan.targets[args.target].cpus
     if cpus:
         os.sched_setaffinity(0, cpus)

@@ -19,6 +19,7 @@ from ._events import (
     WakeChannel,
     back_channel_name,
     event_service,
+    fd_hint,
     raise_open_file_limit,
     wake_channel_name,
 )
@@ -52,12 +53,15 @@ class ShmDomain:
         self.session = session
         self.process_name = process_name
         self._lock = threading.Lock()
-        self._node = (
-            iox2.NodeBuilder.new()
-            .name(iox2.NodeName.new(f"hetros-{session}-{process_name}"[:120]))
-            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
-            .create(iox2.ServiceType.Ipc)
-        )
+        try:
+            self._node = (
+                iox2.NodeBuilder.new()
+                .name(iox2.NodeName.new(f"hetros-{session}-{process_name}"[:120]))
+                .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
+                .create(iox2.ServiceType.Ipc)
+            )
+        except Exception as exc:  # iceoryx2 raises its own exception classes
+            raise TransportError(node_failure(exc)) from exc
         self._services: dict[str, Service] = {}
         self._readers: list[ShmReader] = []
         self._channels: dict[str, WakeChannel] = {}
@@ -182,6 +186,17 @@ class ShmDomain:
         self._back_notifiers.clear()
         # iceoryx2 removes a node's shared memory when its last handle is dropped
         self._node = None
+
+
+def node_failure(exc: Exception) -> str:
+    """What to do when this process cannot join iceoryx2 (its node)."""
+    text = f"{type(exc).__name__}: {exc}"
+    if "UniqueNodeId" in text:
+        counters = ", ".join(str(p) for p in SHM_DIR.glob("iox2_*global_mgmt")) or "/dev/shm/iox2_*global_mgmt"
+        return (f"iceoryx2 could not give this process a node id ({text}): its machine-wide node counter "
+                f"({counters}) is damaged, most likely written by another process; stop every hetros and "
+                "iceoryx2 process, then remove that file (its owner or root can); the next launch makes a new one")
+    return f"this process could not join iceoryx2's shared memory ({text}); {fd_hint()}"
 
 
 def remove_session_segments(session: str) -> list[str]:

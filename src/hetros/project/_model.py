@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, Literal
 
@@ -206,6 +207,12 @@ def parse_size(value: int | str) -> int:
     return int(number) * _UNITS[unit]
 
 
+def _plain_names(what: str, names: Iterable[str]) -> None:
+    for name in names:
+        if problem := plain_name_problem(what, name):
+            raise ValueError(problem)
+
+
 class Project(_Strict):
     name: str
     messages: list[str] = Field(default_factory=list)
@@ -234,8 +241,7 @@ class Project(_Strict):
     @field_validator("name")
     @classmethod
     def _name(cls, value: str) -> str:
-        if problem := plain_name_problem("a project", value):
-            raise ValueError(problem)
+        _plain_names("a project", [value])
         return value
 
     @field_validator("targets")
@@ -243,17 +249,13 @@ class Project(_Strict):
     def _targets(cls, value: dict[str, TargetSpec]) -> dict[str, TargetSpec]:
         if LAUNCHER in value:
             raise ValueError(f"{LAUNCHER!r} is reserved for the launching process; pick another name")
-        for target in value:
-            if problem := plain_name_problem("a target", target):
-                raise ValueError(problem)
+        _plain_names("a target", value)
         return value
 
     @field_validator("hosts")
     @classmethod
     def _hosts(cls, value: dict[str, HostSpec]) -> dict[str, HostSpec]:
-        for host in value:
-            if problem := plain_name_problem("a host", host):
-                raise ValueError(problem)
+        _plain_names("a host", value)
         return value
 
 

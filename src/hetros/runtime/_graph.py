@@ -152,11 +152,6 @@ class _FanoutWriter(Writer):
             part.close()
 
 
-def _liveliness_of(parts: list[Reader]) -> tuple[int, int] | None:
-    counts = [c for c in (part.liveliness() for part in parts) if c is not None]
-    return (sum(c[0] for c in counts), sum(c[1] for c in counts)) if counts else None
-
-
 class _MergedReader(Reader):
     def __init__(self, parts: list[Reader]) -> None:
         self._parts = parts
@@ -172,7 +167,8 @@ class _MergedReader(Reader):
         return any(part.pending() for part in self._parts)
 
     def liveliness(self) -> tuple[int, int] | None:
-        return _liveliness_of(self._parts)
+        counts = [c for c in (part.liveliness() for part in self._parts) if c is not None]
+        return (sum(c[0] for c in counts), sum(c[1] for c in counts)) if counts else None
 
     def close(self) -> None:
         for part in self._parts:

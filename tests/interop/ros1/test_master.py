@@ -6,6 +6,8 @@ import subprocess
 import sys
 import time
 import xmlrpc.client
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -15,14 +17,23 @@ from tests.support.ros1 import LISTENER, ROS_PYTHON, TALKER, needs_ros1, run_ros
 pytestmark = needs_ros1
 
 
-def test_rospy_nodes_and_ros_tools_work_against_hetros_master(master: tuple[str, dict[str, str]],
-                                                              tmp_path: Path) -> None:
-    uri, env = master
+@contextmanager
+def _talking(env: dict[str, str], tmp_path: Path) -> Iterator[None]:
+    """A stock rospy talker on /chatter while the block runs; listener.py beside it."""
     (tmp_path / "talker.py").write_text(TALKER)
     (tmp_path / "listener.py").write_text(LISTENER)
     talker = subprocess.Popen([ROS_PYTHON, str(tmp_path / "talker.py")], env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
+        yield
+    finally:
+        stop(talker)
+
+
+def test_rospy_nodes_and_ros_tools_work_against_hetros_master(master: tuple[str, dict[str, str]],
+                                                              tmp_path: Path) -> None:
+    uri, env = master
+    with _talking(env, tmp_path):
         listened = run_ros(env, ROS_PYTHON, str(tmp_path / "listener.py"))
         assert listened.startswith("got 5 hello "), listened
         assert "/chatter" in run_ros(env, "rostopic", "list").split()
@@ -39,19 +50,13 @@ def test_rospy_nodes_and_ros_tools_work_against_hetros_master(master: tuple[str,
         state = xmlrpc.client.ServerProxy(uri).getSystemState("/test")
         assert state[0] == 1
         assert ["/chatter", ["/talker"]] in state[2][0]
-    finally:
-        stop(talker)
 
 
 def test_a_rospy_node_that_exits_disappears_from_the_graph(master: tuple[str, dict[str, str]],
                                                           tmp_path: Path) -> None:
     """rospy unregisters at shutdown with one ``system.multicall``; stock roscore serves it."""
     uri, env = master
-    (tmp_path / "talker.py").write_text(TALKER)
-    (tmp_path / "listener.py").write_text(LISTENER)
-    talker = subprocess.Popen([ROS_PYTHON, str(tmp_path / "talker.py")], env=env,
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    try:
+    with _talking(env, tmp_path):
         assert run_ros(env, ROS_PYTHON, str(tmp_path / "listener.py")).startswith("got 5 hello ")
         deadline = time.monotonic() + 10
         while "/listener" in run_ros(env, "rosnode", "list").split():
@@ -64,8 +69,6 @@ def test_a_rospy_node_that_exits_disappears_from_the_graph(master: tuple[str, di
         calls.lookupNode("/t", "/nobody")
         first, second = calls().results  # type: ignore[attr-defined]
         assert first[0][0] == 1 and second[0][0] == -1
-    finally:
-        stop(talker)
 
 
 def test_a_node_registered_again_under_its_name_shuts_the_old_one_down(master: tuple[str, dict[str, str]],

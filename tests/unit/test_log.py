@@ -37,3 +37,13 @@ def test_hetros_loggers_carry_the_limit_and_node_loggers_do_not(caplog: pytest.L
     lines = caplog.text.splitlines()
     assert sum("refused request" in line for line in lines) == BURST
     assert sum("hello" in line for line in lines) == BURST * 3
+
+
+def test_a_damaged_iceoryx2_node_counter_is_named_with_the_fix() -> None:
+    """The counter is machine-wide, so the suite does not damage the real one: the message the
+    shm domain raises when iceoryx2 refuses a node id is checked on iceoryx2's error text."""
+    from hetros.transport.shm._domain import node_failure
+
+    text = node_failure(Exception("NodeCreationFailure::UnableToGenerateUniqueNodeId"))
+    assert "node counter" in text and "global_mgmt" in text and "remove that file" in text
+    assert "files open" in node_failure(Exception("InsufficientPermissions"))

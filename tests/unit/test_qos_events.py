@@ -135,3 +135,34 @@ def test_over_dds_lifespan_is_enforced_and_liveliness_is_cyclones() -> None:
     finally:
         reader.close()
         domain.close()
+
+
+def test_a_malformed_sample_on_a_hosts_edge_is_dropped_counted_and_logged(caplog: pytest.LogCaptureFixture) -> None:
+    """Another participant writes bytes that are not hetros's framing on an edge topic: the
+    subscribing node used to get a SerializationError (and die); the sample is dropped."""
+    from cyclonedds.pub import DataWriter
+
+    from hetros.transport.dds._domain import dds_qos
+    from hetros.transport.dds._edges import _SAMPLE
+
+    domain = DdsDomain(free_domain())
+    codec = MessageCodec(registry(), "std_msgs/msg/Int32")
+    qos = QoS(depth=8)
+    reader = DdsEdgeReader(domain, ["hetros/m/a/q"], codec, qos, lambda: None)
+    writer = DdsEdgeWriter(domain, "hetros/m/a/q", codec, qos)
+    rogue = DataWriter(domain.participant, domain.topic("hetros/m/a/q", _SAMPLE), qos=dds_qos(qos))
+    try:
+        deadline = time.monotonic() + 5
+        while (writer.matched() == 0 or len(rogue.get_matched_subscriptions()) == 0) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        for junk in (b"", b"\x00\x01\x00\x00", b"\x00\x01\x00\x00\x01\x02"):  # no body, short bodies
+            rogue.write(_SAMPLE(data=list(junk)))
+        writer.write(Int32(data=7))
+        time.sleep(0.2)
+        reader._arrived()
+        assert reader.try_take().data == 7
+        assert reader.dropped == 3
+        assert "dropped a malformed sample from another host" in caplog.text
+    finally:
+        reader.close()
+        domain.close()

@@ -415,3 +415,21 @@ def test_a_size_forged_in_shared_memory_is_dropped_not_a_crash(pure: str, size: 
         assert outcome == {"first": None, "sum": None, "after": 2, "dropped": 1}, (outcome, done.stderr[-2000:])
     else:
         assert outcome["after"] == 2, outcome
+
+
+def test_a_slot_that_cannot_be_had_says_why(pair: Any) -> None:
+    """Too many loans held, and a slot shared memory cannot hold, are two causes with two
+    fixes (out of memory used to be blamed on 'unpublished loans')."""
+    from hetros import TransportError
+    from hetros.transport.shm._sample import MAX_LOANS
+
+    writer, _reader = pair
+    service = writer._service
+    held = [service.loan(100) for _ in range(MAX_LOANS)]
+    with pytest.raises(TransportError, match="unpublished loans"):
+        service.loan(100)
+    held.clear()
+    with pytest.raises(TransportError, match="most likely full"):
+        service.loan(1 << 44)
+    assert not [name for name in os.listdir("/dev/shm") if name.startswith("iox2_") and
+                os.stat(f"/dev/shm/{name}").st_size >= 1 << 40], "a failed segment growth left a file"

@@ -240,10 +240,16 @@ class Service:
             raise self._no_slot(size, exc) from exc
 
     def _no_slot(self, size: int, exc: Exception) -> TransportError:
+        if "MaxLoans" in str(exc):  # iceoryx2's ExceedsMaxLoans: the loans are the cause
+            return TransportError(
+                f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "
+                f"at most {MAX_LOANS} unpublished loans at once; publish the loaned messages you hold, or "
+                "drop them (a dropped loan returns its slot when the message is garbage-collected)"
+            )
         return TransportError(
-            f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): a publisher holds "
-            f"at most {MAX_LOANS} unpublished loans at once; publish the loaned messages you hold, or "
-            "drop them (a dropped loan returns its slot when the message is garbage-collected)"
+            f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): iceoryx2 could not make "
+            "room for it; shared memory (/dev/shm, or the memory limit of this process or its cgroup) is most "
+            "likely full: free some, raise the limit, or send smaller messages"
         )
 
     def _not_sent(self, exc: Exception) -> TransportError:

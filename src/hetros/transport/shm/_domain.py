@@ -27,6 +27,7 @@ from ._iceoryx import iox2
 from ._sample import (
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
+    remove_unfinished_segments,
     segment_prefix,
 )
 from ._service import Service
@@ -216,8 +217,9 @@ def _unlink(path: Path, removed: list[str]) -> None:
 
 
 def cleanup_stale() -> list[str]:
-    """Remove what crashed launches left: dead iceoryx2 nodes and orphaned credits files."""
-    removed: list[str] = []
+    """Remove what crashed launches left: dead iceoryx2 nodes, orphaned credits files and
+    segments a failure left unfinished."""
+    removed: list[str] = remove_unfinished_segments()
     try:
         states = iox2.Node.list(iox2.ServiceType.Ipc, iox2.config.global_config())
     except Exception:

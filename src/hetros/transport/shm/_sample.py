@@ -6,7 +6,9 @@ import ctypes
 import os
 import re
 import secrets
+import stat
 import struct
+import time
 from pathlib import Path
 from typing import Any
 
@@ -135,6 +137,33 @@ class _Leased:
 
     def __del__(self) -> None:
         self.borrowed.pop()
+
+
+# iceoryx2 creates a segment with mode 0200 and opens it up once it is complete: one still so
+# after this long, or larger than the machine's memory could ever hold, was left by a failure
+_UNFINISHED_AGE = 30.0
+
+
+def remove_unfinished_segments(larger_than: int | None = None) -> list[str]:
+    """Remove iceoryx2 data segments that were never finished (mode 0200) and never will be:
+    older than ``_UNFINISHED_AGE`` s, or, right after a failed growth, larger than ``larger_than``
+    bytes (a 3.79 GB sparse file was left behind when memory ran out, and never removed)."""
+    removed: list[str] = []
+    now = time.time()
+    for path in SHM_DIR.glob("iox2_*.data"):
+        try:
+            info = path.stat()
+        except OSError:
+            continue
+        if info.st_uid != os.getuid() or stat.S_IMODE(info.st_mode) != 0o200:
+            continue
+        if now - info.st_mtime > _UNFINISHED_AGE or (larger_than is not None and info.st_size > larger_than):
+            try:
+                path.unlink()
+                removed.append(path.name)
+            except FileNotFoundError:
+                pass
+    return removed
 
 
 class MappedSegments:

@@ -31,6 +31,7 @@ from ._sample import (
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
     ScratchViews,
+    remove_unfinished_segments,
     segment_prefix,
     slot_memory,
 )
@@ -246,6 +247,8 @@ class Service:
                 f"at most {MAX_LOANS} unpublished loans at once; publish the loaned messages you hold, or "
                 "drop them (a dropped loan returns its slot when the message is garbage-collected)"
             )
+        # a growth that failed leaves its unfinished segment behind (sparse, the size asked for)
+        remove_unfinished_segments(larger_than=size)
         return TransportError(
             f"cannot take a shared-memory slot of {size} bytes on {self.topic} ({exc}): iceoryx2 could not make "
             "room for it; shared memory (/dev/shm, or the memory limit of this process or its cgroup) is most "

@@ -43,7 +43,8 @@ def main() -> None:
             samples.append(rss())
             matched = [max(m, r.matched()) for m, r in zip(matched, readers, strict=True)]
             time.sleep(1.0)
-        out.write_text(json.dumps({"rss": samples, "matched": matched}))
+        cpu = os.times()
+        out.write_text(json.dumps({"rss": samples, "matched": matched, "cpu": cpu.user + cpu.system}))
         return
     writers = {name: DdsEdgeWriter(domain, f"bounded/{name}", codec, qos) for name, qos in QOS.items()}
     deadline = time.monotonic() + 10

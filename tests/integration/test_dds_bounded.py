@@ -41,6 +41,8 @@ def test_a_subscriber_that_never_takes_holds_its_memory_flat_while_the_publisher
     assert sent["sent_all"] <= 12, sent
     assert sent["timeouts_all"] >= SECONDS / 1.0 / 2, sent
     assert sent["first_timeout_at"] is not None and sent["first_timeout_at"] < 5, sent
+    # the waiting thread sleeps while samples wait in the full reader (it spun a CPU before)
+    assert seen["cpu"] < 0.35 * SECONDS, f"the reader used {seen['cpu']:.1f} s of CPU in {SECONDS:g} s"
     rss = seen["rss"]
     settled = rss[10:]  # after start-up and the first samples
     assert max(settled) - min(settled) < 64 * 1024 * 1024, f"reader RSS moved: {[r >> 20 for r in rss]} MiB"

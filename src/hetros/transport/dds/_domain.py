@@ -152,13 +152,14 @@ class DdsDomain:
         self.local_writers: set[int] = set()
         self._waiter: Waiter | None = None
 
-    def watch(self, reader: Any, handler: Callable[[], None]) -> None:
-        """Run ``handler`` (on this participant's waiting thread) whenever ``reader`` has data."""
+    def watch(self, reader: Any, handler: Callable[[], None], unread_only: bool = False) -> None:
+        """Run ``handler`` (on this participant's waiting thread) whenever ``reader`` has data
+        (``unread_only``: samples not read yet; see ``Waiter.watch``)."""
         with self._lock:
             if self._waiter is None:
                 self._waiter = Waiter(self.participant, str(self.domain_id))
             waiter = self._waiter
-        waiter.watch(reader, handler)
+        waiter.watch(reader, handler, unread_only)
 
     def topic(self, name: str, data_type: Any) -> Topic[Any]:
         with self._lock:

@@ -23,8 +23,8 @@ import time
 from collections import deque
 from typing import Any
 
-from cyclonedds._clayer import ddspy_take
-from cyclonedds.core import Policy, Qos
+from cyclonedds._clayer import ddspy_read, ddspy_take
+from cyclonedds.core import InstanceState, Policy, Qos, SampleState, ViewState
 from cyclonedds.idl import make_idl_struct
 from cyclonedds.idl import types as idl
 from cyclonedds.internal import load_cyclonedds
@@ -46,6 +46,7 @@ _LENGTH = struct.Struct("<I")
 _assert_liveliness = load_cyclonedds().dds_assert_liveliness
 _HEAD = 8  # encapsulation, then the sequence's length
 ACK_SLICE_NS = 20_000_000
+UNREAD_STATE = SampleState.NotRead | ViewState.Any | InstanceState.Any
 
 
 def edge_topic(project: str, host: str, channel: str) -> str:
@@ -137,7 +138,7 @@ class DdsEdgeReader(Reader):
         self.readers = [DataReader(domain.participant, domain.topic(topic, _SAMPLE), qos=_edge_qos(qos, writer=False))
                         for topic in topics]
         for reader in self.readers:
-            domain.watch(reader, self._arrived)
+            domain.watch(reader, self._arrived, unread_only=True)
 
     def _fill(self) -> bool:
         """Move samples from the DDS readers into the queue while it has room; whether any came."""
@@ -157,6 +158,12 @@ class DdsEdgeReader(Reader):
     def _arrived(self) -> None:
         if self._fill():
             self._wake()
+        if self._blocks:
+            # what did not fit stays in the DDS reader: marked read, it wakes the waiting thread no
+            # more (it spun a CPU while a subscriber did not take); the node's takes pull it in
+            with self._lock:
+                for reader in self.readers:
+                    ddspy_read(reader._ref, UNREAD_STATE, 1 << 16)
 
     def try_take(self) -> Any | None:
         while True:

@@ -23,6 +23,7 @@ from ..._log import get_logger
 log = get_logger("hetros.dds")
 
 _ANY = SampleState.Any | ViewState.Any | InstanceState.Any
+_UNREAD = SampleState.NotRead | ViewState.Any | InstanceState.Any
 
 
 class Waiter:
@@ -34,10 +35,12 @@ class Waiter:
         self._thread = threading.Thread(target=self._run, name=f"dds-wait:{name}", daemon=True)
         self._thread.start()
 
-    def watch(self, reader: Any, handler: Callable[[], None]) -> None:
-        """Run ``handler`` (which must take everything waiting) whenever ``reader`` has data. A bound
-        method is held weakly: an endpoint nobody holds stops being watched and is deleted."""
-        condition = ReadCondition(reader, _ANY)
+    def watch(self, reader: Any, handler: Callable[[], None], unread_only: bool = False) -> None:
+        """Run ``handler`` (which must take everything waiting) whenever ``reader`` has data, or with
+        ``unread_only`` whenever it has samples not read yet (a handler that leaves samples in the
+        reader marks them read, so they do not wake this thread again). A bound method is held
+        weakly: an endpoint nobody holds stops being watched and is deleted."""
+        condition = ReadCondition(reader, _UNREAD if unread_only else _ANY)
         strong: Callable[[], Callable[[], None] | None]
         if hasattr(handler, "__self__"):
             strong = weakref.WeakMethod(handler)

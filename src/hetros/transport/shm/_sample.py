@@ -8,6 +8,7 @@ import re
 import secrets
 import stat
 import struct
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -179,15 +180,23 @@ class MappedSegments:
     def __init__(self) -> None:
         self.ranges: list[tuple[int, int]] = []
         self._last = (0, 0)  # the range the previous sample was in: most samples are in it too
+        # opened once, while descriptors are plenty, and reread from the start: a check must not
+        # need a descriptor when a process has run out of them
+        self._maps = os.open("/proc/self/maps", os.O_RDONLY | os.O_CLOEXEC)
+        self._lock = threading.Lock()
 
     def refresh(self) -> list[tuple[int, int]]:
+        chunks = []
+        with self._lock:
+            os.lseek(self._maps, 0, os.SEEK_SET)
+            while chunk := os.read(self._maps, 1 << 16):
+                chunks.append(chunk)
         ranges = []
-        with open("/proc/self/maps", encoding="ascii", errors="replace") as maps:
-            for line in maps:
-                parts = line.split(maxsplit=5)
-                if len(parts) == 6 and parts[5].startswith("/dev/shm/iox2_"):
-                    low, high = parts[0].split("-")
-                    ranges.append((int(low, 16), int(high, 16)))
+        for line in b"".join(chunks).decode("ascii", "replace").splitlines():
+            parts = line.split(maxsplit=5)
+            if len(parts) == 6 and parts[5].startswith("/dev/shm/iox2_"):
+                low, high = parts[0].split("-")
+                ranges.append((int(low, 16), int(high, 16)))
         self.ranges = ranges
         return ranges
 

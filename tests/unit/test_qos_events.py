@@ -57,7 +57,7 @@ def _open(session: str, qos: QoS, mapping: str) -> Iterator[tuple[Node, Node]]:
 
 
 def test_a_missed_deadline_reaches_both_ends_on_every_mapping(shm_session: str, mapping: str) -> None:
-    with _open(shm_session, QoS(deadline=0.05), mapping) as (pub_node, sub_node):
+    with _open(shm_session, QoS(deadline=0.25), mapping) as (pub_node, sub_node):
         sub_misses: list[DeadlineMissedStatus] = []
         pub_misses: list[DeadlineMissedStatus] = []
         got: list[int] = []
@@ -71,38 +71,38 @@ def test_a_missed_deadline_reaches_both_ends_on_every_mapping(shm_session: str, 
             if pub_node is not sub_node:
                 pub_node.spin_once(timeout=0)
         assert got == list(range(10)) and not sub_misses and not pub_misses
-        _spin_for(sub_node, 0.3)  # silence: about six periods
+        _spin_for(sub_node, 1.3)  # silence: about five periods
         if pub_node is not sub_node:
             _spin_for(pub_node, 0.05)
-        assert sub_misses and 4 <= sub_misses[-1].total_count <= 8, sub_misses
-        assert pub_misses and pub_misses[-1].total_count >= 4, pub_misses
+        assert sub_misses and 3 <= sub_misses[-1].total_count <= 7, sub_misses
+        assert pub_misses and pub_misses[-1].total_count >= 3, pub_misses
 
 
 def test_a_message_older_than_its_lifespan_is_not_delivered(shm_session: str, mapping: str) -> None:
-    with _open(shm_session, QoS(lifespan=0.1, depth=8), mapping) as (pub_node, sub_node):
+    with _open(shm_session, QoS(lifespan=0.5, depth=8), mapping) as (pub_node, sub_node):
         sub = sub_node.create_subscription(Int32, "/q")
         pub = pub_node.create_publisher(Int32, "/q")
         pub.publish(Int32(data=1))
-        time.sleep(0.2)
+        time.sleep(0.8)
         pub.publish(Int32(data=2))
         assert sub.take(timeout=2).data == 2, "the expired message was delivered"
         assert sub.try_take() is None
 
 
 def test_liveliness_manual_by_topic_is_lost_past_the_lease_and_regained(shm_session: str, mapping: str) -> None:
-    qos = QoS(liveliness="manual_by_topic", lease_duration=0.2)
+    qos = QoS(liveliness="manual_by_topic", lease_duration=0.5)
     with _open(shm_session, qos, mapping) as (pub_node, sub_node):
         changes: list[tuple[int, int]] = []
         sub_node.create_subscription(Int32, "/q", lambda m: None, on_liveliness_changed=lambda s: changes.append(
             (s.alive_count, s.not_alive_count)))
         pub = pub_node.create_publisher(Int32, "/q")
         pub.publish(Int32(data=1))
-        _spin_for(sub_node, 0.15)
+        _spin_for(sub_node, 0.3)
         assert changes[-1] == (1, 0), changes
-        _spin_for(sub_node, 0.5)  # no assertion for more than the lease
+        _spin_for(sub_node, 1.2)  # no assertion for more than the lease
         assert changes[-1] == (0, 1), changes
         pub.assert_liveliness()
-        _spin_for(sub_node, 0.15)
+        _spin_for(sub_node, 0.3)
         assert changes[-1] == (1, 0), changes
         assert isinstance(LivelinessChangedStatus(), LivelinessChangedStatus)
 
@@ -110,7 +110,7 @@ def test_liveliness_manual_by_topic_is_lost_past_the_lease_and_regained(shm_sess
 def test_over_dds_lifespan_is_enforced_and_liveliness_is_cyclones() -> None:
     domain = DdsDomain(free_domain())
     codec = MessageCodec(registry(), "std_msgs/msg/Int32")
-    qos = QoS(depth=8, lifespan=0.2, liveliness="manual_by_topic", lease_duration=0.3)
+    qos = QoS(depth=8, lifespan=0.5, liveliness="manual_by_topic", lease_duration=0.3)
     reader = DdsEdgeReader(domain, ["hetros/q/a/q"], codec, qos, lambda: None)
     writer = DdsEdgeWriter(domain, "hetros/q/a/q", codec, qos)
     try:
@@ -120,7 +120,7 @@ def test_over_dds_lifespan_is_enforced_and_liveliness_is_cyclones() -> None:
         writer.write(Int32(data=1))
         time.sleep(0.05)
         assert reader.liveliness() == (1, 0)
-        time.sleep(0.35)  # older than the lifespan, silent past the lease
+        time.sleep(0.8)  # older than the lifespan, silent past the lease
         writer.write(Int32(data=2))
         time.sleep(0.05)
         taken = []

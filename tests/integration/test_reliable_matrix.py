@@ -212,3 +212,44 @@ def test_a_subscriber_that_never_takes_is_named_when_the_publisher_gives_up(tmp_
     assert "reliable topic /idle: subscriber 'lazy'" in proc.stderr, proc.stderr[-3000:]
     assert "5 message(s) of this process left to take" in proc.stderr, proc.stderr[-3000:]
     assert time.monotonic() - started < 15, "the publisher waited past its publish_timeout"
+
+
+FINISHED_NODES = '''
+from hetros import Node
+from hetros.interfaces.std_msgs.msg import Int32
+
+
+def publisher(node: Node) -> None:
+    pub = node.create_publisher(Int32, "/x")
+    for k in range(5):
+        pub.publish(Int32(data=k))
+
+
+def first_only(node: Node) -> None:
+    sub = node.create_subscription(Int32, "/x")
+    node.log.info("first only took %d", sub.take(timeout=20).data)
+
+
+def all_five(node: Node) -> None:
+    sub = node.create_subscription(Int32, "/x")
+    node.log.info("all five took %s", [sub.take(timeout=20).data for _ in range(5)])
+    node.sleep(8.0)
+'''
+
+
+def test_a_subscriber_node_that_finished_holds_no_publisher_back(tmp_path: Path) -> None:
+    """Two subscriber nodes in one process; one takes a message and returns, the other takes all
+    and lives on. The finished node's FIFO (kept for a restart) is let go, so the publishing
+    process, which returned at once, ends as soon as the live subscriber has everything."""
+    (tmp_path / "nodes.py").write_text(FINISHED_NODES)
+    (tmp_path / "project.yaml").write_text(
+        "name: finished\ntargets:\n  p1: {kind: process}\n  p2: {kind: process}\nnodes:\n"
+        "  pub: {run: nodes:publisher, target: p1, publish: {/x: std_msgs/msg/Int32}}\n"
+        "  one: {run: nodes:first_only, target: p2, subscribe: {/x: std_msgs/msg/Int32}}\n"
+        "  five: {run: nodes:all_five, target: p2, subscribe: {/x: std_msgs/msg/Int32}}\n"
+        "topics:\n  /x: {reliability: reliable, history: keep_all, depth: 8, publish_timeout: 2.0}\n")
+    proc = subprocess.run([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"),
+                           "--duration", "30"], capture_output=True, text=True, timeout=60)
+    assert "all five took [0, 1, 2, 3, 4]" in proc.stderr, proc.stderr[-3000:]
+    assert "first only took 0" in proc.stderr, proc.stderr[-3000:]
+    assert "[ERROR]" not in proc.stderr and proc.returncode == 0, proc.stderr[-3000:]

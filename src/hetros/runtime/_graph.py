@@ -291,6 +291,15 @@ class Graph:
             reader.inner.close()
         return release
 
+    def forget(self, node: str) -> None:
+        """``node`` finished and will not run again: close the readers kept for its restart, so
+        that its subscriber slots are left (publishers neither wait for room nor linger there)."""
+        with self._lock:
+            mine = [key for key in self._prepared if key[1] == node]
+            readers = [self._prepared.pop(key) for key in mine]
+        for reader in readers:
+            reader.inner.close()
+
     def wake_source(self, node: str) -> WaitSource | None:
         """What ``node``'s executor blocks on besides its condition: a ROS 1 node's TCPROS
         connections, or the shm wake channel if any of its readers is fed from another process."""

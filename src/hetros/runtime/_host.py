@@ -86,8 +86,10 @@ class NodeThread:
         root = plan.root if plan else ""
         while not self.graph.stop.is_set():
             node = Node(self.spec.name, self.graph)
+            finished = False
             try:
                 run_node_body(resolve(self.spec.run, root), node)
+                finished = True
                 if not self.graph.stop.is_set():
                     self.on_done(self.spec.name)
                 return
@@ -116,6 +118,8 @@ class NodeThread:
             finally:
                 node.report_times()
                 node.close()
+                if finished:  # done for good: its FIFOs, kept for a restart, hold back no publisher now
+                    self.graph.forget(self.spec.name)
 
 
 class Host:

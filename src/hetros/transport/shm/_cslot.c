@@ -119,19 +119,32 @@ static PyObject *str_publisher, *str_credits_at, *str_blocking, *str_room, *str_
 
 static const char CDR_LE[4] = {0, 1, 0, 0};
 
-/* The iceoryx2 data segments this process has mapped (MappedSegments in _sample.py): a
-   received sample's size comes from shared memory, so a sample is used only when it lies
-   inside one of them; the ranges are asked for again (``mapped_refresh``) when one does not. */
-#define MAX_MAPPED 256
-static uintptr_t mapped_low[MAX_MAPPED], mapped_high[MAX_MAPPED];
-static int mapped_count;
+/* The iceoryx2 data segments this process has mapped (MappedSegments in _sample.py), sorted by
+   address: a received sample's size comes from shared memory, so a sample is used only when it
+   lies inside one of them (found by binary search; a graph of 1,000 topics maps over 1,000);
+   the ranges are asked for again (``mapped_refresh``) when it does not. */
+static uintptr_t *mapped_low, *mapped_high;
+static Py_ssize_t mapped_count, mapped_capacity, mapped_last;
 static PyObject *mapped_refresh;
 
 static int in_mapped(uintptr_t address, unsigned long long size)
 {
-    for (int i = 0; i < mapped_count; i++)
-        if (address >= mapped_low[i] && size <= (unsigned long long)(mapped_high[i] - address))
-            return 1;
+    Py_ssize_t i = mapped_last;
+    if (i < mapped_count && address >= mapped_low[i] && size <= (unsigned long long)(mapped_high[i] - address))
+        return 1;
+    Py_ssize_t low = 0, high = mapped_count; /* the last range starting at or below address */
+    while (low < high) {
+        Py_ssize_t middle = low + (high - low) / 2;
+        if (mapped_low[middle] <= address)
+            low = middle + 1;
+        else
+            high = middle;
+    }
+    i = low - 1;
+    if (i >= 0 && size <= (unsigned long long)(mapped_high[i] - address)) {
+        mapped_last = i;
+        return 1;
+    }
     return 0;
 }
 
@@ -145,12 +158,27 @@ static int sample_mapped(uintptr_t address, unsigned long long size)
     PyObject *ranges = PyObject_CallNoArgs(mapped_refresh);
     if (ranges == NULL)
         return -1;
-    PyObject *fast = PySequence_Fast(ranges, "mapped_refresh() must return a list of (low, high)");
+    PyObject *fast = PySequence_Fast(ranges, "mapped_refresh() must return a sorted list of (low, high)");
     Py_DECREF(ranges);
     if (fast == NULL)
         return -1;
+    Py_ssize_t count = PySequence_Fast_GET_SIZE(fast);
+    if (count > mapped_capacity) {
+        uintptr_t *lows = PyMem_Realloc(mapped_low, (size_t)count * sizeof(uintptr_t));
+        if (lows != NULL)
+            mapped_low = lows;
+        uintptr_t *highs = lows == NULL ? NULL : PyMem_Realloc(mapped_high, (size_t)count * sizeof(uintptr_t));
+        if (highs == NULL) {
+            Py_DECREF(fast);
+            PyErr_NoMemory();
+            return -1;
+        }
+        mapped_high = highs;
+        mapped_capacity = count;
+    }
     mapped_count = 0;
-    for (Py_ssize_t i = 0; i < PySequence_Fast_GET_SIZE(fast) && mapped_count < MAX_MAPPED; i++) {
+    mapped_last = 0;
+    for (Py_ssize_t i = 0; i < count; i++) {
         unsigned long long low, high;
         if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(fast, i), "KK", &low, &high)) {
             Py_DECREF(fast);

@@ -143,14 +143,15 @@ class ShmDomain:
 
         iceoryx2 frees a publisher's samples with its process, so a process whose nodes have
         all returned must not end before its subscribers took what it sent, as a DDS reliable
-        writer lingers until acknowledged. A topic is given up once none of its subscribers
-        took anything for its ``publish_timeout``; what is left is returned. ``stop`` (the graph
-        shutting down) ends the wait at once.
+        writer lingers until acknowledged. It waits while subscribers take from any of its
+        topics (one working through a thousand topics reaches the last one late); a topic is
+        given up once nothing of this process was taken for that topic's ``publish_timeout``,
+        and what is left is returned. ``stop`` (the graph shutting down) ends the wait at once.
         """
         with self._lock:
             waiting = {service: service.behind() for service in self._services.values()}
         waiting = {service: behind for service, behind in waiting.items() if behind}
-        progress = {service: time.monotonic() for service in waiting}
+        progress = time.monotonic()
         left: list[Unacknowledged] = []
         while waiting and not stop.wait(LINGER_POLL):
             now = time.monotonic()
@@ -158,9 +159,11 @@ class ShmDomain:
                 behind = service.behind()
                 if not behind:
                     del waiting[service]
+                    progress = now
                 elif behind != before:
-                    waiting[service], progress[service] = behind, now
-                elif now - progress[service] > service.qos.publish_timeout:
+                    waiting[service], progress = behind, now
+            for service, behind in list(waiting.items()):
+                if now - progress > service.qos.publish_timeout:
                     del waiting[service]
                     left += [Unacknowledged(service.topic, slot, pid, count) for slot, pid, count in behind]
         return left

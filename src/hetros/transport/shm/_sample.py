@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import bisect
 import ctypes
 import os
 import re
@@ -179,6 +180,7 @@ class MappedSegments:
 
     def __init__(self) -> None:
         self.ranges: list[tuple[int, int]] = []
+        self._starts: list[int] = []
         self._last = (0, 0)  # the range the previous sample was in: most samples are in it too
         # opened once, while descriptors are plenty, and reread from the start: a check must not
         # need a descriptor when a process has run out of them
@@ -186,18 +188,20 @@ class MappedSegments:
         self._lock = threading.Lock()
 
     def refresh(self) -> list[tuple[int, int]]:
+        """The data segments' ranges, sorted by address (read again from the kernel)."""
         chunks = []
         with self._lock:
             os.lseek(self._maps, 0, os.SEEK_SET)
             while chunk := os.read(self._maps, 1 << 16):
                 chunks.append(chunk)
         ranges = []
-        for line in b"".join(chunks).decode("ascii", "replace").splitlines():
-            parts = line.split(maxsplit=5)
-            if len(parts) == 6 and parts[5].startswith("/dev/shm/iox2_"):
-                low, high = parts[0].split("-")
-                ranges.append((int(low, 16), int(high, 16)))
+        for line in b"".join(chunks).split(b"\n"):
+            if b"/dev/shm/iox2_" in line:
+                low, _, rest = line.partition(b"-")
+                ranges.append((int(low, 16), int(rest.split(b" ", 1)[0], 16)))
+        ranges.sort()
         self.ranges = ranges
+        self._starts = [low for low, _high in ranges]
         return ranges
 
     def holds(self, address: int, size: int) -> bool:
@@ -206,8 +210,10 @@ class MappedSegments:
         if low <= address and address + size <= high:
             return True
         for attempt in (0, 1):
-            for low, high in self.ranges:
-                if low <= address and address + size <= high:
+            at = bisect.bisect_right(self._starts, address) - 1
+            if at >= 0:
+                low, high = self.ranges[at]
+                if address + size <= high:
                     self._last = (low, high)
                     return True
             if attempt == 0:

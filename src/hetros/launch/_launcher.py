@@ -18,6 +18,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -309,7 +310,7 @@ class Launcher:
         except (BrokenPipeError, OSError, ValueError):
             pass
 
-    def _failed_at_shutdown(self, nodes: Any) -> None:
+    def _failed_at_shutdown(self, nodes: Iterable[str]) -> None:
         self.failures.extend(node for node in nodes if node not in self.failures)
 
     def _shutdown(self, reason: str) -> list[str]:

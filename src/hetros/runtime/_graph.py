@@ -294,9 +294,13 @@ class Graph:
     def forget(self, node: str) -> None:
         """``node`` finished and will not run again: close the readers kept for its restart, so
         that its subscriber slots are left (publishers neither wait for room nor linger there)."""
+        self._close_prepared(node)
+
+    def _close_prepared(self, node: str | None) -> None:
+        """Close the readers kept from start-up for ``node`` (every node's with None)."""
         with self._lock:
-            mine = [key for key in self._prepared if key[1] == node]
-            readers = [self._prepared.pop(key) for key in mine]
+            keys = [key for key in self._prepared if node is None or key[1] == node]
+            readers = [self._prepared.pop(key) for key in keys]
         for reader in readers:
             reader.inner.close()
 
@@ -519,11 +523,7 @@ class Graph:
 
     def close(self) -> None:
         self.shutdown()
-        with self._lock:
-            prepared = list(self._prepared.values())
-            self._prepared.clear()
-        for reader in prepared:
-            reader.inner.close()
+        self._close_prepared(None)
         with self._lock:
             domain, self._shm = self._shm, None
             ros1, self._ros1 = self._ros1, None

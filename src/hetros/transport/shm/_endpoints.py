@@ -478,7 +478,7 @@ class ShmReader(Reader):
     def _account(self, port: _Port, seq: int) -> None:
         """Record ``seq`` as taken, and wake the publisher if it waits for room here."""
         service = port.service
-        if port.service.credits.set_taken(self._slot, seq) and service.blocking:
+        if service.credits.set_taken(self._slot, seq) and service.blocking:
             self._domain.notify_back(service.target, service.credits.back_event)
 
     def _count_damaged(self, port: _Port, why: str) -> None:

@@ -22,7 +22,7 @@ define install_peer_debs
 endef
 
 
-.PHONY: install install-examples install-test install-bench run test lint bench bench-quick clean
+.PHONY: install install-rtl install-examples install-test install-bench run test lint bench bench-quick clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,10 @@ $(STAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/sh
 	touch $@
 
 install: $(STAMP)
+
+# fpga targets' tools (hetros hw ..., hetros bench hw): Amaranth, Yosys; about 130 MB
+install-rtl: | $(PY)
+	$(PIP) install --quiet -e '.[rtl]'
 
 # every example beyond the default one: scikit-learn's digits, scipy
 install-examples: | $(PY)
@@ -66,9 +70,14 @@ run: install
 	$(VENV)/bin/hetros graph examples/lane_following/project.yaml
 	$(VENV)/bin/hetros launch examples/lane_following/project.yaml --duration 40
 
+# the examples are type-checked as users' code is: against the stubs of their own message packages
+# (`hetros msg stubs`), each folder on its own (every example has a nodes.py)
 lint: install-test
 	$(VENV)/bin/ruff check src tests examples benchmarks
 	$(VENV)/bin/mypy --strict src
+	$(VENV)/bin/hetros msg stubs examples/*/msg -o out/typings > /dev/null
+	for example in examples/*/; do \
+		MYPYPATH=out/typings:examples/inverse_kinematics $(VENV)/bin/mypy --strict $$example || exit 1; done
 
 # the conformance suite once more on the pure-Python path (what runs where no C compiler is)
 test: lint

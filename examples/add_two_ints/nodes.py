@@ -1,8 +1,7 @@
 """A service and a client: the client asks /add_two_ints and logs the sums."""
 
-from hetros.interfaces.example_interfaces.srv import AddTwoInts
-
 from hetros import Node
+from hetros.interfaces.example_interfaces.srv import AddTwoInts
 
 
 def server(node: Node) -> None:

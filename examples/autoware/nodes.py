@@ -9,10 +9,10 @@ often the chain missed the 100 ms deadline.
 import time
 
 import numpy as np
-from hetros.interfaces.autoware_msgs.msg import Lane, LaneArray, Waypoint
-from hetros.interfaces.geometry_msgs.msg import PoseStamped, TwistStamped
 
 from hetros import Node, QoS, ShutdownError
+from hetros.interfaces.autoware_msgs.msg import Lane, LaneArray, Waypoint
+from hetros.interfaces.geometry_msgs.msg import PoseStamped, TwistStamped
 
 DT = 0.1
 LANE_WIDTH = 3.5
@@ -29,7 +29,8 @@ def centreline(count: int = 220) -> np.ndarray:
 def offset(points: np.ndarray, distance: float) -> np.ndarray:
     tangent = np.gradient(points, axis=0)
     normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1) / np.linalg.norm(tangent, axis=1)[:, None]
-    return points + distance * normal
+    shifted: np.ndarray = points + distance * normal
+    return shifted
 
 
 def distance_to_route(route: np.ndarray, x: float, y: float) -> float:

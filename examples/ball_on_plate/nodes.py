@@ -16,13 +16,13 @@ from pathlib import Path
 import numpy as np
 
 sys.path.append(str(Path(__file__).resolve().parent.parent / "inverse_kinematics"))
+from kinematics import pack, servo_angles, to_pwm, unpack
+
+from hetros import Node
 from hetros.interfaces.geometry_msgs.msg import Point, Vector3
 from hetros.interfaces.plate_msgs.msg import BallState
 from hetros.interfaces.std_msgs.msg import UInt32
 from hetros.interfaces.stewart_msgs.msg import ServoPwm
-from kinematics import pack, servo_angles, to_pwm, unpack
-
-from hetros import Node
 
 DT = 0.02
 HALF_PLATE = 0.10

@@ -4,6 +4,7 @@ and the backward pass below. Images are 8x8 (scikit-learn's handwritten digits).
 """
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +36,8 @@ def pool(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out, mask
 
 
-def forward(params: dict[str, np.ndarray], images: np.ndarray, keep: list | None = None) -> np.ndarray:
+def forward(params: dict[str, np.ndarray], images: np.ndarray, keep: list[tuple[Any, ...]] | None = None
+            ) -> np.ndarray:
     """Class scores (logits) for (N, 8, 8) images scaled to 0..1."""
     x = images[..., None]
     for layer in range(3):
@@ -50,7 +52,8 @@ def forward(params: dict[str, np.ndarray], images: np.ndarray, keep: list | None
     hidden = np.maximum(flat @ params["fc0"] + params["bfc0"], 0)
     if keep is not None:
         keep.append((flat, hidden))
-    return hidden @ params["fc1"] + params["bfc1"]
+    logits: np.ndarray = hidden @ params["fc1"] + params["bfc1"]
+    return logits
 
 
 def init(rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -68,7 +71,7 @@ def init(rng: np.random.Generator) -> dict[str, np.ndarray]:
 
 def gradients(params: dict[str, np.ndarray], images: np.ndarray, labels: np.ndarray
               ) -> tuple[float, dict[str, np.ndarray]]:
-    keep: list = []
+    keep: list[tuple[Any, ...]] = []  # what forward kept per layer, for the backward pass
     logits = forward(params, images, keep)
     shifted = logits - logits.max(1, keepdims=True)
     probs = np.exp(shifted) / np.exp(shifted).sum(1, keepdims=True)
@@ -100,4 +103,5 @@ def load() -> dict[str, np.ndarray]:
 
 def classify(params: dict[str, np.ndarray], pixels: np.ndarray) -> np.ndarray:
     """Scores for one 8x8 image of 0..16 values."""
-    return forward(params, (pixels.reshape(1, 8, 8).astype(np.float32) / 16.0))[0]
+    scores: np.ndarray = forward(params, (pixels.reshape(1, 8, 8).astype(np.float32) / 16.0))[0]
+    return scores

@@ -2,10 +2,10 @@
 
 import numpy as np
 from cnn import classify, load
-from hetros.interfaces.classifier_msgs.srv import Classify
 from train import split
 
 from hetros import Node
+from hetros.interfaces.classifier_msgs.srv import Classify
 
 
 def classifier(node: Node) -> None:

@@ -5,12 +5,14 @@
 The held-out split (seed 0, 25 %) is the one the integration test queries through the service.
 """
 
+from typing import Any
+
 import numpy as np
 from cnn import WEIGHTS, forward, gradients, init
 
 try:
-    from sklearn.datasets import load_digits
-    from sklearn.model_selection import train_test_split
+    from sklearn.datasets import load_digits  # type: ignore[import-untyped]
+    from sklearn.model_selection import train_test_split  # type: ignore[import-untyped]
 except ImportError as exc:
     raise ImportError("the digit classifier takes its digits from scikit-learn: "
                       "run `.venv/bin/pip install -e '.[examples]'` (or `make install-examples`)") from exc
@@ -18,7 +20,9 @@ except ImportError as exc:
 
 def split() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     digits = load_digits()
-    return train_test_split(digits.images, digits.target, test_size=0.25, random_state=0, stratify=digits.target)
+    train_x, test_x, train_y, test_y = train_test_split(digits.images, digits.target, test_size=0.25, random_state=0,
+                                                        stratify=digits.target)
+    return np.asarray(train_x), np.asarray(test_x), np.asarray(train_y), np.asarray(test_y)
 
 
 def main() -> None:
@@ -45,7 +49,8 @@ def main() -> None:
                 params[key] -= rate * (m / (1 - 0.9**step)) / (np.sqrt(v / (1 - 0.999**step)) + 1e-8)
         accuracy = (forward(params, test_x / 16.0).argmax(1) == test_y).mean()
         print(f"epoch {epoch:2d} loss {loss:.3f} held-out accuracy {accuracy:.4f}")
-    np.savez(WEIGHTS, **{k: v.astype(np.float32) for k, v in params.items()})
+    arrays: dict[str, Any] = {k: v.astype(np.float32) for k, v in params.items()}
+    np.savez(WEIGHTS, **arrays)
     print(f"wrote {WEIGHTS}")
 
 

@@ -6,10 +6,10 @@ software (and what a gateway will later compare against).
 """
 
 import numpy as np
-from hetros.interfaces.hw_msgs.msg import Features
-from hetros.interfaces.sensor_msgs.msg import Image
 
 from hetros import Node
+from hetros.interfaces.hw_msgs.msg import Features
+from hetros.interfaces.sensor_msgs.msg import Image
 
 
 def camera(node: Node) -> None:

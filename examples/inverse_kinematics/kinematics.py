@@ -41,11 +41,13 @@ def rotation(x_deg: float, y_deg: float) -> np.ndarray:
     cy, sy = np.cos(np.radians(y_deg)), np.sin(np.radians(y_deg))
     rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
     ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    return ry @ rx
+    both: np.ndarray = ry @ rx
+    return both
 
 
 def platform_joints(x_deg: float, y_deg: float) -> np.ndarray:
-    return PLATFORM @ rotation(x_deg, y_deg).T + np.array([0.0, 0.0, HOME])
+    joints: np.ndarray = PLATFORM @ rotation(x_deg, y_deg).T + np.array([0.0, 0.0, HOME])
+    return joints
 
 
 def servo_angles(x_deg: float, y_deg: float) -> np.ndarray:
@@ -54,9 +56,11 @@ def servo_angles(x_deg: float, y_deg: float) -> np.ndarray:
     big_l = (leg**2).sum(1) - (ROD**2 - ARM**2)
     big_m = 2 * ARM * leg[:, 2]
     big_n = 2 * ARM * (np.cos(BETA) * leg[:, 0] + np.sin(BETA) * leg[:, 1])
-    return np.arcsin(big_l / np.hypot(big_m, big_n)) - np.arctan2(big_n, big_m)
+    angles: np.ndarray = np.arcsin(big_l / np.hypot(big_m, big_n)) - np.arctan2(big_n, big_m)
+    return angles
 
 
 def to_pwm(angles: np.ndarray) -> np.ndarray:
     """-90..+90 degrees onto 0..1023 (10 bits)."""
-    return np.clip(np.round((np.degrees(angles) + 90.0) / 180.0 * 1023.0), 0, 1023).astype(np.uint16)
+    pwm: np.ndarray = np.clip(np.round((np.degrees(angles) + 90.0) / 180.0 * 1023.0), 0, 1023).astype(np.uint16)
+    return pwm

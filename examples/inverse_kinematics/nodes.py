@@ -1,11 +1,11 @@
 """Controller -> inverse kinematics -> servo, as in ReconROS's ball-on-plate station."""
 
 import numpy as np
-from hetros.interfaces.std_msgs.msg import UInt32
-from hetros.interfaces.stewart_msgs.msg import ServoPwm
 from kinematics import pack, servo_angles, to_pwm, unpack
 
 from hetros import Node
+from hetros.interfaces.std_msgs.msg import UInt32
+from hetros.interfaces.stewart_msgs.msg import ServoPwm
 
 
 def controller(node: Node) -> None:

@@ -10,14 +10,15 @@ from pathlib import Path
 
 import numpy as np
 import vision
+
+from hetros import Node
 from hetros.interfaces.geometry_msgs.msg import TwistStamped
 from hetros.interfaces.lane_msgs.msg import LaneCentre, LightState
 from hetros.interfaces.sensor_msgs.msg import Image
+from hetros.interfaces.std_msgs.msg import Header
 
-from hetros import Node
 
-
-def to_image(pixels: np.ndarray, header: object, encoding: str) -> Image:
+def to_image(pixels: np.ndarray, header: Header, encoding: str) -> Image:
     channels = 1 if pixels.ndim == 2 else pixels.shape[2]
     return Image(header=header, height=pixels.shape[0], width=pixels.shape[1], encoding=encoding,
                  step=pixels.shape[1] * channels, data=pixels.reshape(-1))

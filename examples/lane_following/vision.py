@@ -26,7 +26,8 @@ def homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
         rows.append([x, y, 1, 0, 0, 0, -u * x, -u * y, -u])
         rows.append([0, 0, 0, x, y, 1, -v * x, -v * y, -v])
     _, _, vt = np.linalg.svd(np.array(rows))
-    return vt[-1].reshape(3, 3) / vt[-1, -1]
+    homography: np.ndarray = vt[-1].reshape(3, 3) / vt[-1, -1]
+    return homography
 
 
 BEV_TO_CAM = homography(_BEV_CORNERS, _CAM_CORNERS)
@@ -101,7 +102,8 @@ def compensate(img: np.ndarray) -> np.ndarray:
     counts = np.bincount(filtered.reshape(-1), minlength=256).cumsum()
     median = filtered.astype(np.float32)
     low, high = np.searchsorted(counts, counts[-1] * 0.01), np.searchsorted(counts, counts[-1] * 0.99)
-    return np.clip((median - low) * 255.0 / max(high - low, 1.0), 0, 255).astype(np.uint8)
+    stretched: np.ndarray = np.clip((median - low) * 255.0 / max(high - low, 1.0), 0, 255).astype(np.uint8)
+    return stretched
 
 
 def blur(img: np.ndarray) -> np.ndarray:
@@ -113,7 +115,8 @@ def blur(img: np.ndarray) -> np.ndarray:
     x = sum(kernel[k] * padded[k:k + img.shape[0]] for k in range(5))
     padded = np.pad(x, ((0, 0), (2, 2), (0, 0)), mode="edge")
     x = sum(kernel[k] * padded[:, k:k + img.shape[1]] for k in range(5))
-    return np.clip(x, 0, 255).astype(np.uint8)
+    blurred: np.ndarray = np.clip(x, 0, 255).astype(np.uint8)
+    return blurred
 
 
 _BY, _BX = np.mgrid[0:BEV_H, 0:BEV_W].astype(np.float64)

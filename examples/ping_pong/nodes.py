@@ -11,9 +11,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from hetros.interfaces.std_msgs.msg import UInt8MultiArray
 
 from hetros import Node
+from hetros.interfaces.std_msgs.msg import UInt8MultiArray
 
 
 def ping(node: Node) -> None:

@@ -1,8 +1,7 @@
 """A std_srvs/SetBool service that answers success = data, for ROS 1 clients to call."""
 
-from hetros.interfaces.std_srvs.srv import SetBool
-
 from hetros import Node
+from hetros.interfaces.std_srvs.srv import SetBool
 
 
 def set_bool(node: Node) -> None:

@@ -7,10 +7,10 @@ The DIP node subscribes to /image_raw, calls the ``/sobel_service`` service (a c
 """
 
 import numpy as np
-from hetros.interfaces.application_msgs.srv import SobelSrv
-from hetros.interfaces.sensor_msgs.msg import Image
 
 from hetros import Node
+from hetros.interfaces.application_msgs.srv import SobelSrv
+from hetros.interfaces.sensor_msgs.msg import Image
 
 HEIGHT, WIDTH = 480, 640
 
@@ -26,7 +26,8 @@ def frame(seq: int) -> np.ndarray:
     top, left = 100 + 10 * seq, 200 + 7 * seq
     img[top:top + 120, left:left + 160] = 255
     noise = rng.integers(0, 20, img.shape, dtype=np.uint8)
-    return np.clip(img.astype(np.int16) + noise, 0, 255).astype(np.uint8)
+    noisy: np.ndarray = np.clip(img.astype(np.int16) + noise, 0, 255).astype(np.uint8)
+    return noisy
 
 
 def sobel(img: np.ndarray) -> np.ndarray:

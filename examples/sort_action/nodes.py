@@ -9,9 +9,9 @@ The client checks every result against ``numpy.sort``.
 """
 
 import numpy as np
-from hetros.interfaces.sorter_msgs.action import Sort
 
 from hetros import GoalStatus, Node, ServerGoalHandle
+from hetros.interfaces.sorter_msgs.action import Sort
 
 
 def sort_phases(data: np.ndarray, first: int, last: int) -> None:
@@ -72,8 +72,11 @@ def client(node: Node) -> None:
     for run in range(node.get_parameter("runs", 3)):
         values = rng.integers(0, 2**32, size, dtype=np.uint32)
         progress: list[int] = []
-        goal = sort.send_goal(Sort.Goal(unsorted=values),
-                              feedback_cb=lambda f, seen=progress: seen.append(f.passes_done))
+
+        def record(feedback: Sort.Feedback, seen: list[int] = progress) -> None:  # this run's list, bound now
+            seen.append(feedback.passes_done)
+
+        goal = sort.send_goal(Sort.Goal(unsorted=values), feedback_cb=record)
         result = goal.result(timeout=60.0)
         if goal.status != GoalStatus.SUCCEEDED or not np.array_equal(result.sorted, np.sort(values)):
             raise ValueError(f"run {run}: the sorter's result ({goal.status.name}) differs from numpy.sort")

@@ -7,9 +7,9 @@ against ``numpy.sort``.
 """
 
 import numpy as np
-from hetros.interfaces.std_msgs.msg import UInt32MultiArray
 
 from hetros import Node
+from hetros.interfaces.std_msgs.msg import UInt32MultiArray
 
 
 def odd_even_transposition_sort(values: np.ndarray) -> np.ndarray:

@@ -1,8 +1,7 @@
 """The ROS-lite paper's example (Fig. 6): one talker, two listeners on /chatter."""
 
-from hetros.interfaces.std_msgs.msg import String
-
 from hetros import Node
+from hetros.interfaces.std_msgs.msg import String
 
 
 def talker(node: Node) -> None:

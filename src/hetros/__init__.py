@@ -28,6 +28,7 @@ from ._errors import (
     UndeclaredEndpointError,
     UnknownTypeError,
 )
+from ._qos import QoS
 from .msg import Message
 from .runtime import (
     ActionClient,
@@ -44,7 +45,6 @@ from .runtime import (
     Subscription,
     Timer,
 )
-from .transport import QoS
 
 __version__ = "0.1.0"
 

@@ -15,9 +15,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from hetros.interfaces.std_msgs.msg import UInt8MultiArray
 
 from hetros import PublishTimeoutError
+from hetros.interfaces.std_msgs.msg import UInt8MultiArray
 from hetros.msg import registry
 from hetros.transport import MessageCodec, QoS
 from hetros.transport.dds import DdsDomain, DdsEdgeReader, DdsEdgeWriter

@@ -11,11 +11,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hetros.interfaces.action_msgs.msg import GoalInfo
-from hetros.interfaces.builtin_interfaces.msg import Time
-from hetros.interfaces.example_interfaces.action import Fibonacci
-from hetros.interfaces.std_msgs.msg import String
-from hetros.interfaces.unique_identifier_msgs.msg import UUID
 
 from hetros import (
     ActionError,
@@ -27,6 +22,11 @@ from hetros import (
     TopicTypeError,
     UndeclaredEndpointError,
 )
+from hetros.interfaces.action_msgs.msg import GoalInfo
+from hetros.interfaces.builtin_interfaces.msg import Time
+from hetros.interfaces.example_interfaces.action import Fibonacci
+from hetros.interfaces.std_msgs.msg import String
+from hetros.interfaces.unique_identifier_msgs.msg import UUID
 from hetros.project import check, import_reconros, load_project, plan, template_from_sources
 from hetros.runtime import Graph
 

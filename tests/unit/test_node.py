@@ -6,8 +6,6 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from hetros.interfaces.example_interfaces.srv import AddTwoInts
-from hetros.interfaces.std_msgs.msg import Int32, String
 
 from hetros import (
     Node,
@@ -20,6 +18,8 @@ from hetros import (
     TopicTypeError,
     UndeclaredEndpointError,
 )
+from hetros.interfaces.example_interfaces.srv import AddTwoInts
+from hetros.interfaces.std_msgs.msg import Int32, String
 from hetros.runtime import Graph
 
 

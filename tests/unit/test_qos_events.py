@@ -8,9 +8,9 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 import pytest
-from hetros.interfaces.std_msgs.msg import Int32
 
 from hetros import DeadlineMissedStatus, LivelinessChangedStatus, Node
+from hetros.interfaces.std_msgs.msg import Int32
 from hetros.msg import registry
 from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
 from hetros.runtime import Graph

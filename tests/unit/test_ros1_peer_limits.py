@@ -75,7 +75,6 @@ def test_seventy_slow_writers_do_not_keep_good_calls_from_the_master_or_a_servic
     time limit in all (not per byte), and the oldest is closed to admit a new one, so good
     calls are served meanwhile (they used to fail for 30-40 s)."""
     from hetros.interfaces.std_srvs.srv import SetBool
-
     from hetros.transport.tcpros import Ros1ServiceType
 
     master = Master(port=0)

@@ -7,9 +7,9 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from hetros.interfaces.sensor_msgs.msg import Image
 
 from hetros import Node, ReadOnlyMessageError, TransportError
+from hetros.interfaces.sensor_msgs.msg import Image
 from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
 from hetros.runtime import Graph
 from hetros.transport import QoS, remove_session_segments

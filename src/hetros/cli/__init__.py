@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 from collections.abc import Sequence
@@ -10,7 +11,7 @@ from pathlib import Path
 
 import yaml
 
-from .._errors import CheckError, Error, HardwareError
+from .._errors import CheckError, Error, HardwareError, ProjectError
 from ..msg import _compiled as compiled_codecs
 from ..msg import registry
 from ..plan import Plan
@@ -53,7 +54,17 @@ def cmd_graph(args: argparse.Namespace) -> int:
     return 0
 
 
+def _hardware_tools() -> None:
+    """The fpga commands need the rtl extra (Amaranth, Yosys: about 130 MB, so not in ``make install``)."""
+    import importlib.util
+
+    if importlib.util.find_spec("amaranth") is None:
+        raise HardwareError("the hardware tools are not installed: run `make install-rtl` "
+                            "(or `.venv/bin/pip install -e '.[rtl]'`: Amaranth and Yosys, about 130 MB)")
+
+
 def cmd_hw_build(args: argparse.Namespace) -> int:
+    _hardware_tools()
     from ..hw import build_target
 
     plan, targets = _fpga_targets(args)
@@ -75,6 +86,7 @@ def _fpga_targets(args: argparse.Namespace) -> tuple[Plan, list[str]]:
 
 
 def cmd_hw_report(args: argparse.Namespace) -> int:
+    _hardware_tools()
     from ..hw._report import format_transfers, transfer_report
 
     plan, targets = _fpga_targets(args)
@@ -86,6 +98,7 @@ def cmd_hw_report(args: argparse.Namespace) -> int:
 
 
 def cmd_hw_synth(args: argparse.Namespace) -> int:
+    _hardware_tools()
     from ..hw._report import format_resources, synth_report
 
     plan, targets = _fpga_targets(args)
@@ -203,6 +216,32 @@ def cmd_msg_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_msg_stubs(args: argparse.Namespace) -> int:
+    from ..msg._stubs import shipped_stubs, user_stubs
+    from ..project import load_project
+
+    if args.shipped:
+        for path, text in shipped_stubs().items():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding="utf-8")
+        print(f"wrote the shipped packages' stubs under {path.parent.parent}")
+        return 0
+    folders: list[Path] = []
+    for given in map(Path, args.sources):
+        if given.is_file():  # a project file: its messages: folders
+            loaded = load_project(given)
+            folders += [loaded.root / folder for folder in loaded.model.messages]
+        elif given.is_dir():
+            folders.append(given)
+        else:
+            raise ProjectError(f"{given}: not a project file nor a folder of interface packages")
+    written = user_stubs(folders, Path(args.output))
+    packages = sorted({path.parent.name for path in written})
+    print(f"wrote the stubs of {', '.join(packages) or 'no package'} under {args.output}/hetros/interfaces; "
+          f"type-check with MYPYPATH={args.output} mypy ...")
+    return 0
+
+
 def cmd_master(args: argparse.Namespace) -> int:
     import threading
 
@@ -221,6 +260,7 @@ def cmd_master(args: argparse.Namespace) -> int:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     if args.bench == "hw":
+        _hardware_tools()
         from ..bench.hw import main as hardware
 
         return hardware((["--quick"] if args.quick else []) + (["--out", args.out] if args.out else []))
@@ -351,6 +391,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("folder")
     p.add_argument("-o", "--output", required=True)
     p.set_defaults(func=cmd_msg_build)
+    p = msg.add_parser("stubs", help="write typed stubs of a project's interface packages, for mypy and IDEs")
+    p.add_argument("sources", nargs="*", metavar="PROJECT_OR_FOLDER",
+                   help="project files (their messages: folders) or folders of interface packages")
+    p.add_argument("-o", "--output", default="typings", help="the folder to put on MYPYPATH (default typings)")
+    p.add_argument("--shipped", action="store_true",
+                   help="regenerate the stubs of the packages hetros ships (a development task)")
+    p.set_defaults(func=cmd_msg_stubs)
     return parser
 
 
@@ -365,3 +412,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of our output left (`hetros msg list | head`): nothing is wrong, stop quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0

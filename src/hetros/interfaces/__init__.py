@@ -4,7 +4,9 @@
 the process' registry: the standard ROS 2 packages rosbags carries, the
 packages hetros ships (``example_interfaces``) and user packages loaded from a
 project's ``messages:`` folders. The modules are made on import by a finder,
-so nothing is generated ahead of time.
+so nothing is generated ahead of time for running; what a type checker reads are the stubs
+(``<package>/msg.pyi``...) beside this file for the packages above, and those
+``hetros msg stubs`` writes for a project's own.
 """
 
 from __future__ import annotations
@@ -86,5 +88,7 @@ class _Finder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return None
 
 
+# first: the typed stubs beside this file live in folders named like the packages, which the
+# path finder would otherwise take for empty namespace packages
 if not any(isinstance(f, _Finder) for f in sys.meta_path):
-    sys.meta_path.append(_Finder())
+    sys.meta_path.insert(0, _Finder())

@@ -18,7 +18,14 @@ from typing import Any
 
 from ..plan import Plan
 from ..runtime import Host, setup_logging
-from ..transport import remove_session_segments
+
+
+def _remove_session_segments(session: str) -> None:
+    """The launcher died: remove the session's shared memory (loaded here, on that path only, so a
+    worker whose edges use no shared memory never loads iceoryx2)."""
+    from ..transport import remove_session_segments
+
+    remove_session_segments(session)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -85,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             sys.stderr.write(f"[WARN] [{args.target}]: stopped while starting: {type(exc).__name__}: {exc}\n")
         if orphaned.is_set():
-            remove_session_segments(args.session)
+            _remove_session_segments(args.session)
         return 2
     hosts.append(host)
     host.graph.stop_reason = stop_reason[0]
@@ -107,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     if orphaned.is_set():
         # nobody else will clean up after the launcher: every worker removes what it can
         sys.stderr.write(f"[WARN] [{args.target}]: the launcher is gone; stopped and cleaned up\n")
-        remove_session_segments(args.session)
+        _remove_session_segments(args.session)
         Path(args.plan).unlink(missing_ok=True)
     return 1 if failed else 0
 

@@ -3,10 +3,21 @@
 from ._definitions import find_packages, read_package
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
 from ._message import FrozenMessage, LoanBuffer, Message, copy, default_maker, freeze, hand_over, loaned_array
-from ._registry import ActionType, ServiceType, TypeRegistry, normalize_typename, registry
+from ._registry import (
+    ActionKind,
+    ActionType,
+    ServiceKind,
+    ServiceType,
+    TypeRegistry,
+    action_type,
+    normalize_typename,
+    registry,
+    service_type,
+)
 from ._validate import convert_array, validate
 
 __all__ = [
+    "ActionKind",
     "ActionType",
     "ArrayField",
     "FlatLayout",
@@ -14,8 +25,10 @@ __all__ = [
     "LayoutField",
     "LoanBuffer",
     "Message",
+    "ServiceKind",
     "ServiceType",
     "TypeRegistry",
+    "action_type",
     "array_fields",
     "convert_array",
     "copy",
@@ -29,6 +42,7 @@ __all__ = [
     "normalize_typename",
     "read_package",
     "registry",
+    "service_type",
     "set_path",
     "validate",
 ]

@@ -30,7 +30,8 @@ from rosbags.interfaces import Nodetype
 
 from .._errors import SerializationError
 from . import _compiled as compiled
-from ._message import FrozenList, freeze
+from ._layout import array_fields, get_path, set_path
+from ._message import FrozenList, copy, freeze
 
 if TYPE_CHECKING:
     from ._registry import TypeRegistry
@@ -528,8 +529,6 @@ def compile_cdr(types: TypeRegistry, codec: CdrCodec) -> CdrCodec:
 
 def reference_codec(types: TypeRegistry, typename: str) -> CdrCodec:
     """rosbags' codec behind the same interface: the reference the generated ones are checked against."""
-    from ._layout import array_fields, get_path, set_path
-
     msgdef = types.store.get_msgdef(typename)
     store = types.store
     variable = [field.path for field in array_fields(types, typename) if field.length is None]
@@ -543,8 +542,6 @@ def reference_codec(types: TypeRegistry, typename: str) -> CdrCodec:
         return int(msgdef.serialize_cdr_le(buffer, pos, message, store))
 
     def lean(message: Any) -> Any:
-        from ._message import copy
-
         clone = copy(message)
         for path in variable:
             set_path(clone, path, get_path(clone, path)[:0])

@@ -12,12 +12,13 @@ a sequence) have data-dependent offsets and are reported as variable.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from rosbags.interfaces import Nodetype
 
-from ._registry import TypeRegistry
+if TYPE_CHECKING:
+    from ._registry import TypeRegistry
 
 _SIZES = {
     "bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2,

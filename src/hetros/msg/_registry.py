@@ -23,18 +23,13 @@ from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, TypesysError, get_typestore
 from rosbags.typesys.store import Typestore
 
-from .._errors import DefinitionError, SerializationError, UnknownTypeError
+from .._errors import DefinitionError, SerializationError, TopicTypeError, UnknownTypeError
 from . import _compiled as compiled_codecs
 from ._cdr import CdrCodec, Ros1Codec, build_codec, build_ros1_codec
 from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
 from ._message import FrozenMessage, Message, _copy_reference, build_sealer
-from ._validate import Validator, build_validator, convert_array
+from ._validate import NUMPY_DTYPES, Validator, build_validator, convert_array
 
-NUMPY_DTYPES = {
-    "bool": "bool_", "byte": "uint8", "char": "uint8", "int8": "int8", "uint8": "uint8",
-    "int16": "int16", "uint16": "uint16", "int32": "int32", "uint32": "uint32",
-    "int64": "int64", "uint64": "uint64", "float32": "float32", "float64": "float64",
-}
 _SCALAR_DEFAULTS = {"bool": "False", "string": "''", "float32": "0.0", "float64": "0.0"}
 
 
@@ -64,6 +59,28 @@ class ActionType:
 
     def __repr__(self) -> str:
         return f"<action type {self.name}>"
+
+
+# What the node API takes as a service or action type: the registry's instance, or the class the
+# typed stubs declare for it (``hetros msg stubs``: Request/Response nested, as rclpy has them)
+ServiceKind = ServiceType | type[ServiceType]
+ActionKind = ActionType | type[ActionType]
+
+
+def service_type(kind: ServiceKind) -> ServiceType:
+    """The registry's service type behind ``kind`` (the node API's argument)."""
+    if isinstance(kind, ServiceType):
+        return kind
+    raise TopicTypeError(f"service type must be a hetros service type (e.g. "
+                         f"hetros.interfaces.std_srvs.srv.SetBool), not {kind!r}")
+
+
+def action_type(kind: ActionKind) -> ActionType:
+    """The registry's action type behind ``kind`` (the node API's argument)."""
+    if isinstance(kind, ActionType):
+        return kind
+    raise TopicTypeError(f"action type must be a hetros action type (e.g. "
+                         f"hetros.interfaces.example_interfaces.action.Fibonacci), not {kind!r}")
 
 
 def normalize_typename(name: str, kind: str = "msg") -> str:

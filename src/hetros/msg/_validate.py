@@ -36,6 +36,13 @@ FLOAT32_MAX = 3.4028234663852886e38
 
 Validator = Callable[[Any, str], None]
 
+# the numpy dtype of each primitive ROS type, as a message's arrays hold it (native byte order)
+NUMPY_DTYPES = {
+    "bool": "bool_", "byte": "uint8", "char": "uint8", "int8": "int8", "uint8": "uint8",
+    "int16": "int16", "uint16": "uint16", "int32": "int32", "uint32": "uint32",
+    "int64": "int64", "uint64": "uint64", "float32": "float32", "float64": "float64",
+}
+
 
 def _describe(value: object) -> str:
     text = repr(value)
@@ -175,8 +182,6 @@ def _field_lines(types: TypeRegistry, desc: Any, obj: str, attr: str, path: str,
     sub, length = arg
     bounded = kind == Nodetype.SEQUENCE
     if sub[0] == Nodetype.BASE and sub[1][0] not in ("string", "wstring"):
-        from ._registry import NUMPY_DTYPES  # the registry imports this module
-
         namespace[f"D{index}"] = np.dtype(NUMPY_DTYPES[sub[1][0]])
         fixed = f"v.size != {length}" if not bounded and length else (f"v.size > {length}" if length else "False")
         lines += [f"{indent}v = {get}",

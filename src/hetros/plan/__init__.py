@@ -7,6 +7,7 @@ Neither depends on the other: both depend on this package.
 from ._plan import (
     ACTION_PREFIX,
     LAUNCHER,
+    ROS1_TRANSPORT,
     ROS2_BRIDGE,
     SERVICE_QOS,
     ChannelKind,
@@ -28,6 +29,7 @@ from ._plan import (
 __all__ = [
     "ACTION_PREFIX",
     "LAUNCHER",
+    "ROS1_TRANSPORT",
     "ROS2_BRIDGE",
     "SERVICE_QOS",
     "ChannelKind",

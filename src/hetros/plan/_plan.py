@@ -12,10 +12,12 @@ import json
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
-from ..transport import QoS
+from .._qos import QoS
 
-# inproc: one process; shm: one host; dds: between hosts; hw: an fpga target's topic network
-TransportKind = Literal["inproc", "shm", "dds", "hw"]
+# inproc: one process; shm: one host; dds: between hosts; hw: an fpga target's topic network;
+# tcpros: every endpoint of a `kind: ros1` node (its peers are the ROS 1 master's, not edges)
+TransportKind = Literal["inproc", "shm", "dds", "hw", "tcpros"]
+ROS1_TRANSPORT: TransportKind = "tcpros"
 # Both directions of every service, whatever carries them: deep enough for bursts of calls,
 # patient enough for a slow handler.
 SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
@@ -136,6 +138,27 @@ class Plan:
     def speaks_ros1(self, node: str) -> bool:
         """A node of a ``kind: ros1`` target: all its endpoints are ROS 1's (TCPROS, ROSRPC)."""
         return self.targets[self.nodes[node].target].kind == "ros1"
+
+    def edges_of(self, channel: str, node: str, role: Literal["publish", "subscribe"]) -> list[EdgePlan]:
+        """The edges of ``node``'s endpoint on ``channel``: where it publishes to, or reads from."""
+        if role == "publish":
+            return [e for e in self.edges if e.channel == channel and e.publisher == node]
+        return [e for e in self.edges if e.channel == channel and e.subscriber == node]
+
+    def inputs(self, node: str) -> list[tuple[str, str, bool]]:
+        """``(channel, type, envelope)`` of everything ``node`` reads: opened before it runs."""
+        if self.speaks_ros1(node):
+            spec = self.nodes[node]
+            return ([(topic, typename, False) for topic, typename in spec.subscribe.items()]
+                    + [(request_channel(service), typename, True) for service, typename in spec.services.items()])
+        return [(c.name, c.type, c.kind != "topic") for c in self.channels.values() if node in c.subscribers]
+
+    def transports_of(self, nodes: list[str]) -> list[str]:
+        """Every kind of transport the endpoints of ``nodes`` use."""
+        kinds = {e.transport for e in self.edges if e.publisher in nodes or e.subscriber in nodes}
+        if any(self.speaks_ros1(node) for node in nodes):
+            kinds.add(ROS1_TRANSPORT)
+        return sorted(kinds)
 
     def nodes_in(self, process: str) -> list[str]:
         return [n for n in self.nodes if self.process_of(n) == process and self._here(n)]

@@ -10,9 +10,9 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._errors import MessageError, ProjectError
+from .._qos import QoS
 from ..msg import normalize_typename
 from ..plan import ACTION_PREFIX, LAUNCHER, action_endpoints
-from ..transport import QoS
 from ._names import plain_name_problem
 
 # goals an action server executes at once unless the project file says otherwise
@@ -45,9 +45,16 @@ class TargetSpec(_Strict):
     clock_mhz: float | None = Field(default=None, gt=0)
     data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8)
     part: str | None = None
+    # reserved for co-simulated hardware nodes, which no mapping runs yet: refused, never ignored
     sim: str | None = None
     # the machine it runs on (a name under hosts:); None: the first host, or this machine without hosts:
     host: str | None = None
+
+    @field_validator("sim")
+    @classmethod
+    def _sim(cls, value: str | None) -> str | None:
+        raise ValueError("must be left out (no target runs its nodes in a simulator yet; `hetros hw report` "
+                         "simulates an fpga target's topic network)")
 
     @field_validator("cpus")
     @classmethod

@@ -34,7 +34,8 @@ from .._errors import (
     UndeclaredEndpointError,
 )
 from .._log import get_logger
-from ..msg import ActionType, registry
+from ..msg import ActionKind, ActionType, registry
+from ..msg import action_type as as_action_type
 from ..plan import action_endpoints, request_channel
 from ..transport import Reader
 from ._node import Client, Replies, _check_type, _typename
@@ -123,9 +124,6 @@ Endpoints = dict[str, tuple[str, str]]
 
 def _checked_endpoints(node: Node, action_type: ActionType, name: str, role: str) -> tuple[Endpoints, Endpoints]:
     """The action's services and topics (part -> (name, type)), once the project file is seen to agree."""
-    if not isinstance(action_type, ActionType):
-        raise TopicTypeError(f"action type must be a hetros action type (e.g. "
-                             f"hetros.interfaces.example_interfaces.action.Fibonacci), not {action_type!r}")
     plan = node.graph.plan
     if plan is not None and node.name in plan.nodes:
         section = "actions" if role == "server" else "action_clients"
@@ -213,11 +211,12 @@ class ActionServer:
     node takes goals with :meth:`take_goal` and ends them with :meth:`succeed` and friends.
     """
 
-    def __init__(self, node: Node, action_type: ActionType, name: str,
+    def __init__(self, node: Node, action_type: ActionKind, name: str,
                  execute: Callable[[ServerGoalHandle], Any] | None = None, *,
                  goal_callback: Callable[[Any], bool] | None = None,
                  cancel_callback: Callable[[ServerGoalHandle], bool] | None = None,
                  max_goals: int | None = None, result_timeout: float = RESULT_TIMEOUT) -> None:
+        action_type = as_action_type(action_type)
         services, topics = _checked_endpoints(node, action_type, name, "server")
         plan = node.graph.plan
         planned = plan.nodes[node.name].max_goals.get(name) if plan is not None and node.name in plan.nodes else None
@@ -592,7 +591,8 @@ class ActionClient:
     Feedback callbacks run on the client's helper thread, in the order the server sent them.
     """
 
-    def __init__(self, node: Node, action_type: ActionType, name: str) -> None:
+    def __init__(self, node: Node, action_type: ActionKind, name: str) -> None:
+        action_type = as_action_type(action_type)
         services, topics = _checked_endpoints(node, action_type, name, "client")
         self.node = node
         self.type = action_type

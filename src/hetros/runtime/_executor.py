@@ -22,6 +22,8 @@ from collections import deque
 from collections.abc import Callable
 from typing import Protocol
 
+from ..transport import WaitSource
+
 # A hot spin hands the GIL over (os.sched_yield: 0.5 µs here, half of a poll) only every
 # SPARSE_YIELD polls while no other thread of the process has woken the node: a poll then
 # takes 0.4 µs instead of 1.0 and a message from another process is seen that much sooner
@@ -69,22 +71,6 @@ class Dispatchable(Protocol):
 
     def pending(self) -> bool:
         """Whether more work may be waiting (False only when surely not)."""
-        ...
-
-
-class WaitSource(Protocol):
-    """What a node can block on besides its condition: the shm transport's wake channel."""
-
-    def wait(self, timeout: float | None) -> None:
-        """Block until an event or ``timeout``, then run the wake function of each reader that fired."""
-        ...
-
-    def interrupt(self) -> None:
-        """Make a blocked ``wait`` return (from any thread)."""
-        ...
-
-    def poll(self) -> None:
-        """Without blocking, run the wake function of each reader that has data now."""
         ...
 
 

@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 
 from .._errors import (
     NodeError,
@@ -24,9 +24,11 @@ from .._errors import (
     TakeTimeoutError,
     TopicTypeError,
 )
-from ..msg import ActionType, Message, ServiceType
-from ..plan import reply_channel, request_channel
-from ..transport import QoS, Reader, Writer
+from .._qos import QoS
+from ..msg import ActionKind, Message, ServiceKind, service_type
+from ..plan import ROS1_TRANSPORT, reply_channel, request_channel
+from ..transport import Reader, Writer
+from ._endpoints import EndpointWriter
 from ._executor import AdaptiveSpin, Executor
 from ._graph import Graph
 from ._log import node_logger
@@ -44,6 +46,11 @@ if TYPE_CHECKING:
 
 M = TypeVar("M", bound=Message)
 _MISSING: Any = object()
+
+
+def _nothing() -> None:
+    """The take of a subscription with no reader (closed, or not attached yet)."""
+    return None
 
 
 def _typename(msg_type: type[Message]) -> str:
@@ -71,16 +78,13 @@ class Publisher(Generic[M]):
     without a copy.
     """
 
-    def __init__(self, node: Node, msg_type: type[M], topic: str, writer: Writer) -> None:
+    def __init__(self, node: Node, msg_type: type[M], topic: str, writer: EndpointWriter) -> None:
         self.node = node
         self.msg_type = msg_type
         self.topic = topic
         self.typename = _typename(msg_type)
         self._short = self.typename.rsplit("/", 1)[-1]
         self._writer = writer
-        # a writer that can lend memory (shm, inproc fan-out); others get a plain message
-        self._loan_maker: Callable[[type[M], dict[str, int]], Callable[[], M]] | None = \
-            getattr(writer, "loan_maker", None)
         self._loans: dict[tuple[tuple[str, int], ...], Callable[[], M]] = {}
         self._last_sizes: dict[str, int] | None = None
         self._last_make: Callable[[], M] = msg_type
@@ -114,11 +118,9 @@ class Publisher(Generic[M]):
         """
         if sizes == self._last_sizes:  # the same lengths as last time, the common loop: one comparison
             return self._last_make()
-        if self._loan_maker is None:
-            return self.msg_type()
         make = self._loans.get(tuple(sizes.items()))
         if make is None:
-            make = self._loan_maker(self.msg_type, sizes)
+            make = cast("Callable[[], M]", self._writer.loan_maker(self.msg_type, sizes))
             if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
                 self._loans.clear()
             self._loans[tuple(sizes.items())] = make
@@ -169,6 +171,8 @@ class Subscription(Generic[M]):
         self.typename = _typename(msg_type)
         self.callback = callback
         self._reader: Reader | None = None
+        # the reader's take function (``Reader.taker``): called once per message
+        self._take: Callable[[], M | None] = _nothing
         self.stats = HandlingStats()
         self._returned_at = 0.0
         self._spin = AdaptiveSpin()
@@ -176,6 +180,7 @@ class Subscription(Generic[M]):
 
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
+        self._take = reader.taker()
 
     def _on_wake(self) -> None:
         if self.callback is not None:
@@ -184,8 +189,7 @@ class Subscription(Generic[M]):
             self.node.executor.wake()
 
     def dispatch(self) -> bool:
-        reader = self._reader
-        message = None if reader is None else reader.try_take()
+        message = self._take()
         if message is None:
             return False
         assert self.callback is not None
@@ -200,9 +204,7 @@ class Subscription(Generic[M]):
 
     def try_take(self) -> M | None:
         """The next message, or None when the FIFO is empty (never blocks)."""
-        if self._reader is None:
-            return None
-        message: M | None = self._reader.try_take()
+        message: M | None = self._take()
         return message
 
     def take(self, timeout: float | None = None) -> M:
@@ -211,8 +213,7 @@ class Subscription(Generic[M]):
         if self._returned_at:
             self.stats.add(now - self._returned_at)
             self._returned_at = 0.0  # a take that times out or is interrupted starts no node time
-        reader = self._reader
-        message = None if reader is None else reader.try_take()
+        message: M | None = self._take()
         if message is None:
             message = self._wait_for_message(timeout)
         else:  # a message was already waiting: the common case of a busy loop, without the waiting machinery
@@ -267,6 +268,7 @@ class Subscription(Generic[M]):
         if self.liveliness is not None:
             self.liveliness.stop()
         if self._reader is not None:
+            self._take = _nothing
             self._reader.close()
             self._reader = None
             if self.callback is not None:
@@ -324,8 +326,9 @@ class Replies:
 class Service:
     """Serves one service: the handler takes a request and returns the response."""
 
-    def __init__(self, node: Node, srv_type: ServiceType, name: str,
+    def __init__(self, node: Node, srv_type: ServiceKind, name: str,
                  handler: Callable[[Any], Any]) -> None:
+        srv_type = service_type(srv_type)
         self.node = node
         self.srv_type = srv_type
         self.name = name
@@ -366,7 +369,8 @@ class Service:
 class Client:
     """Calls one service. Replies bypass the node's callback queue, so ``call`` is safe in callbacks."""
 
-    def __init__(self, node: Node, srv_type: ServiceType, name: str) -> None:
+    def __init__(self, node: Node, srv_type: ServiceKind, name: str) -> None:
+        srv_type = service_type(srv_type)
         self.node = node
         self.srv_type = srv_type
         self.name = name
@@ -511,14 +515,16 @@ class Node:
         self._closables.append(subscription)
         return subscription
 
-    def create_service(self, srv_type: ServiceType, name: str, handler: Callable[[Any], Any]) -> Service:
+    def create_service(self, srv_type: ServiceKind, name: str, handler: Callable[[Any], Any]) -> Service:
+        srv_type = service_type(srv_type)
         self._check_declared_type(request_channel(name), _typename(srv_type.Request))
         service = Service(self, srv_type, name, handler)
         self.executor.entities += 1
         self._closables.append(service)
         return service
 
-    def create_client(self, srv_type: ServiceType, name: str) -> Client:
+    def create_client(self, srv_type: ServiceKind, name: str) -> Client:
+        srv_type = service_type(srv_type)
         if name in self.clients:
             raise NodeError(f"node {self.name!r} already has a client of {name}; reuse it")
         self._check_declared_type(request_channel(name), _typename(srv_type.Request))
@@ -527,7 +533,7 @@ class Node:
         self._closables.append(client)
         return client
 
-    def create_action_server(self, action_type: ActionType, name: str,
+    def create_action_server(self, action_type: ActionKind, name: str,
                              execute: Callable[[ServerGoalHandle], Any] | None = None, *,
                              goal_callback: Callable[[Any], bool] | None = None,
                              cancel_callback: Callable[[ServerGoalHandle], bool] | None = None,
@@ -549,7 +555,7 @@ class Node:
         self._closables.append(server)
         return server
 
-    def create_action_client(self, action_type: ActionType, name: str) -> ActionClient:
+    def create_action_client(self, action_type: ActionKind, name: str) -> ActionClient:
         from ._action import ActionClient
 
         if name in self.action_clients:
@@ -624,10 +630,8 @@ class Node:
             return self._parameters[name]
         master = self.graph.plan.ros1_master if self.graph.plan is not None else ""
         if master:
-            from ..transport.tcpros import get_ros1_parameter
-
             try:
-                return get_ros1_parameter(master, "/" + self.name, name)
+                return self.graph.transport(ROS1_TRANSPORT).parameter(self.name, name)
             except KeyError:
                 pass
         if default is not _MISSING:

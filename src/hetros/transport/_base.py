@@ -11,20 +11,46 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Generic, Protocol
+
+from typing_extensions import TypeVar
 
 Wake = Callable[[], None]
+# what a writer carries and a reader delivers: a message, or a service envelope
+# ``(request_id, client, message)``; Any where one endpoint serves every type
+T = TypeVar("T", default=Any)
 
 
-class Writer(ABC):
-    """Publishing end of one topic (or service channel) for one endpoint."""
+class WaitSource(Protocol):
+    """What a node's executor can block on besides its own condition (a transport's wake channel,
+    a ROS 1 node's sockets): the transport that owns it runs each reader's wake function."""
+
+    def wait(self, timeout: float | None) -> None:
+        """Block until an event or ``timeout``, then run the wake function of each reader that fired."""
+        ...
+
+    def interrupt(self) -> None:
+        """Make a blocked ``wait`` return (from any thread)."""
+        ...
+
+    def poll(self) -> None:
+        """Without blocking, run the wake function of each reader that has data now."""
+        ...
+
+
+class Writer(ABC, Generic[T]):
+    """Publishing end of one topic (or service channel) for one endpoint.
+
+    A writer gets messages already handed over (frozen, arrays the caller still owns copied
+    or marked): the runtime applies that ownership rule once, above every transport.
+    """
 
     # whether the transport lends its own memory for messages to be filled in place
     # (``slot_loan_maker``, ``owns_loan``): shared memory does, in-process delivery need not
     lends_slots = False
 
     @abstractmethod
-    def write(self, message: Any) -> None:
+    def write(self, message: T) -> None:
         """Deliver ``message`` to every subscriber; may block per QoS, then raise."""
 
     def slot_loan_maker(self, sizes: dict[str, int]) -> Callable[[], Any] | None:
@@ -45,15 +71,26 @@ class Writer(ABC):
     def close(self) -> None: ...
 
 
-class Reader(ABC):
+class Reader(ABC, Generic[T]):
     """Subscribing end; ``try_take`` returns the next message or None when empty.
 
     What a reader delivers is read-only (a frozen message whose arrays are not writeable):
-    it may be the publisher's own object, or a view on shared memory.
+    it may be the publisher's own object, or a view on shared memory. A damaged or lost
+    message raises (:class:`~hetros.TransportError`); None only ever means "nothing now".
     """
 
     @abstractmethod
-    def try_take(self) -> Any | None: ...
+    def try_take(self) -> T | None: ...
+
+    def taker(self) -> Callable[[], T | None]:
+        """The function a frequent caller keeps and calls instead of ``try_take``.
+
+        It takes exactly as ``try_take`` does; a reader whose fastest path depends on how it
+        was opened (one publisher, a compiled decoder) or that only wraps another returns
+        that path here, so the hot loop makes one call per message and no method is
+        rebound on an instance.
+        """
+        return self.try_take
 
     def pending(self) -> bool:
         """Whether a ``try_take`` now may find a message: False only when the reader knows its

@@ -12,8 +12,9 @@ from collections import deque
 from typing import Any
 
 from .._errors import PublishTimeoutError, ShutdownError
+from .._qos import QoS
 from ._base import Reader, Wake, Writer
-from ._qos import QoS
+from ._seam import Endpoint, Transport, TransportContext
 
 
 class Mailbox(Reader):
@@ -160,3 +161,31 @@ class InprocWriter(Writer):
 
     def close(self) -> None:
         self.closed = True
+
+
+class InprocTransport(Transport):
+    """Edges inside one process: the publisher's object goes into each subscriber's mailbox."""
+
+    kind = "inproc"
+
+    def __init__(self, context: TransportContext) -> None:
+        super().__init__(context)
+        self._lock = threading.Lock()
+        self._topics: dict[str, InprocTopic] = {}
+
+    def topic(self, name: str, qos: QoS) -> InprocTopic:
+        with self._lock:
+            topic = self._topics.get(name)
+            if topic is None:
+                topic = self._topics[name] = InprocTopic(name, qos, self.context.stop)
+            return topic
+
+    def open_writer(self, endpoint: Endpoint) -> InprocWriter:
+        return self.topic(endpoint.name, endpoint.qos).open_writer()
+
+    def open_reader(self, endpoint: Endpoint, wake: Wake) -> Mailbox:
+        return self.topic(endpoint.name, endpoint.qos).open_reader(endpoint.node, wake)
+
+    def close(self) -> None:
+        with self._lock:
+            self._topics.clear()

@@ -12,9 +12,8 @@ import json
 import time
 from pathlib import Path
 
-from hetros.interfaces.std_msgs.msg import Int32
-
 from hetros import Node
+from hetros.interfaces.std_msgs.msg import Int32
 
 MESSAGES = 10
 PATIENCE = 60.0

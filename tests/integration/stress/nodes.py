@@ -8,9 +8,8 @@ import resource
 import threading
 from pathlib import Path
 
-from hetros.interfaces.std_msgs.msg import Int32
-
 from hetros import Node
+from hetros.interfaces.std_msgs.msg import Int32
 
 MESSAGES = 10
 

@@ -25,10 +25,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from hetros.interfaces.std_srvs.srv import SetBool
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from hetros.interfaces.std_srvs.srv import SetBool
 from hetros.msg import registry
 from hetros.transport.tcpros import Ros1Peer, Ros1ServiceType, Ros1Type
 from hetros.transport.tcpros._header import encode_header

@@ -22,6 +22,7 @@ from ._endpoints import (
 )
 from ._idl import REQUEST_HEADER_FIELDS, idl_type
 from ._names import DISCOVERY_TOPIC, DISCOVERY_TYPE, dds_type_name, reply_topic, request_topic, topic_name
+from ._transport import DdsTransport
 
 __all__ = [
     "DISCOVERY_TOPIC",
@@ -37,6 +38,7 @@ __all__ = [
     "DdsServiceServer",
     "DdsTopicReader",
     "DdsTopicWriter",
+    "DdsTransport",
     "DiscoveryInfo",
     "config_xml",
     "dds_qos",

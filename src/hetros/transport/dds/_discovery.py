@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from ..._qos import QoS
 from ...msg import TypeRegistry
-from .._qos import QoS
 from ._domain import DdsDomain, participant_gid
 from ._endpoints import DdsTopicWriter
 from ._names import DISCOVERY_TOPIC, DISCOVERY_TYPE

@@ -25,7 +25,7 @@ from cyclonedds.util import duration
 
 from ..._errors import TransportError
 from ..._log import get_logger
-from .._qos import QoS
+from ..._qos import QoS
 from ._waiter import Waiter
 
 # ROS 2's domains are 0..232 (ports are computed from them)

@@ -33,8 +33,8 @@ from cyclonedds.sub import DataReader
 
 from ..._errors import SerializationError, TransportError
 from ..._log import get_logger
+from ..._qos import QoS
 from .._base import Codec, Reader, Wake, Writer
-from .._qos import QoS
 from ._domain import DdsDomain, dds_qos, delete_entity
 from ._endpoints import ANY_STATE, padded, write_sample
 

@@ -26,9 +26,9 @@ from cyclonedds.sub import DataReader
 
 from ..._errors import Error, PublishTimeoutError, SerializationError, TransportError
 from ..._log import get_logger
+from ..._qos import QoS
 from ...msg import TypeRegistry
 from .._codec import CDR_LE, MessageCodec
-from .._qos import QoS
 from ._domain import SERVICE_QOS, DdsDomain, dds_qos
 from ._idl import idl_type
 from ._names import reply_topic, request_topic, topic_name

@@ -37,11 +37,13 @@ from ._domain import ShmDomain, Unacknowledged, cleanup_stale, remove_session_se
 from ._endpoints import ShmReader, ShmWriter, has_loan
 from ._events import WakeChannel, raise_open_file_limit
 from ._sample import SESSION_TAG_VARIABLE, new_session, reserved_bytes
+from ._transport import ShmTransport
 
 __all__ = [
     "SESSION_TAG_VARIABLE",
     "ShmDomain",
     "ShmReader",
+    "ShmTransport",
     "ShmWriter",
     "Unacknowledged",
     "WakeChannel",

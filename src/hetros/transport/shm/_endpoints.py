@@ -315,10 +315,10 @@ class ShmReader(Reader):
         lifespan = services[0].qos.lifespan if services else None
         self._lifespan_ns = None if lifespan is None else int(lifespan * 1e9)
         self.expired = 0  # messages dropped unread for being older than the lifespan
-        if take_cdr is not None and self._decode_body is not None and self._lifespan_ns is None:
-            self._take_from = self._take_compiled  # type: ignore[method-assign]
-            if self._only_port is not None:  # one publishing target, the common case: one call per message
-                self.try_take = self._try_take_only_port  # type: ignore[method-assign]
+        self._compiled = take_cdr is not None and self._decode_body is not None and self._lifespan_ns is None
+        # how one publishing target's next message is taken: the compiled common case where it applies
+        self._take_from: Callable[[_Port], Any | None] = (
+            self._take_compiled if self._compiled else self._take_reference)
         wake()
 
     # -- taking ----------------------------------------------------------------------------
@@ -346,6 +346,10 @@ class ShmReader(Reader):
         finally:
             lock.release()
 
+    def taker(self) -> Callable[[], Any | None]:
+        """One publishing target and the compiled path, the common case: one call per message."""
+        return self._try_take_only_port if self._compiled and self._only_port is not None else self.try_take
+
     def _try_take_only_port(self) -> Any | None:
         """``try_take`` with one port and the compiled path: ``_take_compiled`` inlined."""
         lock = self._lock
@@ -371,7 +375,7 @@ class ShmReader(Reader):
         finally:
             lock.release()
 
-    def _take_from(self, port: _Port) -> Any | None:
+    def _take_reference(self, port: _Port) -> Any | None:
         """The next message of one publishing target (``self._lock`` held), None when it has none."""
         try:
             sample = port.subscriber.receive()
@@ -394,7 +398,7 @@ class ShmReader(Reader):
         return self._took(port, memory, size)
 
     def _take_compiled(self, port: _Port) -> Any | None:
-        """``_take_from`` with its common case compiled (``_hotpath``); the rest goes to ``_took``."""
+        """``_take_reference`` with its common case compiled (``_hotpath``); the rest goes to ``_took``."""
         assert take_cdr is not None
         try:
             got = take_cdr(port, self._slot, self._copies, self._borrowed, self._decode_body)

@@ -15,9 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from ..._errors import TransportError
+from ..._qos import QoS
 from ...msg._compiled import wanted as _compiled_wanted
 from .._codec import CDR_LE
-from .._qos import QoS
 
 try:  # the compiled slot buffer (built by pip where a C compiler is); ctypes serves otherwise
     from ._cslot import Memory as _Memory  # type: ignore[import-not-found]

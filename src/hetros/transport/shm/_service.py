@@ -11,8 +11,8 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..._errors import PublishTimeoutError, ShutdownError, TransportError
+from ..._qos import QoS
 from .._codec import CDR_LE
-from .._qos import QoS
 from ._credits import Credits, pid_alive
 from ._events import (
     WakeChannel,

@@ -5,6 +5,7 @@ from ._endpoints import ROSRPC_CLIENT, Ros1ServiceCaller, Ros1ServiceServer, Ros
 from ._master import DEFAULT_PORT, Master, MasterState
 from ._peer import Ros1Peer, Ros1Publication, Ros1Subscription, get_ros1_parameter
 from ._stream import Ros1StreamReader, SocketWaiter
+from ._transport import Ros1Transport
 from ._types import Ros1ServiceType, Ros1Type, ros1_name
 
 __all__ = [
@@ -20,6 +21,7 @@ __all__ = [
     "Ros1ServiceType",
     "Ros1StreamReader",
     "Ros1Subscription",
+    "Ros1Transport",
     "Ros1Type",
     "Ros1Writer",
     "SocketWaiter",

@@ -13,16 +13,16 @@ from __future__ import annotations
 
 import itertools
 import threading
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any
 
 from ..._errors import Error, ShutdownError, TransportError
 from ..._log import get_logger
-from ...msg import hand_over
+from ..._qos import QoS
 from .._base import Reader, Wake, Writer
 from .._inproc import Mailbox
-from .._qos import QoS
 from ._header import MAX_FRAME
 from ._peer import Ros1Peer, Ros1Publication
 from ._stream import Ros1StreamReader, SocketWaiter
@@ -41,7 +41,6 @@ class Ros1Writer(Writer):
         self._publication = publication
 
     def write(self, message: Any) -> None:
-        hand_over(message, False)
         self._publication.publish(message)
 
     def close(self) -> None:
@@ -65,10 +64,12 @@ class _Ros1Reader(Reader):
     def __init__(self, reader: Ros1StreamReader, release: Any) -> None:
         self._reader = reader
         self._release = release
-        self.try_take = reader.try_take  # type: ignore[method-assign]
 
     def try_take(self) -> Any | None:
         return self._reader.try_take()
+
+    def taker(self) -> Callable[[], Any | None]:
+        return self._reader.try_take
 
     def close(self) -> None:
         self._release()

@@ -10,7 +10,7 @@ from collections import deque
 
 from ..._errors import PublishTimeoutError
 from ..._log import get_logger
-from .._qos import QoS
+from ..._qos import QoS
 from ._types import Payload
 
 log = get_logger("hetros.ros1")

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..._errors import ProtocolError, PublishTimeoutError, SerializationError, ServiceTimeoutError, TransportError
 from ..._log import get_logger
-from .._qos import QoS
+from ..._qos import QoS
 from ._admission import Admission
 from ._header import FRAME, decode_header, encode_header, frame_length, header_length, require
 from ._outgoing import SubscriberLink, send_parts

@@ -26,8 +26,8 @@ import numpy as np
 
 from ..._errors import ProtocolError, SerializationError
 from ..._log import get_logger
+from ..._qos import QoS
 from .._base import Reader, Wake
-from .._qos import QoS
 from ._header import FRAME, frame_length
 from ._types import Ros1Kind
 

@@ -20,9 +20,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
-from pydantic import ConfigDict, Field
+from annotated_types import Ge, Gt, Le
 
 MAX_DEPTH = 1_000_000
 Reliability = Literal["reliable", "best_effort"]
@@ -38,21 +38,23 @@ class QoS:
     The one definition: the project file's ``topics:`` entries are validated as this class.
     """
 
-    __pydantic_config__ = ConfigDict(extra="forbid")
+    # read by pydantic where the project file is validated; a plain dict, so that loading QoS
+    # (every worker does) does not load pydantic
+    __pydantic_config__: ClassVar[dict[str, str]] = {"extra": "forbid"}
 
     reliability: Reliability = "reliable"
     history: History = "keep_all"
     # Annotated bounds: the project file's errors then name the field (topics./x.depth)
-    depth: Annotated[int, Field(ge=1, le=MAX_DEPTH)] = 10
+    depth: Annotated[int, Ge(1), Le(MAX_DEPTH)] = 10
     durability: Durability = "volatile"
-    publish_timeout: Annotated[float, Field(gt=0)] = 5.0
+    publish_timeout: Annotated[float, Gt(0)] = 5.0
     # a hardware topic's FIFO in front of each subscriber, in beats (fpga targets only; none by default)
-    hw_fifo: Annotated[int, Field(ge=3, le=1 << 20)] | None = None
+    hw_fifo: Annotated[int, Ge(3), Le(1 << 20)] | None = None
     # seconds; None: no deadline, no lifespan, no lease (ROS 2's "infinite")
-    deadline: Annotated[float, Field(gt=0)] | None = None
-    lifespan: Annotated[float, Field(gt=0)] | None = None
+    deadline: Annotated[float, Gt(0)] | None = None
+    lifespan: Annotated[float, Gt(0)] | None = None
     liveliness: Liveliness = "automatic"
-    lease_duration: Annotated[float, Field(gt=0)] | None = None
+    lease_duration: Annotated[float, Gt(0)] | None = None
 
     def __post_init__(self) -> None:
         if self.reliability not in ("reliable", "best_effort"):

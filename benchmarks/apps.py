@@ -18,6 +18,8 @@ import sys
 import time
 from pathlib import Path
 
+from hetros.bench._provenance import provenance
+
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 MAPPINGS = {"processes": "project.yaml", "threads": "project_threads.yaml"}
 # examples without a required node run for a fixed time
@@ -99,7 +101,7 @@ def main() -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "apps.json").write_text(json.dumps(everything, indent=1))
-    (out / "apps.md").write_text("\n\n".join(report) + "\n")
+    (out / "apps.md").write_text(provenance() + "\n\n" + "\n\n".join(report) + "\n")
     print(f"wrote {out / 'apps.json'} and {out / 'apps.md'}")
     return 1 if any(r["exit_code"] for r in everything) else 0
 

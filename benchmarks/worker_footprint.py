@@ -22,6 +22,7 @@ import tempfile
 import textwrap
 from pathlib import Path
 
+from hetros.bench._provenance import provenance
 from hetros.project import load_project, plan
 from hetros.transport import remove_session_segments
 
@@ -183,7 +184,7 @@ def main() -> None:
     report = render(rows)
     print(report)
     (args.out / "worker_footprint.json").write_text(json.dumps(rows, indent=1), encoding="utf-8")
-    (args.out / "worker_footprint.md").write_text(report + "\n", encoding="utf-8")
+    (args.out / "worker_footprint.md").write_text(provenance() + "\n\n" + report + "\n", encoding="utf-8")
     plot(rows, args.out / "worker_footprint.png")
     print(f"wrote {args.out / 'worker_footprint.json'}, .md and .png")
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Annotated, ClassVar, Literal
 
 from annotated_types import Ge, Gt, Le
+from typing_extensions import Doc
 
 MAX_DEPTH = 1_000_000
 Reliability = Literal["reliable", "best_effort"]
@@ -42,19 +43,26 @@ class QoS:
     # (every worker does) does not load pydantic
     __pydantic_config__: ClassVar[dict[str, str]] = {"extra": "forbid"}
 
-    reliability: Reliability = "reliable"
-    history: History = "keep_all"
-    # Annotated bounds: the project file's errors then name the field (topics./x.depth)
-    depth: Annotated[int, Ge(1), Le(MAX_DEPTH)] = 10
-    durability: Durability = "volatile"
-    publish_timeout: Annotated[float, Gt(0)] = 5.0
-    # a hardware topic's FIFO in front of each subscriber, in beats (fpga targets only; none by default)
-    hw_fifo: Annotated[int, Ge(3), Le(1 << 20)] | None = None
-    # seconds; None: no deadline, no lifespan, no lease (ROS 2's "infinite")
-    deadline: Annotated[float, Gt(0)] | None = None
-    lifespan: Annotated[float, Gt(0)] | None = None
-    liveliness: Liveliness = "automatic"
-    lease_duration: Annotated[float, Gt(0)] | None = None
+    # Annotated bounds: the project file's errors then name the field (topics./x.depth); Doc: its
+    # line in the project file's reference (docs/PROJECT_FILE.md)
+    reliability: Annotated[Reliability, Doc("best_effort never blocks the publisher and may drop")] = "reliable"
+    history: Annotated[History, Doc("keep_all blocks a reliable publisher while a FIFO is full; keep_last "
+                                    "drops the oldest")] = "keep_all"
+    depth: Annotated[int, Ge(1), Le(MAX_DEPTH), Doc("the FIFO of each subscriber, in messages")] = 10
+    durability: Annotated[Durability, Doc("transient_local replays the last depth messages to a late "
+                                          "subscriber")] = "volatile"
+    publish_timeout: Annotated[float, Gt(0), Doc("seconds a reliable keep_all publisher waits for room before "
+                                                 "PublishTimeoutError")] = 5.0
+    hw_fifo: Annotated[int, Ge(3), Le(1 << 20), Doc("fpga targets: a FIFO of this many beats in front of each "
+                                                    "subscriber (absent: none)")] | None = None
+    deadline: Annotated[float, Gt(0), Doc("seconds: each publisher publishes, each subscriber receives, at least "
+                                          "once a period (absent: none)")] | None = None
+    lifespan: Annotated[float, Gt(0), Doc("seconds after which an untaken message is dropped (absent: "
+                                          "never)")] | None = None
+    liveliness: Annotated[Liveliness, Doc("manual_by_topic: alive while it publishes or asserts within "
+                                          "lease_duration")] = "automatic"
+    lease_duration: Annotated[float, Gt(0), Doc("seconds of the liveliness lease (absent: "
+                                                "infinite)")] | None = None
 
     def __post_init__(self) -> None:
         if self.reliability not in ("reliable", "best_effort"):

@@ -270,7 +270,7 @@ def test_an_undeclared_action_names_the_yaml_key_to_add(tmp_path: Path) -> None:
 
 def test_init_and_reconros_import_pick_up_actions(tmp_path: Path) -> None:
     (tmp_path / "nodes.py").write_text(NODES)
-    template = template_from_sources([tmp_path / "nodes.py"], tmp_path, "t")
+    template, _ = template_from_sources([tmp_path / "nodes.py"], tmp_path, "t")
     assert template["nodes"]["server"]["actions"] == {"/fib": "example_interfaces/action/Fibonacci"}
     assert template["nodes"]["client"]["action_clients"] == {"/fib": "example_interfaces/action/Fibonacci"}
     cfg = tmp_path / "build.cfg"
@@ -284,7 +284,7 @@ def test_init_and_reconros_import_pick_up_actions(tmp_path: Path) -> None:
         node_2 = rosnode, "caller"
         call = rosactionc, node_2, sort_action, "sort", 10000
     """))
-    data = import_reconros(cfg)
+    data, _ = import_reconros(cfg)
     assert data["nodes"]["sorter"]["actions"] == {"/sort": "sorter_msgs/action/Sort"}
     assert data["nodes"]["caller"]["action_clients"] == {"/sort": "sorter_msgs/action/Sort"}
 

@@ -10,7 +10,7 @@ import pytest
 from hetros import CheckError, LaunchError, ProjectError
 from hetros.launch import deploy_commands, launch, local_host
 from hetros.plan import Plan
-from hetros.project import load_project, plan
+from hetros.project import check, load_project, plan
 
 NODES = textwrap.dedent('''
     from hetros.interfaces.std_msgs.msg import String
@@ -100,6 +100,16 @@ def test_this_machine_is_the_host_with_a_local_address(tmp_path: Path) -> None:
         local_host(nowhere)
     with pytest.raises(LaunchError, match="--as moon: the project's hosts are here, robot"):
         launch(built, host="moon")
+    robot = built.hosts["robot"].address
+    with pytest.raises(LaunchError, match=rf"--as robot: its address {robot} is not one of this machine's.*"
+                                          r"run this on robot's machine, or change hosts\.robot\.address"):
+        launch(built, host="robot")
+
+
+def test_check_says_when_no_host_is_this_machine(tmp_path: Path) -> None:
+    nowhere = load_project(_project(tmp_path, HOSTS.replace("127.0.0.1", "10.0.0.7"), TARGETS))
+    assert any("none of the hosts' addresses" in w and "is this machine's" in w for w in check(nowhere).warnings)
+    assert not any("none of the hosts" in w for w in check(load_project(_project(tmp_path, HOSTS, TARGETS))).warnings)
 
 
 def test_deploy_starts_this_host_directly_and_the_others_over_ssh(tmp_path: Path) -> None:

@@ -269,10 +269,8 @@ def test_reconros_hardware_threads_and_hw_topics_land_on_one_fpga_target(tmp_pat
         [ReconosThread@Sorter]
         HwSource = hls
         ResourceGroup = Sorter
-        [ROSGateway@Gateway]
-        HWTopic = "fast"
     """))
-    data = import_reconros(cfg)
+    data, _ = import_reconros(cfg)
     assert data["targets"]["fpga"] == {"kind": "fpga", "clock_mhz": 150.0, "part": "xczu7ev-ffvc1156-2-e"}
     assert data["nodes"]["producer"]["target"] == data["nodes"]["consumer"]["target"] == "fpga"
     assert data["nodes"]["consumer"]["subscribe"] == {"/fast": "sensor_msgs/msg/Image"}

@@ -126,7 +126,7 @@ def test_reconros_listing1_imports(tmp_path: Path) -> None:
         sub = rossub, node_2, image_msg, "/image_raw", 10000
         pub = rospub, node_2, image_msg, "/image_filtered"
     """))
-    data = import_reconros(cfg)
+    data, _ = import_reconros(cfg)
     assert data["nodes"]["sobel"] == {"run": "nodes:sobel", "target": "resourcegroupsobel",
                                       "services": {"/sobelservice": "application_msgs/srv/SobelSrv"}}
     assert data["nodes"]["dip"]["clients"] == {"/sobelservice": "application_msgs/srv/SobelSrv"}
@@ -136,7 +136,7 @@ def test_reconros_listing1_imports(tmp_path: Path) -> None:
 
 def test_init_template_from_sources_checks_clean(tmp_path: Path) -> None:
     src = EXAMPLES / "talker_listener" / "nodes.py"
-    data = template_from_sources([src], src.parent, "tl")
+    data, _ = template_from_sources([src], src.parent, "tl")
     assert data["nodes"]["talker"]["publish"] == {"/chatter": "std_msgs/msg/String"}
     assert data["nodes"]["listener2"]["subscribe"] == {"/chatter": "std_msgs/msg/String"}
 

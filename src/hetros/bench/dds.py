@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from ._provenance import provenance
 from .latency import SIZE_LABELS, Stats, _table, fmt, log_axes
 from .ros1 import wait_all
 
@@ -331,7 +332,7 @@ def main(argv: list[str] | None = None) -> int:
     report = render(results)
     print()
     print(report)
-    (out / "dds.md").write_text(report + "\n")
+    (out / "dds.md").write_text(provenance() + "\n\n" + report + "\n")
     (out / "dds.jsonl").write_text("".join(json.dumps(r) + "\n" for r in results))
     plot(results, out / "dds.png")
     return 0

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from ..hw._report import TABLE_I_PAPER_MS, TABLE_I_SIZES, Resources, format_resources, synthesize, transfer_cycles
+from ._provenance import provenance
 
 # fpgaDDS Table I, CycloneDDS column (ms), and Table II (whole design on the XCZU7EV), for context
 PAPER_CYCLONE_MS = {"3 kB": 0.06, "12 kB": 0.07, "50 kB": 0.19, "196 kB": 0.63, "786 kB": 2.34, "3146 kB": 9.24}
@@ -124,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
     one, two = table_one(args.quick), table_two(args.quick)
     text = markdown(one, two)
     print("\n" + text)
-    (out / "hw.md").write_text(text + "\n")
+    (out / "hw.md").write_text(provenance() + "\n\n" + text + "\n")
     (out / "hw.json").write_text(json.dumps({"table_one": one, "table_two": two}, indent=1))
     plot(one, out / "hw.png")
     print(f"\nwrote {out / 'hw.md'}, {out / 'hw.json'}, {out / 'hw.png'}")

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..transport import cleanup_stale, new_session, remove_session_segments
+from ._provenance import provenance
 
 SIZES = [4, 3 * 1024, 12 * 1024, 48 * 1024, 192 * 1024, 768 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
 SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "196 kB",
@@ -487,7 +488,8 @@ def log_axes(ax: Any, title: str, unit: str) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer sizes and repetitions (about a minute on 2 cores)")
     parser.add_argument("--out", default="out/bench", help="folder for latency.jsonl, latency.md, latency.png")
     parser.add_argument("--systems", help="comma-separated subset of: " + ", ".join(SYSTEMS))
     parser.add_argument("--no-pin", action="store_true", help="do not pin ping and echo to separate CPUs")
@@ -542,7 +544,7 @@ def main(argv: list[str] | None = None) -> int:
     report = render(run, systems, sizes)
     print()
     print(report)
-    (out / "latency.md").write_text(report + "\n")
+    (out / "latency.md").write_text(provenance() + "\n\n" + report + "\n")
     with (out / "latency.jsonl").open("w") as handle:
         for r in run.results:
             handle.write(json.dumps({"system": r.system, "size": r.size, "error": r.error,

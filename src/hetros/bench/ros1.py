@@ -54,6 +54,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from ._provenance import provenance
 from ._ros1_protocol import measured, reply_topic
 from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt, log_axes, parse_sizes
 
@@ -382,7 +383,7 @@ def main(argv: list[str] | None = None) -> int:
     report = render(results, sizes, missing, STEADY_MALLOC if args.steady_malloc else "")
     print()
     print(report)
-    (out / "ros1.md").write_text(report + "\n")
+    (out / "ros1.md").write_text(provenance() + "\n\n" + report + "\n")
     with (out / "ros1.jsonl").open("w") as handle:
         for r in results:
             handle.write(json.dumps({"pair": r.system, "size": r.size, "error": r.error,

@@ -143,19 +143,27 @@ def cmd_init(args: argparse.Namespace) -> int:
 
     files = [Path(f) for f in args.files]
     root = Path(args.root) if args.root else (files[0].parent if files else Path.cwd())
-    data = template_from_sources(files, root, args.name or root.resolve().name)
+    data, unresolved = template_from_sources(files, root, args.name or root.resolve().name)
     if not data["nodes"]:
         print("no create_* calls found in the given files", file=sys.stderr)
         return EXIT_ERROR
     _write_yaml(data, args.output)
+    print(f"found {len(data['nodes'])} node(s): {', '.join(data['nodes'])}", file=sys.stderr)
+    for note in unresolved:
+        print(f"warning: {note}", file=sys.stderr)
     return 0
 
 
 def cmd_import(args: argparse.Namespace) -> int:
     from ..project import import_reconros, import_roslite
 
-    converter = import_roslite if args.format == "roslite" else import_reconros
-    _write_yaml(converter(Path(args.file), module=args.module), args.output)
+    if args.format == "roslite":
+        _write_yaml(import_roslite(Path(args.file), module=args.module), args.output)
+        return 0
+    project, notes = import_reconros(Path(args.file), module=args.module)
+    _write_yaml(project, args.output)
+    for note in notes:
+        print(f"note: {note}", file=sys.stderr)
     return 0
 
 
@@ -239,6 +247,13 @@ def cmd_msg_stubs(args: argparse.Namespace) -> int:
     packages = sorted({path.parent.name for path in written})
     print(f"wrote the stubs of {', '.join(packages) or 'no package'} under {args.output}/hetros/interfaces; "
           f"type-check with MYPYPATH={args.output} mypy ...")
+    return 0
+
+
+def cmd_reference(args: argparse.Namespace) -> int:
+    from ..project._reference import reference_markdown
+
+    print(reference_markdown(), end="")
     return 0
 
 
@@ -328,13 +343,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output")
     p.add_argument("--module", default="nodes", help="module holding the node functions")
     p.set_defaults(func=cmd_import)
+    p = sub.add_parser("reference", help="print the project file's reference (every key, kind and default)")
+    p.set_defaults(func=cmd_reference)
     p = sub.add_parser("master", help="run a ROS 1 master (master API + parameter server) for rospy/roscpp nodes")
     p.add_argument("--port", type=int, default=11311)
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1 only)")
     p.set_defaults(func=cmd_master)
     bench = sub.add_parser("bench", help="benchmarks against the peers").add_subparsers(dest="bench", required=True)
     p = bench.add_parser("latency", help="latency, throughput and idle CPU against CycloneDDS, iceoryx2, ...")
-    p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions (under a minute)")
+    p.add_argument("--quick", action="store_true",
+                        help="fewer sizes and repetitions (about a minute on 2 cores)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.add_argument("--systems", help="comma-separated subset")
     p.add_argument("--rounds", type=int, help="interleaved rounds whose samples are pooled (default 1)")

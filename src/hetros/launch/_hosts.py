@@ -15,7 +15,6 @@ per host: its project hash and its phase) with a DDS liveliness lease, so:
 from __future__ import annotations
 
 import json
-import socket
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -28,6 +27,7 @@ from cyclonedds.util import duration
 
 from .._errors import LaunchError
 from .._log import get_logger
+from .._net import is_local_address
 from ..plan import Plan
 from ..transport.dds import HOST_LEASE, DdsDomain
 
@@ -44,15 +44,7 @@ HostState: Any = make_idl_struct("HostState", "hetros::dds_::HostState_", {"host
 
 def local_host(plan: Plan) -> str:
     """The host of ``plan`` whose address belongs to this machine (exactly one must)."""
-    mine = []
-    for name, host in plan.hosts.items():
-        try:
-            address = socket.gethostbyname(host.address)
-            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-                probe.bind((address, 0))  # only an address of this machine can be bound
-        except OSError:
-            continue
-        mine.append(name)
+    mine = [name for name, host in plan.hosts.items() if is_local_address(host.address)]
     if len(mine) != 1:
         listed = ", ".join(f"{n} ({h.address})" for n, h in plan.hosts.items())
         found = f"it is {' and '.join(mine)}" if mine else "none of its addresses is one of them"

@@ -25,6 +25,7 @@ from typing import IO, Any
 
 from .._errors import LaunchError
 from .._log import get_logger
+from .._net import is_local_address
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
 from ..transport import cleanup_stale, new_session, remove_session_segments
@@ -366,6 +367,11 @@ def launch(plan: Plan, *, duration: float | None = None, host: str | None = None
     if plan.hosts:
         if host is not None and host not in plan.hosts:
             raise LaunchError(f"--as {host}: the project's hosts are {', '.join(plan.hosts)}")
+        if host is not None and not is_local_address(plan.hosts[host].address):
+            raise LaunchError(
+                f"--as {host}: its address {plan.hosts[host].address} is not one of this machine's, so its DDS "
+                f"participant cannot use it; run this on {host}'s machine, or change hosts.{host}.address in "
+                "the project file to an address of this one")
         plan = plan.on_host(host or local_host(plan))
     elif host is not None:
         raise LaunchError(f"--as {host}: the project names no hosts (add a hosts: section)")

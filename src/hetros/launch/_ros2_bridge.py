@@ -66,7 +66,8 @@ def bridge(node: Node) -> None:
                 discovery.add(owner, readers=[server.reader], writers=[server.writer])
         imported_services = []
         for service, typename in dict(p("import_services", {})).items():
-            forwarded = _ImportedService(node, types, DdsServiceClient(domain, types, service, typename), typename)
+            forwarded = _ImportedService(node, types, DdsServiceClient(domain, types, service, typename), typename,
+                                          domain.domain_id)
             imported_services.append(forwarded)
             for owner in owners["import_services"][service]:
                 discovery.add(owner, readers=[forwarded.dds.reader], writers=[forwarded.dds.writer])
@@ -117,9 +118,11 @@ class _ImportedService:
     """Serves a ROS 2 service inside the graph: each call is forwarded over DDS without blocking
     the node, and the reply written to the calling client when it arrives."""
 
-    def __init__(self, node: Node, types: TypeRegistry, dds: DdsServiceClient, typename: str) -> None:
+    def __init__(self, node: Node, types: TypeRegistry, dds: DdsServiceClient, typename: str,
+                 domain_id: int) -> None:
         self.node = node
         self.dds = dds
+        self.domain_id = domain_id
         self.service = dds.service
         self._replies = Replies(node, self.service, f"{typename}_Response")
         self._waiting: list[tuple[float, int, str, Any]] = []
@@ -153,8 +156,8 @@ class _ImportedService:
                     self._waiting.append((deadline, request_id, client, request))
             else:
                 self.node.log.error("service %s: no ROS 2 server was discovered within %g s; the call of %s "
-                                    "is not answered (is the ROS 2 server running on domain %s?)",
-                                    self.service, _DISCOVERY_WAIT, client, self.node.get_parameter("domain", 0))
+                                    "is not answered (is the ROS 2 server running on domain %d?)",
+                                    self.service, _DISCOVERY_WAIT, client, self.domain_id)
             return
         try:
             future = self.dds.call_async(request)

@@ -1,7 +1,7 @@
 /*
  * hetros.msg._ccdr: the compiled CDR / ROS 1 codec, one interpreter for every message type.
  *
- * Python compiles each type into a program (hetros/msg/_ccdr_program.py): one op per field,
+ * Python compiles each type into a program (hetros/msg/_compiled.py): one op per field,
  * with the slot offset of the field in the message object, the primitive kind, the fixed
  * length or bound, the nested type's program. This file walks such programs to size,
  * encode and decode messages, reading and writing the objects' slots directly.

@@ -3,8 +3,9 @@
 * ROS-lite's map file: YAML entries with name, cluster, publish, publish_type,
   subscribe, subscribe_type; each cluster becomes a process target.
 * ReconROS' configuration file: ``[ResourceGroup@Name]`` sections whose
-  rosnode/roscpp, rosmsg, rossrvmsg, rosactionmsg, rossub, rospub, rossrvs, rossrv,
-  rosactions and rosactionc entries declare nodes and endpoints; each resource group becomes a process target.
+  rosnode/roscpp, rosmsg, rossrvmsg, rosactionmsg, rossub, rospub, rossrvs, rossrvc,
+  rosactions and rosactionc entries declare nodes and endpoints; each resource group becomes a
+  process target. What has no counterpart is refused naming file:line, or named in the notes.
 """
 
 from __future__ import annotations
@@ -64,32 +65,49 @@ def import_roslite(path: Path, module: str = "nodes") -> dict[str, Any]:
     return {"name": path.stem, "targets": targets, "nodes": nodes}
 
 
-_SECTION = re.compile(r"^\[(?P<kind>\w+)(?:@|\(at\))(?P<name>[^\]]+)\]$")
+_SECTION = re.compile(r"^\[(?P<kind>\w+)(?:@|\(at\))(?P<name>[^\]\(]+)(?:\((?P<start>\d+):(?P<end>\d+)\))?\]$")
 # one fpga target for every hardware thread of a ReconROS build
 FPGA_TARGET = "fpga"
+# ReconOS's own resources (mailboxes, semaphores, ...): synchronisation between a thread's hardware
+# and software halves, which hetros nodes do through topics; named in the notes, not carried over
+_RECONOS_RESOURCES = {"mbox", "sem", "cond", "rq", "memory"}
+_ENDPOINTS = {"rossub": ("subscribe", "msg"), "rospub": ("publish", "msg"), "rossrvs": ("services", "srv"),
+              "rossrvc": ("clients", "srv"), "rossrv": ("clients", "srv"), "rosactions": ("actions", "action"),
+              "rosacts": ("actions", "action"), "rosactionc": ("action_clients", "action"),
+              "rosactc": ("action_clients", "action")}
+_MESSAGES = {"rosmsg", "rosmg", "rossrvmsg", "rosactionmsg"}
 
 
 def _fields(value: str) -> list[str]:
-    return [v.strip().strip('"') for v in value.split(",")]
+    """ReconROS splits a resource on commas and blanks alike (``rosmsg, sensor_msgs ,msg ,Image``)."""
+    return [v.strip('"') for v in re.split(r"[, ]+", value.strip()) if v.strip('"')]
 
 
-def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
-    """A project dict from the ROS part of a ReconROS build.cfg (Listing 1 of the paper).
+def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], list[str]]:
+    """A project dict from the ROS part of a ReconROS build.cfg (Listing 1 of the paper), and notes
+    naming what was not carried over (ReconOS's own resources), each with file:line.
 
-    Each ``[ResourceGroup@…]`` becomes a process target. A build with hardware threads
-    (``[ReconosThread@…]`` with a ``HwSource``) or ``hw``-flagged ``rossub``/``rospub`` lines gets
-    one fpga target (clock from the system clock, part from ``TargetPart``): nodes with hardware
-    topics go on it, since a hardware topic has all its endpoints in hardware; the other nodes
-    of hardware threads stay in software, runnable, one ``target:`` edit away from it. Message
-    types may be variables (``rosmsg``…) or written inline (``sensor_msgs/Image``).
+    Each ``[ResourceGroup@…]`` becomes a process target; ``[ResourceGroup@name(0:2)]`` is three,
+    ``name_0`` to ``name_2``, with ``%`` in its entries replaced by the index, as ReconROS does.
+    ``rossub``/``rospub``, ``rossrvs``/``rossrvc`` and ``rosactions``/``rosactionc`` (also spelt
+    ``rosacts``/``rosactc``) become endpoints. A build with hardware threads (``[ReconosThread@…]``
+    with a ``HwSource``) or ``hw``-flagged ``rossub``/``rospub`` lines gets one fpga target (clock
+    from the system clock, part from ``TargetPart``): nodes with hardware topics go on it, since a
+    hardware topic has all its endpoints in hardware; the other nodes of hardware threads stay in
+    software, one ``target:`` edit away from it. Message types may be variables (``rosmsg``…) or
+    written inline (``sensor_msgs/Image``). What hetros has no counterpart for is refused with its
+    line: ``[ROSGateway@…]`` sections (hardware-software gateways), a ``rosmsg`` with a sequence
+    length (ReconROS's preallocated ``…__Sequence``), and any other ``ros*`` resource.
     """
     targets: dict[str, Any] = {}
     nodes: dict[str, Any] = {}
-    group = ""
+    notes: list[str] = []
+    # the resource groups of the current section, each with the index `%` stands for ("" without a range)
+    groups: list[tuple[str, str]] = []
     section_kind = ""
-    variables: dict[str, str] = {}
-    messages: dict[str, str] = {}
-    group_of: dict[str, str] = {}
+    # per group: variable -> node name / message type
+    variables: dict[tuple[str, str], str] = {}
+    messages: dict[tuple[str, str], str] = {}
     hardware_nodes: set[str] = set()
     hardware_groups: set[str] = set()  # groups of hardware threads
     thread: dict[str, str] = {}
@@ -97,16 +115,30 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
     clocks: dict[str, dict[str, str]] = {}
     threads: list[dict[str, str]] = []
     clock_name = ""
+    ranged: dict[str, list[str]] = {}  # a ranged group's name -> its expanded groups
     for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
         line = re.sub(r"^\d+\s+", "", raw.split("#", 1)[0].strip())
         if not line:
             continue
-        section = _SECTION.match(line)
-        if section or line.startswith("["):
+        where = f"{path}:{lineno}"
+        if line.startswith("["):
+            section = _SECTION.match(line)
             section_kind = section.group("kind") if section else line.strip("[]")
-            group = section.group("name") if section and section_kind == "ResourceGroup" else ""
+            groups = []
+            if section_kind == "ROSGateway":
+                raise ProjectError(f"{where}: {line} is a ReconROS hardware-software gateway, which hetros does not "
+                                   "map (its gateways come with hardware nodes); remove the section and connect "
+                                   "the topics in the project file")
+            if section and section_kind == "ResourceGroup":
+                name = section.group("name").strip()
+                if section.group("start") is not None:
+                    indices = range(int(section.group("start")), int(section.group("end")) + 1)
+                    groups = [(f"{name}_{i}", str(i)) for i in indices]
+                    ranged[name] = [group for group, _ in groups]
+                else:
+                    groups = [(name, "")]
             if section_kind == "ReconosThread":
-                thread = {}
+                thread = {"line": str(lineno)}
                 threads.append(thread)
             if section and section_kind == "Clock":
                 clocks[section.group("name")] = {}
@@ -124,64 +156,17 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
         if section_kind == "Clock" and clock_name:
             clocks[clock_name][var] = value
             continue
-        if not group:
-            continue
-        fields = _fields(value)
-        kind = fields[0]
-
-        def need(count: int) -> None:
-            if len(fields) < count:
-                raise ProjectError(f"{path}:{lineno}: {kind} needs {count - 1} arguments, got {len(fields) - 1}")
-
-        def node_of(ref: str) -> dict[str, Any]:
-            if ref not in variables:
-                raise ProjectError(f"{path}:{lineno}: {ref!r} is not a node defined earlier in this group")
-            found: dict[str, Any] = nodes[variables[ref]]
-            return found
-
-        def message_of(ref: str, kind_of_type: str = "msg") -> str:
-            if ref in messages:
-                return messages[ref]
-            parts = ref.split("/")
-            if len(parts) == 2 and all(parts):  # written inline: sensor_msgs/Image
-                return f"{parts[0]}/{kind_of_type}/{parts[1]}"
-            if len(parts) == 3 and all(parts):
-                return ref
-            raise ProjectError(f"{path}:{lineno}: {ref!r} is neither a message defined earlier in this group "
-                               "nor a type name like 'sensor_msgs/Image'")
-
-        if kind in ("rosnode", "roscpp"):
-            need(2)
-            name = fields[1].lower()
-            variables[var] = name
-            target = group.lower()
-            targets.setdefault(target, {"kind": "process"})
-            nodes[name] = {"run": f"{module}:{name}", "target": target}
-            group_of[name] = group
-        elif kind in ("rosmsg", "rosmg", "rossrvmsg", "rosactionmsg"):
-            need(4)
-            messages[var] = f"{fields[1]}/{fields[2]}/{fields[3]}"
-        elif kind in ("rossub", "rospub"):
-            need(4)
-            section_name = "subscribe" if kind == "rossub" else "publish"
-            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2])
-            if "hw" in (f.lower() for f in fields[4:]):
-                hardware_nodes.add(variables[fields[1]])
-        elif kind in ("rossrvs", "rossrv"):
-            need(4)
-            section_name = "services" if kind == "rossrvs" else "clients"
-            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2], "srv")
-        elif kind in ("rosactions", "rosactionc"):
-            need(4)
-            section_name = "actions" if kind == "rosactions" else "action_clients"
-            node_of(fields[1]).setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2], "action")
-        else:
-            continue
+        for number, (group, index) in enumerate(groups):
+            fields = [f.replace("%", index) for f in _fields(value)] if index else _fields(value)
+            _resource(path, lineno, module, group, var, fields, targets, nodes, notes, variables, messages,
+                      hardware_nodes, first=number == 0)
     if not nodes:
         raise ProjectError(f"{path}: no [ResourceGroup@...] section with a rosnode/roscpp entry found")
     for spec in threads:
         if spec.get("HwSource") and spec.get("ResourceGroup"):
-            hardware_groups.update(g.strip() for g in spec["ResourceGroup"].split(","))
+            for named in re.split(r"[, ]+", spec["ResourceGroup"].strip()):
+                base = re.sub(r"\(.*\)$", "", named)
+                hardware_groups.update(ranged.get(base, [base]))
     if hardware_nodes or hardware_groups:
         fpga: dict[str, Any] = {"kind": "fpga"}
         clock = clocks.get(general.get("SystemClock", ""), {}).get("ClockFreq", "")
@@ -194,4 +179,62 @@ def import_reconros(path: Path, module: str = "nodes") -> dict[str, Any]:
             nodes[name]["target"] = FPGA_TARGET
         used = {spec["target"] for spec in nodes.values()} | {FPGA_TARGET}
         targets = {name: spec for name, spec in targets.items() if name in used}
-    return {"name": path.stem, "targets": targets, "nodes": nodes}
+    return {"name": path.stem, "targets": targets, "nodes": nodes}, notes
+
+
+def _resource(path: Path, lineno: int, module: str, group: str, var: str, fields: list[str],
+              targets: dict[str, Any], nodes: dict[str, Any], notes: list[str],
+              variables: dict[tuple[str, str], str], messages: dict[tuple[str, str], str],
+              hardware_nodes: set[str], first: bool) -> None:
+    """One ``var = kind, args...`` line of a resource group."""
+    where = f"{path}:{lineno}"
+    kind = fields[0] if fields else ""
+
+    def need(count: int) -> None:
+        if len(fields) < count:
+            raise ProjectError(f"{where}: {kind} needs {count - 1} arguments, got {len(fields) - 1}")
+
+    def node_of(ref: str) -> dict[str, Any]:
+        if (group, ref) not in variables:
+            raise ProjectError(f"{where}: {ref!r} is not a node defined earlier in this group")
+        found: dict[str, Any] = nodes[variables[(group, ref)]]
+        return found
+
+    def message_of(ref: str, kind_of_type: str) -> str:
+        if (group, ref) in messages:
+            return messages[(group, ref)]
+        parts = ref.split("/")
+        if len(parts) == 2 and all(parts):  # written inline: sensor_msgs/Image
+            return f"{parts[0]}/{kind_of_type}/{parts[1]}"
+        if len(parts) == 3 and all(parts):
+            return ref
+        raise ProjectError(f"{where}: {ref!r} is neither a message defined earlier in this group "
+                           "nor a type name like 'sensor_msgs/Image'")
+
+    if kind in ("rosnode", "roscpp"):
+        need(2)
+        name = fields[1].lower()
+        variables[(group, var)] = name
+        target = group.lower()
+        targets.setdefault(target, {"kind": "process"})
+        nodes[name] = {"run": f"{module}:{name}", "target": target}
+    elif kind in _MESSAGES:
+        need(4)
+        if len(fields) > 4:
+            raise ProjectError(f"{where}: {kind} with a sequence length ({', '.join(fields[1:])}) is ReconROS's "
+                               f"preallocated {fields[1]}/{fields[3]} sequence, which hetros does not map; drop "
+                               f"the length (the topic then carries {fields[1]}/{fields[2]}/{fields[3]})")
+        messages[(group, var)] = f"{fields[1]}/{fields[2]}/{fields[3]}"
+    elif kind in _ENDPOINTS:
+        need(4)
+        section_name, type_kind = _ENDPOINTS[kind]
+        node = node_of(fields[1])
+        node.setdefault(section_name, {})[_topic(fields[3])] = message_of(fields[2], type_kind)
+        if kind in ("rossub", "rospub") and "hw" in (f.lower() for f in fields[4:]):
+            hardware_nodes.add(variables[(group, fields[1])])
+    elif kind.startswith("ros"):
+        raise ProjectError(f"{where}: {kind} is a ReconROS resource hetros does not map (it maps "
+                           f"{', '.join(sorted({'rosnode', *_MESSAGES, *_ENDPOINTS}))})")
+    elif kind in _RECONOS_RESOURCES and first:
+        notes.append(f"{where}: {var} = {kind} is ReconOS's own {kind} resource between a thread's hardware and "
+                     "software halves; hetros nodes talk through topics, so it is not carried over")

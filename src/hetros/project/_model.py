@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, Literal
@@ -26,9 +27,10 @@ class _Strict(BaseModel):
 class HostSpec(_Strict):
     """A machine of the graph: where its targets run and where its peers find it."""
 
-    address: str
-    # the user `hetros deploy` logs in as over ssh (None: deploy starts it only when it is this machine)
-    ssh: str | None = None
+    address: str = Field(description="the machine's IP address or host name; its peers reach it there, and "
+                         "`hetros launch` runs the host whose address is local")
+    ssh: str | None = Field(default=None, description="the user `hetros deploy` logs in as over ssh (absent: deploy "
+                            "starts this host only when it is the machine deploy runs on)")
 
     @field_validator("address")
     @classmethod
@@ -39,16 +41,20 @@ class HostSpec(_Strict):
 
 
 class TargetSpec(_Strict):
-    kind: Literal["thread", "process", "ros1", "fpga"]
-    cpus: list[int] = Field(default_factory=list)
-    # fpga: the clock of the generated topic network, the stream width, the device
-    clock_mhz: float | None = Field(default=None, gt=0)
-    data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8)
-    part: str | None = None
+    kind: Literal["thread", "process", "ros1", "fpga"] = Field(
+        description="thread: in the launcher's process; process: a process of its own; ros1: a process whose "
+                    "nodes are ROS 1 nodes (TCPROS, ROSRPC); fpga: an FPGA whose topics become an AXI-Stream network")
+    cpus: list[int] = Field(default_factory=list, description="the CPUs the target's process is pinned to "
+                            "(empty: any)")
+    clock_mhz: float | None = Field(default=None, gt=0, description="fpga: the clock of the generated topic "
+                                    "network (absent: 100 MHz)")
+    data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8, description="fpga: the stream width in bits")
+    part: str | None = Field(default=None, description="fpga: the device, for reports")
     # reserved for co-simulated hardware nodes, which no mapping runs yet: refused, never ignored
-    sim: str | None = None
-    # the machine it runs on (a name under hosts:); None: the first host, or this machine without hosts:
-    host: str | None = None
+    sim: str | None = Field(default=None, description="reserved: refused with an error until targets run their "
+                            "nodes in a simulator")
+    host: str | None = Field(default=None, description="the machine it runs on, a name under hosts: (absent: the "
+                             "first host, or this machine without hosts:)")
 
     @field_validator("sim")
     @classmethod
@@ -68,34 +74,46 @@ class TargetSpec(_Strict):
 class EndpointSpec(_Strict):
     """An endpoint with its own QoS request, checked against its peers' (ROS 2 request/offer)."""
 
-    type: str
-    reliability: Literal["reliable", "best_effort"] | None = None
-    durability: Literal["volatile", "transient_local"] | None = None
-    deadline: float | None = Field(default=None, gt=0)
-    liveliness: Literal["automatic", "manual_by_topic"] | None = None
-    lease_duration: float | None = Field(default=None, gt=0)
+    type: str = Field(description="the message type, as pkg/msg/Type")
+    reliability: Literal["reliable", "best_effort"] | None = Field(
+        default=None, description="requested (a subscriber) or offered (a publisher); absent: the topic's")
+    durability: Literal["volatile", "transient_local"] | None = Field(
+        default=None, description="requested or offered; absent: the topic's")
+    deadline: float | None = Field(default=None, gt=0, description="seconds, requested or offered; absent: the "
+                                   "topic's")
+    liveliness: Literal["automatic", "manual_by_topic"] | None = Field(
+        default=None, description="requested or offered; absent: the topic's")
+    lease_duration: float | None = Field(default=None, gt=0, description="seconds, requested or offered; absent: "
+                                         "the topic's")
 
 
 class ActionSpec(_Strict):
     """An action server with a bound on the goals it executes at once (the rest wait, accepted)."""
 
-    type: str
-    max_goals: int = Field(default=DEFAULT_MAX_GOALS, ge=1, le=1024)
+    type: str = Field(description="the action type, as pkg/action/Type")
+    max_goals: int = Field(default=DEFAULT_MAX_GOALS, ge=1, le=1024,
+                           description="how many goals execute at once; later ones wait, accepted")
 
 
 class NodeSpec(_Strict):
-    run: str
-    target: str
-    publish: dict[str, str | EndpointSpec] = Field(default_factory=dict)
-    subscribe: dict[str, str | EndpointSpec] = Field(default_factory=dict)
-    services: dict[str, str] = Field(default_factory=dict)
-    clients: dict[str, str] = Field(default_factory=dict)
-    actions: dict[str, str | ActionSpec] = Field(default_factory=dict)
-    action_clients: dict[str, str] = Field(default_factory=dict)
-    parameters: dict[str, Any] = Field(default_factory=dict)
-    restart: Literal["never", "on-failure"] = "never"
-    required: bool = False
-    max_restarts: int = Field(default=3, ge=0)
+    run: str = Field(description="module:function (or module:Class) of the node's code, the module beside the "
+                     "project file")
+    target: str = Field(description="the target it runs on, a name under targets:")
+    publish: dict[str, str | EndpointSpec] = Field(
+        default_factory=dict, description="topic -> type, or topic -> {type: ..., QoS offered}")
+    subscribe: dict[str, str | EndpointSpec] = Field(
+        default_factory=dict, description="topic -> type, or topic -> {type: ..., QoS requested}")
+    services: dict[str, str] = Field(default_factory=dict, description="service served -> pkg/srv/Type")
+    clients: dict[str, str] = Field(default_factory=dict, description="service called -> pkg/srv/Type")
+    actions: dict[str, str | ActionSpec] = Field(
+        default_factory=dict, description="action served -> pkg/action/Type, or -> {type: ..., max_goals: N}")
+    action_clients: dict[str, str] = Field(default_factory=dict, description="action called -> pkg/action/Type")
+    parameters: dict[str, Any] = Field(default_factory=dict, description="name -> value, read by "
+                                       "node.get_parameter(name)")
+    restart: Literal["never", "on-failure"] = Field(default="never", description="on-failure: a node that raised "
+                                                   "starts again, its subscriptions kept")
+    required: bool = Field(default=False, description="when this node returns, the whole launch ends")
+    max_restarts: int = Field(default=3, ge=0, description="restarts after which a failing node stays failed")
 
     def types(self, section: str) -> dict[str, str]:
         """Endpoint name -> type name for a section, its actions' services and topics included.
@@ -148,13 +166,18 @@ class Bridged(_Strict):
     """What a bridge carries across: hetros endpoints exported, the other graph's imported."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
-    export: list[str] = Field(default_factory=list)
-    import_: list[str] = Field(default_factory=list, alias="import")
-    export_services: list[str] = Field(default_factory=list)
-    import_services: list[str] = Field(default_factory=list)
-    # hetros action servers offered to the other graph's clients, and the other way round
-    export_actions: list[str] = Field(default_factory=list)
-    import_actions: list[str] = Field(default_factory=list)
+    export: list[str] = Field(default_factory=list, description="topics hetros publishes, offered to the other "
+                              "graph's subscribers")
+    import_: list[str] = Field(default_factory=list, alias="import", description="topics the other graph "
+                               "publishes, delivered to hetros subscribers")
+    export_services: list[str] = Field(default_factory=list, description="hetros services the other graph's "
+                                       "clients may call")
+    import_services: list[str] = Field(default_factory=list, description="the other graph's services hetros "
+                                       "clients may call")
+    export_actions: list[str] = Field(default_factory=list, description="hetros action servers offered to the "
+                                      "other graph's clients")
+    import_actions: list[str] = Field(default_factory=list, description="the other graph's action servers, for "
+                                      "hetros action clients")
 
     def listed(self) -> dict[str, list[str]]:
         """The six lists by their YAML keys (``export``, ``import``, ``export_services``, ...)."""
@@ -166,10 +189,10 @@ class Bridged(_Strict):
 class Ros1Spec(Bridged):
     """Topics shared with a ROS 1 graph through its master (``hetros master`` or roscore)."""
 
-    # None: $ROS_MASTER_URI, else http://127.0.0.1:11311/
-    master: str | None = None
-    # the interface the bridge's slave API and TCPROS server listen on
-    host: str = "127.0.0.1"
+    master: str | None = Field(default=None, description="the ROS 1 master's URI (absent: $ROS_MASTER_URI, else "
+                               "http://127.0.0.1:11311/)")
+    host: str = Field(default="127.0.0.1", description="the interface the bridge's slave API and TCPROS server "
+                      "listen on")
 
     @field_validator("master")
     @classmethod
@@ -182,18 +205,20 @@ class Ros1Spec(Bridged):
 class Ros2Spec(Bridged):
     """Topics, services and actions shared with a ROS 2 graph over DDS (rmw_cyclonedds's wire)."""
 
-    # None: $ROS_DOMAIN_ID, else 0
-    domain: int | None = Field(default=None, ge=0, le=232)
-    # the one interface the DDS participant uses, and the addresses it looks for peers at
-    # (static discovery; $CYCLONEDDS_URI replaces all three, as for any ROS 2 node)
-    interface: str = "127.0.0.1"
-    peers: list[str] = Field(default_factory=lambda: ["127.0.0.1"])
-    multicast: bool = False
+    domain: int | None = Field(default=None, ge=0, le=232, description="the ROS 2 domain id (absent: "
+                               "$ROS_DOMAIN_ID, else 0)")
+    interface: str = Field(default="127.0.0.1", description="the one interface the DDS participant uses "
+                           "($CYCLONEDDS_URI replaces interface, peers and multicast)")
+    peers: list[str] = Field(default_factory=lambda: ["127.0.0.1"], description="where static discovery looks "
+                             "for ROS 2 participants")
+    multicast: bool = Field(default=False, description="whether discovery also uses multicast")
 
 
 class ExternalSpec(_Strict):
-    ros2: Ros2Spec | None = None
-    ros1: Ros1Spec | None = None
+    ros2: Ros2Spec | None = Field(default=None, description="share topics, services and actions with a ROS 2 "
+                                  "graph over DDS")
+    ros1: Ros1Spec | None = Field(default=None, description="share topics, services and actions with a ROS 1 "
+                                  "graph through its master")
 
 
 _UNITS = {"": 1, "B": 1, "KIB": 1 << 10, "MIB": 1 << 20, "GIB": 1 << 30, "TIB": 1 << 40,
@@ -214,6 +239,18 @@ def parse_size(value: int | str) -> int:
     return int(number) * _UNITS[unit]
 
 
+def _unknown_key(loc: list[str]) -> str:
+    """An unknown key's error: the nearest known key when one is close, else every key there."""
+    from ._reference import known_keys
+
+    known = known_keys(tuple(loc[:-1]))
+    near = difflib.get_close_matches(loc[-1], known, n=1, cutoff=0.6)
+    if near:
+        return f"unknown key {loc[-1]!r}; did you mean {near[0]!r}?"
+    listed = f": one of {', '.join(known)}" if known else ""
+    return f"unknown key {loc[-1]!r}{listed} (docs/PROJECT_FILE.md lists every key)"
+
+
 def _plain_names(what: str, names: Iterable[str]) -> None:
     for name in names:
         if problem := plain_name_problem(what, name):
@@ -221,19 +258,23 @@ def _plain_names(what: str, names: Iterable[str]) -> None:
 
 
 class Project(_Strict):
-    name: str
-    messages: list[str] = Field(default_factory=list)
-    shm_budget: int | str = "1GiB"
-    targets: dict[str, TargetSpec] = Field(default_factory=lambda: {"main": TargetSpec(kind="thread")})
-    nodes: dict[str, NodeSpec]
-    topics: dict[str, QoS] = Field(default_factory=dict)
-    external: ExternalSpec | None = None
-    # the machines one graph spans; edges between them go over DDS
-    hosts: dict[str, HostSpec] = Field(default_factory=dict)
-    # when a host goes away: stop the whole graph, or keep the rest running until it returns
-    on_peer_lost: Literal["stop", "continue"] = "stop"
-    # the DDS domain of the edges between hosts (None: $ROS_DOMAIN_ID, else 0)
-    dds_domain: int | None = Field(default=None, ge=0, le=232)
+    name: str = Field(description="the project's name: an ASCII letter, then letters, digits, _ or -")
+    messages: list[str] = Field(default_factory=list, description="folders of .msg/.srv/.action packages, "
+                                "relative to the project file")
+    shm_budget: int | str = Field(default="1GiB", description="the most shared memory all topics may reserve "
+                                  "(bytes, or like 4GiB)")
+    targets: dict[str, TargetSpec] = Field(default_factory=lambda: {"main": TargetSpec(kind="thread")},
+                                           description="name -> where nodes run (absent: one thread target, main)")
+    nodes: dict[str, NodeSpec] = Field(description="name -> a node: its code, its target, its endpoints")
+    topics: dict[str, QoS] = Field(default_factory=dict, description="topic -> its QoS (absent: reliable, keep_all, "
+                                   "depth 10)")
+    external: ExternalSpec | None = Field(default=None, description="the ROS 1 and ROS 2 graphs this one joins")
+    hosts: dict[str, HostSpec] = Field(default_factory=dict, description="name -> a machine the graph spans; "
+                                       "edges between them go over DDS")
+    on_peer_lost: Literal["stop", "continue"] = Field(default="stop", description="when a host goes away: stop "
+                                                      "the whole graph, or keep the rest running until it returns")
+    dds_domain: int | None = Field(default=None, ge=0, le=232, description="the DDS domain of the edges between "
+                                   "hosts (absent: $ROS_DOMAIN_ID, else 0)")
 
     @field_validator("shm_budget")
     @classmethod
@@ -402,8 +443,8 @@ def load_project(path: str | Path) -> LoadedProject:
             if error["loc"] and error["loc"][-1] == "str" and tuple(map(str, error["loc"][:-1])) in branches:
                 continue
             message = error["msg"].removeprefix("Value error, ")
-            if error["type"] == "extra_forbidden":
-                message = f"unknown key {loc[-1]!r}; check its spelling against the documented keys"
+            if error["type"] in ("extra_forbidden", "unexpected_keyword_argument"):
+                message = _unknown_key(loc)
             elif error["type"] == "missing":
                 message = f"required key {loc[-1]!r} is missing"
             elif isinstance(error.get("input"), str | int | float | bool | None) and \

@@ -1,10 +1,11 @@
 """Runtime: node API, per-node executor, per-process graph, the host of a process' nodes."""
 
 from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle
+from ._entities import Client, Publisher, Replies, Service, Subscription, Timer
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
-from ._node import Client, Node, Publisher, Replies, Service, Subscription, Timer
+from ._node import Node
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus
 
 __all__ = [

@@ -38,7 +38,7 @@ from ..msg import ActionKind, ActionType, registry
 from ..msg import action_type as as_action_type
 from ..plan import action_endpoints, request_channel
 from ..transport import Reader
-from ._node import Client, Replies, _check_type, _typename
+from ._entities import Client, Replies, check_type, typename_of
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -240,7 +240,7 @@ class ActionServer:
         graph = node.graph
         self._requests: dict[str, Reader] = {}
         self._types = {part: graph.types.get_service(srv) for part, (_, srv) in services.items()}
-        self._replies = {part: Replies(node, service, _typename(self._types[part].Response))
+        self._replies = {part: Replies(node, service, typename_of(self._types[part].Response))
                          for part, (service, _srv) in services.items()}
         for part, (service, srv) in services.items():
             node._check_declared_type(request_channel(service), f"{srv}_Request")
@@ -428,7 +428,7 @@ class ActionServer:
 
     def publish_feedback(self, handle: ServerGoalHandle, feedback: Any) -> None:
         """Send ``feedback`` to the clients of ``handle``'s goal (in order, reliably)."""
-        _check_type(feedback, _typename(self.type.Feedback), f"feedback of action {self.name}")
+        check_type(feedback, typename_of(self.type.Feedback), f"feedback of action {self.name}")
         if not handle.is_active:
             raise ActionError(f"goal {_short(handle.goal_id)} of {self.name} already ended "
                               f"({STATUS_NAMES[handle.status]}); it takes no more feedback")
@@ -451,7 +451,7 @@ class ActionServer:
         self._end(handle, CANCELED, result)
 
     def _check_result(self, result: Any) -> None:
-        _check_type(result, _typename(self.type.Result), f"the result of action {self.name}")
+        check_type(result, typename_of(self.type.Result), f"the result of action {self.name}")
         result._hetros_validate(result, f"the result of {self.name}")
 
     def _end(self, handle: ServerGoalHandle, status: int, result: Any) -> None:
@@ -658,7 +658,7 @@ class ActionClient:
     def send_goal(self, goal: Any, feedback_cb: Callable[[Any], object] | None = None,
                   timeout: float = 10.0) -> ClientGoalHandle:
         """Send ``goal``; return its handle once the server accepted or rejected it (``handle.accepted``)."""
-        _check_type(goal, _typename(self.type.Goal), f"a goal of action {self.name}")
+        check_type(goal, typename_of(self.type.Goal), f"a goal of action {self.name}")
         goal._hetros_validate(goal, f"the goal of {self.name}")
         goal_id = os.urandom(16)
         handle = ClientGoalHandle(self, goal_id, feedback_cb)

@@ -276,7 +276,7 @@ class _Port:
         self.suspect_since = 0.0
 
 
-bind_slots(_Port)
+bind_slots(_Port, ("subscriber", "service", "expected", "suspect_since"))
 
 
 class ShmReader(Reader):

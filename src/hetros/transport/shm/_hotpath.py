@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from ..._errors import TransportError
 from ...msg._compiled import wanted
 from ._credits import Credits
 from ._iceoryx import assume_init, loan_slice
@@ -33,10 +34,24 @@ if _cslot is not None and wanted():
     send_cdr, send_slot, take_cdr = _cslot.send_cdr, _cslot.send_slot, _cslot.take_cdr
 
 
-def bind_slots(cls: type) -> None:
-    """Let the compiled path read and write ``cls``'s slots in place (a state class it is handed)."""
+# the slots the compiled path reads and writes in place, per class it is handed (``_cslot.c``'s
+# bind list holds exactly these names; tests/unit/test_c_contracts.py checks both sides)
+COMPILED_SLOTS: dict[type, tuple[str, ...]] = {}
+
+
+def bind_slots(cls: type, names: tuple[str, ...]) -> None:
+    """Let the compiled path read and write ``cls``'s slots ``names`` in place.
+
+    A slot renamed on one side only would otherwise drop the class to the slow path without a
+    word (or to an error deep in C): every name must be found, or the import fails here.
+    """
     if _cslot is not None and wanted():
-        _cslot.bind_slots(cls)
+        bound = _cslot.bind_slots(cls)
+        if bound != len(names):
+            raise TransportError(
+                f"{cls.__name__}: the compiled path found {bound} of its {len(names)} slots ({', '.join(names)}); "
+                "a slot was renamed on one side: rename it in transport/shm/_cslot.c's bind list too")
+    COMPILED_SLOTS[cls] = names
 
 
-__all__ = ["SENT_STALE_WAKES", "bind_slots", "send_cdr", "send_slot", "take_cdr"]
+__all__ = ["COMPILED_SLOTS", "SENT_STALE_WAKES", "bind_slots", "send_cdr", "send_slot", "take_cdr"]

@@ -321,4 +321,5 @@ class Service:
         self.credits.close()
 
 
-bind_slots(Service)
+bind_slots(Service, ("_publisher", "credits_at", "blocking", "room", "next_seq", "_wakes_version", "_wakes",
+                     "qos"))

@@ -1,0 +1,464 @@
+"""``hetros check``: every static check of a project, each error naming its YAML path and the fix."""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import os
+from collections.abc import Iterable
+
+from .._errors import DefinitionError, MessageError
+from .._net import is_local_address
+from .._qos import QoS
+from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
+from ..plan import (
+    ACTION_PREFIX,
+    ROS2_BRIDGE,
+    process_name,
+)
+from ..transport import reserved_bytes
+from ._bridges import (
+    ROS1_BRIDGE,
+    bridged,
+    check_bridged,
+    check_ros1_nodes,
+    ros1_carries,
+    ros1_nodes,
+    ros2_carries,
+)
+from ._model import LoadedProject, NodeSpec
+from ._names import node_name_problem, topic_name_problem
+from ._probe import module_findable, runnable_problems
+from ._report import CheckReport
+from ._scan import scan_file
+
+
+def load_messages(project: LoadedProject, types: TypeRegistry, report: CheckReport) -> None:
+    for index, folder in enumerate(project.model.messages):
+        path = (project.root / folder).resolve()
+        try:
+            types.load_folder(path)
+        except DefinitionError as exc:
+            report.errors.append(f"{project.where('messages', index)}: {exc}")
+
+
+def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckReport:
+    """Every check ``hetros check`` promises; errors name file:line and the YAML path."""
+    types = types or registry()
+    report = CheckReport()
+    model = project.model
+    load_messages(project, types, report)
+    where = project.where
+
+    for tname, target in model.targets.items():
+        for index, cpu in enumerate(target.cpus):
+            if cpu >= (os.cpu_count() or 1):
+                report.errors.append(
+                    f"{where('targets', tname, 'cpus', index)}: cpu {cpu} does not exist on this "
+                    f"machine ({os.cpu_count()} CPUs: 0..{(os.cpu_count() or 1) - 1})"
+                )
+    _check_hosts(project, report)
+    speaks_ros1 = ros1_nodes(project)
+    for reserved, graph in ((ROS1_BRIDGE, "ROS 1"), (ROS2_BRIDGE, "ROS 2")):
+        if reserved in model.nodes or reserved in model.targets:
+            report.errors.append(f"{where('nodes', reserved)}: {reserved!r} is reserved for the {graph} bridge; "
+                                 "rename the node or target")
+    publishers: dict[str, list[tuple[str, str]]] = {}
+    subscribers: dict[str, list[tuple[str, str]]] = {}
+    servers: dict[str, list[tuple[str, str]]] = {}
+    clients: dict[str, list[tuple[str, str]]] = {}
+    runnable: dict[str, list[str]] = {}
+    derived: set[str] = set()  # the services and topics of actions: checked as actions
+    for nname, spec in model.nodes.items():
+        if spec.target not in model.targets:
+            report.errors.append(
+                f"{where('nodes', nname, 'target')}: unknown target {spec.target!r}; "
+                f"define it under targets (known: {', '.join(model.targets) or 'none'})"
+            )
+        problem = node_name_problem(nname)
+        if problem:
+            report.errors.append(f"{where('nodes', nname)}: {problem}")
+        module = spec.run.partition(":")[0]
+        if not module_findable(project, module):
+            report.errors.append(
+                f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the "
+                "project file nor in the environment"
+            )
+        else:
+            runnable.setdefault(spec.run, []).append(nname)
+        _check_actions(project, nname, spec, types, report)
+        for section, table, kind in (("publish", publishers, "msg"), ("subscribe", subscribers, "msg"),
+                                     ("services", servers, "srv"), ("clients", clients, "srv")):
+            for endpoint, typename in spec.types(section).items():
+                if spec.action_of(section, endpoint) is not None:
+                    derived.add(endpoint)
+                    table.setdefault(endpoint, []).append((nname, normalize_typename(typename, kind)))
+                    continue
+                problem = topic_name_problem(endpoint)
+                if problem:
+                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: {endpoint!r} {problem}")
+                try:
+                    full = normalize_typename(typename, kind)
+                    if kind == "msg":
+                        types.get(full)
+                    else:
+                        types.get_service(full)
+                except MessageError as exc:
+                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: {exc}")
+                    full = typename
+                table.setdefault(endpoint, []).append((nname, full))
+
+    for run, problem in runnable_problems(project, list(runnable)).items():
+        for nname in runnable.get(run, []):
+            report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
+    external = bridged(project)
+    imported = {t for spec in external.values() for t in spec.import_}
+    _check_action_pairs(project, {a for spec in external.values() for a in spec.import_actions}, report)
+    for topic, subscribed in subscribers.items():
+        if topic in derived:
+            continue
+        if topic not in publishers and topic not in imported:
+            for nname, _ in subscribed:
+                if nname in speaks_ros1:
+                    continue  # a ROS 1 node's topic may come from any ROS 1 publisher
+                report.errors.append(
+                    f"{where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}"
+                    f"{_nearest(topic, publishers)}; add a publisher under some node's 'publish', import it "
+                    "from ROS 1 or ROS 2 (external: ros1: / ros2: import:) or remove this subscription"
+                )
+    for topic in (set(publishers) | set(subscribers)) - derived:
+        declared = {t for _, t in publishers.get(topic, []) + subscribers.get(topic, [])}
+        if len(declared) > 1:
+            users = ", ".join(f"{n}: {t}" for n, t in publishers.get(topic, []) + subscribers.get(topic, []))
+            report.errors.append(f"{where('nodes')}: topic {topic} is declared with different types "
+                                 f"({users}); one topic carries one type")
+    imported_services = {v for spec in external.values() for v in spec.import_services}
+    for service, calling in clients.items():
+        if service in derived:
+            continue
+        if service not in servers and service not in imported_services:
+            for nname, _ in calling:
+                if nname in speaks_ros1:
+                    continue  # a ROS 1 node may call any ROS 1 service
+                report.errors.append(f"{where('nodes', nname, 'clients', service)}: no node serves "
+                                     f"{service}{_nearest(service, servers)}; add it under some node's 'services'")
+    for service, serving in servers.items():
+        if service in derived:
+            continue
+        if len(serving) > 1:
+            report.errors.append(f"{where('nodes', serving[1][0], 'services', service)}: {service} is "
+                                 f"already served by {serving[0][0]}; a service has one server")
+        declared = {t for _, t in serving + clients.get(service, [])}
+        if len(declared) > 1:
+            report.errors.append(f"{where('nodes')}: service {service} is declared with different types")
+    for topic, topic_spec in model.topics.items():
+        problem = topic_name_problem(topic)
+        if problem:
+            report.errors.append(f"{where('topics', topic)}: {topic!r} {problem}")
+        if topic not in publishers and topic not in subscribers:
+            report.errors.append(f"{where('topics', topic)}: no node publishes or subscribes {topic}")
+        if topic_spec.reliability == "best_effort" and topic_spec.history == "keep_all":
+            report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
+                                   "behaves like keep_last with this depth")
+    _check_qos_compatibility(project, publishers, subscribers, report)
+    _check_hardware_topics(project, publishers, subscribers, types, report)
+
+    def hetros_side(table: dict[str, list[tuple[str, str]]]) -> dict[str, list[tuple[str, str]]]:
+        return {k: kept for k, v in table.items() if (kept := [e for e in v if e[0] not in speaks_ros1])}
+
+    _check_shm_budget(project, types, hetros_side(publishers), hetros_side(subscribers), report)
+    if speaks_ros1:
+        check_ros1_nodes(project, speaks_ros1, types, report)
+    _check_sources(project, report)
+    tables = (publishers, subscribers, servers, clients)
+    for graph, bridged_spec in external.items():
+        check_bridged(project, graph, bridged_spec, tables, ros1_carries if graph == "ros1" else ros2_carries,
+                       types, report)
+    return report
+
+
+def _check_hosts(project: LoadedProject, report: CheckReport) -> None:
+    """Host names become parts of DDS topic names; targets name hosts that exist; one address each."""
+    model = project.model
+    where = project.where
+    ros2 = model.external.ros2 if model.external is not None else None
+    if model.hosts and ros2 is not None and (model.dds_domain is None or model.dds_domain == ros2.domain):
+        # one process holds one Cyclone configuration per domain: the bridge would take the hosts' one
+        report.errors.append(f"{where('dds_domain')}: the edges between hosts and external: ros2: need different "
+                             "DDS domains (their participants are configured differently); set dds_domain: and "
+                             "external: ros2: domain: to two numbers")
+    for name, host in model.hosts.items():
+        if not name.isidentifier():
+            report.errors.append(f"{where('hosts', name)}: a host name must be letters, digits and '_' "
+                                 f"(it is part of DDS topic names), not {name!r}")
+        users = [other for other, spec in model.hosts.items() if spec.address == host.address]
+        if users[0] != name:
+            report.errors.append(f"{where('hosts', name, 'address')}: {host.address} is host {users[0]}'s "
+                                 "address already; one machine is one host (targets share it)")
+    if model.hosts and not any(is_local_address(host.address) for host in model.hosts.values()):
+        report.warnings.append(f"{where('hosts')}: none of the hosts' addresses ("
+                               f"{', '.join(h.address for h in model.hosts.values())}) is this machine's: "
+                               "`hetros launch` runs on one of the hosts (edit an address if this machine is one)")
+    custom_dds = bool(os.environ.get("CYCLONEDDS_URI"))
+    if ros2 is not None and not custom_dds and not is_local_address(ros2.interface):
+        report.errors.append(f"{where('external', 'ros2', 'interface')}: {ros2.interface} is not an address of "
+                             "this machine, so the ROS 2 bridge's DDS participant cannot use it; give one of this "
+                             "machine's addresses (127.0.0.1 for ROS 2 nodes on this machine)")
+    for tname, target in model.targets.items():
+        if target.host is None:
+            continue
+        if not model.hosts:
+            report.errors.append(f"{where('targets', tname, 'host')}: host {target.host!r} is not defined; "
+                                 "name the machines under hosts: (name: {address: ...})")
+        elif target.host not in model.hosts:
+            report.errors.append(f"{where('targets', tname, 'host')}: unknown host {target.host!r}; define it "
+                                 f"under hosts: (known: {', '.join(model.hosts)})")
+        elif target.kind == "fpga" and len(model.hosts) > 1:
+            report.warnings.append(f"{where('targets', tname, 'host')}: an fpga target's topic network is "
+                                   "generated per target; its host only decides where its software side runs")
+
+
+def project_hash(project: LoadedProject) -> str:
+    """Of the project file and every message definition it loads: hosts compare it when they meet."""
+    digest = hashlib.sha256(project.path.read_bytes())
+    for folder in project.model.messages:
+        root = (project.root / folder).resolve()
+        for path in sorted(p for p in root.rglob("*") if p.is_file() and p.suffix in (".msg", ".srv", ".action")):
+            digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+_HW_QOS = {"reliability": "reliable", "history": "keep_all", "durability": "volatile"}
+
+
+def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tuple[str, str]]],
+                           subscribers: dict[str, list[tuple[str, str]]], types: TypeRegistry,
+                           report: CheckReport) -> None:
+    """A topic is a hardware topic when all its endpoints sit on one fpga target; say why when not."""
+    from ..hw import stream_problem
+
+    model = project.model
+    where = project.where
+    fpga = {t for t, spec in model.targets.items() if spec.kind == "fpga"}
+    for nname, spec in model.nodes.items():
+        if spec.target in fpga:
+            for section in ("services", "clients", "actions", "action_clients"):
+                for name in getattr(spec, section):
+                    report.errors.append(f"{where('nodes', nname, section, name)}: {section} of a node on an fpga "
+                                         "target need a hardware/software gateway (FPGA part 2, not built yet); "
+                                         "move the node to a thread or process target")
+    for topic in sorted(set(publishers) | set(subscribers)):
+        endpoints = publishers.get(topic, []) + subscribers.get(topic, [])
+        placed = {n: model.nodes[n].target for n, _ in endpoints if n in model.nodes}
+        on_fpga = {n: t for n, t in placed.items() if t in fpga}
+        qos = model.topics.get(topic)
+        if not on_fpga:
+            if qos is not None and qos.hw_fifo is not None:
+                report.warnings.append(f"{where('topics', topic, 'hw_fifo')}: {topic} is not a hardware topic (no "
+                                       "endpoint on an fpga target), so hw_fifo has no effect")
+            continue
+        software = {n: t for n, t in placed.items() if t not in fpga}
+        if software or len(set(on_fpga.values())) > 1:
+            hardware = ", ".join(f"{n} on {t}" for n, t in on_fpga.items())
+            other = ", ".join(f"{n} on {t}" for n, t in software.items()) or "others on another fpga target"
+            report.errors.append(f"{where('nodes')}: topic {topic} is not a hardware topic: {hardware} but {other}; "
+                                 "an edge between hardware and software (or two fpga targets) needs a gateway "
+                                 "(FPGA part 2, not built yet): put all its endpoints on one fpga target or none")
+            continue
+        if qos is not None:
+            for key, wanted in _HW_QOS.items():
+                if getattr(qos, key) != wanted:
+                    report.errors.append(f"{where('topics', topic, key)}: {topic} is a hardware topic, which is "
+                                         f"reliable, keep_all and volatile (an AXI-Stream network with "
+                                         f"back-pressure), not {key} {getattr(qos, key)}; remove the setting")
+        node, typename = endpoints[0]
+        try:
+            problem = stream_problem(types, typename)
+        except MessageError:
+            continue  # an unknown type is reported where it is declared
+        if problem:
+            section = "publish" if topic in publishers else "subscribe"
+            report.errors.append(f"{where('nodes', node, section, topic)}: {topic} [{typename}] cannot be a "
+                                 f"hardware topic: {problem}")
+
+
+def _check_actions(project: LoadedProject, nname: str, spec: NodeSpec, types: TypeRegistry,
+                   report: CheckReport) -> None:
+    where = project.where
+    for section in ("actions", "action_clients"):
+        for action, typename in spec.types(section).items():
+            problem = topic_name_problem(action)
+            if problem:
+                report.errors.append(f"{where('nodes', nname, section, action)}: {action!r} {problem}")
+            elif ACTION_PREFIX in action + "/":
+                report.errors.append(f"{where('nodes', nname, section, action)}: an action name cannot contain "
+                                     f"{ACTION_PREFIX.rstrip('/')!r} (hetros puts the action's own services there)")
+            try:
+                types.get_action(normalize_typename(typename, "action"))
+            except MessageError as exc:
+                report.errors.append(f"{where('nodes', nname, section, action)}: {exc}")
+            if spec.target in project.model.targets and project.model.targets[spec.target].kind == "ros1":
+                report.errors.append(f"{where('nodes', nname, section, action)}: actions on a 'kind: ros1' target "
+                                     "(actionlib) are not supported yet; put the node on a thread or process "
+                                     "target")
+
+
+def _check_action_pairs(project: LoadedProject, imported: set[str], report: CheckReport) -> None:
+    """One server per action, a server (here or imported from ROS 1) for every client, one type per action."""
+    where = project.where
+    servers: dict[str, list[tuple[str, str]]] = {}
+    for nname, spec in project.model.nodes.items():
+        for action, typename in spec.types("actions").items():
+            servers.setdefault(action, []).append((nname, typename))
+    for action, serving in servers.items():
+        if len(serving) > 1:
+            report.errors.append(f"{where('nodes', serving[1][0], 'actions', action)}: action {action} is already "
+                                 f"served by {serving[0][0]}; an action has one server")
+    for nname, spec in project.model.nodes.items():
+        for action, typename in spec.types("action_clients").items():
+            if action in imported and action not in servers:
+                continue
+            if action not in servers:
+                report.errors.append(f"{where('nodes', nname, 'action_clients', action)}: no node serves action "
+                                     f"{action}; add it under some node's 'actions'")
+                continue
+            mine = _action_type_or_raw(typename)
+            theirs = _action_type_or_raw(servers[action][0][1])
+            if mine != theirs:
+                report.errors.append(f"{where('nodes', nname, 'action_clients', action)}: {action} is served by "
+                                     f"{servers[action][0][0]} as {theirs}, not {mine}; one action has one type")
+
+
+def _action_type_or_raw(typename: str) -> str:
+    try:
+        return normalize_typename(typename, "action")
+    except MessageError:
+        return typename
+
+
+def _check_shm_budget(project: LoadedProject, types: TypeRegistry, publishers: dict[str, list[tuple[str, str]]],
+                      subscribers: dict[str, list[tuple[str, str]]], report: CheckReport) -> None:
+    """Refuse a topic whose shared memory (iceoryx2 reserves it up front) exceeds the project's budget."""
+    model = project.model
+    budget = model.shm_budget_bytes
+
+    def process(node: str) -> str:
+        name = model.nodes[node].target
+        target = model.targets.get(name)
+        return process_name(name, target.kind if target is not None else "thread")
+
+    for topic, published in publishers.items():
+        if not any(process(p) != process(s) for p, _ in published for s, _ in subscribers.get(topic, [])):
+            continue
+        typename = published[0][1]
+        spec = model.topics.get(topic)
+        qos = spec if spec is not None else QoS()
+        try:
+            size = flat_layout(types, typename).size
+        except MessageError:
+            continue
+        need = reserved_bytes(qos, size) * len({process(p) for p, _ in published})
+        if need > budget:
+            what = f"{size}-byte messages" if size is not None else "variable-size messages (4 KiB slots at first)"
+            report.errors.append(
+                f"{project.where('topics', topic, 'depth') if spec else project.where('nodes')}: {topic} would "
+                f"reserve {need / 2**20:,.0f} MiB of shared memory (depth {qos.depth}, {what}) but the "
+                f"project's shm_budget is {budget / 2**20:,.0f} MiB; lower the depth or raise shm_budget"
+            )
+
+
+# how ROS 2 matches an offer to a request, per policy: the offer must be at least as strong
+_RANK = {"best_effort": 0, "reliable": 1, "volatile": 0, "transient_local": 1, "automatic": 0, "manual_by_topic": 1}
+
+
+_PERIODS = ("deadline", "lease_duration")  # seconds; None is infinite; the offer must be at most the request
+
+
+def _offer_falls_short(policy: str, offered: object, requested: object) -> bool:
+    if policy in _PERIODS:
+        return requested is not None and (offered is None or float(offered) > float(requested))  # type: ignore[arg-type]
+    return _RANK[str(requested)] > _RANK[str(offered)]
+
+
+def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[tuple[str, str]]],
+                             subscribers: dict[str, list[tuple[str, str]]], report: CheckReport) -> None:
+    """A subscriber may not request more than a publisher offers, as ROS 2 matches them:
+    reliability, durability and liveliness kind by strength, deadline and lease_duration by
+    period (an offered period longer than the requested one, or none, falls short)."""
+    model = project.model
+    for topic, subscribed in subscribers.items():
+        topic_qos = model.topics.get(topic) or QoS()
+        for policy in ("reliability", "durability", "deadline", "liveliness", "lease_duration"):
+            default = getattr(topic_qos, policy)
+
+            def effective(node: str, section: str, policy: str = policy, default: object = default,
+                          topic: str = topic) -> object:
+                spec = model.nodes[node].endpoint(section, topic)
+                value = getattr(spec, policy) if spec else None
+                return default if value is None else value
+
+            def shown(value: object, policy: str = policy) -> str:
+                return ("none" if value is None else f"{value:g} s") if policy in _PERIODS else str(value)
+
+            for pub, _ in publishers.get(topic, []):
+                offered = effective(pub, "publish")
+                for sub, _ in subscribed:
+                    requested = effective(sub, "subscribe")
+                    if _offer_falls_short(policy, offered, requested):
+                        report.errors.append(
+                            f"{project.where('nodes', sub, 'subscribe', topic)}: incompatible QoS on "
+                            f"{topic}: {sub} requests {policy} {shown(requested)} but {pub} offers "
+                            f"{shown(offered)} ({project.where('nodes', pub, 'publish', topic)}); make them agree"
+                        )
+
+
+def _nearest(name: str, known: Iterable[str]) -> str:
+    """ "; did you mean '/x'?" when one of ``known`` is close to ``name``, else ""."""
+    near = difflib.get_close_matches(name, [str(k) for k in known], n=1, cutoff=0.6)
+    return f"; did you mean {near[0]!r}?" if near else ""
+
+
+_SCANNED_KIND = {"publish": "msg", "subscribe": "msg", "services": "srv", "clients": "srv", "actions": "action",
+                 "action_clients": "action"}
+
+
+def _check_sources(project: LoadedProject, report: CheckReport) -> None:
+    """What a node's code creates against what its project entry declares: every endpoint, with
+    its type where the code names it through ``hetros.interfaces``."""
+    for nname, spec in project.model.nodes.items():
+        module, _, attr = spec.run.partition(":")
+        path = project.root.joinpath(*module.split(".")).with_suffix(".py")
+        if not path.is_file():
+            continue
+        try:
+            scanned = {s.name: s for s in scan_file(path, module)}
+        except SyntaxError as exc:
+            report.errors.append(f"{project.where('nodes', nname, 'run')}: {path}:{exc.lineno}: "
+                                 f"syntax error: {exc.msg}")
+            continue
+        found = scanned.get(attr)
+        if found is None:
+            continue
+        for section, endpoints in found.endpoints.items():
+            declared = {name: typename for name, typename in getattr(spec, section).items()}
+            for endpoint, code_type in endpoints.items():
+                at = f"{path.name}:{found.lines.get((section, endpoint), found.line)}"
+                if endpoint not in declared:
+                    report.errors.append(
+                        f"{project.where('nodes', nname, section)}: the code of {nname} ({at}) creates "
+                        f"{section} endpoint {endpoint} that the project does not declare"
+                        f"{_nearest(endpoint, declared)} (add '{endpoint}: {code_type}' here otherwise)")
+                    continue
+                entry = declared[endpoint]
+                wanted = entry if isinstance(entry, str) else entry.type
+                if code_type.count("/") != 2:
+                    continue  # a type the scan cannot resolve (not imported from hetros.interfaces)
+                try:
+                    same = normalize_typename(wanted, _SCANNED_KIND[section]) == code_type
+                except MessageError:
+                    continue  # the declared type's own error is reported where types are checked
+                if not same:
+                    report.errors.append(
+                        f"{project.where('nodes', nname, section, endpoint)}: the code of {nname} ({at}) uses "
+                        f"{code_type} on {endpoint}, but the project declares {wanted}; make them agree "
+                        "(launch would refuse the endpoint)")

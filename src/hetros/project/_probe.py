@@ -1,0 +1,94 @@
+"""The node-module probe: each ``run:`` imported in an interpreter of its own, so a module that
+raises, hangs or lacks its function is reported by ``hetros check`` without running in it."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+
+from ._model import LoadedProject
+
+
+def module_findable(project: LoadedProject, module: str) -> bool:
+    candidate = project.root.joinpath(*module.split("."))
+    if candidate.with_suffix(".py").is_file() or (candidate / "__init__.py").is_file():
+        return True
+    try:
+        return importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+_PROBE = """
+import importlib, json, sys
+from pathlib import Path
+from hetros.msg import registry
+types = registry()
+for folder in json.loads(sys.argv[2]):
+    types.load_folder(Path(folder))
+out = {}
+for run in json.loads(sys.argv[1]):
+    module_name, _, attr = run.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except BaseException as exc:
+        tb = exc.__traceback__
+        while tb is not None and tb.tb_next is not None:
+            tb = tb.tb_next
+        place = f" ({tb.tb_frame.f_code.co_filename}:{tb.tb_lineno})" if tb is not None else ""
+        out[run] = f"importing {module_name!r} raised {type(exc).__name__}: {exc}{place}; fix the module"
+        continue
+    target = getattr(module, attr, None)
+    if target is None:
+        out[run] = f"module {module_name!r} has no {attr!r}; define it or fix 'run: {run}'"
+    elif not callable(target):
+        out[run] = f"{run} must be a function or class taking the node, not {type(target).__name__}"
+print("\\n" + sys.argv[3] + json.dumps(out))
+"""
+
+
+# the probe's answer line starts with this: a node module that prints, or ends the interpreter
+# at import, cannot be taken for the answer
+_PROBE_MARK = "hetros-probe-result: "
+
+
+_probed: dict[tuple[str, tuple[str, ...], tuple[float, ...]], dict[str, str]] = {}
+
+
+def runnable_problems(project: LoadedProject, runs: list[str]) -> dict[str, str]:
+    """Import every node module as the launch will, in a separate interpreter, and find the nodes.
+
+    A separate process keeps the user's import-time code (and module names that differ
+    between projects, like many a ``nodes``) out of the checking process.
+    """
+    if not runs:
+        return {}
+    root = str(project.root.resolve())
+    stamps = tuple(p.stat().st_mtime for p in sorted(project.root.glob("**/*.py")))
+    key = (root, tuple(sorted(runs)), stamps)
+    if key in _probed:
+        return _probed[key]
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
+    try:
+        folders = [str((project.root / m).resolve()) for m in project.model.messages]
+        done = subprocess.run([sys.executable, "-c", _PROBE, json.dumps(sorted(runs)), json.dumps(folders),
+                               _PROBE_MARK], capture_output=True,
+                              text=True, timeout=60, env=env, cwd=root, check=False)
+    except subprocess.TimeoutExpired:
+        return {run: "importing the node modules took more than 60 s; does a module block on import?"
+                for run in runs}
+    answers = [line[len(_PROBE_MARK):] for line in done.stdout.splitlines() if line.startswith(_PROBE_MARK)]
+    try:
+        problems: dict[str, str] = json.loads(answers[-1])
+        if not isinstance(problems, dict):
+            raise ValueError(problems)
+    except (ValueError, IndexError):
+        reason = (done.stderr.strip().splitlines() or [f"exit code {done.returncode}, no error printed"])[-1]
+        problems = {run: f"importing the node modules ended the interpreter before hetros could look at "
+                         f"them ({reason}); does a module exit or kill its process at import?" for run in runs}
+    _probed[key] = problems
+    return problems

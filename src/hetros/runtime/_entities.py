@@ -1,0 +1,436 @@
+"""The node API's entities: publishers, subscriptions, timers, services and clients.
+
+Each is what rclpy's is, with one meaning on every mapping: it reads and writes through the
+graph's endpoints and never names a transport. ``Node`` (in ``_node``) makes them.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+import threading
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
+
+from .._errors import (
+    NodeError,
+    ServiceTimeoutError,
+    ShutdownError,
+    TakeTimeoutError,
+    TopicTypeError,
+)
+from ..msg import Message, ServiceKind, service_type
+from ..plan import reply_channel, request_channel
+from ..transport import Reader, Writer
+from ._endpoints import EndpointWriter
+from ._executor import AdaptiveSpin
+from ._qos_events import (
+    DeadlineWatch,
+    LivelinessWatch,
+)
+
+if TYPE_CHECKING:
+    from ._node import Node
+
+M = TypeVar("M", bound=Message)
+_MISSING: Any = object()
+
+
+
+def _nothing() -> None:
+    """The take of a subscription with no reader (closed, or not attached yet)."""
+    return None
+
+
+def typename_of(msg_type: type[Message]) -> str:
+    name = getattr(msg_type, "__msgtype__", "")
+    if not name:
+        raise TopicTypeError(f"message type must be a hetros message class, not {msg_type!r}")
+    return str(name)
+
+
+def check_type(value: object, expected: str, where: str) -> None:
+    actual = getattr(value, "__msgtype__", None)
+    if actual != expected:
+        raise TopicTypeError(
+            f"{where} carries {expected}, not {actual or type(value).__name__}; "
+            f"construct a {expected.rsplit('/', 1)[-1]} (or fix the type in the project file)"
+        )
+
+
+class Publisher(Generic[M]):
+    """Publishes on one topic.
+
+    ``publish`` hands the message object over (it becomes read-only) but leaves your arrays
+    yours: a writable array you own is copied once (into shared memory, or into a read-only
+    copy for in-process subscribers). ``loan`` gives arrays hetros owns, which travel
+    without a copy.
+    """
+
+    def __init__(self, node: Node, msg_type: type[M], topic: str, writer: EndpointWriter) -> None:
+        self.node = node
+        self.msg_type = msg_type
+        self.topic = topic
+        self.typename = typename_of(msg_type)
+        self._short = self.typename.rsplit("/", 1)[-1]
+        self._writer = writer
+        self._loans: dict[tuple[tuple[str, int], ...], Callable[[], M]] = {}
+        self._last_sizes: dict[str, int] | None = None
+        self._last_make: Callable[[], M] = msg_type
+        self.deadline: DeadlineWatch | None = None  # the topic's QoS deadline, offered (``on_deadline_missed``)
+        self.manual_liveliness = False  # each publish asserts liveliness (the topic's is manual_by_topic)
+
+    def publish(self, message: M) -> None:
+        """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
+        if getattr(message, "__msgtype__", None) != self.typename:
+            check_type(message, self.typename, f"topic {self.topic}")
+        message._hetros_validate(message, self._short)
+        self._writer.write(message)
+        if self.deadline is not None:
+            self.deadline.seen()
+        if self.manual_liveliness:
+            self._writer.assert_liveliness()
+
+    def assert_liveliness(self) -> None:
+        """Say this publisher is alive without publishing (``manual_by_topic`` liveliness)."""
+        self._writer.assert_liveliness()
+
+    def loan(self, **sizes: int) -> M:
+        """A message to fill in place and publish without a copy.
+
+        Give the length of each variable-length primitive array to fill (``data=640*480*3``);
+        fixed-size arrays are placed automatically; a nested array is named with ``__``
+        (``header__...``). When a subscriber is in another process and the arrays are large
+        (over 64 KiB), they live in the shared-memory slot that is then sent as it is;
+        smaller ones live in memory hetros owns and are copied once into the slot. After
+        ``publish`` the loaned message is handed over: its arrays are no longer yours.
+        """
+        if sizes == self._last_sizes:  # the same lengths as last time, the common loop: one comparison
+            return self._last_make()
+        make = self._loans.get(tuple(sizes.items()))
+        if make is None:
+            make = cast("Callable[[], M]", self._writer.loan_maker(self.msg_type, sizes))
+            if len(self._loans) > 64:  # lengths that keep changing must not grow the cache forever
+                self._loans.clear()
+            self._loans[tuple(sizes.items())] = make
+        self._last_sizes, self._last_make = sizes, make
+        return make()
+
+    def close(self) -> None:
+        if self.deadline is not None:
+            self.deadline.stop()
+        self._writer.close()
+
+
+class HandlingStats:
+    """How long a node spends on each message of one endpoint (the "node time" of the papers' tables).
+
+    For callbacks and service handlers it is the handler's duration; for ``take`` loops,
+    the time from one ``take`` returning to the next ``take`` call.
+    """
+
+    __slots__ = ("count", "total", "total_sq")
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.total = 0.0
+        self.total_sq = 0.0
+
+    def add(self, seconds: float) -> None:
+        self.count += 1
+        self.total += seconds
+        self.total_sq += seconds * seconds
+
+    def summary(self) -> tuple[int, float, float]:
+        """(count, mean ms, std ms)."""
+        if not self.count:
+            return 0, 0.0, 0.0
+        mean = self.total / self.count
+        return self.count, mean * 1000.0, max(self.total_sq / self.count - mean * mean, 0.0) ** 0.5 * 1000.0
+
+
+class Subscription(Generic[M]):
+    """Receives from one topic: by callback (run by the node's executor) or by ``take``."""
+
+    def __init__(self, node: Node, msg_type: type[M], topic: str,
+                 callback: Callable[[M], object] | None) -> None:
+        self.node = node
+        self.msg_type = msg_type
+        self.topic = topic
+        self.typename = typename_of(msg_type)
+        self.callback = callback
+        self._reader: Reader | None = None
+        # the reader's take function (``Reader.taker``): called once per message
+        self._take: Callable[[], M | None] = _nothing
+        self.stats = HandlingStats()
+        self._returned_at = 0.0
+        self._spin = AdaptiveSpin()
+        self.liveliness: LivelinessWatch | None = None  # set when its publishers' liveliness is watched
+
+    def _attach(self, reader: Reader) -> None:
+        self._reader = reader
+        self._take = reader.taker()
+
+    def _on_wake(self) -> None:
+        if self.callback is not None:
+            self.node.executor.notify(self)
+        else:
+            self.node.executor.wake()
+
+    def dispatch(self) -> bool:
+        message = self._take()
+        if message is None:
+            return False
+        assert self.callback is not None
+        start = time.perf_counter()
+        self.callback(message)
+        self.stats.add(time.perf_counter() - start)
+        return True
+
+    def pending(self) -> bool:
+        reader = self._reader
+        return reader is not None and reader.pending()
+
+    def try_take(self) -> M | None:
+        """The next message, or None when the FIFO is empty (never blocks)."""
+        message: M | None = self._take()
+        return message
+
+    def take(self, timeout: float | None = None) -> M:
+        """Block for the next message; raise TakeTimeoutError, or ShutdownError on shutdown."""
+        now = time.perf_counter()
+        if self._returned_at:
+            self.stats.add(now - self._returned_at)
+            self._returned_at = 0.0  # a take that times out or is interrupted starts no node time
+        message: M | None = self._take()
+        if message is None:
+            message = self._wait_for_message(timeout)
+        else:  # a message was already waiting: the common case of a busy loop, without the waiting machinery
+            self._spin.arrived(now)
+        self._returned_at = time.perf_counter()
+        return message
+
+    def _wait_for_message(self, timeout: float | None) -> M:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        stop = self.node.graph.stop
+        executor = self.node.executor
+        spin = self._spin.budget()
+        if spin:
+            spin_end = time.perf_counter() + spin
+            polls = 0
+            executor.hot_spin(True)
+            try:
+                while (now := time.perf_counter()) < spin_end:
+                    message = self.try_take()
+                    if message is not None:
+                        self._spin.arrived(now)
+                        return message
+                    polls += 1
+                    if polls >= executor.yield_every:  # hands the GIL over (sleep(0) naps ~90 µs); see SPARSE_YIELD
+                        polls = 0
+                        os.sched_yield()
+            finally:
+                executor.hot_spin(False)
+        while True:
+            seen = executor.generation
+            message = self.try_take()
+            if message is not None:
+                self._spin.arrived(time.perf_counter())
+                return message
+            if stop.is_set():
+                raise ShutdownError(f"take on {self.topic} interrupted: the graph is shutting down")
+            wait = None if deadline is None else deadline - time.monotonic()
+            if wait is not None and wait <= 0:
+                raise TakeTimeoutError(f"no message on {self.topic} within {timeout:g} s")
+            executor.wait(seen, wait)
+
+    def __iter__(self) -> Iterator[M]:
+        """Messages until shutdown (the iterator form of a subscription)."""
+        while True:
+            try:
+                yield self.take()
+            except ShutdownError:
+                return
+
+    def close(self) -> None:
+        """Stop receiving; a closed callback no longer keeps the node spinning after its function returns."""
+        if self.liveliness is not None:
+            self.liveliness.stop()
+        if self._reader is not None:
+            self._take = _nothing
+            self._reader.close()
+            self._reader = None
+            if self.callback is not None:
+                self.node.executor.entities -= 1
+                self.node.executor.stop_polling(self)
+
+
+class Timer:
+    def __init__(self, node: Node, period: float, callback: Callable[[], object]) -> None:
+        if not period > 0:
+            raise NodeError(f"timer period must be positive seconds, not {period!r}")
+        self.period = period
+        self.callback = callback
+        self.cancelled = False
+        self._node = node
+        self._due = time.monotonic() + period
+        node.executor.add_timer(self._due, self._fire)
+
+    def _fire(self) -> float | None:
+        if self.cancelled:
+            return None
+        self.callback()
+        now = time.monotonic()
+        self._due += self.period
+        if self._due < now:
+            self._due = now + self.period
+        return None if self.cancelled else self._due
+
+    def cancel(self) -> None:
+        if not self.cancelled:
+            self.cancelled = True
+            self._node.executor.entities -= 1
+
+
+class Replies:
+    """The reply side of one service: a writer per calling client, opened on its first reply.
+    Callable from any thread (an action's goals answer from theirs)."""
+
+    def __init__(self, node: Node, service: str, response_type: str) -> None:
+        self._node = node
+        self._service = service
+        self._response_type = response_type
+        self._writers: dict[str, Writer] = {}
+        self._lock = threading.Lock()
+
+    def send(self, request_id: int, client: str, response: Any) -> None:
+        with self._lock:
+            writer = self._writers.get(client)
+            if writer is None:
+                writer = self._writers[client] = self._node.graph.open_writer(
+                    reply_channel(self._service, client), self._node.name, self._response_type, envelope=True)
+            writer.write((request_id, client, response))
+
+
+class Service:
+    """Serves one service: the handler takes a request and returns the response."""
+
+    def __init__(self, node: Node, srv_type: ServiceKind, name: str,
+                 handler: Callable[[Any], Any]) -> None:
+        srv_type = service_type(srv_type)
+        self.node = node
+        self.srv_type = srv_type
+        self.name = name
+        self.handler = handler
+        self._request_type = typename_of(srv_type.Request)
+        self._response_type = typename_of(srv_type.Response)
+        self._replies = Replies(node, name, self._response_type)
+        self._closed = False
+        self.stats = HandlingStats()
+        self._reader = node.graph.open_reader(
+            request_channel(name), node.name, self._request_type,
+            lambda: node.executor.notify(self), envelope=True,
+        )
+
+    def dispatch(self) -> bool:
+        envelope = self._reader.try_take()
+        if envelope is None:
+            return False
+        request_id, client, request = envelope
+        start = time.perf_counter()
+        response = self.handler(request)
+        self.stats.add(time.perf_counter() - start)
+        check_type(response, self._response_type, f"the response of service {self.name}")
+        response._hetros_validate(response, f"the response of {self.name}")
+        self._replies.send(request_id, client, response)
+        return True
+
+    def pending(self) -> bool:
+        return self._reader.pending()
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._reader.close()
+            self.node.executor.entities -= 1
+
+
+class Client:
+    """Calls one service. Replies bypass the node's callback queue, so ``call`` is safe in callbacks."""
+
+    def __init__(self, node: Node, srv_type: ServiceKind, name: str) -> None:
+        srv_type = service_type(srv_type)
+        self.node = node
+        self.srv_type = srv_type
+        self.name = name
+        self._request_type = typename_of(srv_type.Request)
+        self._response_type = typename_of(srv_type.Response)
+        self._ids = itertools.count(1)
+        self._pending: dict[int, Future[Any]] = {}
+        self._lock = threading.Lock()
+        self._reader: Reader | None = None
+        self._writer = node.graph.open_writer(
+            request_channel(name), node.name, self._request_type, envelope=True
+        )
+        self._reader = node.graph.open_reader(
+            reply_channel(name, node.name), node.name, self._response_type, self._reply_arrived, envelope=True
+        )
+
+    def _reply_arrived(self) -> None:
+        self._on_reply()
+        self.node.executor.wake()
+
+    def _on_reply(self) -> None:
+        while self._reader is not None:
+            with self._lock:
+                envelope = self._reader.try_take()
+                if envelope is None:
+                    return
+                future = self._pending.pop(envelope[0], None)
+            if future is None or future.done():
+                continue
+            if isinstance(envelope[2], BaseException):  # a transport that could not deliver the call says why
+                future.set_exception(envelope[2])
+            else:
+                future.set_result(envelope[2])
+
+    def call_async(self, request: Any) -> Future[Any]:
+        check_type(request, self._request_type, f"a request of service {self.name}")
+        request._hetros_validate(request, f"the request to {self.name}")
+        future: Future[Any] = Future()
+        with self._lock:
+            request_id = next(self._ids)
+            self._pending[request_id] = future
+        self._writer.write((request_id, self.node.name, request))
+        return future
+
+    def call(self, request: Any, timeout: float = 5.0) -> Any:
+        """Send ``request`` and wait for the response; the caller's thread waits on the reply reader itself."""
+        future = self.call_async(request)
+        deadline = time.monotonic() + timeout
+        executor = self.node.executor
+        while True:
+            seen = executor.generation
+            self._on_reply()
+            if future.done():
+                return future.result()
+            if self.node.graph.stop.is_set():
+                reason = self.node.graph.stop_reason
+                raise ShutdownError(f"call to {self.name} interrupted: the graph is shutting down"
+                                    + (f" because {reason}" if reason else ""))
+            left = deadline - time.monotonic()
+            if left <= 0:
+                with self._lock:
+                    self._pending = {k: v for k, v in self._pending.items() if v is not future}
+                raise ServiceTimeoutError(
+                    f"service {self.name} did not reply within {timeout:g} s; is its server "
+                    "node running (see `hetros graph`)?"
+                )
+            executor.wait(seen, left)
+
+    def close(self) -> None:
+        if self._reader is not None:
+            self._reader.close()
+

@@ -68,7 +68,7 @@ bench-quick: install-bench
 
 run: install
 	$(VENV)/bin/hetros graph examples/lane_following/project.yaml
-	$(VENV)/bin/hetros launch examples/lane_following/project.yaml --duration 40
+	$(VENV)/bin/hetros launch examples/lane_following/project.yaml --duration 40 --node-times
 
 # the examples are type-checked as users' code is: against the stubs of their own message packages
 # (`hetros msg stubs`), each folder on its own (every example has a nodes.py)

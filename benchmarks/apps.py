@@ -37,7 +37,7 @@ def run(app: str, mapping: str) -> dict[str, object]:
     project = EXAMPLES / app / MAPPINGS[mapping]
     start = time.monotonic()
     proc = subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration",
-                           str(DURATION.get(app, 300.0))], capture_output=True, text=True, check=False,
+                           str(DURATION.get(app, 300.0)), "--node-times"], capture_output=True, text=True, check=False,
                           timeout=600, cwd=EXAMPLES.parent)
     wall = time.monotonic() - start
     nodes = [{"node": m[0], "endpoint": m[1], "mean_ms": float(m[2]), "std_ms": float(m[3]), "count": int(m[4])}

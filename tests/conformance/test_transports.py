@@ -22,7 +22,20 @@ import pytest
 
 from hetros import PublishTimeoutError, ReadOnlyMessageError
 from hetros.msg import freeze, registry
-from hetros.transport import InprocTopic, MessageCodec, QoS, Reader, ShmDomain, Writer, remove_session_segments
+from hetros.plan import LAUNCHER, ChannelPlan, EdgePlan, HostPlan, NodePlan, Plan, TargetPlan
+from hetros.transport import (
+    Endpoint,
+    InprocTopic,
+    MessageCodec,
+    QoS,
+    Reader,
+    ShmDomain,
+    Transport,
+    TransportContext,
+    Writer,
+    remove_session_segments,
+    transport_class,
+)
 
 TYPE = "sensor_msgs/msg/Image"
 
@@ -188,12 +201,157 @@ class ShmProcessHarness(ShmHarness):
         return reader
 
 
-HARNESSES = {"inproc": InprocHarness, "shm": ShmHarness, "shm-processes": ShmProcessHarness}
+class SeamHarness(Harness):
+    """Any registered transport, opened the way the runtime opens it: through the registry, from a
+    plan whose channel /t has publishers pub0..pub2 and subscribers sub0..sub2 in processes (or on
+    hosts) of their own. A new transport joins this suite by its registration alone."""
+
+    KIND = ""
+
+    def __init__(self, qos: QoS, session: str) -> None:
+        self.qos = qos
+        self.session = session
+        self.plan = self._plan(qos)
+        self.transports: list[Transport] = []
+        self.readers: list[Reader] = []
+        self.writers: list[Writer] = []
+        self.pumps: list[threading.Event] = []
+        self.pump_threads: list[threading.Thread] = []
+
+    def _plan(self, qos: QoS) -> Plan:
+        pubs, subs = [f"pub{i}" for i in range(3)], [f"sub{i}" for i in range(3)]
+        # hosts of one process (Cyclone delivers within it) all on the one loopback interface Cyclone knows
+        hosts = {name: HostPlan(name, "127.0.0.1") for name in pubs + subs} if self.KIND == "dds" else {}
+        kind = "thread" if self.KIND == "inproc" else "process"
+        return Plan(
+            name="conformance", root=".", message_paths=(),
+            targets={n: TargetPlan(n, kind, host=n if hosts else "") for n in pubs + subs},
+            nodes={n: NodePlan(n, "x:y", n) for n in pubs + subs},
+            channels={"/t": ChannelPlan("/t", TYPE, "topic", qos, tuple(pubs), tuple(subs))},
+            edges=tuple(EdgePlan("/t", p, s, self.KIND) for p in pubs for s in subs),  # type: ignore[arg-type]
+            hosts=hosts, local_host="pub0" if hosts else "", dds_domain=211 if hosts else None,
+        )
+
+    def _transport(self, node: str) -> Transport:
+        plan = self.plan if not self.plan.hosts else self.plan.on_host(node)
+        process = LAUNCHER if self.KIND == "inproc" else node
+        if self.KIND == "inproc" and self.transports:
+            return self.transports[0]  # one process: one transport
+        codecs = {False: MessageCodec(registry(), TYPE)}
+        made = transport_class(self.KIND)(TransportContext(plan, process, self.session, threading.Event(), registry(),
+                                                           lambda typename, envelope: codecs[envelope]))
+        self.transports.append(made)
+        return made
+
+    def delivered(self, writer: Writer) -> None:
+        """Return once what ``writer`` wrote has reached its readers (the suite's writes are
+        synchronous for transports within a host)."""
+
+    def _edges(self, node: str) -> tuple[EdgePlan, ...]:
+        return tuple(e for e in self.plan.edges if node in (e.publisher, e.subscriber))
+
+    def writer(self, index: int = 0) -> Writer:
+        node = f"pub{index}"
+        inner = self._transport(node).open_writer(Endpoint("/t", node, TYPE, self.qos, False, self._edges(node)))
+        self.writers.append(inner)
+        delivered = self.delivered
+
+        class Freezing(Writer):  # the runtime hands a message over before any transport sees it
+            def write(self, message: Any) -> None:
+                inner.write(freeze(message))
+                delivered(inner)
+
+            def close(self) -> None:
+                inner.close()
+
+        return Freezing()
+
+    def reader(self, index: int = 0, wake: Callable[[], None] = lambda: None) -> Reader:
+        node = f"sub{index}"
+        transport = self._transport(node)
+        reader = transport.open_reader(Endpoint("/t", node, TYPE, self.qos, False, self._edges(node)), wake)
+        source = transport.wait_source(node)
+        if source is not None:  # stands in for the node's executor
+            stop = threading.Event()
+            self.pumps.append(stop)
+
+            def run() -> None:
+                while not stop.is_set():
+                    source.wait(0.05)
+
+            thread = threading.Thread(target=run, daemon=True)
+            thread.start()
+            self.pump_threads.append(thread)
+        self.readers.append(reader)
+        return reader
+
+    def close(self) -> None:
+        for stop in self.pumps:
+            stop.set()
+        for thread in self.pump_threads:
+            thread.join()
+        for reader in self.readers:
+            reader.close()
+        for transport in self.transports:
+            transport.close()
+        remove_session_segments(self.session)
+
+
+class SeamInproc(SeamHarness):
+    KIND = "inproc"
+
+
+class SeamShm(SeamHarness):
+    KIND = "shm"
+
+
+class SeamDds(SeamHarness):
+    """Hosts as participants of one process: Cyclone delivers between them asynchronously, so a
+    write returns once the matched readers have the sample (acknowledged, or a moment for best effort)."""
+
+    KIND = "dds"
+
+    def delivered(self, writer: Writer) -> None:
+        dds_writer = getattr(writer, "writer", None)  # DdsEdgeWriter.writer: the Cyclone DataWriter
+        if dds_writer is None:
+            return
+        deadline = time.monotonic() + 5.0  # discovery, even within a process, takes a moment
+        while len(dds_writer.get_matched_subscriptions()) < len(self.readers) and time.monotonic() < deadline:
+            time.sleep(0.005)
+        if self.qos.reliability == "reliable":
+            dds_writer.wait_for_acks(int(20e9))
+        else:
+            time.sleep(0.02)
+
+    def writer(self, index: int = 0) -> Writer:
+        made = super().writer(index)
+        self.delivered(self.writers[-1])  # matched before the first write, as a launch's start barrier ensures
+        return made
+
+
+HARNESSES = {"inproc": InprocHarness, "shm": ShmHarness, "shm-processes": ShmProcessHarness,
+             "seam-inproc": SeamInproc, "seam-shm": SeamShm, "seam-dds": SeamDds}
+
+
+# Where the edges between hosts keep a weaker promise than the suite's, known and documented
+# (docs/GUIDE.md, Hosts): strict, so a fix shows up as an unexpected pass.
+KNOWN_DEVIATIONS = {
+    ("seam-dds", "test_backpressure_blocks_then_times_out"):
+        "between hosts a reliable FIFO holds up to the reader's and the writer's DDS histories "
+        "(about 2x depth) before the publisher blocks",
+    ("seam-dds", "test_late_joiners_history_fills_its_reliable_fifo"):
+        "the same: the replayed history does not fill a late joiner's FIFO of depth",
+    ("seam-dds", "test_transient_local_late_joiner_gets_last_n"):
+        "a late joiner on a host edge is replayed only the newest of the history",
+}
 
 
 @pytest.fixture(params=sorted(HARNESSES))
 def make(request: pytest.FixtureRequest, shm_session: str) -> Iterator[Callable[[QoS], Harness]]:
     made: list[Harness] = []
+    deviation = KNOWN_DEVIATIONS.get((request.param, request.function.__name__))
+    if deviation is not None:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=deviation))
 
     def factory(qos: QoS) -> Harness:
         harness = HARNESSES[request.param](qos, shm_session)

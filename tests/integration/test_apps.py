@@ -219,7 +219,8 @@ def test_lane_following_finds_the_centre_and_obeys_the_light(tmp_path: Path, pro
     data["nodes"]["monitor"]["parameters"].update({"frames": 45, "out": str(tmp_path / "out")})
     variant_file = tmp_path / project
     variant_file.write_text(yaml.safe_dump(data))
-    result = subprocess.run([sys.executable, "-m", "hetros", "launch", str(variant_file), "--duration", "120"],
+    result = subprocess.run([sys.executable, "-m", "hetros", "launch", str(variant_file), "--duration", "120",
+                             "--node-times"],
                             capture_output=True, text=True, timeout=180, check=False,
                             env=dict(os.environ, PYTHONPATH=str(example)))
     assert result.returncode == 0, result.stderr

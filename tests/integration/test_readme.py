@@ -64,6 +64,7 @@ def test_the_readme_code_blocks_run(tmp_path: Path) -> None:
         outputs.append(done.stdout + done.stderr)
     launched = next(out for command, out in zip(commands, outputs, strict=True) if "launch" in command)
     assert re.search(r"\[listener\].*hello \d+", launched), launched[-2000:]
+    assert "node time on" not in launched, "per-node times are logged with --node-times only"
 
 
 @pytest.mark.parametrize("command", ["hetros msg list | head -1", "hetros msg show std_msgs/msg/String | head -1"])

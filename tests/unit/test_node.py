@@ -106,6 +106,27 @@ def test_take_loop_node_time_runs_from_a_take_returning_to_the_next_take(graph: 
     assert sub.stats.summary()[0] == 2
 
 
+def test_a_take_loop_over_two_topics_does_not_count_the_wait_for_the_other(graph: Graph,
+                                                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """lane_control's shape: take /a, then wait for /b. The time on /a's message ends when the
+    node takes again, on either topic; the wait for /b is not spent on /a's message."""
+    clock = [100.0]
+    monkeypatch.setattr("hetros.runtime._entities.time.perf_counter", lambda: clock[0])
+    node = Node("s", graph)
+    a, b = node.create_subscription(Int32, "/a"), node.create_subscription(Int32, "/b")
+    pub_a, pub_b = Node("p", graph).create_publisher(Int32, "/a"), Node("q", graph).create_publisher(Int32, "/b")
+    pub_a.publish(Int32(data=1))
+    a.take(timeout=1)
+    clock[0] += 0.002  # 2 ms of work on /a's message
+    pub_b.publish(Int32(data=2))
+    b.take(timeout=1)
+    clock[0] += 0.500  # then the node is idle, or waits elsewhere, half a second
+    pub_a.publish(Int32(data=3))
+    a.take(timeout=1)
+    assert a.stats.count == 1 and abs(a.stats.summary()[1] - 2.0) < 1e-6  # ms
+    assert b.stats.count == 1 and abs(b.stats.summary()[1] - 500.0) < 1e-6
+
+
 def test_published_message_is_handed_over_read_only(graph: Graph) -> None:
     sub = Node("s", graph).create_subscription(String, "/x")
     pub = Node("p", graph).create_publisher(String, "/x")

@@ -116,8 +116,11 @@ def cmd_hw_synth(args: argparse.Namespace) -> int:
 def cmd_launch(args: argparse.Namespace) -> int:
     from ..launch import launch
     from ..project import plan_file
+    from ..runtime import NODE_TIMES_VARIABLE
 
     plan = plan_file(args.project)
+    if args.node_times:
+        os.environ[NODE_TIMES_VARIABLE] = "1"  # the worker processes inherit it
     result = launch(plan, duration=args.duration, host=args.as_host)
     if result.exit_code:
         print(f"[launch] graph stopped: {result.reason} (failed: {', '.join(result.failures) or '-'})",
@@ -323,6 +326,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="stop after this many seconds")
     p.add_argument("--as", dest="as_host", metavar="HOST",
                    help="with hosts: run this host's targets (default: the host whose address is this machine's)")
+    p.add_argument("--node-times", action="store_true",
+                   help="at the end, log each node's time per message on each subscription and service")
     p.set_defaults(func=cmd_launch)
     p = sub.add_parser("deploy", help="start every host of a project (this one directly, the others over ssh)")
     p.add_argument("project")

@@ -67,7 +67,8 @@ class HostLink:
         self._gone: set[str] = set()
         hosts = plan.hosts
         self._domain = DdsDomain(plan.dds_domain, interface=hosts[self.me].address,
-                                 peers=[h.address for h in hosts.values()], lease=HOST_LEASE)
+                                 peers=[h.address for h in hosts.values()], lease=HOST_LEASE,
+                                 configured_at=f"hosts.{self.me}.address")
         qos = Qos(Policy.Reliability.Reliable(max_blocking_time=duration(seconds=1)),
                   Policy.Durability.TransientLocal, Policy.History.KeepLast(1),
                   Policy.Liveliness.Automatic(lease_duration=duration(seconds=LIVELINESS)))

@@ -5,10 +5,11 @@ from ._entities import Client, Publisher, Replies, Service, Subscription, Timer
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
-from ._node import Node
+from ._node import NODE_TIMES_VARIABLE, Node
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus
 
 __all__ = [
+    "NODE_TIMES_VARIABLE",
     "ActionClient",
     "ActionServer",
     "Client",

@@ -165,7 +165,6 @@ class Subscription(Generic[M]):
         # the reader's take function (``Reader.taker``): called once per message
         self._take: Callable[[], M | None] = _nothing
         self.stats = HandlingStats()
-        self._returned_at = 0.0
         self._spin = AdaptiveSpin()
         self.liveliness: LivelinessWatch | None = None  # set when its publishers' liveliness is watched
 
@@ -201,15 +200,19 @@ class Subscription(Generic[M]):
     def take(self, timeout: float | None = None) -> M:
         """Block for the next message; raise TakeTimeoutError, or ShutdownError on shutdown."""
         now = time.perf_counter()
-        if self._returned_at:
-            self.stats.add(now - self._returned_at)
-            self._returned_at = 0.0  # a take that times out or is interrupted starts no node time
+        node = self.node
+        working_on = node.taken_by
+        if working_on is not None:
+            # the node's time on the message it took last ends at its next take, on whichever
+            # subscription: waiting for another topic is not time spent on this one's message
+            working_on.stats.add(now - node.taken_at)
+            node.taken_by = None  # a take that times out or is interrupted starts no node time
         message: M | None = self._take()
         if message is None:
             message = self._wait_for_message(timeout)
         else:  # a message was already waiting: the common case of a busy loop, without the waiting machinery
             self._spin.arrived(now)
-        self._returned_at = time.perf_counter()
+        node.taken_by, node.taken_at = self, time.perf_counter()
         return message
 
     def _wait_for_message(self, timeout: float | None) -> M:

@@ -9,6 +9,8 @@ a process); ``msg.copy()`` keeps a writable one.
 from __future__ import annotations
 
 import itertools
+import logging
+import os
 import time
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -37,6 +39,8 @@ if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ServerGoalHandle
 
 M = TypeVar("M", bound=Message)
+# set (to 1) in the launcher's environment by `hetros launch --node-times`; workers inherit it
+NODE_TIMES_VARIABLE = "HETROS_NODE_TIMES"
 _MISSING: Any = object()
 
 
@@ -63,6 +67,9 @@ class Node:
         self.failing = False
         # whether the node's own code spun its executor (else a function that returns is spun for it)
         self.spun = False
+        # the subscription whose message a take loop works on now, and since when (its node time)
+        self.taken_by: Subscription[Any] | None = None
+        self.taken_at = 0.0
         self.action_clients: dict[str, ActionClient] = {}
 
     # -- endpoints -------------------------------------------------------------------------
@@ -244,13 +251,16 @@ class Node:
         return dict(self._parameters)
 
     def report_times(self) -> None:
-        """Log, per subscription and service, how many messages the node handled and how long each took."""
+        """Log, per subscription and service, how many messages the node handled and how long each
+        took: at INFO with ``hetros launch --node-times`` (``HETROS_NODE_TIMES=1``), else at DEBUG."""
+        level = logging.INFO if os.environ.get(NODE_TIMES_VARIABLE, "") not in ("", "0") else logging.DEBUG
+        if not self.log.isEnabledFor(level):
+            return
         for endpoint in self._closables:
-            stats = getattr(endpoint, "stats", None)
-            if stats is not None and stats.count:
-                count, mean, std = stats.summary()
-                name = getattr(endpoint, "topic", None) or getattr(endpoint, "name", "")
-                self.log.info("node time on %s: %.3f ± %.3f ms per message over %d", name, mean, std, count)
+            if isinstance(endpoint, Subscription | Service) and endpoint.stats.count:
+                count, mean, std = endpoint.stats.summary()
+                name = endpoint.topic if isinstance(endpoint, Subscription) else endpoint.name
+                self.log.log(level, "node time on %s: %.3f ± %.3f ms per message over %d", name, mean, std, count)
 
     def close(self) -> None:
         for endpoint in reversed(self._closables):

@@ -128,7 +128,8 @@ class DdsDomain:
     """A participant on one DDS domain and the topics created on it (shared by name)."""
 
     def __init__(self, domain_id: int | None = None, *, interface: str = "127.0.0.1",
-                 peers: Sequence[str] = ("127.0.0.1",), multicast: bool = False, lease: float | None = None) -> None:
+                 peers: Sequence[str] = ("127.0.0.1",), multicast: bool = False, lease: float | None = None,
+                 configured_at: str = "external.ros2.interface") -> None:
         self.domain_id = default_domain_id() if domain_id is None else domain_id
         if not 0 <= self.domain_id <= MAX_DOMAIN_ID:
             raise TransportError(f"a ROS 2 domain id must be 0 to {MAX_DOMAIN_ID}, not {self.domain_id!r}")
@@ -144,8 +145,9 @@ class DdsDomain:
             if not os.environ.get("CYCLONEDDS_URI"):
                 pin_receive_sockets(interface, self.domain_id)
         except DDSException as exc:
-            raise TransportError(f"cannot join DDS domain {self.domain_id} on {interface}: {exc}; check the "
-                                 "interface address under external: ros2: (or CYCLONEDDS_URI)") from exc
+            raise TransportError(f"cannot join DDS domain {self.domain_id} on {interface}: {exc}; {interface} must be "
+                                 f"an address of this machine: check {configured_at} in the project file (or "
+                                 "CYCLONEDDS_URI)") from exc
         self._topics: dict[str, Topic[Any]] = {}
         self._lock = threading.Lock()
         # the instance handles of this participant's topic writers

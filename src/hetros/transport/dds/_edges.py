@@ -167,12 +167,14 @@ class DdsEdgeReader(Reader):
 
     def try_take(self) -> Any | None:
         while True:
+            if not self._blocks:
+                self._fill()  # keep_last: the newest ``depth``, whatever the waiting thread moved yet
             try:
                 topic, data, sent_ns = self._queue.popleft()
             except IndexError:
-                if not self._blocks or not self._fill():
-                    return None
-                continue
+                if self._blocks and self._fill():
+                    continue
+                return None
             if self._blocks and len(self._queue) < self._depth // 2 + 1:
                 self._fill()  # what waited in the DDS reader for room
             if self._lifespan_ns is not None and time.time_ns() - sent_ns > self._lifespan_ns:
@@ -197,9 +199,8 @@ class DdsEdgeReader(Reader):
         return self._codec.decode(memoryview(data)[_HEAD:_HEAD + size])
 
     def pending(self) -> bool:
-        # every take refills the queue from the DDS readers before it runs dry, and an arrival
-        # into a queue with room wakes the node: an empty queue means nothing is known waiting
-        return bool(self._queue)
+        # an empty queue may only mean the waiting thread has not moved what arrived yet: look
+        return bool(self._queue) or self._fill()
 
     def matched(self) -> int:
         return sum(len(r.get_matched_publications()) for r in self.readers)

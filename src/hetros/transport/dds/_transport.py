@@ -36,7 +36,8 @@ class DdsTransport(Transport):
             if self._domain is None:
                 hosts = self._plan.hosts
                 self._domain = DdsDomain(self._plan.dds_domain, interface=hosts[self._plan.local_host].address,
-                                         peers=[h.address for h in hosts.values()], lease=HOST_LEASE)
+                                         peers=[h.address for h in hosts.values()], lease=HOST_LEASE,
+                                         configured_at=f"hosts.{self._plan.local_host}.address")
             return self._domain
 
     def open_writer(self, endpoint: Endpoint) -> DdsEdgeWriter:

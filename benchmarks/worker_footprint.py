@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -100,9 +101,12 @@ def _import_ms(stderr: str) -> float:
     return total / 1e3
 
 
+_CHILD_ENV: dict[str, str] = dict(os.environ)
+
+
 def _run(code: str, *args: str) -> dict[str, object]:
     done = subprocess.run([sys.executable, "-X", "importtime", "-c", code, *args], capture_output=True,
-                          text=True, timeout=120, check=False)
+                          text=True, timeout=120, check=False, env=_CHILD_ENV)
     if done.returncode != 0:
         raise SystemExit(f"a measured process failed:\n{done.stderr[-2000:]}")
     result: dict[str, object] = json.loads(done.stdout.strip().splitlines()[-1])
@@ -178,7 +182,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--out", type=Path, default=Path("out/bench"))
+    parser.add_argument("--source", type=Path, help="measure the workers of another checkout's src/ (a before/after)")
     args = parser.parse_args()
+    if args.source is not None:
+        _CHILD_ENV["PYTHONPATH"] = str(args.source.resolve())
     rows = measure(args.runs)
     args.out.mkdir(parents=True, exist_ok=True)
     report = render(rows)

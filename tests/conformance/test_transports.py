@@ -7,6 +7,7 @@ publisher its own "process" for shm) and readers on one topic.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import queue
 import subprocess
@@ -32,6 +33,7 @@ from hetros.transport import (
     ShmDomain,
     Transport,
     TransportContext,
+    WaitSource,
     Writer,
     remove_session_segments,
     transport_class,
@@ -54,6 +56,32 @@ class Harness:
 
     def close(self) -> None:
         pass
+
+
+class _Pumps:
+    """Stand-ins for subscriber nodes' executors: each waits on its node's wake source and runs the wakes."""
+
+    def __init__(self) -> None:
+        self.stops: list[threading.Event] = []
+        self.threads: list[threading.Thread] = []
+
+    def start(self, source: WaitSource) -> None:
+        stop = threading.Event()
+        self.stops.append(stop)
+
+        def run() -> None:
+            while not stop.is_set():
+                source.wait(0.05)
+
+        thread = threading.Thread(target=run, daemon=True)
+        thread.start()
+        self.threads.append(thread)
+
+    def stop(self) -> None:
+        for stop in self.stops:
+            stop.set()
+        for thread in self.threads:
+            thread.join()
 
 
 class InprocHarness(Harness):
@@ -86,27 +114,12 @@ class ShmHarness(Harness):
         self.domains: list[ShmDomain] = []
         self.publishers = 0
         self.readers: list[Reader] = []
-        self.pumps: list[threading.Event] = []
-        self.pump_threads: list[threading.Thread] = []
+        self.pumps = _Pumps()
 
     def _domain(self, name: str) -> ShmDomain:
         domain = ShmDomain(self.session, name)
         self.domains.append(domain)
         return domain
-
-    def _pump(self, domain: ShmDomain, owner: str) -> None:
-        """Stands in for the owner node's executor: waits on its wake channel, runs the wakes."""
-        channel = domain.wake_channel(owner)
-        stop = threading.Event()
-        self.pumps.append(stop)
-
-        def run() -> None:
-            while not stop.is_set():
-                channel.wait(0.05)
-
-        thread = threading.Thread(target=run, daemon=True)
-        thread.start()
-        self.pump_threads.append(thread)
 
     def writer(self, index: int = 0) -> Writer:
         self.publishers = max(self.publishers, index + 1)
@@ -119,15 +132,12 @@ class ShmHarness(Harness):
         targets = self.targets()
         domain = self._domain(f"sub{index}")
         reader = domain.open_reader("/t", targets, self.qos, self.codec, index, wake, f"sub{index}")
-        self._pump(domain, f"sub{index}")
+        self.pumps.start(domain.wake_channel(f"sub{index}"))
         self.readers.append(reader)
         return reader
 
     def close(self) -> None:
-        for stop in self.pumps:
-            stop.set()
-        for thread in self.pump_threads:
-            thread.join()
+        self.pumps.stop()
         for reader in self.readers:
             reader.close()
         for domain in self.domains:
@@ -201,6 +211,9 @@ class ShmProcessHarness(ShmHarness):
         return reader
 
 
+_HARNESS_NUMBERS = itertools.count()
+
+
 class SeamHarness(Harness):
     """Any registered transport, opened the way the runtime opens it: through the registry, from a
     plan whose channel /t has publishers pub0..pub2 and subscribers sub0..sub2 in processes (or on
@@ -215,16 +228,15 @@ class SeamHarness(Harness):
         self.transports: list[Transport] = []
         self.readers: list[Reader] = []
         self.writers: list[Writer] = []
-        self.pumps: list[threading.Event] = []
-        self.pump_threads: list[threading.Thread] = []
+        self.pumps = _Pumps()
 
     def _plan(self, qos: QoS) -> Plan:
         pubs, subs = [f"pub{i}" for i in range(3)], [f"sub{i}" for i in range(3)]
         # hosts of one process (Cyclone delivers within it) all on the one loopback interface Cyclone knows
         hosts = {name: HostPlan(name, "127.0.0.1") for name in pubs + subs} if self.KIND == "dds" else {}
         kind = "thread" if self.KIND == "inproc" else "process"
-        return Plan(
-            name="conformance", root=".", message_paths=(),
+        return Plan(  # a name of its own: DDS topics of an earlier test's participants never match this one's
+            name=f"conformance{next(_HARNESS_NUMBERS)}", root=".", message_paths=(),
             targets={n: TargetPlan(n, kind, host=n if hosts else "") for n in pubs + subs},
             nodes={n: NodePlan(n, "x:y", n) for n in pubs + subs},
             channels={"/t": ChannelPlan("/t", TYPE, "topic", qos, tuple(pubs), tuple(subs))},
@@ -271,25 +283,13 @@ class SeamHarness(Harness):
         transport = self._transport(node)
         reader = transport.open_reader(Endpoint("/t", node, TYPE, self.qos, False, self._edges(node)), wake)
         source = transport.wait_source(node)
-        if source is not None:  # stands in for the node's executor
-            stop = threading.Event()
-            self.pumps.append(stop)
-
-            def run() -> None:
-                while not stop.is_set():
-                    source.wait(0.05)
-
-            thread = threading.Thread(target=run, daemon=True)
-            thread.start()
-            self.pump_threads.append(thread)
+        if source is not None:
+            self.pumps.start(source)
         self.readers.append(reader)
         return reader
 
     def close(self) -> None:
-        for stop in self.pumps:
-            stop.set()
-        for thread in self.pump_threads:
-            thread.join()
+        self.pumps.stop()
         for reader in self.readers:
             reader.close()
         for transport in self.transports:

@@ -260,7 +260,8 @@ def test_cyclone_listens_only_on_the_named_interface(domain: DdsDomain) -> None:
                 if host == "0.0.0.0" and first <= port < first + 250:
                     devices[port] = sock.getsockopt(socket.SOL_SOCKET, socket.SO_BINDTODEVICE, 16).rstrip(b"\0")
     assert devices and set(devices.values()) == {b"lo"}, devices
-    with pytest.raises(TransportError, match=r"cannot join DDS domain \d+ on 10.255.255.1: .*check the interface"):
+    with pytest.raises(TransportError, match=r"cannot join DDS domain \d+ on 10.255.255.1: .*10.255.255.1 must be an "
+                                             r"address of this machine: check external.ros2.interface"):
         DdsDomain(free_domain(), interface="10.255.255.1")
 
 

@@ -194,11 +194,11 @@ def test_a_master_that_is_down_at_start_is_retried(caplog: pytest.LogCaptureFixt
     started[0].close()
 
 
-def test_the_readme_example_runs() -> None:
+def test_the_guides_ros1_peer_example_runs() -> None:
     from hetros.transport.tcpros import Master
 
-    readme = (Path(__file__).resolve().parents[3] / "README.md").read_text()
-    block = readme.split("## ROS 1", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    guide = (Path(__file__).resolve().parents[3] / "docs" / "GUIDE.md").read_text()
+    block = guide.split("### A process as a ROS 1 node", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
     running = Master("127.0.0.1", free_port())
     namespace: dict[str, Any] = {}
     try:

@@ -18,6 +18,7 @@ from typing import Any
 from amaranth import Module, Signal
 from amaranth.back import verilog
 from amaranth.hdl import Elaboratable
+from amaranth.lib import wiring
 
 from .._errors import HardwareError
 from ..msg import TypeRegistry, flat_layout
@@ -72,17 +73,25 @@ def hardware_topics(plan: Plan, target: str) -> list[HardwareTopic]:
 
 
 class FpgaTop(Elaboratable):
-    """The top module: every hardware topic of one fpga target behind AXI4-Stream ports."""
+    """The top module: every hardware topic of one fpga target; each endpoint is wired to its node's
+    hardware implementation where the node has one, else behind an AXI4-Stream port of the top."""
 
-    def __init__(self, topics: list[HardwareTopic], data_width: int) -> None:
+    def __init__(self, topics: list[HardwareTopic], data_width: int,
+                 hardware_nodes: dict[str, Elaboratable] | None = None) -> None:
         self.topics = topics
         self.data_width = data_width
+        self.hardware_nodes = dict(hardware_nodes or {})
         # (port prefix, topic index, "pub"/"sub", endpoint index) -> signals by field
         self.ports: dict[str, dict[str, Any]] = {}
         self._where: dict[str, tuple[int, str, int]] = {}
+        # (node, topic index, "pub"/"sub", endpoint index) of endpoints inside the top
+        self._inside: list[tuple[str, int, str, int]] = []
         for index, topic in enumerate(topics):
             for role, nodes, prefix in (("pub", topic.publishers, "s_axis"), ("sub", topic.subscribers, "m_axis")):
                 for position, node in enumerate(nodes):
+                    if node in self.hardware_nodes:
+                        self._inside.append((node, index, role, position))
+                        continue
                     name = f"{prefix}_{topic.port_name}_{node}"
                     self.ports[name] = {
                         field: Signal(width or (data_width if field == "tdata" else data_width // 8),
@@ -110,7 +119,34 @@ class FpgaTop(Elaboratable):
             else:
                 m.d.comb += [port[f].eq(getattr(stream, f)) for f in ("tdata", "tkeep", "tlast", "tvalid")]
                 m.d.comb += stream.tready.eq(port["tready"])
+        for node, component in self.hardware_nodes.items():
+            m.submodules[f"node_{node}"] = component
+        for node, index, role, position in self._inside:
+            stream = getattr(networks[index], f"{role}{position}")
+            port = getattr(self.hardware_nodes[node], self.topics[index].port_name)
+            if role == "pub":  # the hardware node drives the network's input
+                wiring.connect(m, port, stream)
+            else:
+                wiring.connect(m, stream, port)
         return m
+
+
+def hardware_nodes(plan: Plan, target: str) -> dict[str, Elaboratable]:
+    """The hardware implementations of ``target``'s nodes that have one, elaborated and their ports
+    checked against the node's topics."""
+    from .nodes import make_hardware_node, port_problems
+
+    made: dict[str, Elaboratable] = {}
+    width = plan.targets[target].data_width
+    for name, node in plan.nodes.items():
+        if node.target != target or not node.hw:
+            continue
+        component = make_hardware_node(node.hw, plan.root, width, node.parameters)
+        problems = port_problems(component, list(node.publish), list(node.subscribe), width)
+        if problems:
+            raise HardwareError(f"node {name}'s hardware ({node.hw}) does not fit its topics: " + "; ".join(problems))
+        made[name] = component
+    return made
 
 
 def top_name(target: str) -> str:
@@ -128,28 +164,31 @@ def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path
         problem = stream_problem(types, topic.type)
         if problem:
             raise HardwareError(f"{topic.name} [{topic.type}] cannot be a hardware topic: {problem}")
-    top = FpgaTop(topics, spec.data_width)
+    top = FpgaTop(topics, spec.data_width, hardware_nodes(plan, target))
     name = top_name(target)
     text = verilog.convert(top, name=name, ports=top.signals())
     out.mkdir(parents=True, exist_ok=True)
     verilog_path = out / f"{name}.v"
     verilog_path.write_text(text)
     manifest_path = out / f"{name}.json"
-    manifest_path.write_text(json.dumps(manifest(plan, target, topics, types), indent=1))
+    clocked = re.search(r"\binput\s+clk\b", text) is not None  # what the design uses, hardware nodes included
+    manifest_path.write_text(json.dumps(manifest(plan, target, topics, types, clocked), indent=1))
     return verilog_path, manifest_path
 
 
-def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRegistry) -> dict[str, Any]:
+def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRegistry,
+             clocked: bool) -> dict[str, Any]:
     """Every port with its direction and width, every topic with its endpoints and message layout."""
     spec = plan.targets[target]
     width = spec.data_width
-    clocked = any(len(t.publishers) > 1 or len(t.subscribers) > 1 or t.fifo_depth for t in topics)
     ports = [{"name": "clk", "direction": "input", "width": 1, "role": "clock"},
              {"name": "rst", "direction": "input", "width": 1, "role": "reset (active high, synchronous)"}
              ] if clocked else []  # a network of wiring only has neither
     for topic in topics:
         for prefix, nodes, sends in (("s_axis", topic.publishers, True), ("m_axis", topic.subscribers, False)):
             for node in nodes:
+                if plan.nodes[node].hw:
+                    continue  # wired to the node's hardware inside the top
                 for field, bits in _FIELDS:
                     into_network = (field == "tready") != sends
                     ports.append({"name": f"{prefix}_{topic.port_name}_{node}_{field}",
@@ -167,6 +206,7 @@ def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRe
         "beats": ("each message is its CDR body (little endian, no encapsulation header) cut into data_width "
                   "beats, byte k of a beat at tdata[8k+7:8k]; tlast on the last beat, tkeep marks its bytes"),
         "ports": ports,
+        "hardware_nodes": {name: node.hw for name, node in plan.nodes.items() if node.target == target and node.hw},
         "topics": [{"name": t.name, "type": t.type, "publishers": list(t.publishers),
                     "subscribers": list(t.subscribers), "fifo_depth": t.fifo_depth,
                     "arbiter": len(t.publishers) > 1, "broadcast": len(t.subscribers) > 1,

@@ -71,6 +71,8 @@ class NodePlan:
     action_clients: dict[str, str] = field(default_factory=dict)
     # action name -> how many of its goals execute at once
     max_goals: dict[str, int] = field(default_factory=dict)
+    # "module:Component": the node's hardware implementation, which runs where it is on an fpga target
+    hw: str = ""
 
 
 @dataclass(frozen=True)

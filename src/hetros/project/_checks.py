@@ -28,7 +28,7 @@ from ._bridges import (
 )
 from ._model import LoadedProject, NodeSpec
 from ._names import node_name_problem, topic_name_problem
-from ._probe import module_findable, runnable_problems
+from ._probe import hardware_problems, module_findable, runnable_problems
 from ._report import CheckReport
 from ._scan import scan_file
 
@@ -111,6 +111,11 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     for run, problem in runnable_problems(project, list(runnable)).items():
         for nname in runnable.get(run, []):
             report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
+    for nname, problem in hardware_problems(project).items():
+        if nname:
+            report.errors.append(f"{where('nodes', nname, 'hw')}: {problem}")
+        else:
+            report.warnings.append(f"{where('nodes')}: {problem}; `make install-rtl` brings the tools")
     external = bridged(project)
     imported = {t for spec in external.values() for t in spec.import_}
     _check_action_pairs(project, {a for spec in external.values() for a in spec.import_actions}, report)

@@ -98,6 +98,9 @@ class ActionSpec(_Strict):
 class NodeSpec(_Strict):
     run: str = Field(description="module:function (or module:Class) of the node's code, the module beside the "
                      "project file")
+    hw: str | None = Field(default=None, description="module:Component: the node's hardware implementation, an "
+                           "Amaranth component whose stream ports are named after its topics; on an fpga target "
+                           "it is what runs")
     target: str = Field(description="the target it runs on, a name under targets:")
     publish: dict[str, str | EndpointSpec] = Field(
         default_factory=dict, description="topic -> type, or topic -> {type: ..., QoS offered}")
@@ -154,6 +157,14 @@ class NodeSpec(_Strict):
         module, sep, attr = value.partition(":")
         if not sep or not module or not attr:
             raise ValueError(f"run must be 'module:function_or_class', not {value!r}")
+        return value
+
+    @field_validator("hw")
+    @classmethod
+    def _hw(cls, value: str | None) -> str | None:
+        module, sep, attr = (value or "").partition(":")
+        if value is not None and (not sep or not module or not attr):
+            raise ValueError(f"hw must be 'module:Component', not {value!r}")
         return value
 
 

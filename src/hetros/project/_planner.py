@@ -97,7 +97,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
                         s.types("publish"), s.types("subscribe"), s.types("services"), s.types("clients"),
                         {a: normalize_typename(t, "action") for a, t in s.types("actions").items()},
                         {a: normalize_typename(t, "action") for a, t in s.types("action_clients").items()},
-                        s.max_goals())
+                        s.max_goals(), s.hw or "")
             for n, s in model.nodes.items()
         } | {bridge.name: bridge for bridge in bridges},
         channels=channels,

@@ -8,6 +8,7 @@ import json
 import os
 import subprocess
 import sys
+from typing import Any
 
 from ._model import LoadedProject
 
@@ -92,3 +93,51 @@ def runnable_problems(project: LoadedProject, runs: list[str]) -> dict[str, str]
                          f"them ({reason}); does a module exit or kill its process at import?" for run in runs}
     _probed[key] = problems
     return problems
+
+
+_HW_PROBE = """
+import json, sys
+try:
+    from hetros.hw.nodes import make_hardware_node, port_problems
+except ImportError as exc:
+    print("\\n" + sys.argv[2] + json.dumps({"": f"cannot check hardware nodes: {exc}"}))
+    raise SystemExit(0)
+out = {}
+for job in json.loads(sys.argv[1]):
+    try:
+        component = make_hardware_node(job["hw"], ".", job["data_width"], job["parameters"])
+        problems = port_problems(component, job["publish"], job["subscribe"], job["data_width"])
+    except BaseException as exc:
+        problems = [f"making it raised {type(exc).__name__}: {exc}"]
+    if problems:
+        out[job["node"]] = "; ".join(problems)
+print("\\n" + sys.argv[2] + json.dumps(out))
+"""
+
+
+def hardware_problems(project: LoadedProject) -> dict[str, str]:
+    """Each ``hw:`` node on an fpga target whose component does not fit its topics (missing, extra or
+    mis-shaped ports), made in an interpreter of its own as the node modules are; under the key ""
+    why the check could not run (the hardware tools are not installed)."""
+    model = project.model
+    jobs: list[dict[str, Any]] = [{"node": name, "hw": spec.hw, "data_width": model.targets[spec.target].data_width,
+             "parameters": spec.parameters, "publish": list(spec.types("publish")),
+             "subscribe": list(spec.types("subscribe"))}
+            for name, spec in model.nodes.items()
+            if spec.hw and spec.target in model.targets and model.targets[spec.target].kind == "fpga"]
+    if not jobs:
+        return {}
+    root = str(project.root.resolve())
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
+    try:
+        done = subprocess.run([sys.executable, "-c", _HW_PROBE, json.dumps(jobs), _PROBE_MARK], capture_output=True,
+                              text=True, timeout=120, env=env, cwd=root, check=False)
+    except subprocess.TimeoutExpired:
+        return {job["node"]: "making its hardware took more than 120 s" for job in jobs}
+    answers = [line[len(_PROBE_MARK):] for line in done.stdout.splitlines() if line.startswith(_PROBE_MARK)]
+    if not answers:
+        reason = (done.stderr.strip().splitlines() or [f"exit code {done.returncode}"])[-1]
+        return {job["node"]: f"making its hardware ended the interpreter ({reason})" for job in jobs}
+    found: dict[str, str] = json.loads(answers[-1])
+    return found

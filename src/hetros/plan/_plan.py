@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, dataclass, field, replace
+from functools import cached_property
 from typing import Any, Literal
 
 from .._qos import QoS
@@ -18,6 +19,8 @@ from .._qos import QoS
 # tcpros: every endpoint of a `kind: ros1` node (its peers are the ROS 1 master's, not edges)
 TransportKind = Literal["inproc", "shm", "dds", "hw", "tcpros"]
 ROS1_TRANSPORT: TransportKind = "tcpros"
+# nearest first: an endpoint with edges of several kinds feeds (and drains) the cheapest first
+TRANSPORT_ORDER: tuple[str, ...] = ("inproc", "shm", "dds", "hw", "tcpros")
 # Both directions of every service, whatever carries them: deep enough for bursts of calls,
 # patient enough for a slow handler.
 SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
@@ -141,11 +144,17 @@ class Plan:
         """A node of a ``kind: ros1`` target: all its endpoints are ROS 1's (TCPROS, ROSRPC)."""
         return self.targets[self.nodes[node].target].kind == "ros1"
 
+    @cached_property
+    def _edges_by_endpoint(self) -> dict[tuple[str, str, str], list[EdgePlan]]:
+        index: dict[tuple[str, str, str], list[EdgePlan]] = {}
+        for edge in self.edges:
+            index.setdefault((edge.channel, edge.publisher, "publish"), []).append(edge)
+            index.setdefault((edge.channel, edge.subscriber, "subscribe"), []).append(edge)
+        return index
+
     def edges_of(self, channel: str, node: str, role: Literal["publish", "subscribe"]) -> list[EdgePlan]:
         """The edges of ``node``'s endpoint on ``channel``: where it publishes to, or reads from."""
-        if role == "publish":
-            return [e for e in self.edges if e.channel == channel and e.publisher == node]
-        return [e for e in self.edges if e.channel == channel and e.subscriber == node]
+        return list(self._edges_by_endpoint.get((channel, node, role), ()))
 
     def inputs(self, node: str) -> list[tuple[str, str, bool]]:
         """``(channel, type, envelope)`` of everything ``node`` reads: opened before it runs."""

@@ -16,7 +16,7 @@ from .._errors import UndeclaredEndpointError
 from .._log import get_logger
 from .._qos import DEFAULT_QOS, QoS
 from ..msg import TypeRegistry, registry
-from ..plan import LAUNCHER, ROS1_TRANSPORT, ChannelPlan, EdgePlan, Plan
+from ..plan import LAUNCHER, ROS1_TRANSPORT, TRANSPORT_ORDER, ChannelPlan, EdgePlan, Plan
 from ..transport import (
     Codec,
     Endpoint,
@@ -206,7 +206,10 @@ class Graph:
         split: dict[str, list[EdgePlan]] = {}
         for edge in self.plan.edges_of(name, node, "publish" if role == "publish" else "subscribe"):
             split.setdefault(edge.transport, []).append(edge)
-        return {kind: tuple(edges) for kind, edges in sorted(split.items())}
+        def nearest_first(kind: str) -> int:
+            return TRANSPORT_ORDER.index(kind) if kind in TRANSPORT_ORDER else len(TRANSPORT_ORDER)
+
+        return {kind: tuple(split[kind]) for kind in sorted(split, key=nearest_first)}
 
     def open_writer(self, name: str, node: str, typename: str, *, qos: QoS | None = None,
                     envelope: bool = False) -> EndpointWriter:

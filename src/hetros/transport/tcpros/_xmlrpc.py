@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import sys
 import threading
 import xmlrpc.client
 from socketserver import ThreadingMixIn
@@ -59,6 +60,15 @@ class _Threaded(ThreadingMixIn, SimpleXMLRPCServer):
     def server_close(self) -> None:
         self.admission.close()
         super().server_close()
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """A caller that left before its answer (a refused or fuzzed request, a killed node) is one
+        line, not socketserver's traceback on stderr; anything else is logged with its traceback."""
+        error = sys.exc_info()[1]
+        if isinstance(error, ConnectionError | TimeoutError):
+            log.info("XML-RPC caller %s:%s left before its answer (%s)", *client_address[:2], error)
+        else:
+            log.exception("XML-RPC request from %s:%s failed", *client_address[:2])
 
 
 class _Quiet(SimpleXMLRPCRequestHandler):

@@ -14,8 +14,13 @@ import pytest
 
 pytest.importorskip("amaranth")
 
+from amaranth import Module, Signal
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
 from hetros.hw import BeatCodec
 from hetros.hw._sim import simulate
+from hetros.hw._stream import axi_stream
 from hetros.hw.nodes import Echo, NodeUnderTest, port_problems
 from hetros.msg import registry
 from hetros.project import check, load_project, plan
@@ -131,3 +136,27 @@ def test_hw_build_wires_a_hardware_node_inside_the_top(tmp_path: Path) -> None:
     assert not any("_echo_" in name for name in names), "the hardware node's endpoints are inside the top"
     # the echo sits between the two networks: the source's beats reach the sink's port through it
     assert "assign m_axis_recv_sink_tvalid = s_axis_send_source_tvalid;" in verilog.read_text()
+
+
+class _Flaky(wiring.Component):
+    """A broken hardware node: it shows each beat for one cycle only, taken or not."""
+
+    def __init__(self, data_width: int = 64) -> None:
+        super().__init__({"send": In(axi_stream(data_width)), "recv": Out(axi_stream(data_width))})
+
+    def elaborate(self, platform: object) -> Module:
+        m = Module()
+        shown = Signal()
+        m.d.comb += [self.recv.tdata.eq(self.send.tdata), self.recv.tkeep.eq(self.send.tkeep),
+                     self.recv.tlast.eq(self.send.tlast), self.recv.tvalid.eq(self.send.tvalid & ~shown),
+                     self.send.tready.eq(self.recv.tready | shown)]
+        m.d.sync += shown.eq(self.send.tvalid & ~shown & ~self.recv.tready)
+        return m
+
+
+def test_a_hardware_node_that_breaks_the_stream_rules_is_named_with_its_port_and_cycle() -> None:
+    from hetros import HardwareError
+
+    node = NodeUnderTest(_Flaky(64), ["send"], ["recv"], 64, name="flaky")
+    with pytest.raises(HardwareError, match=r"hardware node flaky port 'recv''s stream: TVALID dropped at cycle \d+"):
+        simulate(node, [[bytes([0]) + bytes(200)]], stall=0.5, seed=3)

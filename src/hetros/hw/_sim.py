@@ -67,6 +67,8 @@ def simulate(network: TopicNetwork, messages: list[list[bytes]], *, idle: float 
     partial: list[list[tuple[int, int]]] = [[] for _ in subs]
     per_beat = network.data_width // 8
     held: list[tuple[int, int, int, int] | None] = [None for _ in subs]  # a beat shown and not yet taken
+    # who drives each stream the testbench takes from, as errors name it
+    labels: list[str] = list(getattr(network, "output_labels", [f"subscriber {j}" for j in range(len(subs))]))
     result = SimResult(0, received, done_at)
 
     async def bench(ctx: Any) -> None:
@@ -101,8 +103,9 @@ def simulate(network: TopicNetwork, messages: list[list[bytes]], *, idle: float 
             for index, port in enumerate(subs):
                 shown = (ctx.get(port.tvalid), ctx.get(port.tdata), ctx.get(port.tkeep), ctx.get(port.tlast))
                 if held[index] is not None and shown != held[index]:
-                    raise HardwareError(f"subscriber {index}'s stream changed TVALID/TDATA/TKEEP/TLAST at cycle "
-                                        f"{cycle} before the beat was taken (AXI4-Stream forbids it)")
+                    what = ("TVALID dropped" if not shown[0] else "TDATA/TKEEP/TLAST changed")
+                    raise HardwareError(f"{labels[index]}'s stream: {what} at cycle {cycle} before the beat was "
+                                        "taken (AXI4-Stream holds a shown beat until TREADY)")
                 held[index] = shown if shown[0] and not ready[index] else None
             for index, (port, wants) in enumerate(zip(subs, ready, strict=True)):
                 if wants and ctx.get(port.tvalid):

@@ -91,8 +91,11 @@ class NodeUnderTest(wiring.Component):
     """A hardware node with its input ports as ``pub<i>`` and output ports as ``sub<j>``, the shape the
     topic-network simulation drives (publishers feed it, subscribers take from it)."""
 
-    def __init__(self, node: wiring.Component, inputs: list[str], outputs: list[str], data_width: int) -> None:
+    def __init__(self, node: wiring.Component, inputs: list[str], outputs: list[str], data_width: int,
+                 name: str = "") -> None:
         self.node, self.inputs, self.outputs = node, inputs, outputs
+        # what the simulation's errors call each output: the node and its port
+        self.output_labels = [f"hardware node {name or type(node).__name__} port {port!r}" for port in outputs]
         self.publishers, self.subscribers, self.data_width = len(inputs), len(outputs), data_width
         members = {f"pub{i}": In(axi_stream(data_width)) for i in range(len(inputs))}
         members |= {f"sub{j}": Out(axi_stream(data_width)) for j in range(len(outputs))}

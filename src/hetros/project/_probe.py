@@ -59,6 +59,36 @@ _PROBE_MARK = "hetros-probe-result: "
 _probed: dict[tuple[str, tuple[str, ...], tuple[float, ...]], dict[str, str]] = {}
 
 
+class _ProbeEnded(Exception):
+    """The probe gave no answer: it timed out (``timed_out``), or its interpreter ended (``reason``)."""
+
+    def __init__(self, reason: str, timed_out: bool) -> None:
+        super().__init__(reason)
+        self.reason, self.timed_out = reason, timed_out
+
+
+def _probe(project: LoadedProject, program: str, arguments: list[str], timeout: float) -> dict[str, str]:
+    """Run ``program`` in an interpreter of its own, in the project's folder and on its import path;
+    its answer is the last line that starts with the mark (its mapping of keys to problems)."""
+    root = str(project.root.resolve())
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
+    try:
+        done = subprocess.run([sys.executable, "-c", program, *arguments], capture_output=True, text=True,
+                              timeout=timeout, env=env, cwd=root, check=False)
+    except subprocess.TimeoutExpired:
+        raise _ProbeEnded("", timed_out=True) from None
+    answers = [line[len(_PROBE_MARK):] for line in done.stdout.splitlines() if line.startswith(_PROBE_MARK)]
+    try:
+        problems = json.loads(answers[-1])
+        if not isinstance(problems, dict):
+            raise ValueError(problems)
+    except (ValueError, IndexError):
+        reason = (done.stderr.strip().splitlines() or [f"exit code {done.returncode}, no error printed"])[-1]
+        raise _ProbeEnded(reason, timed_out=False) from None
+    return {str(key): str(value) for key, value in problems.items()}
+
+
 def runnable_problems(project: LoadedProject, runs: list[str]) -> dict[str, str]:
     """Import every node module as the launch will, in a separate interpreter, and find the nodes.
 
@@ -72,25 +102,15 @@ def runnable_problems(project: LoadedProject, runs: list[str]) -> dict[str, str]
     key = (root, tuple(sorted(runs)), stamps)
     if key in _probed:
         return _probed[key]
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
+    folders = [str((project.root / m).resolve()) for m in project.model.messages]
     try:
-        folders = [str((project.root / m).resolve()) for m in project.model.messages]
-        done = subprocess.run([sys.executable, "-c", _PROBE, json.dumps(sorted(runs)), json.dumps(folders),
-                               _PROBE_MARK], capture_output=True,
-                              text=True, timeout=60, env=env, cwd=root, check=False)
-    except subprocess.TimeoutExpired:
-        return {run: "importing the node modules took more than 60 s; does a module block on import?"
-                for run in runs}
-    answers = [line[len(_PROBE_MARK):] for line in done.stdout.splitlines() if line.startswith(_PROBE_MARK)]
-    try:
-        problems: dict[str, str] = json.loads(answers[-1])
-        if not isinstance(problems, dict):
-            raise ValueError(problems)
-    except (ValueError, IndexError):
-        reason = (done.stderr.strip().splitlines() or [f"exit code {done.returncode}, no error printed"])[-1]
+        problems = _probe(project, _PROBE, [json.dumps(sorted(runs)), json.dumps(folders), _PROBE_MARK], 60)
+    except _ProbeEnded as ended:
+        if ended.timed_out:
+            return {run: "importing the node modules took more than 60 s; does a module block on import?"
+                    for run in runs}
         problems = {run: f"importing the node modules ended the interpreter before hetros could look at "
-                         f"them ({reason}); does a module exit or kill its process at import?" for run in runs}
+                         f"them ({ended.reason}); does a module exit or kill its process at import?" for run in runs}
     _probed[key] = problems
     return problems
 
@@ -127,17 +147,8 @@ def hardware_problems(project: LoadedProject) -> dict[str, str]:
             if spec.hw and spec.target in model.targets and model.targets[spec.target].kind == "fpga"]
     if not jobs:
         return {}
-    root = str(project.root.resolve())
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
     try:
-        done = subprocess.run([sys.executable, "-c", _HW_PROBE, json.dumps(jobs), _PROBE_MARK], capture_output=True,
-                              text=True, timeout=120, env=env, cwd=root, check=False)
-    except subprocess.TimeoutExpired:
-        return {job["node"]: "making its hardware took more than 120 s" for job in jobs}
-    answers = [line[len(_PROBE_MARK):] for line in done.stdout.splitlines() if line.startswith(_PROBE_MARK)]
-    if not answers:
-        reason = (done.stderr.strip().splitlines() or [f"exit code {done.returncode}"])[-1]
-        return {job["node"]: f"making its hardware ended the interpreter ({reason})" for job in jobs}
-    found: dict[str, str] = json.loads(answers[-1])
-    return found
+        return _probe(project, _HW_PROBE, [json.dumps(jobs), _PROBE_MARK], 120)
+    except _ProbeEnded as ended:
+        what = "took more than 120 s" if ended.timed_out else f"ended the interpreter ({ended.reason})"
+        return {job["node"]: f"making its hardware {what}" for job in jobs}

@@ -22,7 +22,7 @@ from amaranth.lib import wiring
 
 from .._errors import HardwareError
 from ..msg import TypeRegistry, flat_layout
-from ..plan import Plan
+from ..plan import Plan, gateway_node
 from ._beats import stream_problem
 from ._stream import TopicNetwork
 
@@ -50,19 +50,30 @@ def port_part(topic: str) -> str:
 
 
 def hardware_topics(plan: Plan, target: str) -> list[HardwareTopic]:
-    """The hardware topics of ``target``, in the plan's order."""
+    """The hardware topics of ``target``, in the plan's order.
+
+    A topic's network connects the target's nodes on it and, where the topic crosses to software,
+    the target's gateway: as a publisher into the network where the gateway subscribes (software
+    publishes to the hardware), as a subscriber of it where the gateway publishes.
+    """
     if target not in plan.targets or plan.targets[target].kind != "fpga":
         fpga = [t.name for t in plan.targets.values() if t.kind == "fpga"]
         raise HardwareError(f"target must be an fpga target of the project ({', '.join(fpga) or 'none'}), "
                             f"not {target!r}")
+    gateway = gateway_node(target)
     topics = []
     for channel in plan.channels.values():
-        nodes = set(channel.publishers) | set(channel.subscribers)
-        if channel.kind == "topic" and nodes and all(plan.nodes[n].target == target for n in nodes):
-            if not channel.publishers or not channel.subscribers:
-                continue  # an endpoint with nobody on the other side has nothing to wire
-            topics.append(HardwareTopic(channel.name, channel.type, channel.publishers, channel.subscribers,
-                                        channel.qos.hw_fifo))
+        if channel.kind != "topic":
+            continue
+        publishers = tuple(n for n in channel.publishers if n != gateway and plan.nodes[n].target == target)
+        subscribers = tuple(n for n in channel.subscribers if n != gateway and plan.nodes[n].target == target)
+        if gateway in channel.subscribers:
+            publishers += (gateway,)
+        if gateway in channel.publishers:
+            subscribers += (gateway,)
+        if not publishers or not subscribers:
+            continue  # an endpoint with nobody on the other side has nothing to wire
+        topics.append(HardwareTopic(channel.name, channel.type, publishers, subscribers, channel.qos.hw_fifo))
     names: dict[str, str] = {}
     for topic in topics:
         other = names.setdefault(topic.port_name, topic.name)
@@ -98,6 +109,13 @@ class FpgaTop(Elaboratable):
                                       name=f"{name}_{field}")
                         for field, width in _FIELDS}
                     self._where[name] = (index, role, position)
+
+    def endpoint_of(self, prefix: str) -> tuple[HardwareTopic, str, bool]:
+        """``(topic, node, feeds the network)`` of an external port (``s_axis_...`` or ``m_axis_...``)."""
+        index, role, position = self._where[prefix]
+        topic = self.topics[index]
+        nodes = topic.publishers if role == "pub" else topic.subscribers
+        return topic, nodes[position], role == "pub"
 
     def signals(self) -> list[Any]:
         return [signal for port in self.ports.values() for signal in port.values()]
@@ -139,7 +157,7 @@ def hardware_nodes(plan: Plan, target: str) -> dict[str, Elaboratable]:
     made: dict[str, Elaboratable] = {}
     width = plan.targets[target].data_width
     for name, node in plan.nodes.items():
-        if node.target != target or not node.hw:
+        if node.target != target or not node.hw or not plan.in_hardware(name):
             continue
         component = make_hardware_node(node.hw, plan.root, width, node.parameters)
         problems = port_problems(component, list(node.publish), list(node.subscribe), width)
@@ -187,7 +205,7 @@ def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRe
     for topic in topics:
         for prefix, nodes, sends in (("s_axis", topic.publishers, True), ("m_axis", topic.subscribers, False)):
             for node in nodes:
-                if plan.nodes[node].hw:
+                if plan.nodes[node].hw and plan.in_hardware(node):
                     continue  # wired to the node's hardware inside the top
                 for field, bits in _FIELDS:
                     into_network = (field == "tready") != sends

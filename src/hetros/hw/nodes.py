@@ -26,7 +26,11 @@ from amaranth.lib.wiring import In, Out
 
 from .._errors import HardwareError
 from ._build import port_part
+from ._image import GaussianBlur, ImageFilter3x3, Sobel
 from ._stream import axi_stream
+
+
+__all__ = ["Echo", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "make_hardware_node", "port_problems"]
 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:

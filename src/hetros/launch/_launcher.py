@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import queue
+import shutil
 import signal
 import subprocess
 import sys
@@ -375,9 +376,19 @@ def launch(plan: Plan, *, duration: float | None = None, host: str | None = None
         plan = plan.on_host(host or local_host(plan))
     elif host is not None:
         raise LaunchError(f"--as {host}: the project names no hosts (add a hosts: section)")
-    fpga = sorted({spec.target for spec in plan.nodes.values() if plan.targets[spec.target].kind == "fpga"})
-    if fpga:
-        raise LaunchError(f"target(s) {', '.join(fpga)} are fpga targets: running their nodes needs hardware "
-                          "implementations and co-simulation (FPGA part 2, not built yet); `hetros hw build` "
-                          "generates their topic networks as Verilog today")
+    _check_hardware(plan)
     return Launcher(plan, duration=duration).run()
+
+
+def _check_hardware(plan: Plan) -> None:
+    """Refuse, before anything starts, a launch whose fpga targets could not run: a node there without a
+    hardware implementation, or no simulator on this machine."""
+    bare = sorted(n for n in plan.nodes if plan.in_hardware(n) and not plan.nodes[n].hw)
+    if bare:
+        raise LaunchError(f"node(s) {', '.join(bare)} sit on fpga targets without a hardware implementation, so "
+                          "nothing can run them: give each a hw: (module:Component, see hetros.hw.nodes) or move "
+                          "it to a process target (`hetros hw build` generates topic networks without one)")
+    if any(plan.in_hardware(n) for n in plan.nodes if not plan.hosts or plan.host_of(n) == plan.local_host) \
+            and shutil.which("verilator") is None:
+        raise LaunchError("the project's fpga targets run in Verilator, which this machine lacks: install Debian's "
+                          "verilator package (`make install-test` does, as root)")

@@ -6,6 +6,7 @@ Neither depends on the other: both depend on this package.
 
 from ._plan import (
     ACTION_PREFIX,
+    GATEWAY_PREFIX,
     LAUNCHER,
     ROS1_TRANSPORT,
     ROS2_BRIDGE,
@@ -21,6 +22,7 @@ from ._plan import (
     TransportKind,
     action_endpoints,
     action_topic_qos,
+    gateway_node,
     process_name,
     reply_channel,
     request_channel,
@@ -29,6 +31,7 @@ from ._plan import (
 
 __all__ = [
     "ACTION_PREFIX",
+    "GATEWAY_PREFIX",
     "LAUNCHER",
     "ROS1_TRANSPORT",
     "ROS2_BRIDGE",
@@ -44,6 +47,7 @@ __all__ = [
     "TransportKind",
     "action_endpoints",
     "action_topic_qos",
+    "gateway_node",
     "process_name",
     "reply_channel",
     "request_channel",

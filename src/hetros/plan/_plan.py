@@ -28,6 +28,15 @@ SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
 LAUNCHER = "launcher"
 # the node (and thread target) the planner adds when the project shares endpoints with ROS 2
 ROS2_BRIDGE = "hetros_ros2_bridge"
+# the node the planner adds to each fpga target whose topics cross to software: it runs the target's
+# simulator and is the software end of every gateway (see ``gateway_node``)
+GATEWAY_PREFIX = "hetros_gateway_"
+
+
+def gateway_node(target: str) -> str:
+    """The gateway node of fpga target ``target``: in the target's own process, it subscribes to what
+    software publishes to the target's hardware nodes and publishes what they publish to software."""
+    return GATEWAY_PREFIX + target
 ChannelKind = Literal["topic", "request", "reply"]
 
 
@@ -47,6 +56,8 @@ class TargetPlan:
     part: str = ""
     # the machine (a name in Plan.hosts; "" when the project names no hosts)
     host: str = ""
+    # fpga targets under ``hetros launch``: the simulator that runs the hardware
+    sim: str = "verilator"
 
 
 @dataclass(frozen=True)
@@ -140,6 +151,12 @@ class Plan:
     def _here(self, node: str) -> bool:
         return not self.hosts or self.host_of(node) == self.local_host
 
+    def in_hardware(self, node: str) -> bool:
+        """A node of an fpga target (other than its gateway): its ``hw:`` implementation runs, in the
+        target's simulator, and no process runs its Python."""
+        spec = self.nodes[node]
+        return self.targets[spec.target].kind == "fpga" and node != gateway_node(spec.target)
+
     def speaks_ros1(self, node: str) -> bool:
         """A node of a ``kind: ros1`` target: all its endpoints are ROS 1's (TCPROS, ROSRPC)."""
         return self.targets[self.nodes[node].target].kind == "ros1"
@@ -172,10 +189,12 @@ class Plan:
         return sorted(kinds)
 
     def nodes_in(self, process: str) -> list[str]:
-        return [n for n in self.nodes if self.process_of(n) == process and self._here(n)]
+        """The nodes whose code runs in ``process`` (hardware nodes run in their target's simulator)."""
+        return [n for n in self.nodes if self.process_of(n) == process and self._here(n) and not self.in_hardware(n)]
 
     def processes(self) -> list[str]:
-        return sorted({self.process_of(n) for n in self.nodes if self._here(n)} - {LAUNCHER})
+        return sorted({self.process_of(n) for n in self.nodes if self._here(n) and not self.in_hardware(n)}
+                      - {LAUNCHER})
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=1, sort_keys=True)
@@ -188,7 +207,8 @@ class Plan:
             root=raw["root"],
             message_paths=tuple(raw["message_paths"]),
             targets={k: TargetPlan(v["name"], v["kind"], tuple(v["cpus"]), v.get("clock_mhz", 100.0),
-                                   v.get("data_width", 64), v.get("part", ""), v.get("host", ""))
+                                   v.get("data_width", 64), v.get("part", ""), v.get("host", ""),
+                                   v.get("sim", "verilator"))
                      for k, v in raw["targets"].items()},
             nodes={k: NodePlan(**v) for k, v in raw["nodes"].items()},
             channels={

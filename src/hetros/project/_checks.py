@@ -250,8 +250,8 @@ def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tu
             for section in ("services", "clients", "actions", "action_clients"):
                 for name in getattr(spec, section):
                     report.errors.append(f"{where('nodes', nname, section, name)}: {section} of a node on an fpga "
-                                         "target need a hardware/software gateway (FPGA part 2, not built yet); "
-                                         "move the node to a thread or process target")
+                                         "target are not carried by hetros's gateways yet (topics are); move the "
+                                         "node to a thread or process target")
     for topic in sorted(set(publishers) | set(subscribers)):
         endpoints = publishers.get(topic, []) + subscribers.get(topic, [])
         placed = {n: model.nodes[n].target for n, _ in endpoints if n in model.nodes}
@@ -262,20 +262,17 @@ def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tu
                 report.warnings.append(f"{where('topics', topic, 'hw_fifo')}: {topic} is not a hardware topic (no "
                                        "endpoint on an fpga target), so hw_fifo has no effect")
             continue
-        software = {n: t for n, t in placed.items() if t not in fpga}
-        if software or len(set(on_fpga.values())) > 1:
-            hardware = ", ".join(f"{n} on {t}" for n, t in on_fpga.items())
-            other = ", ".join(f"{n} on {t}" for n, t in software.items()) or "others on another fpga target"
-            report.errors.append(f"{where('nodes')}: topic {topic} is not a hardware topic: {hardware} but {other}; "
-                                 "an edge between hardware and software (or two fpga targets) needs a gateway "
-                                 "(FPGA part 2, not built yet): put all its endpoints on one fpga target or none")
-            continue
-        if qos is not None:
+        crosses = len(set(on_fpga.values())) > 1 or len(on_fpga) < len(placed)
+        if qos is not None and not crosses:
             for key, wanted in _HW_QOS.items():
                 if getattr(qos, key) != wanted:
                     report.errors.append(f"{where('topics', topic, key)}: {topic} is a hardware topic, which is "
                                          f"reliable, keep_all and volatile (an AXI-Stream network with "
                                          f"back-pressure), not {key} {getattr(qos, key)}; remove the setting")
+        if qos is not None and crosses and qos.durability == "transient_local":
+            report.errors.append(f"{where('topics', topic, 'durability')}: {topic} crosses between software and "
+                                 "hardware through a gateway, and hardware keeps no history for late joiners; "
+                                 "make it volatile")
         node, typename = endpoints[0]
         try:
             problem = stream_problem(types, typename)

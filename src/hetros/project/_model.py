@@ -50,17 +50,11 @@ class TargetSpec(_Strict):
                                     "network (absent: 100 MHz)")
     data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8, description="fpga: the stream width in bits")
     part: str | None = Field(default=None, description="fpga: the device, for reports")
-    # reserved for co-simulated hardware nodes, which no mapping runs yet: refused, never ignored
-    sim: str | None = Field(default=None, description="reserved: refused with an error until targets run their "
-                            "nodes in a simulator")
+    sim: Literal["verilator"] | None = Field(
+        default=None, description="fpga: the simulator `hetros launch` runs the target's hardware in (absent: "
+        "verilator, Debian's, compiled once per design; about ten million cycles a second)")
     host: str | None = Field(default=None, description="the machine it runs on, a name under hosts: (absent: the "
                              "first host, or this machine without hosts:)")
-
-    @field_validator("sim")
-    @classmethod
-    def _sim(cls, value: str | None) -> str | None:
-        raise ValueError("must be left out (no target runs its nodes in a simulator yet; `hetros hw report` "
-                         "simulates an fpga target's topic network)")
 
     @field_validator("cpus")
     @classmethod

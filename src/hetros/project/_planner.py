@@ -19,6 +19,7 @@ from ..plan import (
     TargetPlan,
     TransportKind,
     action_topic_qos,
+    gateway_node,
     process_name,
     reply_channel,
     request_channel,
@@ -70,26 +71,33 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
             _add(channels, name, f"{srv}_Response", "reply", project, pub=server, service=service)
             _add(channels, name, f"{srv}_Response", "reply", project, sub=nname, service=service)
     fpga_of = {n: s.target for n, s in model.nodes.items() if model.targets[s.target].kind == "fpga"}
+    gateways = _add_gateways(channels, fpga_of)
+    for gateway, target in gateways.items():
+        process_of[gateway] = target
     # every target on a host: its own, else the first one named (bridges run in the first host's launcher)
     first_host = next(iter(model.hosts), "")
     host_of_target = {t: spec.host or first_host for t, spec in model.targets.items()}
-    host_of = {n: host_of_target[s.target] for n, s in model.nodes.items()} | {b.name: first_host for b in bridges}
+    host_of = ({n: host_of_target[s.target] for n, s in model.nodes.items()} | {b.name: first_host for b in bridges}
+               | {g: host_of_target[t] for g, t in gateways.items()})
 
-    def transport(publisher: str, subscriber: str) -> TransportKind:
-        if publisher in fpga_of:
-            return "hw"  # check: a topic with an endpoint on an fpga target has all of them on it
+    def transport(publisher: str, subscriber: str) -> TransportKind | None:
+        if publisher in fpga_of or subscriber in fpga_of:
+            # inside one target's topic network; a hardware node's software peers are its gateway's
+            return "hw" if fpga_of.get(publisher) == fpga_of.get(subscriber) else None
+        if publisher in gateways and publisher == subscriber:
+            return None  # what a gateway publishes came out of the hardware it feeds
         if host_of[publisher] != host_of[subscriber]:
             return "dds"
         return "inproc" if process_of[publisher] == process_of[subscriber] else "shm"
 
-    edges = tuple(EdgePlan(c.name, p, s, transport(p, s))
-                  for c in channels.values() for p in c.publishers for s in c.subscribers)
+    edges = tuple(EdgePlan(c.name, p, s, kind) for c in channels.values() for p in c.publishers
+                  for s in c.subscribers if (kind := transport(p, s)) is not None)
     return Plan(
         name=model.name,
         root=str(project.root.resolve()),
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
         targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "",
-                               host_of_target[n])
+                               host_of_target[n], t.sim or "verilator")
                  for n, t in model.targets.items()}
         | {bridge.name: TargetPlan(bridge.name, "thread", host=first_host) for bridge in bridges},
         nodes={
@@ -99,7 +107,9 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
                         {a: normalize_typename(t, "action") for a, t in s.types("action_clients").items()},
                         s.max_goals(), s.hw or "")
             for n, s in model.nodes.items()
-        } | {bridge.name: bridge for bridge in bridges},
+        } | {bridge.name: bridge for bridge in bridges}
+        | {g: NodePlan(g, GATEWAY_RUN, t, {"target": t}, publish=_endpoints_of(channels, g, "publish"),
+                       subscribe=_endpoints_of(channels, g, "subscribe")) for g, t in gateways.items()},
         channels=channels,
         edges=edges,
         ros1_master=ros1_master(project),
@@ -111,6 +121,38 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         dds_domain=model.dds_domain,
         project_hash=project_hash(project),
     )
+
+
+# what a gateway node runs: the fpga target's simulator, fed from and draining to software
+GATEWAY_RUN = "hetros.hw._cosim:gateway"
+
+
+def _add_gateways(channels: dict[str, ChannelPlan], fpga_of: dict[str, str]) -> dict[str, str]:
+    """Give each fpga target a gateway node on every topic it shares with software; gateway -> target.
+
+    The gateway subscribes where a node off the target publishes to one of its hardware nodes,
+    and publishes where one off the target subscribes to them (a hardware node of another fpga
+    target counts as off: two targets meet through their gateways).
+    """
+    gateways: dict[str, str] = {}
+    for channel in list(channels.values()):
+        if channel.kind != "topic":
+            continue
+        for target in sorted({fpga_of[n] for n in (*channel.publishers, *channel.subscribers) if n in fpga_of}):
+            gateway = gateway_node(target)
+            into = any(fpga_of.get(n) != target for n in channel.publishers) and \
+                any(fpga_of.get(n) == target for n in channel.subscribers)
+            out_of = any(fpga_of.get(n) != target for n in channel.subscribers) and \
+                any(fpga_of.get(n) == target for n in channel.publishers)
+            if into or out_of:
+                gateways[gateway] = target
+                _add(channels, channel.name, channel.type, "topic", None,  # type: ignore[arg-type]
+                     pub=gateway if out_of else None, sub=gateway if into else None)
+    return gateways
+
+
+def _endpoints_of(channels: dict[str, ChannelPlan], node: str, role: str) -> dict[str, str]:
+    return {c.name: c.type for c in channels.values() if node in (c.publishers if role == "publish" else c.subscribers)}
 
 
 def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, project: LoadedProject,

@@ -141,7 +141,12 @@ class Host:
         self.threads = [NodeThread(plan.nodes[n], self.graph, on_failure, self._exited, on_done)
                         for n in plan.nodes_in(process)]
         for nthread in self.threads:
-            resolve(nthread.spec.run, plan.root)
+            function = resolve(nthread.spec.run, plan.root)
+            prepare = getattr(function, "prepare", None)
+            if callable(prepare):
+                # start-up work that must not count against the graph's time (a simulator's
+                # compilation): done before this process reports ready, so before any node runs
+                prepare(plan, nthread.spec.name, types)
         self.graph.prepare(plan.nodes_in(process))
 
     def _exited(self) -> None:

@@ -1,0 +1,222 @@
+"""Streaming 3x3 image filters as hardware nodes: ``sensor_msgs/msg/Image`` in, the same out.
+
+A mono8 image arrives as its CDR body (``_beats``), so a filter walks the message's fields
+byte by byte: the header, frame_id, height, width, encoding, is_bigendian and step pass
+through unchanged (the output image has the same shape and encoding), and the pixel bytes
+go through two line buffers and a 3x3 window, one pixel a clock cycle. Output pixel ``o``
+leaves when input pixel ``o + width + 1`` arrives (its whole window is in); after the last
+pixel the remaining ``width + 1`` outputs (the bottom border) are flushed.
+
+Border pixels (the outer rows and columns) are 0, in hardware and in the software twins
+in ``hetros.hw.reference``, the bit-exact specification the tests hold the hardware to.
+"""
+
+from __future__ import annotations
+
+from amaranth import Cat, Const, Module, Mux, Signal, unsigned
+from amaranth.hdl import Value
+from amaranth.lib import wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from .._errors import HardwareError
+from ._build import port_part
+from ._stream import axi_stream
+
+# the byte walk over sensor_msgs/msg/Image's CDR body
+_STAMP, _FRAME_LEN, _FRAME, _PAD1, _HEIGHT, _WIDTH, _ENC_LEN, _ENC, _BIGEND, _PAD2, _STEP, _DATA_LEN, _DATA = \
+    range(13)
+
+
+class ImageFilter3x3(wiring.Component):
+    """A mono8 image filter over a 3x3 window (subclasses give :meth:`kernel`).
+
+    ``width`` is the widest image line the line buffers hold (an elaboration parameter, from
+    the node's parameters); narrower images work unchanged, wider ones are not supported.
+    """
+
+    def __init__(self, source: str, sink: str, data_width: int = 64, width: int = 640) -> None:
+        if width < 3:
+            raise HardwareError(f"width must be at least 3 pixels, not {width!r}")
+        self._source, self._sink = port_part(source), port_part(sink)
+        self.data_width, self.width = data_width, width
+        super().__init__({self._source: In(axi_stream(data_width)), self._sink: Out(axi_stream(data_width))})
+
+    def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        """The output pixel of a window (rows top to bottom, each column left to right), 8 bits."""
+        raise NotImplementedError
+
+    def elaborate(self, platform: object) -> Module:
+        m = Module()
+        source = getattr(self, self._source)
+        sink = getattr(self, self._sink)
+        per_beat = self.data_width // 8
+
+        # beats in -> one byte a cycle
+        held = Signal(self.data_width)
+        held_count = Signal(range(per_beat + 1))
+        held_last = Signal()
+        byte = held[:8]
+        byte_valid = held_count != 0
+        byte_last = held_last & (held_count == 1)
+        take = Signal()  # the core takes ``byte`` this cycle
+        m.d.comb += source.tready.eq((held_count == 0) | ((held_count == 1) & take))
+        with m.If(source.tvalid & source.tready):
+            m.d.sync += [held.eq(source.tdata), held_last.eq(source.tlast),
+                         held_count.eq(sum(source.tkeep[i] for i in range(per_beat)))]
+        with m.Elif(take):
+            m.d.sync += [held.eq(held >> 8), held_count.eq(held_count - 1)]
+
+        # bytes out -> beats
+        packing = Signal(self.data_width)
+        packed = Signal(range(per_beat))
+        out_valid, out_byte, out_last = Signal(), Signal(8), Signal()
+        beat_data = Signal(self.data_width)
+        beat_keep = Signal(per_beat)
+        beat_last, beat_valid = Signal(), Signal()
+        m.d.comb += [sink.tdata.eq(beat_data), sink.tkeep.eq(beat_keep), sink.tlast.eq(beat_last),
+                     sink.tvalid.eq(beat_valid)]
+        can_move = ~beat_valid | sink.tready
+        completes = (packed == per_beat - 1) | out_last
+        out_ready = ~completes | can_move
+        with m.If(beat_valid & sink.tready):
+            m.d.sync += beat_valid.eq(0)
+        with m.If(out_valid & out_ready):
+            merged = packing | (out_byte << (packed * 8))
+            with m.If(completes):
+                m.d.sync += [beat_data.eq(merged), beat_keep.eq((Const(2, per_beat + 1) << packed) - 1),
+                             beat_last.eq(out_last), beat_valid.eq(1), packing.eq(0), packed.eq(0)]
+            with m.Else():
+                m.d.sync += [packing.eq(merged), packed.eq(packed + 1)]
+
+        # the field walk
+        state = Signal(range(13))
+        position = Signal(32)  # of the byte being taken, in the message
+        word = Signal(32)
+        word_byte = Signal(2)
+        remaining = Signal(32)
+        line = Signal(32)
+        column = Signal(32)
+        row = Signal(32)
+        received = Signal(32)
+        emitted = Signal(32)
+        flushing = Signal()
+        new_word = Cat(word[8:], byte)  # the little-endian word once this byte is in
+        word_done = word_byte == 3
+        aligned_next = (position + 1)[:2] == 0
+
+        # line buffers: rows r-2 and r-1 at the current column
+        buffers = [Memory(shape=unsigned(8), depth=self.width, init=[]) for _ in range(2)]
+        m.submodules.line_older, m.submodules.line_newer = buffers
+        reads = [b.read_port(domain="comb") for b in buffers]
+        writes = [b.write_port() for b in buffers]
+        pixel = (state == _DATA) & byte_valid & ~flushing
+        address = column[:max(1, (self.width - 1).bit_length())]
+        m.d.comb += [reads[0].addr.eq(address), reads[1].addr.eq(address), writes[0].addr.eq(address),
+                     writes[1].addr.eq(address), writes[0].data.eq(reads[1].data), writes[1].data.eq(byte),
+                     writes[0].en.eq(pixel & take), writes[1].en.eq(pixel & take)]
+        left = [[Signal(8, name=f"w{r}{c}") for c in range(2)] for r in range(3)]  # columns c-2, c-1
+        window = [left[0] + [reads[0].data], left[1] + [reads[1].data], left[2] + [byte]]
+        filtered = Signal(8)
+        m.d.comb += filtered.eq(self.kernel(*window))
+        interior = (row >= 2) & (column >= 2)
+        lagging = received >= line + 1  # this pixel completes the window of output ``received - line - 1``
+
+        with m.If(flushing):
+            m.d.comb += [out_valid.eq(1), out_byte.eq(0), out_last.eq(received - emitted == 1)]
+            with m.If(out_ready):
+                m.d.sync += emitted.eq(emitted + 1)
+                with m.If(received - emitted == 1):
+                    m.d.sync += [flushing.eq(0), state.eq(_STAMP), position.eq(0), word_byte.eq(0)]
+        with m.Elif(byte_valid):
+            emits = Signal()
+            with m.If(state == _DATA):
+                m.d.comb += [emits.eq(lagging), out_byte.eq(Mux(interior, filtered, 0)),
+                             out_last.eq(byte_last & (received + 1 - emitted == 1))]
+            with m.Else():
+                m.d.comb += [emits.eq(1), out_byte.eq(byte), out_last.eq(byte_last)]
+            m.d.comb += [out_valid.eq(emits), take.eq(~emits | out_ready)]
+        with m.If(take):
+            m.d.sync += [position.eq(position + 1), word.eq(new_word), word_byte.eq(word_byte + 1)]
+            with m.Switch(state):
+                with m.Case(_STAMP):
+                    with m.If(position == 7):
+                        m.d.sync += [state.eq(_FRAME_LEN), word_byte.eq(0)]
+                with m.Case(_FRAME_LEN):
+                    with m.If(word_done):
+                        m.d.sync += [remaining.eq(new_word), state.eq(_FRAME)]
+                with m.Case(_FRAME, _ENC):
+                    m.d.sync += remaining.eq(remaining - 1)
+                    with m.If(remaining == 1):
+                        m.d.sync += [state.eq(Mux(aligned_next, Mux(state == _FRAME, _HEIGHT, _BIGEND),
+                                                  Mux(state == _FRAME, _PAD1, _BIGEND))), word_byte.eq(0)]
+                with m.Case(_PAD1):
+                    with m.If(aligned_next):
+                        m.d.sync += [state.eq(_HEIGHT), word_byte.eq(0)]
+                with m.Case(_HEIGHT):
+                    with m.If(word_done):
+                        m.d.sync += state.eq(_WIDTH)
+                with m.Case(_WIDTH):
+                    with m.If(word_done):
+                        m.d.sync += [line.eq(new_word), state.eq(_ENC_LEN)]
+                with m.Case(_ENC_LEN):
+                    with m.If(word_done):
+                        m.d.sync += [remaining.eq(new_word), state.eq(_ENC)]
+                with m.Case(_BIGEND):
+                    m.d.sync += [state.eq(Mux(aligned_next, _STEP, _PAD2)), word_byte.eq(0)]
+                with m.Case(_PAD2):
+                    with m.If(aligned_next):
+                        m.d.sync += [state.eq(_STEP), word_byte.eq(0)]
+                with m.Case(_STEP):
+                    with m.If(word_done):
+                        m.d.sync += state.eq(_DATA_LEN)
+                with m.Case(_DATA_LEN):
+                    with m.If(word_done):
+                        m.d.sync += [remaining.eq(new_word), state.eq(_DATA), column.eq(0), row.eq(0),
+                                     received.eq(0), emitted.eq(0)]
+                with m.Case(_DATA):
+                    m.d.sync += [received.eq(received + 1), remaining.eq(remaining - 1)]
+                    for r in range(3):
+                        m.d.sync += [left[r][0].eq(left[r][1]), left[r][1].eq(window[r][2])]
+                    with m.If(column == line - 1):
+                        m.d.sync += [column.eq(0), row.eq(row + 1)]
+                    with m.Else():
+                        m.d.sync += column.eq(column + 1)
+                    with m.If(lagging):
+                        m.d.sync += emitted.eq(emitted + 1)
+            with m.If(byte_last):
+                # the message ends: outputs still owed (the bottom border) are flushed, then a new one starts
+                owed = received + (state == _DATA) - emitted - ((state == _DATA) & lagging)
+                with m.If((state == _DATA) & (owed != 0)):
+                    m.d.sync += flushing.eq(1)
+                with m.Else():
+                    m.d.sync += [state.eq(_STAMP), position.eq(0), word_byte.eq(0)]
+        return m
+
+
+def _row_sum(row: list[Value]) -> Value:
+    """``a + 2b + c``: one row (or column) of the Sobel and Gaussian kernels."""
+    return row[0] + (row[1] << 1) + row[2]
+
+
+def _widened(value: Value) -> Value:
+    """An unsigned sum as a signed value of one more bit, so differences keep their sign."""
+    return Cat(value, Const(0, 1)).as_signed()
+
+
+class Sobel(ImageFilter3x3):
+    """Edges: ``min(|Gx| + |Gy|, 255)`` with the 3x3 Sobel kernels (``hetros.hw.reference.sobel`` in software)."""
+
+    def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        gx = _widened(_row_sum([top[2], middle[2], bottom[2]])) - _widened(_row_sum([top[0], middle[0], bottom[0]]))
+        gy = _widened(_row_sum(bottom)) - _widened(_row_sum(top))
+        magnitude = Mux(gx < 0, -gx, gx) + Mux(gy < 0, -gy, gy)
+        return Mux(magnitude > 255, 255, magnitude)[:8]
+
+
+class GaussianBlur(ImageFilter3x3):
+    """3x3 Gaussian ``[1 2 1; 2 4 2; 1 2 1] / 16``, rounded half up (``hetros.hw.reference.gaussian_blur`` in software)."""
+
+    def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        total = _row_sum(top) + (_row_sum(middle) << 1) + _row_sum(bottom) + 8
+        return (total >> 4)[:8]

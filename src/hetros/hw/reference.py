@@ -1,0 +1,42 @@
+"""The software twins of the reference hardware nodes: numpy, bit-exact, no Amaranth.
+
+Each function is what a hardware node in ``hetros.hw.nodes`` computes, and what a node's
+Python implementation calls, so one node has two implementations with the same results
+(the tests hold the hardware to these). Border pixels (outer rows and columns) are 0.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+Image = np.ndarray[Any, np.dtype[np.uint8]]
+
+
+def _windows(image: np.ndarray[Any, Any]) -> tuple[np.ndarray[Any, Any], ...]:
+    """The nine shifted views of a 3x3 window over the interior, top-left first, as int32."""
+    x = image.astype(np.int32)
+    rows, columns = x.shape[0] - 2, x.shape[1] - 2
+    return tuple(x[r:r + rows, c:c + columns] for r in range(3) for c in range(3))
+
+
+def sobel(image: np.ndarray[Any, Any]) -> Image:
+    """Edges of a mono8 image: ``min(|Gx| + |Gy|, 255)`` with the 3x3 Sobel kernels."""
+    out = np.zeros(image.shape, np.uint8)
+    if image.shape[0] >= 3 and image.shape[1] >= 3:
+        t0, t1, t2, m0, _m1, m2, b0, b1, b2 = _windows(image)
+        gx = (t2 + 2 * m2 + b2) - (t0 + 2 * m0 + b0)
+        gy = (b0 + 2 * b1 + b2) - (t0 + 2 * t1 + t2)
+        out[1:-1, 1:-1] = np.minimum(np.abs(gx) + np.abs(gy), 255)
+    return out
+
+
+def gaussian_blur(image: np.ndarray[Any, Any]) -> Image:
+    """A mono8 image through the 3x3 Gaussian ``[1 2 1; 2 4 2; 1 2 1] / 16``, rounded half up."""
+    out = np.zeros(image.shape, np.uint8)
+    if image.shape[0] >= 3 and image.shape[1] >= 3:
+        t0, t1, t2, m0, m1, m2, b0, b1, b2 = _windows(image)
+        total = t0 + 2 * t1 + t2 + 2 * (m0 + 2 * m1 + m2) + b0 + 2 * b1 + b2
+        out[1:-1, 1:-1] = (total + 8) >> 4
+    return out

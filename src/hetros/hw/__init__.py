@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..msg import TypeRegistry
 from ..plan import Plan
-from ._beats import BeatCodec, Beats, amaranth_layout, field_name, from_beats, stream_problem, to_beats
+from ._beats import BeatCodec, Beats, amaranth_layout, field_name, from_beats, to_beats
 
 
 def build_target(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path, Path]:
@@ -19,5 +19,5 @@ def build_target(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tup
     return build(plan, target, out, types)
 
 
-__all__ = ["BeatCodec", "Beats", "amaranth_layout", "build_target", "field_name", "from_beats", "stream_problem",
+__all__ = ["BeatCodec", "Beats", "amaranth_layout", "build_target", "field_name", "from_beats",
            "to_beats"]

@@ -1,7 +1,8 @@
 """A message as the beats of a hardware stream, and back.
 
 The beat stream of a message is its CDR body (little endian, CDR-aligned, string and
-sequence lengths inline, no 4-byte encapsulation header) byte for byte, cut into beats of
+sequence lengths inline, no 4-byte encapsulation header) byte for byte, whatever the type
+(the network cuts messages at TLAST and parses nothing; a node reads what it needs), cut into beats of
 ``data_width`` bits: byte ``k`` of a beat sits at ``tdata[8k+7:8k]``, TLAST marks the last
 beat, and TKEEP (one bit per byte) marks which bytes of it count. So a gateway between
 software and hardware is a copy, and the CDR bytes rosbags writes are the reference.
@@ -13,36 +14,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from rosbags.interfaces import Nodetype
 
 from .._errors import HardwareError, SerializationError
 from ..msg import TypeRegistry, normalize_typename
 
 _ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian
-
-
-def stream_problem(types: TypeRegistry, typename: str) -> str | None:
-    """Why ``typename`` cannot be streamed as its CDR body, naming the field; None when it can.
-
-    A stream carries primitives, strings, arrays of them and nested messages; an array or
-    sequence of messages has no fixed place for its elements' lengths that hardware could
-    walk without a parser, so it is refused.
-    """
-    return _problem(types, normalize_typename(typename), "")
-
-
-def _problem(types: TypeRegistry, typename: str, prefix: str) -> str | None:
-    for name, (kind, arg) in types.store.fielddefs[typename][1]:
-        path = f"{prefix}{name}"
-        if kind == Nodetype.NAME:
-            problem = _problem(types, str(arg), f"{path}.")
-            if problem:
-                return problem
-        elif kind in (Nodetype.ARRAY, Nodetype.SEQUENCE) and arg[0][0] == Nodetype.NAME:
-            shape = f"[{arg[1]}]" if kind == Nodetype.ARRAY else "[]"
-            return (f"field {path} is {arg[0][1]}{shape}, an array of messages: a hardware stream carries "
-                    "primitives, strings and arrays of them; flatten it into primitive arrays")
-    return None
 
 
 @dataclass(frozen=True)
@@ -98,9 +74,6 @@ class BeatCodec:
 
     def __init__(self, types: TypeRegistry, typename: str, data_width: int) -> None:
         self.typename = normalize_typename(typename)
-        problem = stream_problem(types, self.typename)
-        if problem:
-            raise HardwareError(f"{self.typename} cannot be a hardware topic's type: {problem}")
         self.data_width = data_width
         _bytes_per_beat(data_width)
         self._types = types

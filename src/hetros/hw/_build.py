@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from amaranth import Module, Signal
+from amaranth import Cat, Module, Signal
 from amaranth.back import verilog
 from amaranth.hdl import Elaboratable
 from amaranth.lib import wiring
@@ -23,7 +23,6 @@ from amaranth.lib import wiring
 from .._errors import HardwareError
 from ..msg import TypeRegistry, flat_layout
 from ..plan import Plan, gateway_node
-from ._beats import stream_problem
 from ._stream import TopicNetwork
 
 _FIELDS = (("tdata", None), ("tkeep", None), ("tlast", 1), ("tvalid", 1), ("tready", 1))
@@ -88,7 +87,7 @@ class FpgaTop(Elaboratable):
     hardware implementation where the node has one, else behind an AXI4-Stream port of the top."""
 
     def __init__(self, topics: list[HardwareTopic], data_width: int,
-                 hardware_nodes: dict[str, Elaboratable] | None = None) -> None:
+                 hardware_nodes: dict[str, Elaboratable] | None = None, monitor: bool = False) -> None:
         self.topics = topics
         self.data_width = data_width
         self.hardware_nodes = dict(hardware_nodes or {})
@@ -109,6 +108,14 @@ class FpgaTop(Elaboratable):
                                       name=f"{name}_{field}")
                         for field, width in _FIELDS}
                     self._where[name] = (index, role, position)
+        # with ``monitor`` (co-simulation), each stream a hardware node drives is watched for the AXI4-Stream
+        # rule (once TVALID is shown, it and the payload hold until TREADY): bit k of ``violations`` is
+        # ``monitored[k]`` breaking it this cycle
+        self.monitored = [f"hardware node {node} port {topics[index].port_name!r} ({topics[index].name})"
+                          for node, index, role, _ in self._inside if role == "pub"] if monitor else []
+        if len(self.monitored) > 64:
+            raise HardwareError(f"co-simulation watches at most 64 hardware node outputs, not {len(self.monitored)}")
+        self.violations = Signal(max(1, len(self.monitored)), name="hw_violations")
 
     def endpoint_of(self, prefix: str) -> tuple[HardwareTopic, str, bool]:
         """``(topic, node, feeds the network)`` of an external port (``s_axis_...`` or ``m_axis_...``)."""
@@ -118,7 +125,8 @@ class FpgaTop(Elaboratable):
         return topic, nodes[position], role == "pub"
 
     def signals(self) -> list[Any]:
-        return [signal for port in self.ports.values() for signal in port.values()]
+        streams = [signal for port in self.ports.values() for signal in port.values()]
+        return streams + ([self.violations] if self.monitored else [])
 
     def elaborate(self, platform: object) -> Module:
         m = Module()
@@ -146,7 +154,22 @@ class FpgaTop(Elaboratable):
                 wiring.connect(m, port, stream)
             else:
                 wiring.connect(m, stream, port)
+        if self.monitored:
+            bits = [_held_stream_broken(m, getattr(self.hardware_nodes[node], self.topics[index].port_name))
+                    for node, index, role, _ in self._inside if role == "pub"]
+            m.d.comb += self.violations.eq(Cat(*bits))
         return m
+
+
+def _held_stream_broken(m: Module, port: Any) -> Signal:
+    """High in a cycle where ``port`` takes TVALID back, or changes its payload, before TREADY took the beat."""
+    held = Signal()
+    previous = Signal(len(port.tdata) + len(port.tkeep) + 1)
+    payload = Cat(port.tdata, port.tkeep, port.tlast)
+    broken = Signal()
+    m.d.sync += [held.eq(port.tvalid & ~port.tready), previous.eq(payload)]
+    m.d.comb += broken.eq(held & (~port.tvalid | (payload != previous)))
+    return broken
 
 
 def hardware_nodes(plan: Plan, target: str) -> dict[str, Elaboratable]:
@@ -175,13 +198,9 @@ def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path
     """Write ``<top>.v`` and ``<top>.json`` (the manifest) for ``target`` into ``out``."""
     topics = hardware_topics(plan, target)
     if not topics:
-        raise HardwareError(f"fpga target {target!r} has no hardware topic (one whose publishers and subscribers "
-                            "all run on it): nothing to generate")
+        raise HardwareError(f"fpga target {target!r} has no hardware topic (one with a publisher and a "
+                            "subscriber on it, counting its gateway): nothing to generate")
     spec = plan.targets[target]
-    for topic in topics:
-        problem = stream_problem(types, topic.type)
-        if problem:
-            raise HardwareError(f"{topic.name} [{topic.type}] cannot be a hardware topic: {problem}")
     top = FpgaTop(topics, spec.data_width, hardware_nodes(plan, target))
     name = top_name(target)
     text = verilog.convert(top, name=name, ports=top.signals())

@@ -18,16 +18,20 @@ port holds TREADY low while the gateway's publisher is blocked.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import re
+import sys
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .._errors import HardwareError
 from .._log import get_logger
 from ..msg import TypeRegistry
 from ..plan import Plan, gateway_node
-from ._build import FpgaTop, hardware_nodes, hardware_topics, top_name
+from ._build import FpgaTop, HardwareTopic, hardware_nodes, hardware_topics, top_name
 from ._verilator import IDLE, StreamPort, VerilatedTop, compile_simulator
 
 if TYPE_CHECKING:
@@ -64,7 +68,7 @@ class TargetSimulation:
         self.target, self.clock_mhz = target, spec.clock_mhz
         gateway = gateway_node(target)
         topics = hardware_topics(plan, target)
-        top = FpgaTop(topics, spec.data_width, hardware_nodes(plan, target))
+        top = FpgaTop(topics, spec.data_width, hardware_nodes(plan, target), monitor=True)
         name = top_name(target)
         text = verilog.convert(top, name=name, ports=top.signals())
         clocked = re.search(r"\binput\s+clk\b", text) is not None
@@ -77,14 +81,16 @@ class TargetSimulation:
                 raise HardwareError(f"fpga target {target}: node {node} on {topic.name} has no hw: implementation, so "
                                     "nothing can run it in the simulator; give it one (hw: module:Component) or move "
                                     "it to a process target")
-            label = f"gateway of {target}, {'software -> hardware' if feeds else 'hardware -> software'} " \
-                    f"on {topic.name} (port {prefix})"
+            peers = [n for n in (topic.subscribers if feeds else topic.publishers) if n != gateway]
+            label = (f"gateway of {target}, software -> {', '.join(peers)} on {topic.name} (port {prefix})" if feeds
+                     else f"gateway of {target}, {', '.join(peers)} -> software on {topic.name} (port {prefix})")
             port = StreamPort(prefix, feeds, label)
             ports.append(port)
             into = self.inputs if feeds else self.outputs
             into.append(GatewayPort(topic.name, topic.type, len(into), port))
         started = time.perf_counter()
-        library = compile_simulator(text, name, ports, spec.data_width, clocked)
+        library = compile_simulator(text, name, ports, spec.data_width, clocked, design_key(plan, target, topics),
+                                    top.monitored)
         self.compile_seconds = time.perf_counter() - started
         self.top = VerilatedTop(library, ports)
 
@@ -100,6 +106,29 @@ def _prepare(plan: Plan, name: str, types: TypeRegistry) -> None:
     """Build and compile the target's simulation while the process starts, before the graph goes, so the
     first messages meet a running simulator (and compile time is not the publishers' wait)."""
     _PREPARED[name] = TargetSimulation(plan, plan.nodes[name].target, types)
+
+
+def design_key(plan: Plan, target: str, topics: list[HardwareTopic]) -> str:
+    """What the target's hardware is made of, as sources: its nodes' ``hw:`` and parameters, its topics,
+    the target's stream width, Amaranth's version, and the text of hetros's hardware modules and of every
+    Python file of the project folder and of each hardware node's module."""
+    import amaranth
+
+    spec = plan.targets[target]
+    parts = [amaranth.__version__, str(spec.data_width), repr(topics)]
+    files = sorted(Path(__file__).parent.glob("*.py")) + sorted(Path(plan.root).rglob("*.py"))
+    for name, node in sorted(plan.nodes.items()):
+        if node.target == target and plan.in_hardware(name):
+            parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}")
+            module = sys.modules.get(node.hw.partition(":")[0])
+            source = getattr(module, "__file__", None)
+            if source:
+                files.append(Path(source))
+    digest = hashlib.sha256("\0".join(parts).encode())
+    for path in files:
+        if ".venv" not in path.parts and path.is_file():
+            digest.update(str(path).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
 
 
 def gateway(node: Node) -> None:

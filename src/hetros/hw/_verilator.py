@@ -16,7 +16,6 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
-import re
 import shutil
 import subprocess
 from dataclasses import dataclass
@@ -57,7 +56,8 @@ def _storage(bits: int) -> str:
         if bits <= 64 else f"VlWide<{(bits + 31) // 32}>"
 
 
-def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: bool) -> str:
+def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: bool,
+                   monitored: list[str] | None = None) -> str:
     """The C++ of the cycle loop for ``top``'s ports (see the module's docstring)."""
     inputs = [p for p in ports if p.feeds_design]
     outputs = [p for p in ports if not p.feeds_design]
@@ -164,6 +164,14 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
             " p.current.clear(); what |= 2; }",
             "    } }",
         ]
+    if monitored:
+        lines += [
+            "  { static const char* WATCHED[] = {" + ", ".join(f'"{label}"' for label in monitored) + "};",
+            "    uint64_t broken = (uint64_t)s->top->hw_violations;",
+            f"    for (int k = 0; k < {len(monitored)}; ++k) if (broken >> k & 1) {{",
+            "      s->error = std::string(WATCHED[k]) + \": TVALID dropped, or TDATA/TKEEP/TLAST changed, before "
+            "TREADY at cycle \" + std::to_string(s->cycle); what |= 8; break; } }",
+        ]
     lines += ["  edge(s);"]
     for i in range(len(inputs)):
         lines += [
@@ -227,12 +235,14 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
 
 
 def compile_simulator(verilog: str, top: str, ports: list[StreamPort], data_width: int, clocked: bool,
-                      cache: Path | None = None) -> Path:
-    """The shared library of ``top`` with its harness, compiled once per design (see the module's docstring)."""
-    harness = harness_source(top, ports, data_width, clocked)
-    # source attributes name files relative to where Amaranth ran; they change nothing the simulator does
-    essential = re.sub(r"\(\*[^*]*\*\)", "", verilog)
-    digest = hashlib.sha256(f"{_HARNESS_VERSION}\0{essential}\0{harness}".encode()).hexdigest()[:20]
+                      design_key: str, monitored: list[str] | None = None, cache: Path | None = None) -> Path:
+    """The shared library of ``top`` with its harness, compiled once per design (see the module's docstring).
+
+    ``design_key`` identifies the design as its sources do (Amaranth's Verilog of one design may
+    order ports and number wires differently from one process to the next, so the text cannot).
+    """
+    harness = harness_source(top, ports, data_width, clocked, monitored)
+    digest = hashlib.sha256(f"{_HARNESS_VERSION}\0{design_key}\0{harness}".encode()).hexdigest()[:20]
     folder = (cache or cache_root()) / f"{top}-{digest}"
     library = folder / f"lib{top}.so"
     if library.exists():

@@ -30,7 +30,8 @@ from ._image import GaussianBlur, ImageFilter3x3, Sobel
 from ._stream import axi_stream
 
 
-__all__ = ["Echo", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "make_hardware_node", "port_problems"]
+__all__ = ["Echo", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "axi_stream", "make_hardware_node",
+           "port_problems"]
 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:

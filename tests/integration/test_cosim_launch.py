@@ -1,0 +1,158 @@
+"""Mixed graphs under ``hetros launch``: software nodes and hardware nodes co-simulated in Verilator,
+the same results as the software mapping, nothing lost under back-pressure, failures reported."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("amaranth")
+pytestmark = [pytest.mark.rtl,
+              pytest.mark.skipif(shutil.which("verilator") is None, reason="Debian's verilator is not installed")]
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def launch(project: Path, cwd: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "120", *extra],
+                          capture_output=True, text=True, timeout=240, check=False, cwd=cwd)
+
+
+def test_sobel_on_an_fpga_target_gives_the_software_mappings_pixels(tmp_path: Path) -> None:
+    results = {}
+    for mapping in ("project.yaml", "project_fpga.yaml"):
+        cwd = tmp_path / mapping
+        cwd.mkdir()
+        result = launch(EXAMPLES / "sobel_hw" / mapping, cwd)
+        assert result.returncode == 0, result.stderr
+        assert "8 frames, every pixel equal to the software Sobel" in result.stderr
+        results[mapping] = (cwd / "out" / "sobel_hw" / "edges.txt").read_text()
+    assert results["project.yaml"] == results["project_fpga.yaml"]
+    assert len(results["project.yaml"].splitlines()) == 8
+
+
+def test_the_fpga_mapping_reports_simulated_time_beside_wall_time(tmp_path: Path) -> None:
+    result = launch(EXAMPLES / "sobel_hw" / "project_fpga.yaml", tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert re.search(r"fpga target fpga: \d+ cycles simulated \([\d.]+ ms at 100 MHz\) in [\d.]+ s of simulation",
+                     result.stderr)
+    # a 64x48 image is 3072 pixels: the Sobel takes a cycle a pixel, its header a few more
+    per_message = re.search(r"sobel -> software on /image_edges .*: 8 messages, \d+ beats, (\d+) cycles per message "
+                            r"\(([\d.]+) µs at 100 MHz\)", result.stderr)
+    assert per_message is not None, result.stderr
+    assert 3072 <= int(per_message.group(1)) < 3300
+
+
+def test_ping_pong_with_the_copy_node_in_hardware_returns_every_byte(tmp_path: Path) -> None:
+    result = launch(EXAMPLES / "ping_pong" / "project_fpga.yaml", tmp_path)
+    assert result.returncode == 0, result.stderr
+    sizes = [int(s) for s in re.findall(r"\[ping\]: round trip +(\d+) B:", result.stderr)]
+    assert sizes == [4, 8192, 1 << 20]
+
+
+NODES = '''
+import time
+
+from hetros import Node
+from hetros.interfaces.std_msgs.msg import UInt8MultiArray
+
+
+def source(node: Node) -> None:
+    pub = node.create_publisher(UInt8MultiArray, "/a")
+    fail_after = node.get_parameter("fail_after", -1)
+    for seq in range(node.get_parameter("count")):
+        if seq == fail_after:
+            raise ValueError("the source broke on purpose")
+        message = UInt8MultiArray(data=bytes([seq % 256]) * (1 + seq % 300))
+        message.layout.data_offset = seq
+        pub.publish(message)
+        time.sleep(node.get_parameter("pause", 0.0))
+
+
+def echo(node: Node) -> None:
+    pub = node.create_publisher(UInt8MultiArray, "/b")
+    for message in node.create_subscription(UInt8MultiArray, "/a"):
+        pub.publish(message)
+
+
+def sink(node: Node) -> None:
+    sub = node.create_subscription(UInt8MultiArray, "/b")
+    count = node.get_parameter("count")
+    for seq in range(count):
+        message = sub.take()
+        if message.layout.data_offset != seq or bytes(message.data) != bytes([seq % 256]) * (1 + seq % 300):
+            raise ValueError(f"message {seq} arrived as {message.layout.data_offset}")
+        time.sleep(node.get_parameter("pause", 0.0))
+    node.log.info("%d messages through the hardware, in order and intact", count)
+'''
+
+
+def _echo_project(tmp_path: Path, source: str = "", sink: str = "", topics: str = "") -> Path:
+    (tmp_path / "nodes.py").write_text(NODES)
+    path = tmp_path / "project.yaml"
+    path.write_text(textwrap.dedent(f"""\
+        name: echo
+        targets:
+          io: {{kind: process}}
+          fpga: {{kind: fpga, data_width: 32}}
+        nodes:
+          source: {{run: nodes:source, target: io, parameters: {{count: 300{source}}},
+                   publish: {{/a: std_msgs/msg/UInt8MultiArray}}}}
+          echo: {{run: nodes:echo, hw: "hetros.hw.nodes:Echo", target: fpga, parameters: {{source: /a, sink: /b}},
+                 subscribe: {{/a: std_msgs/msg/UInt8MultiArray}}, publish: {{/b: std_msgs/msg/UInt8MultiArray}}}}
+          sink: {{run: nodes:sink, target: io, required: true, parameters: {{count: 300{sink}}},
+                 subscribe: {{/b: std_msgs/msg/UInt8MultiArray}}}}
+        topics:
+          /a: {{depth: 2}}
+          /b: {{depth: 2}}
+        {topics}"""))
+    return path
+
+
+def test_a_reliable_topic_through_a_gateway_loses_nothing_under_back_pressure(tmp_path: Path) -> None:
+    """A fast publisher, a slow subscriber, depth 2 on both sides: the gateway and the hardware hold,
+    the publisher blocks, and every message arrives in order."""
+    result = launch(_echo_project(tmp_path, sink=", pause: 0.003"), tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "300 messages through the hardware, in order and intact" in result.stderr
+
+
+def test_a_software_nodes_crash_stops_the_graph_and_the_simulator(tmp_path: Path) -> None:
+    started = time.monotonic()
+    result = launch(_echo_project(tmp_path, source=", fail_after: 20"), tmp_path)
+    assert result.returncode != 0
+    assert "the source broke on purpose" in result.stderr
+    assert time.monotonic() - started < 60, "the simulator kept the graph from stopping"
+    assert re.search(r"fpga target fpga: \d+ cycles simulated", result.stderr), "the simulator did not stop in order"
+
+
+def test_the_simulator_process_dying_is_reported_like_any_target(tmp_path: Path) -> None:
+    project = _echo_project(tmp_path, source=", pause: 0.05", sink=", pause: 0.0")
+    with subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "60"],
+                          stderr=subprocess.PIPE, text=True, cwd=tmp_path) as proc:
+        assert proc.stderr is not None
+        lines = []
+        pid = None
+        for line in proc.stderr:
+            lines.append(line)
+            found = re.search(r"target fpga ready \(pid (\d+)", line)
+            if found:
+                pid = int(found.group(1))
+            if pid is not None and "in verilator" in line:
+                break
+        assert pid is not None, "".join(lines)
+        time.sleep(0.5)
+        os.kill(pid, signal.SIGKILL)
+        rest = proc.stderr.read()
+        code = proc.wait(60)
+    assert code != 0
+    assert re.search(r"target fpga died", rest), rest

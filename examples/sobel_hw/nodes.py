@@ -34,7 +34,8 @@ def camera(node: Node) -> None:
     for seq in node.rate(node.get_parameter("hz", 20.0)):
         if seq >= node.get_parameter("frames"):
             return
-        msg = Image(height=height, width=width, encoding="mono8", step=width, data=frame(seq, height, width).reshape(-1))
+        pixels = frame(seq, height, width)
+        msg = Image(height=height, width=width, encoding="mono8", step=width, data=pixels.reshape(-1))
         msg.header.frame_id = f"frame{seq}"
         pub.publish(msg)
 

@@ -160,15 +160,15 @@ def gateway(node: Node) -> None:
                     message = subscription.try_take()
                     if message is None:
                         break
-                    body = bytearray(codec.size(message))
-                    codec.encode(message, memoryview(body))
-                    top.push(port.index, bytes(body))
+                    encoded = bytearray(codec.size(message))
+                    codec.encode(message, memoryview(encoded))
+                    top.push(port.index, bytes(encoded))
             started = time.perf_counter()
             events = top.run(_CHUNK, _IDLE_CYCLES)
             wall += time.perf_counter() - started
             for port, publisher, codec in outputs:
-                while (body := top.pop(port.index)) is not None:
-                    publisher.publish(codec.decode(memoryview(body)))
+                while (produced := top.pop(port.index)) is not None:
+                    publisher.publish(codec.decode(memoryview(produced)))
             waiting = any(top.queued(p.index) for p, _, _ in inputs)
             if events & IDLE and not waiting:
                 node.executor.wait(seen, 0.1)

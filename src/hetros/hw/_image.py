@@ -208,14 +208,16 @@ class Sobel(ImageFilter3x3):
     """Edges: ``min(|Gx| + |Gy|, 255)`` with the 3x3 Sobel kernels (``hetros.hw.reference.sobel`` in software)."""
 
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
-        gx = _widened(_row_sum([top[2], middle[2], bottom[2]])) - _widened(_row_sum([top[0], middle[0], bottom[0]]))
+        right, left = [top[2], middle[2], bottom[2]], [top[0], middle[0], bottom[0]]
+        gx = _widened(_row_sum(right)) - _widened(_row_sum(left))
         gy = _widened(_row_sum(bottom)) - _widened(_row_sum(top))
         magnitude = Mux(gx < 0, -gx, gx) + Mux(gy < 0, -gy, gy)
         return Mux(magnitude > 255, 255, magnitude)[:8]
 
 
 class GaussianBlur(ImageFilter3x3):
-    """3x3 Gaussian ``[1 2 1; 2 4 2; 1 2 1] / 16``, rounded half up (``hetros.hw.reference.gaussian_blur`` in software)."""
+    """3x3 Gaussian ``[1 2 1; 2 4 2; 1 2 1] / 16``, rounded half up (in software:
+    ``hetros.hw.reference.gaussian_blur``)."""
 
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         total = _row_sum(top) + (_row_sum(middle) << 1) + _row_sum(bottom) + 8

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import json
 import os
 import shutil
 import subprocess
@@ -24,7 +25,7 @@ from pathlib import Path
 from .._errors import HardwareError
 
 # bumped when the harness text changes in a way its hash would not show (compiler flags)
-_HARNESS_VERSION = "1"
+_HARNESS_VERSION = "2"
 
 
 @dataclass(frozen=True)
@@ -56,181 +57,189 @@ def _storage(bits: int) -> str:
         if bits <= 64 else f"VlWide<{(bits + 31) // 32}>"
 
 
+# The cycle loop's fixed part: ports are indices here; the generated part reads and drives the signals.
+_HARNESS = r"""
+static const size_t MAX_MESSAGE = size_t(1) << 30;
+static const int KEEP_BYTES = (PER_BEAT + 7) / 8;
+
+template <class T> static inline void put(T& dst, const uint8_t* src, int n) {
+  uint64_t v = 0; std::memcpy(&v, src, n); dst = (T)v; }
+template <std::size_t W> static inline void put(VlWide<W>& dst, const uint8_t* src, int n) {
+  std::memset(dst.data(), 0, W * 4); std::memcpy(dst.data(), src, n); }
+template <class T> static inline void get(const T& src, uint8_t* dst, int n) {
+  uint64_t v = (uint64_t)src; std::memcpy(dst, &v, n); }
+template <std::size_t W> static inline void get(const VlWide<W>& src, uint8_t* dst, int n) {
+  std::memcpy(dst, src.data(), n); }
+
+struct InPort {
+  std::deque<std::vector<uint8_t>> queue; size_t offset = 0;
+  uint64_t messages = 0, beats = 0, busy = 0, started = 0;
+};
+struct OutPort {
+  std::vector<uint8_t> current; std::deque<std::vector<uint8_t>> done; size_t limit = 4;
+  uint64_t messages = 0, beats = 0, busy = 0, started = 0;
+  bool held = false; uint8_t held_data[PER_BEAT]; uint8_t held_keep[KEEP_BYTES]; int held_last = 0;
+};
+struct Sim {
+  VerilatedContext* context; TOP* top;
+  InPort in[N_IN > 0 ? N_IN : 1]; OutPort out[N_OUT > 0 ? N_OUT : 1];
+  uint64_t cycle = 0; std::string error;
+};
+
+static int fail(Sim* s, const char* label, const char* what) {
+  s->error = std::string(label) + ": " + what + " at cycle " + std::to_string(s->cycle); return 8; }
+
+// the beat an input port shows this cycle: the next bytes of its first queued message
+static bool show(Sim* s, int i, uint8_t* data, uint8_t* keep, int* last) {
+  InPort& p = s->in[i];
+  std::memset(data, 0, PER_BEAT); std::memset(keep, 0, KEEP_BYTES); *last = 0;
+  if (p.queue.empty()) return false;
+  const std::vector<uint8_t>& m = p.queue.front();
+  size_t left = m.size() - p.offset; int n = left < (size_t)PER_BEAT ? (int)left : PER_BEAT;
+  std::memcpy(data, m.data() + p.offset, n);
+  for (int b = 0; b < n; ++b) keep[b / 8] |= (uint8_t)(1u << (b % 8));
+  *last = left <= (size_t)PER_BEAT; return true;
+}
+
+// after the clock edge: an input beat was taken
+static int taken(Sim* s, int i) {
+  InPort& p = s->in[i]; const std::vector<uint8_t>& m = p.queue.front();
+  if (p.offset == 0) p.started = s->cycle;
+  p.offset += PER_BEAT; ++p.beats;
+  if (p.offset < m.size()) return 1;
+  p.busy += s->cycle - p.started + 1; ++p.messages; p.queue.pop_front(); p.offset = 0;
+  return p.queue.empty() ? 5 : 1;
+}
+
+// an output port's signals this cycle, checked against the AXI4-Stream rules and collected at TLAST
+static int watch(Sim* s, int j, bool valid, bool ready, const uint8_t* data, const uint8_t* keep, int last) {
+  OutPort& p = s->out[j]; const char* label = OUT_LABELS[j]; int what = 0;
+  if (p.held && !valid) what |= fail(s, label, "TVALID dropped before TREADY");
+  else if (p.held && (std::memcmp(data, p.held_data, PER_BEAT) || std::memcmp(keep, p.held_keep, KEEP_BYTES)
+                      || last != p.held_last)) what |= fail(s, label, "TDATA/TKEEP/TLAST changed before TREADY");
+  p.held = valid && !ready;
+  if (p.held) {
+    std::memcpy(p.held_data, data, PER_BEAT); std::memcpy(p.held_keep, keep, KEEP_BYTES); p.held_last = last; }
+  if (!(valid && ready)) return what;
+  int n = 0; while (n < PER_BEAT && (keep[n / 8] >> (n % 8) & 1)) ++n;
+  for (int b = n; b < PER_BEAT; ++b)
+    if (keep[b / 8] >> (b % 8) & 1) { what |= fail(s, label, "TKEEP not contiguous low bytes"); break; }
+  if (!last && n != PER_BEAT) what |= fail(s, label, "a partial beat without TLAST");
+  if (p.current.empty()) p.started = s->cycle;
+  p.current.insert(p.current.end(), data, data + n); ++p.beats; what |= 1;
+  if (p.current.size() > MAX_MESSAGE) what |= fail(s, label, "more than 1 GiB without TLAST");
+  if (last) {
+    p.busy += s->cycle - p.started + 1; ++p.messages;
+    p.done.push_back(std::move(p.current)); p.current.clear(); what |= 2;
+  }
+  return what;
+}
+
+static void drive(Sim* s);
+static int sample(Sim* s, bool* fired);
+static void edge(Sim* s);
+
+// one cycle; the bits: 1 a beat moved, 2 an output message ended, 4 an input queue ran dry, 8 a violation
+static int cycle(Sim* s) {
+  bool fired[N_IN > 0 ? N_IN : 1];
+  drive(s); s->top->eval();
+  int what = sample(s, fired);
+  edge(s);
+  for (int i = 0; i < N_IN; ++i) if (fired[i]) what |= taken(s, i);
+  ++s->cycle; return what;
+}
+
+extern "C" {
+void* hs_new() {
+  Sim* s = new Sim; s->context = new VerilatedContext; s->top = new TOP{s->context};
+  RESET;
+  return s;
+}
+void hs_free(void* h) { Sim* s = (Sim*)h; s->top->final(); delete s->top; delete s->context; delete s; }
+void hs_push(void* h, int port, const uint8_t* data, size_t size) {
+  ((Sim*)h)->in[port].queue.emplace_back(data, data + size); }
+size_t hs_queued(void* h, int port) { return ((Sim*)h)->in[port].queue.size(); }
+void hs_set_limit(void* h, int port, size_t limit) { ((Sim*)h)->out[port].limit = limit; }
+long long hs_next_size(void* h, int port) {
+  Sim* s = (Sim*)h; return s->out[port].done.empty() ? -1 : (long long)s->out[port].done.front().size(); }
+int hs_pop(void* h, int port, uint8_t* buf) {
+  Sim* s = (Sim*)h; if (s->out[port].done.empty()) return 0;
+  std::vector<uint8_t>& m = s->out[port].done.front(); std::memcpy(buf, m.data(), m.size());
+  s->out[port].done.pop_front(); return 1; }
+size_t hs_partial(void* h, int port) { return ((Sim*)h)->out[port].current.size(); }
+uint64_t hs_cycle(void* h) { return ((Sim*)h)->cycle; }
+const char* hs_error(void* h) { return ((Sim*)h)->error.c_str(); }
+void hs_stats(void* h, int output, int port, uint64_t* into) {
+  Sim* s = (Sim*)h;
+  if (output) { OutPort& p = s->out[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; }
+  else { InPort& p = s->in[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; }
+}
+// up to max_cycles; ends early on an event Python must handle, or after idle quiet cycles with no input waiting
+int hs_run(void* h, uint64_t max_cycles, uint64_t idle) {
+  Sim* s = (Sim*)h; int seen = 0; uint64_t quiet = 0;
+  for (uint64_t n = 0; n < max_cycles; ++n) {
+    int what = cycle(s); seen |= what;
+    if (what & 14) return seen;
+    if (what & 1) { quiet = 0; continue; }
+    bool waiting = false;
+    for (int i = 0; i < N_IN; ++i) waiting |= !s->in[i].queue.empty();
+    if (!waiting && ++quiet >= idle) return seen | 16;
+  }
+  return seen;
+}
+}
+"""
+
+
+def _c_strings(labels: list[str]) -> str:
+    return "{" + ", ".join(json.dumps(label) for label in labels or [""]) + "}"
+
+
 def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: bool,
                    monitored: list[str] | None = None) -> str:
     """The C++ of the cycle loop for ``top``'s ports (see the module's docstring)."""
     inputs = [p for p in ports if p.feeds_design]
     outputs = [p for p in ports if not p.feeds_design]
-    per_beat = data_width // 8
+    reset = ("s->top->clk = 0; s->top->rst = 1; drive(s); s->top->eval(); for (int i = 0; i < 4; ++i) edge(s); "
+             "s->top->rst = 0; s->top->eval()") if clocked else "drive(s); s->top->eval()"
     lines = [
         "// Generated by hetros.hw._verilator: DO NOT EDIT.",
         f'#include "V{top}.h"',
         "#include <verilated.h>",
         "#include <cstdint>", "#include <cstring>", "#include <deque>", "#include <string>", "#include <vector>",
-        "",
-        f"static const int PER_BEAT = {per_beat};",
+        f"typedef V{top} TOP;",
+        f"static const int PER_BEAT = {data_width // 8};",
         f"static const int N_IN = {len(inputs)};",
         f"static const int N_OUT = {len(outputs)};",
-        "static const size_t MAX_MESSAGE = size_t(1) << 30;",
-        "",
-        "template <class T> static inline void put(T& dst, const uint8_t* src, int n) {",
-        "  uint64_t v = 0; std::memcpy(&v, src, n); dst = (T)v; }",
-        "template <std::size_t W> static inline void put(VlWide<W>& dst, const uint8_t* src, int n) {",
-        "  std::memset(dst.data(), 0, W * 4); std::memcpy(dst.data(), src, n); }",
-        "template <class T> static inline void get(const T& src, uint8_t* dst, int n) {",
-        "  uint64_t v = (uint64_t)src; std::memcpy(dst, &v, n); }",
-        "template <std::size_t W> static inline void get(const VlWide<W>& src, uint8_t* dst, int n) {",
-        "  std::memcpy(dst, src.data(), n); }",
-        "",
-        "struct InPort { std::deque<std::vector<uint8_t>> queue; size_t offset = 0; uint64_t messages = 0, beats = 0,",
-        "  busy = 0, started = 0; bool active = false; };",
-        "struct OutPort { std::vector<uint8_t> current; std::deque<std::vector<uint8_t>> done; size_t limit = 4;",
-        "  uint64_t messages = 0, beats = 0, busy = 0, started = 0; bool held = false;",
-        "  uint8_t held_data[PER_BEAT]; uint8_t held_keep[(PER_BEAT + 7) / 8]; int held_last = 0; };",
-        "",
-        "struct Sim {",
-        "  VerilatedContext* context; " f"V{top}* top;",
-        "  InPort in[N_IN > 0 ? N_IN : 1]; OutPort out[N_OUT > 0 ? N_OUT : 1];",
-        "  uint64_t cycle = 0; std::string error;",
-        "};",
-        "",
-        'static const char* IN_LABELS[] = {' + ", ".join(f'"{p.label}"' for p in inputs) + ("" if inputs else '""')
-        + "};",
-        'static const char* OUT_LABELS[] = {' + ", ".join(f'"{p.label}"' for p in outputs)
-        + ("" if outputs else '""') + "};",
-        "",
-        "static void settle(Sim* s) { s->top->eval(); }",
-        "static void edge(Sim* s) {",
+        f"static const char* OUT_LABELS[] = {_c_strings([p.label for p in outputs])};",
+        f"#define RESET {reset}",
+        _HARNESS,
+        "static void drive(Sim* s) {",
+        "  uint8_t data[PER_BEAT]; uint8_t keep[KEEP_BYTES]; int last;",
     ]
-    if clocked:
-        lines += ["  s->top->clk = 1; s->top->eval(); s->top->clk = 0; s->top->eval();"]
-    else:
-        lines += ["  (void)s;"]
-    lines += ["}", "", "static void drive(Sim* s) {"]
     for i, port in enumerate(inputs):
-        lines += [
-            f"  {{ InPort& p = s->in[{i}];",
-            "    if (!p.queue.empty()) {",
-            "      const std::vector<uint8_t>& m = p.queue.front();",
-            "      size_t left = m.size() - p.offset; int n = left < (size_t)PER_BEAT ? (int)left : PER_BEAT;",
-            f"      put(s->top->{port.prefix}_tdata, m.data() + p.offset, n);",
-            "      uint8_t keep[(PER_BEAT + 7) / 8 + 8] = {0};",
-            "      for (int b = 0; b < n; ++b) keep[b / 8] |= (uint8_t)(1u << (b % 8));",
-            f"      put(s->top->{port.prefix}_tkeep, keep, (PER_BEAT + 7) / 8);",
-            f"      s->top->{port.prefix}_tlast = (left <= (size_t)PER_BEAT); s->top->{port.prefix}_tvalid = 1;",
-            f"    }} else {{ s->top->{port.prefix}_tvalid = 0; s->top->{port.prefix}_tlast = 0; }} }}",
-        ]
+        lines += [f"  {{ bool valid = show(s, {i}, data, keep, &last); TOP* t = s->top;",
+                  f"    put(t->{port.prefix}_tdata, data, PER_BEAT); put(t->{port.prefix}_tkeep, keep, KEEP_BYTES);",
+                  f"    t->{port.prefix}_tlast = last; t->{port.prefix}_tvalid = valid; }}"]
     for j, port in enumerate(outputs):
         lines += [f"  s->top->{port.prefix}_tready = s->out[{j}].done.size() < s->out[{j}].limit;"]
-    lines += ["}", "",
-              "// one cycle; returns 1 when a port moved a beat, 2 when an output message ended, 4 when an input",
-              "// queue ran dry, 8 on an AXI4-Stream violation",
-              "static int cycle(Sim* s) {",
-              "  int what = 0; drive(s); settle(s);",
-              "  bool fired_in[N_IN > 0 ? N_IN : 1]; bool fired_out[N_OUT > 0 ? N_OUT : 1];"]
+    lines += ["}", "", "static int sample(Sim* s, bool* fired) {",
+              "  int what = 0; uint8_t data[PER_BEAT]; uint8_t keep[KEEP_BYTES]; TOP* t = s->top;"]
     for i, port in enumerate(inputs):
-        lines += [f"  fired_in[{i}] = s->top->{port.prefix}_tvalid && s->top->{port.prefix}_tready;"]
+        lines += [f"  fired[{i}] = t->{port.prefix}_tvalid && t->{port.prefix}_tready;"]
     for j, port in enumerate(outputs):
-        lines += [
-            f"  {{ OutPort& p = s->out[{j}];",
-            f"    bool valid = s->top->{port.prefix}_tvalid; bool ready = s->top->{port.prefix}_tready;",
-            "    uint8_t data[PER_BEAT]; uint8_t keep[(PER_BEAT + 7) / 8 + 8] = {0};",
-            f"    get(s->top->{port.prefix}_tdata, data, PER_BEAT);",
-            f"    get(s->top->{port.prefix}_tkeep, keep, (PER_BEAT + 7) / 8);",
-            f"    int last = s->top->{port.prefix}_tlast ? 1 : 0;",
-            "    if (p.held) {",
-            "      if (!valid) { s->error = std::string(OUT_LABELS[" f"{j}" "]) + \": TVALID dropped before TREADY at "
-            "cycle \" + std::to_string(s->cycle); what |= 8; }",
-            "      else if (std::memcmp(data, p.held_data, PER_BEAT) || std::memcmp(keep, p.held_keep, (PER_BEAT + 7) / 8)"
-            " || last != p.held_last) { s->error = std::string(OUT_LABELS[" f"{j}" "]) + \": TDATA/TKEEP/TLAST "
-            "changed before TREADY at cycle \" + std::to_string(s->cycle); what |= 8; }",
-            "    }",
-            "    fired_out[" f"{j}" "] = valid && ready;",
-            "    p.held = valid && !ready;",
-            "    if (p.held) { std::memcpy(p.held_data, data, PER_BEAT); std::memcpy(p.held_keep, keep, (PER_BEAT + 7) / 8);"
-            " p.held_last = last; }",
-            "    if (valid && ready) {",
-            "      int n = 0; while (n < PER_BEAT && (keep[n / 8] >> (n % 8) & 1)) ++n;",
-            "      for (int b = n; b < PER_BEAT; ++b) if (keep[b / 8] >> (b % 8) & 1) {",
-            "        s->error = std::string(OUT_LABELS[" f"{j}" "]) + \": TKEEP not contiguous low bytes at cycle \" + "
-            "std::to_string(s->cycle); what |= 8; break; }",
-            "      if (!last && n != PER_BEAT) { s->error = std::string(OUT_LABELS[" f"{j}" "]) + \": a partial beat "
-            "without TLAST at cycle \" + std::to_string(s->cycle); what |= 8; }",
-            "      if (p.current.empty()) p.started = s->cycle;",
-            "      p.current.insert(p.current.end(), data, data + n); ++p.beats; what |= 1;",
-            "      if (p.current.size() > MAX_MESSAGE) { s->error = std::string(OUT_LABELS[" f"{j}" "]) + \": more than "
-            "1 GiB without TLAST by cycle \" + std::to_string(s->cycle); what |= 8; }",
-            "      if (last) { p.busy += s->cycle - p.started + 1; ++p.messages; p.done.push_back(std::move(p.current));"
-            " p.current.clear(); what |= 2; }",
-            "    } }",
-        ]
+        lines += [f"  get(t->{port.prefix}_tdata, data, PER_BEAT); get(t->{port.prefix}_tkeep, keep, KEEP_BYTES);",
+                  f"  what |= watch(s, {j}, t->{port.prefix}_tvalid, t->{port.prefix}_tready, data, keep, "
+                  f"t->{port.prefix}_tlast ? 1 : 0);"]
     if monitored:
-        lines += [
-            "  { static const char* WATCHED[] = {" + ", ".join(f'"{label}"' for label in monitored) + "};",
-            "    uint64_t broken = (uint64_t)s->top->hw_violations;",
-            f"    for (int k = 0; k < {len(monitored)}; ++k) if (broken >> k & 1) {{",
-            "      s->error = std::string(WATCHED[k]) + \": TVALID dropped, or TDATA/TKEEP/TLAST changed, before "
-            "TREADY at cycle \" + std::to_string(s->cycle); what |= 8; break; } }",
-        ]
-    lines += ["  edge(s);"]
-    for i in range(len(inputs)):
-        lines += [
-            f"  if (fired_in[{i}]) {{ InPort& p = s->in[{i}]; const std::vector<uint8_t>& m = p.queue.front();",
-            "    if (p.offset == 0) p.started = s->cycle;",
-            "    p.offset += PER_BEAT; ++p.beats; what |= 1;",
-            "    if (p.offset >= m.size()) { p.busy += s->cycle - p.started + 1; ++p.messages; p.queue.pop_front();",
-            "      p.offset = 0; if (p.queue.empty()) what |= 4; } }",
-        ]
-    lines += [
-        "  ++s->cycle; return what;",
-        "}",
-        "",
-        'extern "C" {',
-        "void* hs_new() {",
-        "  Sim* s = new Sim; s->context = new VerilatedContext;",
-        f"  s->top = new V{top}{{s->context}};",
-    ]
-    if clocked:
-        lines += ["  s->top->clk = 0; s->top->rst = 1; drive(s); settle(s);",
-                  "  for (int i = 0; i < 4; ++i) edge(s);", "  s->top->rst = 0; settle(s);"]
-    else:
-        lines += ["  drive(s); settle(s);"]
-    lines += [
-        "  return s;",
-        "}",
-        "void hs_free(void* h) { Sim* s = (Sim*)h; s->top->final(); delete s->top; delete s->context; delete s; }",
-        "void hs_push(void* h, int port, const uint8_t* data, size_t size) {",
-        "  ((Sim*)h)->in[port].queue.emplace_back(data, data + size); }",
-        "size_t hs_queued(void* h, int port) { return ((Sim*)h)->in[port].queue.size(); }",
-        "void hs_set_limit(void* h, int port, size_t limit) { ((Sim*)h)->out[port].limit = limit; }",
-        "long long hs_next_size(void* h, int port) {",
-        "  Sim* s = (Sim*)h; return s->out[port].done.empty() ? -1 : (long long)s->out[port].done.front().size(); }",
-        "int hs_pop(void* h, int port, uint8_t* buf) {",
-        "  Sim* s = (Sim*)h; if (s->out[port].done.empty()) return 0;",
-        "  std::vector<uint8_t>& m = s->out[port].done.front(); std::memcpy(buf, m.data(), m.size());",
-        "  s->out[port].done.pop_front(); return 1; }",
-        "size_t hs_partial(void* h, int port) { return ((Sim*)h)->out[port].current.size(); }",
-        "uint64_t hs_cycle(void* h) { return ((Sim*)h)->cycle; }",
-        "const char* hs_error(void* h) { return ((Sim*)h)->error.c_str(); }",
-        "void hs_stats(void* h, int output, int port, uint64_t* into) {",
-        "  Sim* s = (Sim*)h;",
-        "  if (output) { OutPort& p = s->out[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; }",
-        "  else { InPort& p = s->in[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; } }",
-        "// run up to max_cycles; stop early on an event Python must handle, or after idle cycles without a beat",
-        "// while no input waits; returns the events seen (cycle()'s bits)",
-        "int hs_run(void* h, uint64_t max_cycles, uint64_t idle) {",
-        "  Sim* s = (Sim*)h; int seen = 0; uint64_t quiet = 0;",
-        "  for (uint64_t n = 0; n < max_cycles; ++n) {",
-        "    int what = cycle(s); seen |= what;",
-        "    if (what & 14) return seen;",
-        "    if (what & 1) { quiet = 0; continue; }",
-        "    bool waiting = false; for (int i = 0; i < N_IN; ++i) waiting |= !s->in[i].queue.empty();",
-        "    if (!waiting && ++quiet >= idle) return seen | 16;",
-        "  }",
-        "  return seen;",
-        "}",
-        "}",
-    ]
+        lines += [f"  static const char* WATCHED[] = {_c_strings(monitored)};",
+                  "  uint64_t broken = (uint64_t)t->hw_violations;",
+                  f"  for (int k = 0; k < {len(monitored)}; ++k) if (broken >> k & 1) {{",
+                  '    what |= fail(s, WATCHED[k], "TVALID dropped, or TDATA/TKEEP/TLAST changed, before TREADY"); '
+                  "break; }"]
+    lines += ["  (void)fired; (void)data; (void)keep; return what;", "}", "", "static void edge(Sim* s) {"]
+    lines += ["  s->top->clk = 1; s->top->eval(); s->top->clk = 0; s->top->eval();" if clocked else "  (void)s;"]
+    lines += ["}"]
     return "\n".join(lines) + "\n"
 
 

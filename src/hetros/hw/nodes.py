@@ -17,20 +17,20 @@ from __future__ import annotations
 import importlib
 import inspect
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
-from amaranth import Module
+from amaranth import Cat, Module, Mux
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from .._errors import HardwareError
-from ._build import port_part
+from ._build import port_part, service_ports
 from ._image import GaussianBlur, ImageFilter3x3, Sobel
 from ._stream import axi_stream
 
-__all__ = ["Echo", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "axi_stream", "make_hardware_node",
-           "port_problems"]
+__all__ = ["AddTwoInts", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel",
+           "axi_stream", "make_hardware_node", "port_problems"]
 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:
@@ -56,13 +56,23 @@ def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str
 
 
 def port_problems(component: wiring.Component, publish: list[str], subscribe: list[str],
-                  data_width: int) -> list[str]:
-    """What keeps ``component`` from serving these topics: each missing, extra or mis-shaped port."""
+                  data_width: int, services: Sequence[str] = ()) -> list[str]:
+    """What keeps ``component`` from serving these topics and services: each missing, extra or mis-shaped
+    port. A service it serves is two ports: ``<service>_request`` in, ``<service>_response`` out."""
     wanted = {port_part(t): (Out, t) for t in publish} | {port_part(t): (In, t) for t in subscribe}
+    for service in services:
+        request, response = service_ports(service)
+        wanted |= {request: (In, f"{service}'s requests"), response: (Out, f"{service}'s responses")}
     members = dict(component.signature.members.items())
     problems = []
     for name, (flow, topic) in sorted(wanted.items()):
         role = "publishes" if flow is Out else "subscribes"
+        if topic.endswith("'s requests"):
+            role = "serves"
+            topic = topic.removesuffix("'s requests") + ", so it takes requests"
+        elif topic.endswith("'s responses"):
+            role = "serves"
+            topic = topic.removesuffix("'s responses") + ", so it gives responses"
         member = members.get(name)
         expected = flow(axi_stream(data_width))
         if member is None:
@@ -113,3 +123,64 @@ class NodeUnderTest(wiring.Component):
         for j, port in enumerate(self.outputs):
             wiring.connect(m, getattr(self.node, port), wiring.flipped(getattr(self, f"sub{j}")))
         return m
+
+
+class FixedServer(wiring.Component):
+    """A hardware server of a service whose request and response have fixed sizes (no strings or
+    sequences): it gathers a request's beats into one register, computes the response from it
+    (:meth:`respond`, combinational) and sends it back, one response per request, in order.
+    Requests and responses are their CDR bodies, as on every hardware stream."""
+
+    request_bytes = 0
+    response_bytes = 0
+
+    def __init__(self, service: str, data_width: int = 64) -> None:
+        self._request, self._response = service_ports(service)
+        self.data_width = data_width
+        super().__init__({self._request: In(axi_stream(data_width)), self._response: Out(axi_stream(data_width))})
+
+    def respond(self, request: Any) -> Any:
+        """The response's bytes (``8 * response_bytes`` bits, byte 0 lowest) from the request's."""
+        raise NotImplementedError
+
+    def elaborate(self, platform: object) -> Module:
+        from amaranth import Signal
+
+        m = Module()
+        requests, responses = getattr(self, self._request), getattr(self, self._response)
+        per_beat = self.data_width // 8
+        request_beats = -(-self.request_bytes // per_beat)
+        response_beats = -(-self.response_bytes // per_beat)
+        gathered = Signal(request_beats * self.data_width)
+        beat = Signal(range(max(request_beats, response_beats) + 1))
+        answer = Signal(response_beats * self.data_width)
+        answering = Signal()
+        m.d.comb += requests.tready.eq(~answering)
+        with m.If(requests.tvalid & requests.tready):
+            with m.If(beat < request_beats):
+                m.d.sync += gathered.word_select(beat, self.data_width).eq(requests.tdata)
+            m.d.sync += beat.eq(beat + 1)
+            with m.If(requests.tlast):
+                merged = Cat(*(Mux(beat == k, requests.tdata, gathered.word_select(k, self.data_width))
+                               for k in range(request_beats)))
+                m.d.sync += [answer.eq(self.respond(merged[:8 * self.request_bytes])), answering.eq(1), beat.eq(0)]
+        last = beat == response_beats - 1
+        tail = self.response_bytes - (response_beats - 1) * per_beat
+        m.d.comb += [responses.tvalid.eq(answering), responses.tdata.eq(answer.word_select(beat, self.data_width)),
+                     responses.tlast.eq(last),
+                     responses.tkeep.eq(Mux(last, (1 << tail) - 1, (1 << per_beat) - 1))]
+        with m.If(responses.tvalid & responses.tready):
+            m.d.sync += beat.eq(beat + 1)
+            with m.If(last):
+                m.d.sync += [answering.eq(0), beat.eq(0)]
+        return m
+
+
+class AddTwoInts(FixedServer):
+    """``example_interfaces/srv/AddTwoInts`` in hardware: ``sum = a + b`` (int64, wrapping)."""
+
+    request_bytes = 16
+    response_bytes = 8
+
+    def respond(self, request: Any) -> Any:
+        return (request[:64] + request[64:128])[:64]

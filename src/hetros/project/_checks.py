@@ -248,11 +248,11 @@ def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tu
     fpga = {t for t, spec in model.targets.items() if spec.kind == "fpga"}
     for nname, spec in model.nodes.items():
         if spec.target in fpga:
-            for section in ("services", "clients", "actions", "action_clients"):
+            for section in ("clients", "actions", "action_clients"):
                 for name in getattr(spec, section):
                     report.errors.append(f"{where('nodes', nname, section, name)}: {section} of a node on an fpga "
-                                         "target are not carried by hetros's gateways yet (topics are); move the "
-                                         "node to a thread or process target")
+                                         "target are not carried by hetros's gateways yet (topics and services "
+                                         "are); move the node to a thread or process target")
     for topic in sorted(set(publishers) | set(subscribers)):
         endpoints = publishers.get(topic, []) + subscribers.get(topic, [])
         placed = {n: model.nodes[n].target for n, _ in endpoints if n in model.nodes}

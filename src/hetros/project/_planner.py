@@ -109,7 +109,8 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
             for n, s in model.nodes.items()
         } | {bridge.name: bridge for bridge in bridges}
         | {g: NodePlan(g, GATEWAY_RUN, t, {"target": t}, publish=_endpoints_of(channels, g, "publish"),
-                       subscribe=_endpoints_of(channels, g, "subscribe")) for g, t in gateways.items()},
+                       subscribe=_endpoints_of(channels, g, "subscribe"), services=_services_of(channels, g))
+           for g, t in gateways.items()},
         channels=channels,
         edges=edges,
         ros1_master=ros1_master(project),
@@ -124,7 +125,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
 
 
 # what a gateway node runs: the fpga target's simulator, fed from and draining to software
-GATEWAY_RUN = "hetros.hw._cosim:gateway"
+GATEWAY_RUN = "hetros.launch._gateway:gateway"
 
 
 def _add_gateways(channels: dict[str, ChannelPlan], fpga_of: dict[str, str]) -> dict[str, str]:
@@ -136,8 +137,6 @@ def _add_gateways(channels: dict[str, ChannelPlan], fpga_of: dict[str, str]) -> 
     """
     gateways: dict[str, str] = {}
     for channel in list(channels.values()):
-        if channel.kind != "topic":
-            continue
         for target in sorted({fpga_of[n] for n in (*channel.publishers, *channel.subscribers) if n in fpga_of}):
             gateway = gateway_node(target)
             into = any(fpga_of.get(n) != target for n in channel.publishers) and \
@@ -146,13 +145,20 @@ def _add_gateways(channels: dict[str, ChannelPlan], fpga_of: dict[str, str]) -> 
                 any(fpga_of.get(n) == target for n in channel.publishers)
             if into or out_of:
                 gateways[gateway] = target
-                _add(channels, channel.name, channel.type, "topic", None,  # type: ignore[arg-type]
-                     pub=gateway if out_of else None, sub=gateway if into else None)
+                _add(channels, channel.name, channel.type, channel.kind, None,  # type: ignore[arg-type]
+                     pub=gateway if out_of else None, sub=gateway if into else None, service=channel.service)
     return gateways
 
 
 def _endpoints_of(channels: dict[str, ChannelPlan], node: str, role: str) -> dict[str, str]:
-    return {c.name: c.type for c in channels.values() if node in (c.publishers if role == "publish" else c.subscribers)}
+    return {c.name: c.type for c in channels.values()
+            if c.kind == "topic" and node in (c.publishers if role == "publish" else c.subscribers)}
+
+
+def _services_of(channels: dict[str, ChannelPlan], gateway: str) -> dict[str, str]:
+    """The services a gateway serves for its target's hardware servers: name -> srv type."""
+    return {c.service: c.type.removesuffix("_Request") for c in channels.values()
+            if c.kind == "request" and gateway in c.subscribers}
 
 
 def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, project: LoadedProject,

@@ -1,0 +1,163 @@
+"""The gateway node of an fpga target: its hardware co-simulated, its topics and services in the graph.
+
+The planner gives each fpga target whose topics or services cross to software a gateway node
+(``plan.gateway_node``) in a process of the target's own. That node builds the target's top
+module and has Verilator compile it (``hetros.hw._cosim``) while the process starts, then
+moves messages between the graph and the simulated ports: what software publishes to the
+hardware arrives through the gateway's ordinary subscriptions (shared memory from the other
+processes of the host) and is pushed into the top's ``s_axis`` port as its CDR body; what
+the hardware publishes comes out of an ``m_axis`` port and is published as an ordinary
+message. A hardware server takes each request's body and answers in order; the gateway keeps
+who asked and answers each client on its reply channel. Software nodes cannot tell a
+hardware peer from a software one.
+
+Reliable topics stay lossless across the gateway: it takes from a subscription only while
+the port's queue has room, so a full hardware side fills the subscription's FIFO and then
+blocks the software publisher, as any slow subscriber would; and the hardware's output
+port holds TREADY low while the gateway's publisher is blocked.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from .._errors import HardwareError
+from .._log import get_logger
+from ..hw._cosim import GatewayPort, TargetSimulation
+from ..hw._verilator import IDLE
+from ..msg import TypeRegistry
+from ..plan import Plan
+from ..runtime import Node, Replies
+
+log = get_logger("hetros.cosim")
+
+# messages a gateway keeps queued at an input port: enough that the hardware never waits for Python
+# between two messages, few enough that back-pressure reaches the publisher early
+_QUEUED = 2
+# cycles a run may take before Python looks at the graph again, and quiet cycles after which a design
+# whose inputs are empty counts as idle (the gateway then sleeps until software publishes)
+_CHUNK = 2_000_000
+_IDLE_CYCLES = 20_000
+# simulations built while the process started (``gateway.prepare``), by gateway node
+_PREPARED: dict[str, TargetSimulation] = {}
+
+
+def _prepare(plan: Plan, name: str, types: TypeRegistry) -> None:
+    """Build and compile the target's simulation before the graph goes, so the first messages meet a
+    running simulator and compile time is not the publishers' wait."""
+    _PREPARED[name] = TargetSimulation(plan, plan.nodes[name].target, types)
+
+
+class _Input:
+    """Where one input port's messages come from: a subscription, or a service's request channel."""
+
+    def __init__(self, node: Node, port: GatewayPort, types: TypeRegistry) -> None:
+        self.port = port
+        self.codec = types.codec(port.type)
+        # who asked, in the order their requests went into the hardware (a hardware server answers in order)
+        self.asked: deque[tuple[int, str]] = deque()
+        self.take: Callable[[], Any]
+        if port.service:
+            reader = node.graph.open_reader(port.topic, node.name, port.type, node.executor.wake, envelope=True)
+            self.take = reader.try_take
+        else:
+            self.take = node.create_subscription(types.get(port.type), port.topic).try_take
+
+    def feed(self, push: Callable[[int, bytes], None]) -> None:
+        item = self.take()
+        if item is None:
+            raise LookupError
+        if self.port.service:
+            request_id, client, item = item
+            self.asked.append((request_id, client))
+        encoded = bytearray(self.codec.size(item))
+        self.codec.encode(item, memoryview(encoded))
+        push(self.port.index, bytes(encoded))
+
+
+class _Output:
+    """Where one output port's messages go: a publisher, or the clients of a service."""
+
+    def __init__(self, node: Node, port: GatewayPort, types: TypeRegistry, asked: deque[tuple[int, str]]) -> None:
+        self.port = port
+        self.codec = types.codec(port.type)
+        self.asked = asked
+        self.replies = Replies(node, port.service, port.type) if port.service else None
+        self.publisher = None if port.service else node.create_publisher(types.get(port.type), port.topic)
+
+    def send(self, body: bytes) -> None:
+        message = self.codec.decode(memoryview(body))
+        if self.replies is None:
+            assert self.publisher is not None
+            self.publisher.publish(message)
+            return
+        if not self.asked:
+            raise HardwareError(f"{self.port.port.label}: the hardware answered a request nobody made (a server "
+                                "gives one response per request, in order)")
+        request_id, client = self.asked.popleft()
+        self.replies.send(request_id, client, message)
+
+
+def gateway(node: Node) -> None:
+    """Run the fpga target's hardware in Verilator, its gateway ports fed from and drained to the graph."""
+    plan = node.graph.plan
+    if plan is None:
+        raise HardwareError("a gateway runs inside a launch: it needs the plan of the project")
+    target = str(node.get_parameter("target"))
+    types = node.graph.types
+    simulation = _PREPARED.pop(node.name, None) or TargetSimulation(plan, target, types)
+    top = simulation.top
+    log.info("fpga target %s in verilator (%d gateway ports; compiled or found in the cache in %.1f s)", target,
+             len(top.inputs) + len(top.outputs), simulation.compile_seconds)
+    inputs = [_Input(node, port, types) for port in simulation.inputs]
+    asked = {i.port.service: i.asked for i in inputs if i.port.service}
+    outputs = [_Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
+    stop = node.graph.stop
+    wall = 0.0
+    try:
+        while not stop.is_set():
+            seen = node.executor.generation
+            for each in inputs:
+                try:
+                    while top.queued(each.port.index) < _QUEUED:
+                        each.feed(top.push)
+                except LookupError:
+                    pass  # nothing more to take now
+            started = time.perf_counter()
+            events = top.run(_CHUNK, _IDLE_CYCLES)
+            wall += time.perf_counter() - started
+            for out in outputs:
+                while (produced := top.pop(out.port.index)) is not None:
+                    out.send(produced)
+            waiting = any(top.queued(i.port.index) for i in inputs)
+            if events & IDLE and not waiting:
+                node.executor.wait(seen, 0.1)
+    finally:
+        _report(simulation, wall)
+        for port in simulation.outputs:
+            partial = top.partial(port.index)
+            if partial:
+                log.error("%s: %d bytes arrived without TLAST ending their message", port.port.label, partial)
+        simulation.close()
+
+
+gateway.prepare = _prepare  # type: ignore[attr-defined]
+
+
+def _report(simulation: TargetSimulation, wall: float) -> None:
+    """Simulated time beside wall time: per gateway port, cycles per message and µs at the target clock."""
+    top = simulation.top
+    cycles = top.cycle
+    rate = cycles / wall if wall > 0 else 0.0
+    log.info("fpga target %s: %d cycles simulated (%.3f ms at %g MHz) in %.3f s of simulation (%.2f M cycles/s)",
+             simulation.target, cycles, cycles / simulation.clock_mhz / 1000, simulation.clock_mhz, wall, rate / 1e6)
+    for output, ports in ((False, simulation.inputs), (True, simulation.outputs)):
+        for port in ports:
+            messages, beats, busy = top.stats(output, port.index)
+            if messages:
+                per = busy / messages
+                log.info("  %s: %d messages, %d beats, %.0f cycles per message (%.2f µs at %g MHz)", port.port.label,
+                         messages, beats, per, per / simulation.clock_mhz, simulation.clock_mhz)

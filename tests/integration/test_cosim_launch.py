@@ -59,6 +59,12 @@ def test_ping_pong_with_the_copy_node_in_hardware_returns_every_byte(tmp_path: P
     assert sizes == [4, 8192, 1 << 20]
 
 
+def test_sorting_with_the_sorter_in_hardware_matches_numpy(tmp_path: Path) -> None:
+    result = launch(EXAMPLES / "sorting" / "project_fpga.yaml", tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert len(re.findall(r"run \d: 2048 numbers sorted correctly", result.stderr)) == 5
+
+
 def test_add_two_ints_served_by_hardware_answers_as_the_software_server(tmp_path: Path) -> None:
     answers = {}
     for mapping in ("project.yaml", "project_fpga.yaml"):

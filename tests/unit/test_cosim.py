@@ -26,25 +26,27 @@ pytestmark = [pytest.mark.rtl,
 IMAGE = "sensor_msgs/msg/Image"
 
 
-def _filter_project(tmp_path: Path, component: str, data_width: int, width: int) -> Plan:
+def _filter_project(tmp_path: Path, component: str, data_width: int, width: int = 0, typename: str = IMAGE,
+                    parameter: str = "") -> Plan:
+    parameter = parameter or f"width: {width}"
     (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""\
         name: filter
         targets:
           io: {{kind: process}}
           fpga: {{kind: fpga, data_width: {data_width}}}
         nodes:
-          camera: {{run: json:dumps, target: io, publish: {{/raw: {IMAGE}}}}}
+          camera: {{run: json:dumps, target: io, publish: {{/raw: {typename}}}}}
           filter: {{run: json:dumps, hw: "{component}", target: fpga,
-                   parameters: {{source: /raw, sink: /out, width: {width}}},
-                   subscribe: {{/raw: {IMAGE}}}, publish: {{/out: {IMAGE}}}}}
-          display: {{run: json:dumps, target: io, subscribe: {{/out: {IMAGE}}}}}
+                   parameters: {{source: /raw, sink: /out, {parameter}}},
+                   subscribe: {{/raw: {typename}}}, publish: {{/out: {typename}}}}}
+          display: {{run: json:dumps, target: io, subscribe: {{/out: {typename}}}}}
         """))
     return plan(load_project(tmp_path / "project.yaml"))
 
 
-def _through(simulation: TargetSimulation, messages: list[Any]) -> list[Any]:
+def _through(simulation: TargetSimulation, messages: list[Any], typename: str = IMAGE) -> list[Any]:
     """Each message pushed into the gateway's input, what the hardware published for it."""
-    codec = registry().codec(IMAGE)
+    codec = registry().codec(typename)
     top = simulation.top
     out = []
     for message in messages:
@@ -235,3 +237,32 @@ def test_the_hardware_adder_serves_add_two_ints_bit_exact_in_order(tmp_path: Pat
         simulation.close()
     wrapped = [(a + b + 2**63) % 2**64 - 2**63 for a, b in pairs]
     assert sums == wrapped
+
+
+@pytest.mark.parametrize("data_width", [8, 64, 128])
+def test_the_hardware_sorter_publishes_what_the_software_sorter_does(tmp_path: Path, data_width: int) -> None:
+    """Random arrays of every awkward length, layouts with labelled dimensions (skipped, every alignment),
+    against the software node's answer: ``UInt32MultiArray(data=np.sort(data))``."""
+    array = "std_msgs/msg/UInt32MultiArray"
+    planned = _filter_project(tmp_path, "hetros.hw.nodes:Sorter", data_width, typename=array,
+                              parameter="capacity: 64")
+    types = registry()
+    cls, layout, dim = (types.get(f"std_msgs/msg/{n}") for n in ("UInt32MultiArray", "MultiArrayLayout",
+                                                                  "MultiArrayDimension"))
+    rng = np.random.default_rng(data_width)
+    messages, expected = [], []
+    for size in [0, 1, 2, 3, 17, 63, 64, 33, 64, 5, *rng.integers(0, 65, 6)]:
+        values = rng.integers(0, 2**32, int(size), dtype=np.uint32)
+        if size % 3 == 1:
+            values[: size // 2] = values[0]  # ties
+        dims = [dim(label="x" * int(rng.integers(0, 6)), size=int(size), stride=1) for _ in range(int(size) % 3)]
+        messages.append(cls(layout=layout(dim=dims, data_offset=int(size)), data=values))
+        expected.append(np.sort(values))
+    simulation = TargetSimulation(planned, "fpga", types)
+    try:
+        outputs = _through(simulation, messages, array)
+    finally:
+        simulation.close()
+    for output, want in zip(outputs, expected, strict=True):
+        assert list(output.layout.dim) == [] and output.layout.data_offset == 0
+        np.testing.assert_array_equal(np.asarray(output.data), want)

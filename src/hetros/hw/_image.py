@@ -21,6 +21,7 @@ from amaranth.lib.wiring import In, Out
 
 from .._errors import HardwareError
 from ._build import port_part
+from ._bytes import bytes_in, bytes_out
 from ._stream import axi_stream
 
 # the byte walk over sensor_msgs/msg/Image's CDR body
@@ -50,44 +51,11 @@ class ImageFilter3x3(wiring.Component):
         m = Module()
         source = getattr(self, self._source)
         sink = getattr(self, self._sink)
-        per_beat = self.data_width // 8
 
-        # beats in -> one byte a cycle
-        held = Signal(self.data_width)
-        held_count = Signal(range(per_beat + 1))
-        held_last = Signal()
-        byte = held[:8]
-        byte_valid = held_count != 0
-        byte_last = held_last & (held_count == 1)
-        take = Signal()  # the core takes ``byte`` this cycle
-        m.d.comb += source.tready.eq((held_count == 0) | ((held_count == 1) & take))
-        with m.If(source.tvalid & source.tready):
-            m.d.sync += [held.eq(source.tdata), held_last.eq(source.tlast),
-                         held_count.eq(sum(source.tkeep[i] for i in range(per_beat)))]
-        with m.Elif(take):
-            m.d.sync += [held.eq(held >> 8), held_count.eq(held_count - 1)]
-
-        # bytes out -> beats
-        packing = Signal(self.data_width)
-        packed = Signal(range(per_beat))
-        out_valid, out_byte, out_last = Signal(), Signal(8), Signal()
-        beat_data = Signal(self.data_width)
-        beat_keep = Signal(per_beat)
-        beat_last, beat_valid = Signal(), Signal()
-        m.d.comb += [sink.tdata.eq(beat_data), sink.tkeep.eq(beat_keep), sink.tlast.eq(beat_last),
-                     sink.tvalid.eq(beat_valid)]
-        can_move = ~beat_valid | sink.tready
-        completes = (packed == per_beat - 1) | out_last
-        out_ready = ~completes | can_move
-        with m.If(beat_valid & sink.tready):
-            m.d.sync += beat_valid.eq(0)
-        with m.If(out_valid & out_ready):
-            merged = packing | (out_byte << (packed * 8))
-            with m.If(completes):
-                m.d.sync += [beat_data.eq(merged), beat_keep.eq((Const(2, per_beat + 1) << packed) - 1),
-                             beat_last.eq(out_last), beat_valid.eq(1), packing.eq(0), packed.eq(0)]
-            with m.Else():
-                m.d.sync += [packing.eq(merged), packed.eq(packed + 1)]
+        incoming = bytes_in(m, source, self.data_width)
+        byte, byte_valid, byte_last, take = incoming.byte, incoming.valid, incoming.last, incoming.take
+        outgoing = bytes_out(m, sink, self.data_width)
+        out_valid, out_byte, out_last, out_ready = outgoing.valid, outgoing.byte, outgoing.last, outgoing.ready
 
         # the field walk
         state = Signal(range(13))

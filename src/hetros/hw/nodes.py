@@ -27,9 +27,10 @@ from amaranth.lib.wiring import In, Out
 from .._errors import HardwareError
 from ._build import port_part, service_ports
 from ._image import GaussianBlur, ImageFilter3x3, Sobel
+from ._sort import Sorter
 from ._stream import axi_stream
 
-__all__ = ["AddTwoInts", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel",
+__all__ = ["AddTwoInts", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "Sorter",
            "axi_stream", "make_hardware_node", "port_problems"]
 
 

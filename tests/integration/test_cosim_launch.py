@@ -52,8 +52,10 @@ def test_the_fpga_mapping_reports_simulated_time_beside_wall_time(tmp_path: Path
     assert 3072 <= int(per_message.group(1)) < 3300
 
 
-def test_ping_pong_with_the_copy_node_in_hardware_returns_every_byte(tmp_path: Path) -> None:
-    result = launch(EXAMPLES / "ping_pong" / "project_fpga.yaml", tmp_path)
+@pytest.mark.parametrize("project", ["project_fpga.yaml", "project_fpga_verilog.yaml"])
+def test_ping_pong_with_the_copy_node_in_hardware_returns_every_byte(tmp_path: Path, project: str) -> None:
+    """The copy node as Amaranth (hetros.hw.nodes.Echo) and as Verilog in Vitis HLS's shape."""
+    result = launch(EXAMPLES / "ping_pong" / project, tmp_path)
     assert result.returncode == 0, result.stderr
     sizes = [int(s) for s in re.findall(r"\[ping\]: round trip +(\d+) B:", result.stderr)]
     assert sizes == [4, 8192, 1 << 20]

@@ -266,3 +266,26 @@ def test_the_hardware_sorter_publishes_what_the_software_sorter_does(tmp_path: P
     for output, want in zip(outputs, expected, strict=True):
         assert list(output.layout.dim) == [] and output.layout.data_offset == 0
         np.testing.assert_array_equal(np.asarray(output.data), want)
+
+
+def test_a_verilog_node_names_what_its_module_lacks(tmp_path: Path) -> None:
+    from hetros import CheckError
+
+    source = (Path(__file__).resolve().parents[2] / "examples" / "ping_pong" / "rtl" / "echo_hls.v").read_text()
+    (tmp_path / "echo.v").write_text(source.replace("output reg         recv_TLAST,", "").replace(
+        "recv_TLAST <= send_TLAST;", ""))
+    (tmp_path / "project.yaml").write_text(textwrap.dedent("""\
+        name: broken
+        targets: {io: {kind: process}, fpga: {kind: fpga}}
+        nodes:
+          ping: {run: json:dumps, target: io, publish: {/send: std_msgs/msg/String},
+                 subscribe: {/recv: std_msgs/msg/String}}
+          copy: {run: json:dumps, hw: "echo.v:echo_hls", target: fpga,
+                 subscribe: {/send: std_msgs/msg/String}, publish: {/recv: std_msgs/msg/String}}
+        """))
+    with pytest.raises(CheckError, match=r"nodes\.copy\.hw: .*stream 'recv' lacks recv_tlast \(an AXI4-Stream port is "
+                                         r"tdata, tkeep, tlast, tvalid and tready\)"):
+        plan(load_project(tmp_path / "project.yaml"))
+    (tmp_path / "echo.v").write_text(source.replace("[63:0] recv_TDATA", "[31:0] recv_TDATA"))
+    with pytest.raises(CheckError, match=r"recv_tdata must be 64 bits for the target's data_width 64, not 32"):
+        plan(load_project(tmp_path / "project.yaml"))

@@ -166,14 +166,14 @@ def test_hardware_topic_qos_is_checked(tmp_path: Path, extra: str, expected: str
         plan(load_project(_fpga_project(tmp_path, extra)))
 
 
-def test_services_on_an_fpga_target_are_refused_naming_the_key(tmp_path: Path) -> None:
+def test_clients_on_an_fpga_target_are_refused_naming_the_key(tmp_path: Path) -> None:
     path = _fpga_project(tmp_path, "")
     text = path.read_text().replace("target: fpga0, publish: {/image: sensor_msgs/msg/Image}}",
                                     "target: fpga0, publish: {/image: sensor_msgs/msg/Image}, "
-                                    "services: {/reset: std_srvs/srv/Trigger}}")
+                                    "clients: {/reset: std_srvs/srv/Trigger}}")
     path.write_text(text)
-    with pytest.raises(CheckError, match=r"nodes\.camera\.services\./reset: services of a node on an fpga target "
-                                         r"are not carried by hetros's gateways yet"):
+    with pytest.raises(CheckError, match=r"nodes\.camera\.clients\./reset: clients of a node on an fpga target "
+                                         r"are not carried by hetros's gateways yet \(topics and services are\)"):
         plan(load_project(path))
 
 

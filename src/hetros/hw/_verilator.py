@@ -244,7 +244,8 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
 
 
 def compile_simulator(verilog: str, top: str, ports: list[StreamPort], data_width: int, clocked: bool,
-                      design_key: str, monitored: list[str] | None = None, cache: Path | None = None) -> Path:
+                      design_key: str, monitored: list[str] | None = None, sources: list[Path] | None = None,
+                      cache: Path | None = None) -> Path:
     """The shared library of ``top`` with its harness, compiled once per design (see the module's docstring).
 
     ``design_key`` identifies the design as its sources do (Amaranth's Verilog of one design may
@@ -263,7 +264,8 @@ def compile_simulator(verilog: str, top: str, ports: list[StreamPort], data_widt
     (build / f"{top}.v").write_text(verilog)
     (build / "harness.cpp").write_text(harness)
     jobs = str(max(1, min(4, os.cpu_count() or 1)))
-    _run([verilator, "--cc", f"{top}.v", "--top-module", top, "-Mdir", "obj", "-O3", "--x-assign", "fast",
+    _run([verilator, "--cc", f"{top}.v", *(str(s) for s in sources or []), "--top-module", top, "-Mdir", "obj",
+          "-O3", "--x-assign", "fast",
           "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-lint", "-Wno-style", "-CFLAGS", "-fPIC -O2",
           "--build", "-j", jobs], build, top)
     include = Path(verilator).resolve().parent.parent / "share" / "verilator" / "include"

@@ -29,13 +29,17 @@ from ._build import port_part, service_ports
 from ._image import GaussianBlur, ImageFilter3x3, Sobel
 from ._sort import Sorter
 from ._stream import axi_stream
+from ._verilog_node import VerilogNode, is_verilog, make_verilog_node
 
 __all__ = ["AddTwoInts", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "Sorter",
-           "axi_stream", "make_hardware_node", "port_problems"]
+           "VerilogNode", "axi_stream", "make_hardware_node", "port_problems"]
 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:
-    """The component ``hw`` names, elaborated for ``data_width`` and the node's parameters."""
+    """The component ``hw`` names, elaborated for ``data_width`` and the node's parameters (a ``file.v:module``
+    is a Verilog module, see ``hetros.hw._verilog_node``)."""
+    if is_verilog(hw):
+        return make_verilog_node(hw, root, data_width, parameters)
     module_name, _, attr = hw.partition(":")
     if root not in sys.path:
         sys.path.insert(0, root)

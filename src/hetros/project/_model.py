@@ -92,9 +92,9 @@ class ActionSpec(_Strict):
 class NodeSpec(_Strict):
     run: str = Field(description="module:function (or module:Class) of the node's code, the module beside the "
                      "project file")
-    hw: str | None = Field(default=None, description="module:Component: the node's hardware implementation, an "
-                           "Amaranth component whose stream ports are named after its topics; on an fpga target "
-                           "it is what runs")
+    hw: str | None = Field(default=None, description="module:Component or file.v:module: the node's hardware "
+                           "implementation, an Amaranth component or a Verilog module whose stream ports are named "
+                           "after its topics; on an fpga target it is what runs")
     target: str = Field(description="the target it runs on, a name under targets:")
     publish: dict[str, str | EndpointSpec] = Field(
         default_factory=dict, description="topic -> type, or topic -> {type: ..., QoS offered}")
@@ -158,7 +158,7 @@ class NodeSpec(_Strict):
     def _hw(cls, value: str | None) -> str | None:
         module, sep, attr = (value or "").partition(":")
         if value is not None and (not sep or not module or not attr):
-            raise ValueError(f"hw must be 'module:Component', not {value!r}")
+            raise ValueError(f"hw must be 'module:Component' (Amaranth) or 'file.v:module' (Verilog), not {value!r}")
         return value
 
 

@@ -54,6 +54,7 @@ def test_a_ranged_resource_group_is_one_target_per_index_with_percent_replaced(t
     """))
     assert sorted(project["nodes"]) == ["control_0", "control_1", "control_2"]
     assert project["nodes"]["control_1"] == {"run": "nodes:control_1", "target": "control_1",
+                                             "hw": "nodes_hw:control_1",
                                              "publish": {"/joint_1/command": "std_msgs/msg/Float64"}}
     assert "%" not in repr(project)
 
@@ -64,7 +65,15 @@ def test_a_ranged_resource_group_is_one_target_per_index_with_percent_replaced(t
      node_1 = rosnode, "n"
      [ROSGateway@Gateway1]
      HWTopic = "nicehwtopic"
-     """, ":3: [ROSGateway@Gateway1] is a ReconROS hardware-software gateway, which hetros does not map"),
+     """, ":3: [ROSGateway@Gateway1] needs SWTopic, MsgType (a gateway joins HWTopic to SWTopic, both of MsgType)"),
+    ("""
+     [ResourceGroup@G]
+     node_1 = rosnode, "n"
+     [ROSGateway@Gateway1]
+     HWTopic = "nicehwtopic"
+     SWTopic = "/sw"
+     MsgType = sensor_msgs/Image
+     """, ":3: [ROSGateway@Gateway1] joins hardware topic /nicehwtopic, which no node publishes or subscribes"),
     ("""
      [ResourceGroup@G]
      data = rosmsg, std_msgs, msg, UInt32, 1000
@@ -81,3 +90,43 @@ def test_what_has_no_counterpart_is_refused_with_file_and_line(tmp_path: Path, t
         import_reconros(_cfg(tmp_path, text))
     assert message in str(info.value)
     assert str(tmp_path / "build.cfg") in str(info.value)
+
+
+def test_reconros_gateways_and_two_implementations_map_to_one_topic_and_hw(tmp_path: Path) -> None:
+    """ReconROS's ros_hwtopic_gateway demo's shape: threads on a hardware topic, a gateway to software."""
+    project, notes = import_reconros(_cfg(tmp_path, """
+        [General]
+        TargetPart = xczu7ev-ffvc1156-2-e
+        [ResourceGroup@RThreadb]
+        img_input = rosmsg, sensor_msgs ,msg ,Image
+        node_1 = rosnode, "filter"
+        SubData = rossub, node_1, img_input, "/inputtopic", 10000
+        PubData = rospub, node_1, sensor_msgs/Image, "nicehwtopic", hw
+        [ResourceGroup@Viewer]
+        node_1 = rosnode, "viewer"
+        in = rossub, node_1, sensor_msgs/Image, "/topic/gateway", 10000
+        [ResourceGroup@Both]
+        node_1 = rosnode, "sorter"
+        out = rospub, node_1, sensor_msgs/Image, "/sorted"
+        [ReconosThread@Threadb]
+        HwSource = hls
+        ResourceGroup = RThreadb
+        [ReconosThread@Sorter]
+        HwSource = hls
+        SwSource = c
+        ResourceGroup = Both
+        [ROSGateway@Gateway1]
+        Slot = Gateways(0)
+        HWTopic = "nicehwtopic"
+        SWTopic = "/topic/gateway"
+        MsgType = sensor_msgs/Image
+    """))
+    nodes = project["nodes"]
+    assert nodes["filter"]["target"] == "fpga" and nodes["filter"]["hw"] == "nodes_hw:filter"
+    assert nodes["filter"]["publish"] == {"/topic/gateway": "sensor_msgs/msg/Image"}
+    assert nodes["viewer"]["target"] == "viewer" and "hw" not in nodes["viewer"]
+    # HwSource and SwSource: both implementations, the software target kept
+    assert nodes["sorter"]["target"] == "both" and nodes["sorter"]["hw"] == "nodes_hw:sorter"
+    assert any("[ROSGateway@Gateway1] joins hardware topic /nicehwtopic to software topic /topic/gateway" in n
+               for n in notes)
+    assert any("sorter gets hw: nodes_hw:<node>" in n and "both implementations" in n for n in notes)

@@ -94,10 +94,15 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
     with a ``HwSource``) or ``hw``-flagged ``rossub``/``rospub`` lines gets one fpga target (clock
     from the system clock, part from ``TargetPart``): nodes with hardware topics go on it, since a
     hardware topic has all its endpoints in hardware; the other nodes of hardware threads stay in
-    software, one ``target:`` edit away from it. Message types may be variables (``rosmsg``…) or
-    written inline (``sensor_msgs/Image``). What hetros has no counterpart for is refused with its
-    line: ``[ROSGateway@…]`` sections (hardware-software gateways), a ``rosmsg`` with a sequence
-    length (ReconROS's preallocated ``…__Sequence``), and any other ``ros*`` resource.
+    software, one ``target:`` edit away from it. A hardware thread's nodes get ``hw:`` (its
+    ``HwSource``): ``<module>_hw:<node>``, a placeholder for the Amaranth component or HLS-exported
+    Verilog that ``hetros check`` refuses until written; with a ``SwSource`` too the node has both
+    implementations and the target chooses, without one it goes on the fpga target. A
+    ``[ROSGateway@…]`` joins its hardware topic to its software topic: in hetros they are one topic
+    (the software name), and the planner adds the gateway where hardware and software meet. Message
+    types may be variables (``rosmsg``…) or written inline (``sensor_msgs/Image``). What hetros has
+    no counterpart for is refused with its line: a ``rosmsg`` with a sequence length (ReconROS's
+    preallocated ``…__Sequence``), and any other ``ros*`` resource.
     """
     targets: dict[str, Any] = {}
     nodes: dict[str, Any] = {}
@@ -114,6 +119,7 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
     general: dict[str, str] = {}
     clocks: dict[str, dict[str, str]] = {}
     threads: list[dict[str, str]] = []
+    gateways: list[dict[str, str]] = []
     clock_name = ""
     ranged: dict[str, list[str]] = {}  # a ranged group's name -> its expanded groups
     for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
@@ -126,9 +132,8 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
             section_kind = section.group("kind") if section else line.strip("[]")
             groups = []
             if section_kind == "ROSGateway":
-                raise ProjectError(f"{where}: {line} is a ReconROS hardware-software gateway, which hetros does not "
-                                   "map (its gateways come with hardware nodes); remove the section and connect "
-                                   "the topics in the project file")
+                thread = {"line": str(lineno), "section": line}
+                gateways.append(thread)
             if section and section_kind == "ResourceGroup":
                 name = section.group("name").strip()
                 if section.group("start") is not None:
@@ -150,8 +155,8 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
         if section_kind == "General":
             general[var] = value
             continue
-        if section_kind == "ReconosThread":
-            thread[var] = value
+        if section_kind in ("ReconosThread", "ROSGateway"):
+            thread[var] = value.strip().strip('"')
             continue
         if section_kind == "Clock" and clock_name:
             clocks[clock_name][var] = value
@@ -164,9 +169,14 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
         raise ProjectError(f"{path}: no [ResourceGroup@...] section with a rosnode/roscpp entry found")
     for spec in threads:
         if spec.get("HwSource") and spec.get("ResourceGroup"):
+            groups_of_thread = set()
             for named in re.split(r"[, ]+", spec["ResourceGroup"].strip()):
                 base = re.sub(r"\(.*\)$", "", named)
-                hardware_groups.update(ranged.get(base, [base]))
+                groups_of_thread.update(ranged.get(base, [base]))
+            hardware_groups.update(groups_of_thread)
+            _two_implementations(path, spec, groups_of_thread, module, nodes, notes)
+    for spec in gateways:
+        _join_gateway(path, spec, nodes, notes)
     if hardware_nodes or hardware_groups:
         fpga: dict[str, Any] = {"kind": "fpga"}
         clock = clocks.get(general.get("SystemClock", ""), {}).get("ClockFreq", "")
@@ -175,11 +185,57 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
         if general.get("TargetPart"):
             fpga["part"] = general["TargetPart"]
         targets[FPGA_TARGET] = fpga
-        for name in hardware_nodes:
+        for name in sorted(hardware_nodes):
             nodes[name]["target"] = FPGA_TARGET
+            nodes[name].setdefault("hw", f"{module}_hw:{name}")  # its hw-flagged endpoints exist in hardware only
         used = {spec["target"] for spec in nodes.values()} | {FPGA_TARGET}
         targets = {name: spec for name, spec in targets.items() if name in used}
     return {"name": path.stem, "targets": targets, "nodes": nodes}, notes
+
+
+def _two_implementations(path: Path, thread: dict[str, str], groups: set[str], module: str,
+                         nodes: dict[str, Any], notes: list[str]) -> None:
+    """A hardware thread's nodes: ``hw:`` from its HwSource, ``run:`` kept when it has a SwSource."""
+    where = f"{path}:{thread['line']}"
+    named = [name for name, spec in nodes.items() if spec["target"] in {g.lower() for g in groups}]
+    for name in named:
+        nodes[name]["hw"] = f"{module}_hw:{name}"
+    if named:
+        both = "with its SwSource, both implementations: the target chooses" if thread.get("SwSource") else \
+            "without a SwSource, run: is a placeholder too, so the node stays runnable in software, one target: " \
+            "edit from the fpga target"
+        notes.append(f"{where}: HwSource = {thread['HwSource']}: {', '.join(sorted(named))} "
+                     f"{'get' if len(named) > 1 else 'gets'} hw: "
+                     f"{module}_hw:<node>, a placeholder for an Amaranth component or the HLS export's Verilog "
+                     f"(file.v:module) that `hetros check` refuses until written; {both}")
+
+
+def _join_gateway(path: Path, gateway: dict[str, str], nodes: dict[str, Any], notes: list[str]) -> None:
+    """A ReconROS gateway joins a hardware topic to a software topic: in hetros, one topic (the software one)."""
+    where = f"{path}:{gateway['line']}"
+    missing = [key for key in ("HWTopic", "SWTopic", "MsgType") if not gateway.get(key)]
+    if missing:
+        raise ProjectError(f"{where}: {gateway['section']} needs {', '.join(missing)} (a gateway joins HWTopic to "
+                           "SWTopic, both of MsgType)")
+    hardware, software = _topic(gateway["HWTopic"]), _topic(gateway["SWTopic"])
+    parts = gateway["MsgType"].split("/")
+    wanted = f"{parts[0]}/msg/{parts[-1]}"
+    used = False
+    for name, spec in nodes.items():
+        for section in ("publish", "subscribe"):
+            endpoints = spec.get(section, {})
+            if hardware in endpoints:
+                if endpoints[hardware] != wanted:
+                    raise ProjectError(f"{where}: {gateway['section']} carries {wanted}, but node {name} "
+                                       f"{section}s {hardware} as {endpoints[hardware]}; make them one type")
+                endpoints[software] = endpoints.pop(hardware)
+                used = True
+    if not used:
+        raise ProjectError(f"{where}: {gateway['section']} joins hardware topic {hardware}, which no node "
+                           "publishes or subscribes; name a hardware topic of the build")
+    notes.append(f"{where}: {gateway['section']} joins hardware topic {hardware} to software topic {software}: in "
+                 f"hetros they are one topic, {software}; the planner adds the gateway where hardware and software "
+                 "nodes meet")
 
 
 def _resource(path: Path, lineno: int, module: str, group: str, var: str, fields: list[str],

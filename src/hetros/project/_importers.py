@@ -126,7 +126,6 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
         line = re.sub(r"^\d+\s+", "", raw.split("#", 1)[0].strip())
         if not line:
             continue
-        where = f"{path}:{lineno}"
         if line.startswith("["):
             section = _SECTION.match(line)
             section_kind = section.group("kind") if section else line.strip("[]")

@@ -5,6 +5,10 @@ The Sobel node has two implementations: ``sobel`` below (Python, numpy) and
 cycle). ``project.yaml`` maps it to a process, so the Python runs; ``project_fpga.yaml``
 maps it to an fpga target, so the hardware runs in Verilator behind gateways, and the
 camera and display do not change. Both mappings write the same digests.
+
+The ``project_chain*.yaml`` files put a Gaussian blur before the Sobel (fpgaDDS's execution
+models): both in software; both on one fpga target, joined by a hardware topic (dataflow);
+each on an fpga target of its own, the blurred image crossing through the CPU (sequential).
 """
 
 import hashlib
@@ -13,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from hetros import Node
+from hetros.hw.reference import gaussian_blur
 from hetros.hw.reference import sobel as sobel_edges
 from hetros.interfaces.sensor_msgs.msg import Image
 
@@ -40,35 +45,52 @@ def camera(node: Node) -> None:
         pub.publish(msg)
 
 
-def sobel(node: Node) -> None:
-    pub = node.create_publisher(Image, "/image_edges")
+FILTERS = {"sobel": sobel_edges, "blur": gaussian_blur}
+
+
+def _filter(node: Node, name: str) -> None:
+    """One filter stage: from the ``source`` topic to the ``sink`` topic (parameters, as the hardware's)."""
+    apply = FILTERS[name]
+    pub = node.create_publisher(Image, node.get_parameter("sink"))
 
     def on_image(msg: Image) -> None:
-        edges = sobel_edges(msg.data.reshape(msg.height, msg.width))
+        filtered = apply(msg.data.reshape(msg.height, msg.width))
         pub.publish(Image(header=msg.header, height=msg.height, width=msg.width, encoding=msg.encoding,
-                          is_bigendian=msg.is_bigendian, step=msg.step, data=edges.reshape(-1)))
+                          is_bigendian=msg.is_bigendian, step=msg.step, data=filtered.reshape(-1)))
 
-    node.create_subscription(Image, "/image_raw", on_image)
+    node.create_subscription(Image, node.get_parameter("source"), on_image)
     node.spin()
 
 
+def sobel(node: Node) -> None:
+    _filter(node, "sobel")
+
+
+def blur(node: Node) -> None:
+    _filter(node, "blur")
+
+
 def display(node: Node) -> None:
-    """Checks each frame against the software Sobel and writes one digest line per frame."""
+    """Checks each frame against the software filters (``pipeline``, Sobel alone by default) and writes one
+    digest line per frame."""
     frames = node.get_parameter("frames")
     height, width = node.get_parameter("height"), node.get_parameter("width")
+    pipeline = [FILTERS[name] for name in node.get_parameter("pipeline", ["sobel"])]
     lines = []
     sub = node.create_subscription(Image, "/image_edges")
     for _ in range(frames):
         msg = sub.take()
         seq = int(msg.header.frame_id.removeprefix("frame"))
-        expected = sobel_edges(frame(seq, height, width))
+        expected = frame(seq, height, width)
+        for stage in pipeline:
+            expected = stage(expected)
         got = msg.data.reshape(msg.height, msg.width)
         if not np.array_equal(got, expected):
             wrong = np.argwhere(got != expected)
-            raise ValueError(f"frame {seq}: {len(wrong)} pixels differ from the software Sobel, first at {wrong[0]}")
+            raise ValueError(f"frame {seq}: {len(wrong)} pixels differ from the software filters, first at {wrong[0]}")
         lines.append(f"{msg.header.frame_id} {msg.width}x{msg.height} {msg.encoding} "
                      f"{hashlib.sha256(got.tobytes()).hexdigest()[:16]}")
     out = Path(node.get_parameter("out", "out/sobel_hw"))
     out.mkdir(parents=True, exist_ok=True)
     (out / "edges.txt").write_text("\n".join(lines) + "\n")
-    node.log.info("%d frames, every pixel equal to the software Sobel; digests in %s", frames, out / "edges.txt")
+    node.log.info("%d frames, every pixel equal to the software filters; digests in %s", frames, out / "edges.txt")

@@ -27,17 +27,23 @@ def launch(project: Path, cwd: Path, *extra: str) -> subprocess.CompletedProcess
                           capture_output=True, text=True, timeout=240, check=False, cwd=cwd)
 
 
-def test_sobel_on_an_fpga_target_gives_the_software_mappings_pixels(tmp_path: Path) -> None:
+@pytest.mark.parametrize(("mappings", "out"), [
+    (("project.yaml", "project_fpga.yaml"), "sobel_hw"),
+    (("project_chain.yaml", "project_chain_fpga.yaml", "project_chain_sequential.yaml"), "sobel_chain"),
+])
+def test_filters_on_fpga_targets_give_the_software_mappings_pixels(tmp_path: Path, mappings: tuple[str, ...],
+                                                                    out: str) -> None:
+    """Sobel alone, and blur -> Sobel in software, as dataflow (one target) and sequential (two)."""
     results = {}
-    for mapping in ("project.yaml", "project_fpga.yaml"):
+    for mapping in mappings:
         cwd = tmp_path / mapping
         cwd.mkdir()
         result = launch(EXAMPLES / "sobel_hw" / mapping, cwd)
         assert result.returncode == 0, result.stderr
-        assert "8 frames, every pixel equal to the software Sobel" in result.stderr
-        results[mapping] = (cwd / "out" / "sobel_hw" / "edges.txt").read_text()
-    assert results["project.yaml"] == results["project_fpga.yaml"]
-    assert len(results["project.yaml"].splitlines()) == 8
+        assert "8 frames, every pixel equal to the software filters" in result.stderr
+        results[mapping] = (cwd / "out" / out / "edges.txt").read_text()
+    assert len(set(results.values())) == 1
+    assert len(results[mappings[0]].splitlines()) == 8
 
 
 def test_the_fpga_mapping_reports_simulated_time_beside_wall_time(tmp_path: Path) -> None:

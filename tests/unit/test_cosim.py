@@ -289,3 +289,19 @@ def test_a_verilog_node_names_what_its_module_lacks(tmp_path: Path) -> None:
     (tmp_path / "echo.v").write_text(source.replace("[63:0] recv_TDATA", "[31:0] recv_TDATA"))
     with pytest.raises(CheckError, match=r"recv_tdata must be 64 bits for the target's data_width 64, not 32"):
         plan(load_project(tmp_path / "project.yaml"))
+
+
+def test_the_execution_models_of_a_chain_time_dataflow_against_sequential() -> None:
+    """Blur -> Sobel: dataflow overlaps the two (about one frame's cycles), sequential adds them up and
+    crosses the CPU twice more."""
+    from hetros.hw._models import execution_models, sample_message
+
+    planned = plan(load_project(Path(__file__).resolve().parents[2] / "examples" / "sobel_hw" /
+                                "project_chain_fpga.yaml"))
+    types = registry()
+    sample = sample_message(types, IMAGE, (64, 48), 0)
+    dataflow, sequential = execution_models(planned, "fpga", types, {"/image_raw": sample})
+    assert [name for name, _ in sequential.stages] == ["blur", "sobel"]
+    assert 64 * 48 <= dataflow.cycles < 64 * 48 * 1.2
+    assert sequential.cycles == sum(cycles for _, cycles in sequential.stages) > 1.8 * dataflow.cycles
+    assert (dataflow.cpu_copies, sequential.cpu_copies) == (2, 4)

@@ -90,10 +90,38 @@ def cmd_hw_report(args: argparse.Namespace) -> int:
     from ..hw._report import format_transfers, transfer_report
 
     plan, targets = _fpga_targets(args)
+    if args.models:
+        return _execution_models(args, plan, targets)
     for target in targets:
         print(f"fpga target {target}: one message from the first publisher to every subscriber, simulated "
               "(cycles from the first beat offered to the last TLAST taken)\n")
         print(format_transfers(transfer_report(plan, target, simulator=args.simulator)))
+    return 0
+
+
+def _execution_models(args: argparse.Namespace, plan: Plan, targets: list[str]) -> int:
+    """``hw report --models``: each target's hardware nodes as a dataflow chain and as a sequential one."""
+    from ..hw._build import hardware_topics
+    from ..hw._models import execution_models, format_models, sample_message
+    from ..plan import gateway_node
+
+    width, _, height = args.image.partition("x")
+    if not (width.isdigit() and height.isdigit()):
+        raise HardwareError(f"--image must be WIDTHxHEIGHT (640x480), not {args.image!r}")
+    types = registry()
+    for folder in plan.message_paths:
+        types.load_folder(Path(folder))
+    for target in targets:
+        gateway = gateway_node(target)
+        inputs = {t.name: t.type for t in hardware_topics(plan, target) if gateway in t.publishers and not t.service}
+        if not inputs:
+            print(f"fpga target {target}: no topic from software into its hardware nodes: no chain to time\n")
+            continue
+        samples = {name: sample_message(types, typename, (int(width), int(height)), args.size)
+                   for name, typename in inputs.items()}
+        print(f"fpga target {target}: one message into {', '.join(inputs)} ({args.image} for images, {args.size} "
+              "elements for arrays), co-simulated in Verilator\n")
+        print(format_models(target, execution_models(plan, target, types, samples)) + "\n")
     return 0
 
 
@@ -392,6 +420,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--target", help="the fpga target (default: every one)")
     p.add_argument("--simulator", choices=["auto", "icarus", "amaranth"], default="auto",
                    help="auto: Icarus Verilog when installed (fast), else Amaranth's simulator")
+    p.add_argument("--models", action="store_true",
+                   help="instead: the target's hardware nodes as a dataflow chain (hardware topics between them) "
+                        "and as a sequential one (each behind its own gateway): latency and CPU copies per message")
+    p.add_argument("--image", default="640x480", help="--models: the size of an image message (WIDTHxHEIGHT)")
+    p.add_argument("--size", type=int, default=2048, help="--models: elements of an array message")
     p.set_defaults(func=cmd_hw_report)
     p = hw.add_parser("synth", help="Yosys resource estimate (LUT/FF/BRAM/DSP) per hardware node and topic network, "
                                        "totals against the part")

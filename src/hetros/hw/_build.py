@@ -59,29 +59,38 @@ def port_part(topic: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]", "_", topic.strip("/"))
 
 
-def hardware_topics(plan: Plan, target: str) -> list[HardwareTopic]:
+def hardware_topics(plan: Plan, target: str, only: set[str] | None = None) -> list[HardwareTopic]:
     """The hardware topics of ``target``, in the plan's order.
 
     A topic's network connects the target's nodes on it and, where the topic crosses to software,
-    the target's gateway: as a publisher into the network where the gateway subscribes (software
-    publishes to the hardware), as a subscriber of it where the gateway publishes.
+    the target's gateway: as a publisher into the network where software (or a node off the
+    design) publishes to the hardware, as a subscriber of it where software subscribes. With
+    ``only``, the design holds just those hardware nodes and the target's others count as
+    software: each node behind a gateway of its own, as ``hw report`` compares.
     """
     if target not in plan.targets or plan.targets[target].kind != "fpga":
         fpga = [t.name for t in plan.targets.values() if t.kind == "fpga"]
         raise HardwareError(f"target must be an fpga target of the project ({', '.join(fpga) or 'none'}), "
                             f"not {target!r}")
     gateway = gateway_node(target)
+
+    def inside(node: str) -> bool:
+        return node != gateway and plan.nodes[node].target == target and (only is None or node in only)
+
     topics = []
     for channel in plan.channels.values():
         if channel.kind == "reply":
             continue  # a hardware server's responses: one stream per service, below
-        publishers = tuple(n for n in channel.publishers if n != gateway and plan.nodes[n].target == target)
-        subscribers = tuple(n for n in channel.subscribers if n != gateway and plan.nodes[n].target == target)
-        if gateway in channel.subscribers:
+        sources = [n for n in channel.publishers if n != gateway]
+        sinks = [n for n in channel.subscribers if n != gateway]
+        publishers = tuple(n for n in sources if inside(n))
+        subscribers = tuple(n for n in sinks if inside(n))
+        if subscribers and any(not inside(n) for n in sources):
             publishers += (gateway,)
-        if gateway in channel.publishers:
+        if publishers and publishers != (gateway,) and \
+                (gateway in channel.publishers or any(not inside(n) for n in sinks)):
             subscribers += (gateway,)
-        if not publishers or not subscribers:
+        if not publishers or not subscribers or publishers == subscribers == (gateway,):
             continue  # an endpoint with nobody on the other side has nothing to wire
         topics.append(HardwareTopic(channel.name, channel.type, publishers, subscribers, channel.qos.hw_fifo,
                                     channel.service))
@@ -188,15 +197,15 @@ def _held_stream_broken(m: Module, port: Any) -> Signal:
     return broken
 
 
-def hardware_nodes(plan: Plan, target: str) -> dict[str, Elaboratable]:
-    """The hardware implementations of ``target``'s nodes that have one, elaborated and their ports
-    checked against the node's topics."""
+def hardware_nodes(plan: Plan, target: str, only: set[str] | None = None) -> dict[str, Elaboratable]:
+    """The hardware implementations of ``target``'s nodes that have one (of ``only``, when given), elaborated
+    and their ports checked against the node's topics."""
     from .nodes import make_hardware_node, port_problems
 
     made: dict[str, Elaboratable] = {}
     width = plan.targets[target].data_width
     for name, node in plan.nodes.items():
-        if node.target != target or not node.hw or not plan.in_hardware(name):
+        if node.target != target or not node.hw or not plan.in_hardware(name) or (only is not None and name not in only):
             continue
         component = make_hardware_node(node.hw, plan.root, width, node.parameters)
         problems = port_problems(component, list(node.publish), list(node.subscribe), width, list(node.services))

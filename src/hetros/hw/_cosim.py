@@ -38,14 +38,14 @@ class GatewayPort:
 class TargetSimulation:
     """An fpga target's top module compiled and instantiated: the gateway's view of the hardware."""
 
-    def __init__(self, plan: Plan, target: str, types: TypeRegistry) -> None:
+    def __init__(self, plan: Plan, target: str, types: TypeRegistry, only: set[str] | None = None) -> None:
         from amaranth.back import verilog
 
         spec = plan.targets[target]
         self.target, self.clock_mhz = target, spec.clock_mhz
         gateway = gateway_node(target)
-        topics = hardware_topics(plan, target)
-        components = hardware_nodes(plan, target)
+        topics = hardware_topics(plan, target, only)
+        components = hardware_nodes(plan, target, only)
         top = FpgaTop(topics, spec.data_width, components, monitor=True)
         name = top_name(target)
         text = verilog.convert(top, name=name, ports=top.signals())

@@ -101,6 +101,18 @@ def source(node: Node) -> None:
         time.sleep(node.get_parameter("pause", 0.0))
 
 
+def latest_sink(node: Node) -> None:
+    """Slow, on keep_last topics: takes what is newest until the last message arrives."""
+    sub = node.create_subscription(UInt8MultiArray, "/b")
+    count, seen = node.get_parameter("count"), []
+    while not seen or seen[-1] != count - 1:
+        seen.append(sub.take().layout.data_offset)
+        time.sleep(0.01)
+    if seen != sorted(set(seen)):
+        raise ValueError(f"out of order or repeated: {seen}")
+    node.log.info("%d of %d messages, newest last", len(seen), count)
+
+
 def echo(node: Node) -> None:
     pub = node.create_publisher(UInt8MultiArray, "/b")
     for message in node.create_subscription(UInt8MultiArray, "/a"):
@@ -147,6 +159,19 @@ def test_a_reliable_topic_through_a_gateway_loses_nothing_under_back_pressure(tm
     result = launch(_echo_project(tmp_path, sink=", pause: 0.003"), tmp_path)
     assert result.returncode == 0, result.stderr
     assert "300 messages through the hardware, in order and intact" in result.stderr
+
+
+def test_keep_last_across_a_gateway_drops_the_oldest_and_delivers_the_newest(tmp_path: Path) -> None:
+    path = _echo_project(tmp_path, topics="")
+    text = path.read_text().replace("run: nodes:sink,", "run: nodes:latest_sink,")
+    text = text.replace("/a: {depth: 2}", "/a: {history: keep_last, depth: 1}").replace(
+        "/b: {depth: 2}", "/b: {history: keep_last, depth: 1}")
+    path.write_text(text)
+    result = launch(path, tmp_path)
+    assert result.returncode == 0, result.stderr
+    kept = re.search(r"(\d+) of 300 messages, newest last", result.stderr)
+    assert kept is not None, result.stderr
+    assert int(kept.group(1)) < 300, "a slow keep_last subscriber behind the hardware should have lost some"
 
 
 def test_a_software_nodes_crash_stops_the_graph_and_the_simulator(tmp_path: Path) -> None:

@@ -250,13 +250,13 @@ def plot(one: list[dict[str, Any]], cosim: list[dict[str, Any]], path: Path) -> 
     import matplotlib.pyplot as plt
 
     fig, (ax, speed) = plt.subplots(1, 2, figsize=(12, 4), gridspec_kw={"width_ratios": [3, 2]})
-    names = [f"{r['simulator']}\n{r['frame']} #{r['index']}" for r in cosim]
+    names = [f"{r['simulator'].split()[0]} {r['frame']} #{r['index']}" for r in cosim]
     speed.bar(names, [r["cycles_per_s"] for r in cosim], color="tab:green")
     speed.axhline(1e6, color="tab:red", linestyle="--", label="launch default's floor: 1 M cycles/s")
     speed.set_yscale("log")
     speed.set_ylabel("simulated cycles per second")
     speed.set_title("Sobel through its gateway")
-    speed.tick_params(axis="x", labelsize=7)
+    speed.tick_params(axis="x", labelsize=7, labelrotation=35)
     speed.legend(fontsize=8)
     sizes = [row["bytes"] for row in one]
     ax.loglog(sizes, [row["ms"] for row in one], "o-", label="hetros hardware topic (simulated, 100 MHz)")

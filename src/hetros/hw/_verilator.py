@@ -25,7 +25,7 @@ from pathlib import Path
 from .._errors import HardwareError
 
 # bumped when the harness text changes in a way its hash would not show (compiler flags)
-_HARNESS_VERSION = "2"
+_HARNESS_VERSION = "3"
 
 
 @dataclass(frozen=True)
@@ -268,20 +268,46 @@ def compile_simulator(verilog: str, top: str, ports: list[StreamPort], data_widt
           "-O3", "--x-assign", "fast",
           "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-lint", "-Wno-style", "-CFLAGS", "-fPIC -O2",
           "--build", "-j", jobs], build, top)
-    include = Path(verilator).resolve().parent.parent / "share" / "verilator" / "include"
-    root = subprocess.run([verilator, "--getenv", "VERILATOR_ROOT"], capture_output=True, text=True, check=False)
-    if root.returncode == 0 and root.stdout.strip():
-        include = Path(root.stdout.strip()) / "include"
+    include = _include_folder(verilator)
     archives = sorted(str(p) for p in (build / "obj").glob("*.a"))
+    runtime = _runtime_objects(verilator, include, cache or cache_root())
     _run(["g++", "-shared", "-fPIC", "-O2", "-std=c++17", "-I", "obj", "-I", str(include),
-          "-I", str(include / "vltstd"), "harness.cpp", str(include / "verilated.cpp"),
-          str(include / "verilated_threads.cpp"), *archives, "-pthread", "-o", library.name], build, top)
+          "-I", str(include / "vltstd"), "harness.cpp", *runtime, *archives, "-pthread", "-o", library.name],
+         build, top)
     folder.parent.mkdir(parents=True, exist_ok=True)
     try:
         os.replace(build, folder)  # another launch that compiled the same design first wins; both are equal
     except OSError:
         shutil.rmtree(build, ignore_errors=True)
     return library
+
+
+def _include_folder(verilator: str) -> Path:
+    root = subprocess.run([verilator, "--getenv", "VERILATOR_ROOT"], capture_output=True, text=True, check=False)
+    if root.returncode == 0 and root.stdout.strip():
+        return Path(root.stdout.strip()) / "include"
+    return Path(verilator).resolve().parent.parent / "share" / "verilator" / "include"
+
+
+def _runtime_objects(verilator: str, include: Path, cache: Path) -> list[str]:
+    """Verilator's own runtime, compiled once per Verilator version and machine (most of a design's
+    compile time otherwise), then linked into each design's library."""
+    version = subprocess.run([verilator, "--version"], capture_output=True, text=True, check=False).stdout
+    folder = cache / f"runtime-{hashlib.sha256(version.encode()).hexdigest()[:12]}"
+    objects = [folder / f"{name}.o" for name in ("verilated", "verilated_threads")]
+    if all(o.exists() for o in objects):
+        return [str(o) for o in objects]
+    build = folder.with_name(folder.name + f".build{os.getpid()}")
+    shutil.rmtree(build, ignore_errors=True)
+    build.mkdir(parents=True)
+    for target in objects:
+        _run(["g++", "-c", "-fPIC", "-O2", "-std=c++17", "-I", str(include), "-I", str(include / "vltstd"),
+              str(include / f"{target.stem}.cpp"), "-o", target.name], build, "Verilator's runtime")
+    try:
+        os.replace(build, folder)
+    except OSError:
+        shutil.rmtree(build, ignore_errors=True)  # another process built it first: both are equal
+    return [str(o) for o in objects]
 
 
 def _run(command: list[str], cwd: Path, top: str) -> None:

@@ -286,7 +286,8 @@ def main(argv: list[str] | None = None) -> int:
     text = markdown(one, two, cosim, chain)
     print("\n" + text)
     (out / "hw.md").write_text(provenance() + "\n\n" + text + "\n")
-    (out / "hw.json").write_text(json.dumps({"table_one": one, "table_two": two, "cosim": cosim, "chain": chain}, indent=1))
+    figures = {"table_one": one, "table_two": two, "cosim": cosim, "chain": chain}
+    (out / "hw.json").write_text(json.dumps(figures, indent=1))
     plot(one, cosim, out / "hw.png")
     print(f"\nwrote {out / 'hw.md'}, {out / 'hw.json'}, {out / 'hw.png'}")
     return 0

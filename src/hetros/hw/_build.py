@@ -205,7 +205,8 @@ def hardware_nodes(plan: Plan, target: str, only: set[str] | None = None) -> dic
     made: dict[str, Elaboratable] = {}
     width = plan.targets[target].data_width
     for name, node in plan.nodes.items():
-        if node.target != target or not node.hw or not plan.in_hardware(name) or (only is not None and name not in only):
+        wanted = only is None or name in only
+        if node.target != target or not node.hw or not plan.in_hardware(name) or not wanted:
             continue
         component = make_hardware_node(node.hw, plan.root, width, node.parameters)
         problems = port_problems(component, list(node.publish), list(node.subscribe), width, list(node.services))

@@ -48,26 +48,32 @@ def camera(node: Node) -> None:
 FILTERS = {"sobel": sobel_edges, "blur": gaussian_blur}
 
 
-def _filter(node: Node, name: str) -> None:
-    """One filter stage: from the ``source`` topic to the ``sink`` topic (parameters, as the hardware's)."""
+def _filter(node: Node, name: str, source: str, sink: str) -> None:
+    """One filter stage, from ``source`` to ``sink`` (the hardware twin gets the same names as parameters)."""
     apply = FILTERS[name]
-    pub = node.create_publisher(Image, node.get_parameter("sink"))
+    pub = node.create_publisher(Image, sink)
 
     def on_image(msg: Image) -> None:
         filtered = apply(msg.data.reshape(msg.height, msg.width))
         pub.publish(Image(header=msg.header, height=msg.height, width=msg.width, encoding=msg.encoding,
                           is_bigendian=msg.is_bigendian, step=msg.step, data=filtered.reshape(-1)))
 
-    node.create_subscription(Image, node.get_parameter("source"), on_image)
+    node.create_subscription(Image, source, on_image)
     node.spin()
 
 
 def sobel(node: Node) -> None:
-    _filter(node, "sobel")
+    _filter(node, "sobel", "/image_raw", "/image_edges")
 
 
 def blur(node: Node) -> None:
-    _filter(node, "blur")
+    """The chain's first stage."""
+    _filter(node, "blur", "/image_raw", "/image_blur")
+
+
+def chained_sobel(node: Node) -> None:
+    """The chain's second stage."""
+    _filter(node, "sobel", "/image_blur", "/image_edges")
 
 
 def display(node: Node) -> None:

@@ -38,9 +38,14 @@ log = get_logger("hetros.cosim")
 # between two messages, few enough that back-pressure reaches the publisher early
 _QUEUED = 2
 # cycles a run may take before Python looks at the graph again, and quiet cycles after which a design
-# whose inputs are empty counts as idle (the gateway then sleeps until software publishes)
+# whose inputs are empty counts as idle (the gateway then sleeps until software publishes): few right after
+# a message went in or out (the next one is likely on its way), more after a sleep that nothing woke
 _CHUNK = 2_000_000
+_QUIET_AFTER_TRAFFIC = 256
 _IDLE_CYCLES = 20_000
+# while more messages went into the hardware than came out, it is working (a sort, a frame's flush) even
+# with its ports quiet: the clock runs on, up to this many cycles since a message last went in or out
+_IN_FLIGHT_CYCLES = 50_000_000
 # simulations built while the process started (``gateway.prepare``), by gateway node
 _PREPARED: dict[str, TargetSimulation] = {}
 
@@ -117,6 +122,8 @@ def gateway(node: Node) -> None:
     outputs = [_Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
     stop = node.graph.stop
     wall = 0.0
+    pushed = popped = last_moved = 0
+    quiet = _IDLE_CYCLES
     try:
         while not stop.is_set():
             seen = node.executor.generation
@@ -124,17 +131,23 @@ def gateway(node: Node) -> None:
                 try:
                     while top.queued(each.port.index) < _QUEUED:
                         each.feed(top.push)
+                        pushed += 1
+                        last_moved = top.cycle
                 except LookupError:
                     pass  # nothing more to take now
+            working = pushed > popped and top.cycle - last_moved < _IN_FLIGHT_CYCLES
             started = time.perf_counter()
-            events = top.run(_CHUNK, _IDLE_CYCLES)
+            events = top.run(_CHUNK, _CHUNK if working else quiet)
             wall += time.perf_counter() - started
             for out in outputs:
                 while (produced := top.pop(out.port.index)) is not None:
                     out.send(produced)
+                    popped += 1
+                    last_moved = top.cycle
             waiting = any(top.queued(i.port.index) for i in inputs)
             if events & IDLE and not waiting:
                 node.executor.wait(seen, 0.1)
+                quiet = _QUIET_AFTER_TRAFFIC if node.executor.generation != seen else _IDLE_CYCLES
     finally:
         _report(simulation, wall)
         for port in simulation.outputs:

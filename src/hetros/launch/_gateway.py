@@ -27,7 +27,7 @@ from typing import Any
 from .._errors import HardwareError
 from .._log import get_logger
 from ..hw._cosim import GatewayPort, TargetSimulation
-from ..hw._verilator import IDLE
+from ..hw._verilator import IDLE, VerilatedTop
 from ..msg import TypeRegistry
 from ..plan import Plan
 from ..runtime import Node, Replies
@@ -71,16 +71,15 @@ class _Input:
         else:
             self.take = node.create_subscription(types.get(port.type), port.topic).try_take
 
-    def feed(self, push: Callable[[int, bytes], None]) -> None:
+    def feed(self, top: VerilatedTop) -> None:
+        """Take one message and encode it straight into the simulator's input queue (its one copy)."""
         item = self.take()
         if item is None:
             raise LookupError
         if self.port.service:
             request_id, client, item = item
             self.asked.append((request_id, client))
-        encoded = bytearray(self.codec.size(item))
-        self.codec.encode(item, memoryview(encoded))
-        push(self.port.index, bytes(encoded))
+        self.codec.encode(item, top.loan_input(self.port.index, self.codec.size(item)))
 
 
 class _Output:
@@ -93,8 +92,10 @@ class _Output:
         self.replies = Replies(node, port.service, port.type) if port.service else None
         self.publisher = None if port.service else node.create_publisher(types.get(port.type), port.topic)
 
-    def send(self, body: bytes) -> None:
-        message = self.codec.decode(memoryview(body))
+    def send(self, body: memoryview) -> None:
+        """Publish a message decoded in place from the simulator's memory: its arrays are views there, and
+        the transport's send is their one copy (the gateway's process has no other node to keep them)."""
+        message = self.codec.decode(body)
         if self.replies is None:
             assert self.publisher is not None
             self.publisher.publish(message)
@@ -130,7 +131,7 @@ def gateway(node: Node) -> None:
             for each in inputs:
                 try:
                     while top.queued(each.port.index) < _QUEUED:
-                        each.feed(top.push)
+                        each.feed(top)
                         pushed += 1
                         last_moved = top.cycle
                 except LookupError:
@@ -140,8 +141,12 @@ def gateway(node: Node) -> None:
             events = top.run(_CHUNK, _CHUNK if working else quiet)
             wall += time.perf_counter() - started
             for out in outputs:
-                while (produced := top.pop(out.port.index)) is not None:
-                    out.send(produced)
+                while (produced := top.front(out.port.index)) is not None:
+                    try:
+                        out.send(produced)
+                    finally:
+                        del produced
+                        top.drop(out.port.index)
                     popped += 1
                     last_moved = top.cycle
             waiting = any(top.queued(i.port.index) for i in inputs)

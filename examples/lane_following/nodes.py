@@ -54,7 +54,7 @@ def stage(node: Node, source: str, target: str, work, encoding: str = "rgb8") ->
 
 
 def compensation(node: Node) -> None:
-    stage(node, "/image_raw", "/image_comp", vision.compensate)
+    stage(node, "/image_raw", "/image_comp", vision.compensate())
 
 
 def gaussian_blur(node: Node) -> None:
@@ -139,7 +139,8 @@ def monitor(node: Node) -> None:
         write_pngs(Path(out), lat)
         node.log.info("wrote %s and %s", Path(out) / "latency.png", Path(out) / "frame.png")
     if out:
-        (Path(out) / "summary.json").write_text(json.dumps({"latency_ms": latencies, "stopped": stopped}))
+        (Path(out) / "summary.json").write_text(json.dumps({"latency_ms": latencies, "stopped": stopped,
+                                                            "centres": dict(sorted(seen.items()))}))
 
 
 def write_pngs(out: Path, latencies: np.ndarray) -> None:
@@ -158,7 +159,9 @@ def write_pngs(out: Path, latencies: np.ndarray) -> None:
     plt.close(fig)
     frame = 25
     img, truth = vision.render(frame)
-    bev = vision.project(vision.blur(vision.compensate(img)))
+    compensate = vision.compensate()
+    compensate(vision.render(frame - 1)[0])  # the stretch comes from the frame before
+    bev = vision.project(vision.blur(compensate(img)))
     _found, centre, left, right = vision.find_lane(bev)
     fig, axes = plt.subplots(1, 2, figsize=(12, 4))
     axes[0].imshow(img)

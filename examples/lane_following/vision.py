@@ -7,6 +7,8 @@ through a fixed homography; everything is vectorised numpy.
 
 import numpy as np
 
+from hetros.hw.reference import Compensation, gaussian_blur
+
 CAM_W, CAM_H = 640, 480
 BEV_W, BEV_H = 1000, 600
 HORIZON = 200
@@ -83,40 +85,12 @@ def render(frame: int) -> tuple[np.ndarray, float]:
     return np.clip(img, 0, 255).astype(np.uint8), truth
 
 
-# Paeth's 19 compare-exchanges that leave the median of nine in position 4.
-_MEDIAN9 = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8), (0, 3), (5, 8), (4, 7),
-            (3, 6), (1, 4), (2, 5), (4, 7), (4, 2), (6, 4), (4, 2))
-
-
-def median3x3(img: np.ndarray) -> np.ndarray:
-    padded = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge")
-    p = [padded[i:i + img.shape[0], j:j + img.shape[1]] for i in range(3) for j in range(3)]
-    for a, b in _MEDIAN9:
-        p[a], p[b] = np.minimum(p[a], p[b]), np.maximum(p[a], p[b])
-    return p[4]
-
-
-def compensate(img: np.ndarray) -> np.ndarray:
-    """Outlier pixels out (3x3 median), then a contrast stretch from the histogram (1st-99th percentile)."""
-    filtered = median3x3(img)
-    counts = np.bincount(filtered.reshape(-1), minlength=256).cumsum()
-    median = filtered.astype(np.float32)
-    low, high = np.searchsorted(counts, counts[-1] * 0.01), np.searchsorted(counts, counts[-1] * 0.99)
-    stretched: np.ndarray = np.clip((median - low) * 255.0 / max(high - low, 1.0), 0, 255).astype(np.uint8)
-    return stretched
-
-
-def blur(img: np.ndarray) -> np.ndarray:
-    """5x5 Gaussian (sigma 1), separable."""
-    kernel = np.exp(-0.5 * np.arange(-2, 3) ** 2)
-    kernel /= kernel.sum()
-    x = img.astype(np.float32)
-    padded = np.pad(x, ((2, 2), (0, 0), (0, 0)), mode="edge")
-    x = sum(kernel[k] * padded[k:k + img.shape[0]] for k in range(5))
-    padded = np.pad(x, ((0, 0), (2, 2), (0, 0)), mode="edge")
-    x = sum(kernel[k] * padded[:, k:k + img.shape[1]] for k in range(5))
-    blurred: np.ndarray = np.clip(x, 0, 255).astype(np.uint8)
-    return blurred
+# The image stages are the ones hetros.hw.nodes implements in hardware, so an fpga mapping of the
+# vehicle (project_fpga.yaml) computes what this one does, bit for bit: the compensation (a 3x3 median
+# of each channel, then a contrast stretch from the previous frame's 1st-99th percentile) and a 3x3
+# Gaussian blur, both integer, borders 0.
+compensate = Compensation  # a class: one instance per stream of frames (it keeps the percentiles)
+blur = gaussian_blur
 
 
 _BY, _BX = np.mgrid[0:BEV_H, 0:BEV_W].astype(np.float64)

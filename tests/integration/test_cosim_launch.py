@@ -46,6 +46,32 @@ def test_filters_on_fpga_targets_give_the_software_mappings_pixels(tmp_path: Pat
     assert len(results[mappings[0]].splitlines()) == 8
 
 
+def test_the_vehicle_with_compensation_and_blur_in_hardware_sees_what_software_sees(tmp_path: Path) -> None:
+    """examples/lane_following: the fpga mapping's lane centres, frame by frame, and stop frames are the
+    software mapping's (the image stages are bit-exact, so everything after them is too)."""
+    import json
+
+    import yaml
+
+    example = EXAMPLES / "lane_following"
+    summaries = {}
+    for project in ("project.yaml", "project_fpga.yaml"):
+        data = yaml.safe_load((example / project).read_text())
+        data["messages"] = [str((example / m).resolve()) for m in data["messages"]]
+        data["nodes"]["camera"]["parameters"]["frames"] = 40
+        data["nodes"]["monitor"]["parameters"].update({"frames": 40, "out": str(tmp_path / project)})
+        variant = tmp_path / f"variant_{project}"
+        variant.write_text(yaml.safe_dump(data))
+        result = subprocess.run([sys.executable, "-m", "hetros", "launch", str(variant), "--duration", "200"],
+                                capture_output=True, text=True, timeout=240, check=False, cwd=tmp_path,
+                                env=dict(os.environ, PYTHONPATH=str(example)))
+        assert result.returncode == 0, result.stderr
+        summaries[project] = json.loads((tmp_path / project / "summary.json").read_text())
+    software, hardware = summaries["project.yaml"], summaries["project_fpga.yaml"]
+    assert len(software["centres"]) == 40 and software["centres"] == hardware["centres"]
+    assert software["stopped"] == hardware["stopped"] == list(range(20, 35))
+
+
 def test_the_fpga_mapping_reports_simulated_time_beside_wall_time(tmp_path: Path) -> None:
     result = launch(EXAMPLES / "sobel_hw" / "project_fpga.yaml", tmp_path)
     assert result.returncode == 0, result.stderr

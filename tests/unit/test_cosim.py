@@ -305,3 +305,35 @@ def test_the_execution_models_of_a_chain_time_dataflow_against_sequential() -> N
     assert 64 * 48 <= dataflow.cycles < 64 * 48 * 1.2
     assert sequential.cycles == sum(cycles for _, cycles in sequential.stages) > 1.8 * dataflow.cycles
     assert (dataflow.cpu_copies, sequential.cpu_copies) == (2, 4)
+
+
+@pytest.mark.parametrize(("component", "twin"), [
+    ("hetros.hw.nodes:GaussianBlur", gaussian_blur),
+    ("hetros.hw.nodes:Compensation", None),
+])
+def test_rgb_filters_and_the_stateful_compensation_match_their_twins_frame_after_frame(
+        tmp_path: Path, component: str, twin: Any) -> None:
+    """rgb8 (a window per channel) over a stream of frames: the compensation stretches each frame with the
+    percentiles of the one before, so its hardware must carry them from frame to frame as the twin does."""
+    from hetros.hw.reference import Compensation
+
+    planned = _filter_project(tmp_path, component, 64, parameter="width: 24, channels: 3")
+    apply = twin or Compensation()
+    cls = registry().get(IMAGE)
+    rng = np.random.default_rng(5)
+    images, messages = [], []
+    for index, (height, width) in enumerate([(12, 24), (9, 17), (12, 24), (3, 3), (10, 20), (12, 24)]):
+        image = rng.integers(0, 256, (height, width, 3), dtype=np.uint8)
+        image[rng.random((height, width)) < 0.05] = 255  # outliers for the median
+        image = (image // (1 + index % 3)).astype(np.uint8)  # a different spread each frame
+        images.append(image)
+        message = cls(height=height, width=width, encoding="rgb8", step=width * 3, data=image.reshape(-1))
+        message.header.frame_id = "c" * index
+        messages.append(message)
+    simulation = TargetSimulation(planned, "fpga", registry())
+    try:
+        outputs = _through(simulation, messages)
+    finally:
+        simulation.close()
+    for image, output in zip(images, outputs, strict=True):
+        np.testing.assert_array_equal(np.asarray(output.data).reshape(image.shape), apply(image))

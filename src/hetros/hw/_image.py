@@ -30,22 +30,37 @@ _STAMP, _FRAME_LEN, _FRAME, _PAD1, _HEIGHT, _WIDTH, _ENC_LEN, _ENC, _BIGEND, _PA
 
 
 class ImageFilter3x3(wiring.Component):
-    """A mono8 image filter over a 3x3 window (subclasses give :meth:`kernel`).
+    """An image filter over a 3x3 window of each channel (subclasses give :meth:`kernel`).
 
-    ``width`` is the widest image line the line buffers hold (an elaboration parameter, from
-    the node's parameters); narrower images work unchanged, wider ones are not supported.
+    ``width`` is the widest image line the line buffers hold and ``channels`` the bytes of a pixel
+    (1 for mono8, 3 for rgb8), both elaboration parameters from the node's parameters; narrower
+    images work unchanged, wider ones are not supported. A line is the image's ``step`` bytes.
     """
 
-    def __init__(self, source: str, sink: str, data_width: int = 64, width: int = 640) -> None:
+    def __init__(self, source: str, sink: str, data_width: int = 64, width: int = 640, channels: int = 1) -> None:
         if width < 3:
             raise HardwareError(f"width must be at least 3 pixels, not {width!r}")
+        if channels < 1:
+            raise HardwareError(f"channels must be at least 1, not {channels!r}")
         self._source, self._sink = port_part(source), port_part(sink)
-        self.data_width, self.width = data_width, width
+        self.data_width, self.width, self.channels = data_width, width, channels
         super().__init__({self._source: In(axi_stream(data_width)), self._sink: Out(axi_stream(data_width))})
 
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         """The output pixel of a window (rows top to bottom, each column left to right), 8 bits."""
         raise NotImplementedError
+
+    def post(self, m: Module, value: Value) -> Value:
+        """What an output byte becomes after the window (its border zeros included): itself here."""
+        return value
+
+    def observe(self, m: Module, value: Value, taken: Value) -> None:
+        """See each output byte before :meth:`post` (``taken`` high when it leaves); nothing here."""
+
+    def between_frames(self, m: Module, ended: Value) -> Value:
+        """Work between two messages: ``ended`` strobes when one has left; while the returned value is
+        high, the next message waits. Nothing here."""
+        return Const(0, 1)
 
     def elaborate(self, platform: object) -> Module:
         m = Module()
@@ -73,37 +88,55 @@ class ImageFilter3x3(wiring.Component):
         word_done = word_byte == 3
         aligned_next = (position + 1)[:2] == 0
 
-        # line buffers: rows r-2 and r-1 at the current column
-        buffers = [Memory(shape=unsigned(8), depth=self.width, init=[]) for _ in range(2)]
+        # line buffers: rows r-2 and r-1 at the current column (a column is a byte of a pixel)
+        depth = self.width * self.channels
+        buffers = [Memory(shape=unsigned(8), depth=depth, init=[]) for _ in range(2)]
         m.submodules.line_older, m.submodules.line_newer = buffers
         reads = [b.read_port(domain="comb") for b in buffers]
         writes = [b.write_port() for b in buffers]
         pixel = (state == _DATA) & byte_valid & ~flushing
-        address = column[:max(1, (self.width - 1).bit_length())]
+        address = column[:max(1, (depth - 1).bit_length())]
         m.d.comb += [reads[0].addr.eq(address), reads[1].addr.eq(address), writes[0].addr.eq(address),
                      writes[1].addr.eq(address), writes[0].data.eq(reads[1].data), writes[1].data.eq(byte),
                      writes[0].en.eq(pixel & take), writes[1].en.eq(pixel & take)]
-        left = [[Signal(8, name=f"w{r}{c}") for c in range(2)] for r in range(3)]  # columns c-2, c-1
-        window = [left[0] + [reads[0].data], left[1] + [reads[1].data], left[2] + [byte]]
+        # the bytes of the last two pixels of each row, oldest first: columns c-2 and c-1 of this channel
+        channels = self.channels
+        left = [[Signal(8, name=f"w{r}_{c}") for c in range(2 * channels)] for r in range(3)]
+        newest = [reads[0].data, reads[1].data, byte]
+        window = [[left[r][0], left[r][channels], newest[r]] for r in range(3)]
         filtered = Signal(8)
         m.d.comb += filtered.eq(self.kernel(*window))
-        interior = (row >= 2) & (column >= 2)
-        lagging = received >= line + 1  # this pixel completes the window of output ``received - line - 1``
+        interior = (row >= 2) & (column >= 2 * channels)
+        # this byte completes the window of output ``received - line - channels``
+        lagging = received >= line + channels
+        before_post = Signal(8)
+        leaving = Signal()  # an image byte leaves this cycle (for ``observe``)
+        ended = Signal()  # the message's last byte leaves this cycle
+        waiting = Signal()
+        self.observe(m, before_post, leaving)
+        m.d.comb += waiting.eq(self.between_frames(m, ended))
+        posted = Signal(8)
+        m.d.comb += posted.eq(self.post(m, before_post))
 
         with m.If(flushing):
-            m.d.comb += [out_valid.eq(1), out_byte.eq(0), out_last.eq(received - emitted == 1)]
+            m.d.comb += [out_valid.eq(1), before_post.eq(0), out_byte.eq(posted),
+                         out_last.eq(received - emitted == 1), leaving.eq(out_ready),
+                         ended.eq(out_ready & (received - emitted == 1))]
             with m.If(out_ready):
                 m.d.sync += emitted.eq(emitted + 1)
                 with m.If(received - emitted == 1):
                     m.d.sync += [flushing.eq(0), state.eq(_STAMP), position.eq(0), word_byte.eq(0)]
-        with m.Elif(byte_valid):
+        with m.Elif(byte_valid & ~(waiting & (state == _STAMP) & (position == 0))):
             emits = Signal()
             with m.If(state == _DATA):
-                m.d.comb += [emits.eq(lagging), out_byte.eq(Mux(interior, filtered, 0)),
-                             out_last.eq(byte_last & (received + 1 - emitted == 1))]
+                m.d.comb += [emits.eq(lagging), before_post.eq(Mux(interior, filtered, 0)),
+                             out_byte.eq(posted),
+                             out_last.eq(byte_last & (received + 1 - emitted == 1)), leaving.eq(lagging & out_ready)]
             with m.Else():
                 m.d.comb += [emits.eq(1), out_byte.eq(byte), out_last.eq(byte_last)]
             m.d.comb += [out_valid.eq(emits), take.eq(~emits | out_ready)]
+            with m.If(byte_last & take):
+                m.d.comb += ended.eq(~((state == _DATA) & (received + 1 - emitted - lagging != 0)))
         with m.If(take):
             m.d.sync += [position.eq(position + 1), word.eq(new_word), word_byte.eq(word_byte + 1)]
             with m.Switch(state):
@@ -126,7 +159,7 @@ class ImageFilter3x3(wiring.Component):
                         m.d.sync += state.eq(_WIDTH)
                 with m.Case(_WIDTH):
                     with m.If(word_done):
-                        m.d.sync += [line.eq(new_word), state.eq(_ENC_LEN)]
+                        m.d.sync += state.eq(_ENC_LEN)
                 with m.Case(_ENC_LEN):
                     with m.If(word_done):
                         m.d.sync += [remaining.eq(new_word), state.eq(_ENC)]
@@ -137,7 +170,7 @@ class ImageFilter3x3(wiring.Component):
                         m.d.sync += [state.eq(_STEP), word_byte.eq(0)]
                 with m.Case(_STEP):
                     with m.If(word_done):
-                        m.d.sync += state.eq(_DATA_LEN)
+                        m.d.sync += [line.eq(new_word), state.eq(_DATA_LEN)]
                 with m.Case(_DATA_LEN):
                     with m.If(word_done):
                         m.d.sync += [remaining.eq(new_word), state.eq(_DATA), column.eq(0), row.eq(0),
@@ -145,7 +178,8 @@ class ImageFilter3x3(wiring.Component):
                 with m.Case(_DATA):
                     m.d.sync += [received.eq(received + 1), remaining.eq(remaining - 1)]
                     for r in range(3):
-                        m.d.sync += [left[r][0].eq(left[r][1]), left[r][1].eq(window[r][2])]
+                        m.d.sync += [left[r][k].eq(left[r][k + 1]) for k in range(2 * channels - 1)]
+                        m.d.sync += left[r][-1].eq(newest[r])
                     with m.If(column == line - 1):
                         m.d.sync += [column.eq(0), row.eq(row + 1)]
                     with m.Else():
@@ -190,3 +224,72 @@ class GaussianBlur(ImageFilter3x3):
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         total = _row_sum(top) + (_row_sum(middle) << 1) + _row_sum(bottom) + 8
         return (total >> 4)[:8]
+
+
+# Paeth's 19 compare-exchanges that leave the median of nine in position 4
+_MEDIAN9 = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8), (0, 3), (5, 8), (4, 7),
+            (3, 6), (1, 4), (2, 5), (4, 7), (4, 2), (6, 4), (4, 2))
+
+
+class Compensation(ImageFilter3x3):
+    """The lane-following vehicle's image compensation: outliers out with a 3x3 median of each channel,
+    then a contrast stretch between the 1st and 99th percentile of the previous frame's median image
+    (its histogram is counted as the frame streams by and read between frames, so no frame buffer is
+    needed; the first frame is not stretched). ``hetros.hw.reference.Compensation`` in software."""
+
+    def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        values = [*top, *middle, *bottom]
+        for a, b in _MEDIAN9:
+            values[a], values[b] = Mux(values[a] < values[b], values[a], values[b]), \
+                Mux(values[a] < values[b], values[b], values[a])
+        return values[4]
+
+    def elaborate(self, platform: object) -> Module:
+        self._low = Signal(8, init=0)
+        self._high = Signal(8, init=255)
+        self._histogram = Memory(shape=unsigned(32), depth=256, init=[])
+        self._count = Signal(32)
+        return super().elaborate(platform)
+
+    def post(self, m: Module, value: Value) -> Value:
+        span = Mux(self._high > self._low, self._high - self._low, 1)
+        above = Mux(value > self._low, value - self._low, 0)
+        stretched = (above * 255) // span
+        return Mux(stretched > 255, 255, stretched)[:8]
+
+    def observe(self, m: Module, value: Value, taken: Value) -> None:
+        m.submodules.histogram = self._histogram
+        self._read = self._histogram.read_port(domain="comb")
+        self._write = self._histogram.write_port()
+        self._scanning = Signal()
+        with m.If(~self._scanning):
+            m.d.comb += [self._read.addr.eq(value), self._write.addr.eq(value),
+                         self._write.data.eq(self._read.data + 1), self._write.en.eq(taken)]
+        with m.If(taken):
+            m.d.sync += self._count.eq(self._count + 1)
+
+    def between_frames(self, m: Module, ended: Value) -> Value:
+        """Walk the histogram once: the percentiles for the next frame, each bin cleared behind."""
+        level = Signal(9)
+        running = Signal(32)
+        found_low, found_high = Signal(), Signal()
+        low, high = Signal(8), Signal(8)
+        scanning = self._scanning
+        with m.If(ended):
+            m.d.sync += [scanning.eq(1), level.eq(0), running.eq(0), found_low.eq(0), found_high.eq(0)]
+        with m.If(scanning):
+            total = running + self._read.data
+            reaches_low = (total * 100) >= self._count
+            reaches_high = (total * 100) >= self._count * 99
+            m.d.comb += [self._read.addr.eq(level), self._write.addr.eq(level), self._write.data.eq(0),
+                         self._write.en.eq(1)]
+            m.d.sync += [running.eq(total), level.eq(level + 1)]
+            with m.If(~found_low & reaches_low):
+                m.d.sync += [low.eq(level), found_low.eq(1)]
+            with m.If(~found_high & reaches_high):
+                m.d.sync += [high.eq(level), found_high.eq(1)]
+            with m.If(level == 255):
+                m.d.sync += [scanning.eq(0), self._count.eq(0),
+                             self._low.eq(Mux(found_low | reaches_low, Mux(found_low, low, level), 0)),
+                             self._high.eq(Mux(found_high | reaches_high, Mux(found_high, high, level), 255))]
+        return scanning

@@ -26,13 +26,13 @@ from amaranth.lib.wiring import In, Out
 
 from .._errors import HardwareError
 from ._build import port_part, service_ports
-from ._image import GaussianBlur, ImageFilter3x3, Sobel
+from ._image import Compensation, GaussianBlur, ImageFilter3x3, Sobel
 from ._sort import Sorter
 from ._stream import axi_stream
 from ._verilog_node import VerilogNode, is_verilog, make_verilog_node
 
-__all__ = ["AddTwoInts", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest", "Sobel", "Sorter",
-           "VerilogNode", "axi_stream", "make_hardware_node", "port_problems"]
+__all__ = ["AddTwoInts", "Compensation", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest",
+           "Sobel", "Sorter", "VerilogNode", "axi_stream", "make_hardware_node", "port_problems"]
 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:

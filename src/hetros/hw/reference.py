@@ -40,3 +40,38 @@ def gaussian_blur(image: np.ndarray[Any, Any]) -> Image:
         total = t0 + 2 * t1 + t2 + 2 * (m0 + 2 * m1 + m2) + b0 + 2 * b1 + b2
         out[1:-1, 1:-1] = (total + 8) >> 4
     return out
+
+
+_MEDIAN9 = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8), (0, 3), (5, 8), (4, 7),
+            (3, 6), (1, 4), (2, 5), (4, 7), (4, 2), (6, 4), (4, 2))
+
+
+def median3x3(image: np.ndarray[Any, Any]) -> Image:
+    """The median of each pixel's 3x3 window, channel by channel (Paeth's network), borders 0."""
+    out = np.zeros(image.shape, np.uint8)
+    if image.shape[0] >= 3 and image.shape[1] >= 3:
+        values = list(_windows(image))
+        for a, b in _MEDIAN9:
+            values[a], values[b] = np.minimum(values[a], values[b]), np.maximum(values[a], values[b])
+        out[1:-1, 1:-1] = values[4]
+    return out
+
+
+class Compensation:
+    """The lane-following vehicle's image compensation, as ``hetros.hw.nodes.Compensation`` computes it: a
+    3x3 median of each channel (borders 0), then a contrast stretch between the 1st and 99th percentile of
+    the previous frame's median image (the first frame is not stretched). One instance per stream of
+    frames: it keeps the percentiles from one frame to the next."""
+
+    def __init__(self) -> None:
+        self.low, self.high = 0, 255
+
+    def __call__(self, image: np.ndarray[Any, Any]) -> Image:
+        median = median3x3(image)
+        above = np.maximum(median.astype(np.int32) - self.low, 0)
+        stretched: Image = np.minimum(above * 255 // max(self.high - self.low, 1), 255).astype(np.uint8)
+        counts = np.bincount(median.reshape(-1), minlength=256).cumsum()
+        total = int(counts[-1])
+        self.low = int(np.argmax(100 * counts >= total))
+        self.high = int(np.argmax(100 * counts >= 99 * total))
+        return stretched

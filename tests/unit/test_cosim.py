@@ -27,13 +27,13 @@ IMAGE = "sensor_msgs/msg/Image"
 
 
 def _filter_project(tmp_path: Path, component: str, data_width: int, width: int = 0, typename: str = IMAGE,
-                    parameter: str = "") -> Plan:
+                    parameter: str = "", sim: str = "verilator") -> Plan:
     parameter = parameter or f"width: {width}"
     (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""\
         name: filter
         targets:
           io: {{kind: process}}
-          fpga: {{kind: fpga, data_width: {data_width}}}
+          fpga: {{kind: fpga, data_width: {data_width}, sim: {sim}}}
         nodes:
           camera: {{run: json:dumps, target: io, publish: {{/raw: {typename}}}}}
           filter: {{run: json:dumps, hw: "{component}", target: fpga,
@@ -163,6 +163,32 @@ def test_a_hardware_node_that_breaks_the_stream_rules_is_named_with_its_port_and
         with pytest.raises(HardwareError, match=r"hardware node filter port 'out' \(/out\): TVALID dropped, or "
                                                 r"TDATA/TKEEP/TLAST changed, before TREADY at cycle \d+"):
             for _ in range(100):
+                top.run(10_000, 1_000)
+    finally:
+        simulation.close()
+
+
+NO_LAST = FLAKY.replace("class Flaky", "class NoLast").replace(
+    "self.out.tlast.eq(self.raw.tlast)", "self.out.tlast.eq(0)").replace(
+    "self.out.tvalid.eq(self.raw.tvalid & ~shown)", "self.out.tvalid.eq(self.raw.tvalid)").replace(
+    "self.raw.tready.eq(self.out.tready | shown)", "self.raw.tready.eq(self.out.tready)")
+
+
+def test_a_hardware_node_that_never_sends_tlast_leaves_its_bytes_counted_not_published(tmp_path: Path) -> None:
+    """The gateway cuts messages at TLAST only: bytes without it are held and reported at the end."""
+    (tmp_path / "nolast.py").write_text(NO_LAST)
+    planned = _filter_project(tmp_path, "nolast:NoLast", 64, width=40)
+    simulation = TargetSimulation(planned, "fpga", registry())
+    top = simulation.top
+    try:
+        top.push(0, bytes(range(96)))  # whole beats: held, counted
+        for _ in range(10):
+            top.run(10_000, 1_000)
+        assert top.pop(0) is None and top.partial(0) == 96
+        top.push(0, bytes(range(100)))  # ends in a partial beat, which only a last beat may be
+        with pytest.raises(HardwareError, match=r"filter -> software on /out .*: a partial beat without TLAST at "
+                                                r"cycle \d+"):
+            for _ in range(10):
                 top.run(10_000, 1_000)
     finally:
         simulation.close()
@@ -337,3 +363,24 @@ def test_rgb_filters_and_the_stateful_compensation_match_their_twins_frame_after
         simulation.close()
     for image, output in zip(images, outputs, strict=True):
         np.testing.assert_array_equal(np.asarray(output.data).reshape(image.shape), apply(image))
+
+
+def test_sim_amaranth_gives_verilators_bytes_and_cycles_behind_the_same_surface(tmp_path: Path) -> None:
+    """The two simulators a target may name, on one design: the same output bytes, the same cycles per
+    message at each gateway port, the same AXI4-Stream verdicts."""
+    cls = registry().get(IMAGE)
+    image = np.random.default_rng(11).integers(0, 256, (5, 7), dtype=np.uint8)
+    message = cls(height=5, width=7, encoding="mono8", step=7, data=image.reshape(-1))
+    seen = {}
+    for sim in ("verilator", "amaranth"):
+        folder = tmp_path / sim
+        folder.mkdir()
+        simulation = TargetSimulation(_filter_project(folder, "hetros.hw.nodes:Sobel", 32, width=8, sim=sim),
+                                      "fpga", registry())
+        try:
+            (output,) = _through(simulation, [message])
+            seen[sim] = (bytes(np.asarray(output.data)), simulation.top.stats(False, 0), simulation.top.stats(True, 0))
+        finally:
+            simulation.close()
+    assert seen["verilator"] == seen["amaranth"]
+    np.testing.assert_array_equal(np.frombuffer(seen["amaranth"][0], np.uint8).reshape(5, 7), sobel(image))

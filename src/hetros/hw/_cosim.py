@@ -19,6 +19,7 @@ from typing import Any
 from .._errors import HardwareError
 from ..msg import TypeRegistry
 from ..plan import Plan, gateway_node
+from ._amaranth_top import AmaranthTop
 from ._build import FpgaTop, HardwareTopic, hardware_nodes, hardware_topics, top_name
 from ._verilator import StreamPort, VerilatedTop, compile_simulator
 from ._verilog_node import verilog_sources
@@ -35,6 +36,9 @@ class GatewayPort:
     service: str = ""  # the service whose requests go in, or whose responses come out, here
 
 
+SimulatedTop = VerilatedTop | AmaranthTop
+
+
 class TargetSimulation:
     """An fpga target's top module compiled and instantiated: the gateway's view of the hardware."""
 
@@ -42,14 +46,12 @@ class TargetSimulation:
         from amaranth.back import verilog
 
         spec = plan.targets[target]
-        self.target, self.clock_mhz = target, spec.clock_mhz
+        self.target, self.clock_mhz, self.simulator = target, spec.clock_mhz, spec.sim
         gateway = gateway_node(target)
         topics = hardware_topics(plan, target, only)
         components = hardware_nodes(plan, target, only)
         top = FpgaTop(topics, spec.data_width, components, monitor=True)
         name = top_name(target)
-        text = verilog.convert(top, name=name, ports=top.signals())
-        clocked = re.search(r"\binput\s+clk\b", text) is not None
         ports = []
         self.inputs: list[GatewayPort] = []
         self.outputs: list[GatewayPort] = []
@@ -68,10 +70,19 @@ class TargetSimulation:
             into.append(GatewayPort(topic.name, topic.type, len(into), port, topic.service))
         started = time.perf_counter()
         sources = verilog_sources(components)
-        library = compile_simulator(text, name, ports, spec.data_width, clocked,
-                                    design_key(plan, target, topics, sources), top.monitored, sources)
+        self.top: SimulatedTop
+        if spec.sim == "amaranth":
+            if sources:
+                raise HardwareError(f"fpga target {target}: sim: amaranth cannot run Verilog nodes "
+                                    f"({', '.join(s.name for s in sources)}); use sim: verilator")
+            self.top = AmaranthTop(top, ports, spec.data_width, top.monitored)
+        else:
+            text = verilog.convert(top, name=name, ports=top.signals())
+            clocked = re.search(r"\binput\s+clk\b", text) is not None
+            library = compile_simulator(text, name, ports, spec.data_width, clocked,
+                                        design_key(plan, target, topics, sources), top.monitored, sources)
+            self.top = VerilatedTop(library, ports)
         self.compile_seconds = time.perf_counter() - started
-        self.top = VerilatedTop(library, ports)
 
     def close(self) -> None:
         self.top.close()

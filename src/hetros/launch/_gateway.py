@@ -26,8 +26,8 @@ from typing import Any
 
 from .._errors import HardwareError
 from .._log import get_logger
-from ..hw._cosim import GatewayPort, TargetSimulation
-from ..hw._verilator import IDLE, VerilatedTop
+from ..hw._cosim import GatewayPort, SimulatedTop, TargetSimulation
+from ..hw._verilator import IDLE
 from ..msg import TypeRegistry
 from ..plan import Plan
 from ..runtime import Node, Replies
@@ -71,7 +71,7 @@ class _Input:
         else:
             self.take = node.create_subscription(types.get(port.type), port.topic).try_take
 
-    def feed(self, top: VerilatedTop) -> None:
+    def feed(self, top: SimulatedTop) -> None:
         """Take one message and encode it straight into the simulator's input queue (its one copy)."""
         item = self.take()
         if item is None:
@@ -116,15 +116,17 @@ def gateway(node: Node) -> None:
     types = node.graph.types
     simulation = _PREPARED.pop(node.name, None) or TargetSimulation(plan, target, types)
     top = simulation.top
-    log.info("fpga target %s in verilator (%d gateway ports; compiled or found in the cache in %.1f s)", target,
+    log.info("fpga target %s in %s (%d gateway ports; built in %.1f s)", target, simulation.simulator,
              len(top.inputs) + len(top.outputs), simulation.compile_seconds)
+    # Amaranth's simulator runs thousands of cycles a second, not millions: it idles after fewer
+    idle_cycles = _IDLE_CYCLES if simulation.simulator == "verilator" else _QUIET_AFTER_TRAFFIC
     inputs = [_Input(node, port, types) for port in simulation.inputs]
     asked = {i.port.service: i.asked for i in inputs if i.port.service}
     outputs = [_Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
     stop = node.graph.stop
     wall = 0.0
     pushed = popped = last_moved = 0
-    quiet = _IDLE_CYCLES
+    quiet = idle_cycles
     try:
         while not stop.is_set():
             seen = node.executor.generation
@@ -152,7 +154,7 @@ def gateway(node: Node) -> None:
             waiting = any(top.queued(i.port.index) for i in inputs)
             if events & IDLE and not waiting:
                 node.executor.wait(seen, 0.1)
-                quiet = _QUIET_AFTER_TRAFFIC if node.executor.generation != seen else _IDLE_CYCLES
+                quiet = _QUIET_AFTER_TRAFFIC if node.executor.generation != seen else idle_cycles
     finally:
         _report(simulation, wall)
         for port in simulation.outputs:

@@ -388,7 +388,10 @@ def _check_hardware(plan: Plan) -> None:
         raise LaunchError(f"node(s) {', '.join(bare)} sit on fpga targets without a hardware implementation, so "
                           "nothing can run them: give each a hw: (module:Component, see hetros.hw.nodes) or move "
                           "it to a process target (`hetros hw build` generates topic networks without one)")
-    if any(plan.in_hardware(n) for n in plan.nodes if not plan.hosts or plan.host_of(n) == plan.local_host) \
-            and shutil.which("verilator") is None:
-        raise LaunchError("the project's fpga targets run in Verilator, which this machine lacks: install Debian's "
-                          "verilator package (`make install-test` does, as root)")
+    verilated = sorted({plan.nodes[n].target for n in plan.nodes if plan.in_hardware(n)
+                        and (not plan.hosts or plan.host_of(n) == plan.local_host)
+                        and plan.targets[plan.nodes[n].target].sim == "verilator"})
+    if verilated and shutil.which("verilator") is None:
+        raise LaunchError(f"fpga target(s) {', '.join(verilated)} run in Verilator, which this machine lacks: install "
+                          "Debian's verilator package (`make install-test` does, as root), or set sim: amaranth on a "
+                          "small design")

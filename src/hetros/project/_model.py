@@ -50,9 +50,10 @@ class TargetSpec(_Strict):
                                     "network (absent: 100 MHz)")
     data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8, description="fpga: the stream width in bits")
     part: str | None = Field(default=None, description="fpga: the device, for reports")
-    sim: Literal["verilator"] | None = Field(
+    sim: Literal["verilator", "amaranth"] | None = Field(
         default=None, description="fpga: the simulator `hetros launch` runs the target's hardware in (absent: "
-        "verilator, Debian's, compiled once per design; about ten million cycles a second)")
+        "verilator, Debian's, compiled once per design, millions of cycles a second; amaranth: Amaranth's own, "
+        "no compiler, thousands of cycles a second, for small designs)")
     host: str | None = Field(default=None, description="the machine it runs on, a name under hosts: (absent: the "
                              "first host, or this machine without hosts:)")
 

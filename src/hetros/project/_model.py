@@ -5,10 +5,10 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._errors import MessageError, ProjectError
 from .._qos import QoS
@@ -40,6 +40,17 @@ class HostSpec(_Strict):
         return value
 
 
+_SIMULATORS = ("verilator", "amaranth")
+
+
+def _simulator(value: str | None) -> str | None:
+    if value is not None and value not in _SIMULATORS:
+        hint = (" (Icarus replays the exported Verilog in `hetros hw report`; a launch needs a simulator the gateway "
+                "drives a cycle at a time)" if value == "icarus" else "")
+        raise ValueError(f"sim must be one of {', '.join(map(repr, _SIMULATORS))}, not {value!r}{hint}")
+    return value
+
+
 class TargetSpec(_Strict):
     kind: Literal["thread", "process", "ros1", "fpga"] = Field(
         description="thread: in the launcher's process; process: a process of its own; ros1: a process whose "
@@ -50,7 +61,7 @@ class TargetSpec(_Strict):
                                     "network (absent: 100 MHz)")
     data_width: int = Field(default=64, ge=8, le=1024, multiple_of=8, description="fpga: the stream width in bits")
     part: str | None = Field(default=None, description="fpga: the device, for reports")
-    sim: Literal["verilator", "amaranth"] | None = Field(
+    sim: Annotated[str | None, AfterValidator(_simulator)] = Field(
         default=None, description="fpga: the simulator `hetros launch` runs the target's hardware in (absent: "
         "verilator, Debian's, compiled once per design, millions of cycles a second; amaranth: Amaranth's own, "
         "no compiler, thousands of cycles a second, for small designs)")
@@ -445,11 +456,16 @@ def load_project(path: str | Path) -> LoadedProject:
         # the branch that was meant (the mapping's, when the value is one)
         branches = {tuple(map(str, e["loc"][:-2])) for e in errors if len(e["loc"]) > 1 and e["loc"][-2] in _SPECS}
         for error in errors:
-            loc = [str(p) for p in error["loc"] if p not in _UNION_TAGS]
+            unknown = error["type"] in ("extra_forbidden", "unexpected_keyword_argument")
+            raw = list(error["loc"])
+            # a union's branch names are pydantic's, not the file's; but an unknown key is the user's own,
+            # even when it happens to spell one ("EndpointSpec: ...")
+            tail = raw[-1:] if unknown else []
+            loc = [str(p) for p in raw[:len(raw) - len(tail)] if p not in _UNION_TAGS] + [str(p) for p in tail]
             if error["loc"] and error["loc"][-1] == "str" and tuple(map(str, error["loc"][:-1])) in branches:
                 continue
             message = error["msg"].removeprefix("Value error, ")
-            if error["type"] in ("extra_forbidden", "unexpected_keyword_argument"):
+            if unknown:
                 message = _unknown_key(loc)
             elif error["type"] == "missing":
                 message = f"required key {loc[-1]!r} is missing"

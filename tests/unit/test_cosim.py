@@ -152,6 +152,12 @@ class Flaky(wiring.Component):
 """
 
 
+def _run_until_raised(top: Any, match: str) -> None:
+    with pytest.raises(HardwareError, match=match):
+        for _ in range(100):
+            top.run(10_000, 1_000)
+
+
 def test_a_hardware_node_that_breaks_the_stream_rules_is_named_with_its_port_and_cycle(tmp_path: Path) -> None:
     (tmp_path / "flaky.py").write_text(FLAKY)
     planned = _filter_project(tmp_path, "flaky:Flaky", 64, width=40)
@@ -160,10 +166,8 @@ def test_a_hardware_node_that_breaks_the_stream_rules_is_named_with_its_port_and
     top.set_output_limit(0, 0)  # the software side takes nothing: the node must hold its beat
     top.push(0, bytes(100))
     try:
-        with pytest.raises(HardwareError, match=r"hardware node filter port 'out' \(/out\): TVALID dropped, or "
-                                                r"TDATA/TKEEP/TLAST changed, before TREADY at cycle \d+"):
-            for _ in range(100):
-                top.run(10_000, 1_000)
+        _run_until_raised(top, r"hardware node filter port 'out' \(/out\): TVALID dropped, or TDATA/TKEEP/TLAST "
+                               r"changed, before TREADY at cycle \d+")
     finally:
         simulation.close()
 
@@ -186,10 +190,7 @@ def test_a_hardware_node_that_never_sends_tlast_leaves_its_bytes_counted_not_pub
             top.run(10_000, 1_000)
         assert top.pop(0) is None and top.partial(0) == 96
         top.push(0, bytes(range(100)))  # ends in a partial beat, which only a last beat may be
-        with pytest.raises(HardwareError, match=r"filter -> software on /out .*: a partial beat without TLAST at "
-                                                r"cycle \d+"):
-            for _ in range(10):
-                top.run(10_000, 1_000)
+        _run_until_raised(top, r"filter -> software on /out .*: a partial beat without TLAST at cycle \d+")
     finally:
         simulation.close()
 

@@ -22,9 +22,9 @@ _PERIOD = 1e-8
 
 
 @dataclass
-class _In:
-    queue: deque[bytearray] = field(default_factory=deque)
-    offset: int = 0
+class _Port:
+    """What a port counts (``stats``): messages, beats, and cycles from a message's first beat to its last."""
+
     messages: int = 0
     beats: int = 0
     busy: int = 0
@@ -32,14 +32,16 @@ class _In:
 
 
 @dataclass
-class _Out:
+class _In(_Port):
+    queue: deque[bytearray] = field(default_factory=deque)
+    offset: int = 0
+
+
+@dataclass
+class _Out(_Port):
     current: bytearray = field(default_factory=bytearray)
     done: deque[bytes] = field(default_factory=deque)
     limit: int = 4
-    messages: int = 0
-    beats: int = 0
-    busy: int = 0
-    started: int = 0
     held: tuple[int, int, int] | None = None
 
 
@@ -192,7 +194,7 @@ class AmaranthTop:
         return self._cycle
 
     def stats(self, output: bool, port: int) -> tuple[int, int, int]:
-        state: _In | _Out = self._out[port] if output else self._in[port]
+        state: _Port = self._out[port] if output else self._in[port]
         return state.messages, state.beats, state.busy
 
     def run(self, max_cycles: int, idle: int) -> int:

@@ -92,13 +92,18 @@ class ImageFilter3x3(wiring.Component):
         depth = self.width * self.channels
         buffers = [Memory(shape=unsigned(8), depth=depth, init=[]) for _ in range(2)]
         m.submodules.line_older, m.submodules.line_newer = buffers
-        reads = [b.read_port(domain="comb") for b in buffers]
         writes = [b.write_port() for b in buffers]
+        # synchronous reads (block RAM), one cycle ahead: each cycle reads the column the next image byte
+        # will have, so its two line-buffer bytes are there when it is taken
+        reads = [b.read_port(domain="sync", transparent_for=(w,)) for b, w in zip(buffers, writes, strict=True)]
         pixel = (state == _DATA) & byte_valid & ~flushing
-        address = column[:max(1, (depth - 1).bit_length())]
-        m.d.comb += [reads[0].addr.eq(address), reads[1].addr.eq(address), writes[0].addr.eq(address),
-                     writes[1].addr.eq(address), writes[0].data.eq(reads[1].data), writes[1].data.eq(byte),
-                     writes[0].en.eq(pixel & take), writes[1].en.eq(pixel & take)]
+        bits = max(1, (depth - 1).bit_length())
+        following = Mux(column == line - 1, 0, column + 1)
+        upcoming = Mux(state == _DATA, Mux(pixel & take, following, column), 0)
+        address = column[:bits]
+        m.d.comb += [reads[0].addr.eq(upcoming[:bits]), reads[1].addr.eq(upcoming[:bits]),
+                     writes[0].addr.eq(address), writes[1].addr.eq(address), writes[0].data.eq(reads[1].data),
+                     writes[1].data.eq(byte), writes[0].en.eq(pixel & take), writes[1].en.eq(pixel & take)]
         # the bytes of the last two pixels of each row, oldest first: columns c-2 and c-1 of this channel
         channels = self.channels
         left = [[Signal(8, name=f"w{r}_{c}") for c in range(2 * channels)] for r in range(3)]

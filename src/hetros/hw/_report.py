@@ -159,7 +159,10 @@ def yosys_resources(verilog: str, top: str, family: str = "xcup", sources: list[
                   "tee -q -o stat.txt stat")
         ran = subprocess.run([yosys, "-q", "-p", script], cwd=root, capture_output=True, text=True, check=False)
         if ran.returncode or not (root / "stat.txt").exists():
-            raise HardwareError(f"Yosys could not synthesize {top}: {ran.stderr[-2000:]}")
+            hint = ("; Yosys' LUTRAM mapping refuses this memory shape (a wide memory read asynchronously, as the "
+                    "image filters' line buffers of rgb8 lines are): an estimate needs a synchronous read"
+                    if "lutram" in ran.stderr.lower() else "")
+            raise HardwareError(f"Yosys could not synthesize {top}: {ran.stderr[-2000:].strip()}{hint}")
         cells: dict[str, int] = {}
         for line in (root / "stat.txt").read_text().splitlines():
             fields = line.split()

@@ -140,6 +140,17 @@ def cmd_hw_synth(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_ps(args: argparse.Namespace) -> int:
+    import json
+    from dataclasses import asdict
+
+    from ..launch._registry import format_launches, running
+
+    records = running()
+    print(json.dumps([asdict(r) for r in records], indent=1) if args.json else format_launches(records))
+    return 0
+
+
 def cmd_launch(args: argparse.Namespace) -> int:
     from ..launch import launch
     from ..project import plan_file
@@ -409,6 +420,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sizes", help=_SIZES_HELP)
     p.add_argument("--out", help="output folder (default out/bench)")
     p.set_defaults(func=cmd_bench)
+    p = sub.add_parser("ps", help="the launches running on this machine as you: session, pid, project, hosts, start")
+    p.add_argument("--json", action="store_true", help="as JSON, for machines")
+    p.set_defaults(func=cmd_ps)
     hw = sub.add_parser("hw", help="fpga targets: topic networks as RTL").add_subparsers(dest="hw", required=True)
     p = hw.add_parser("build", help="write an fpga target's topic network as Verilog, with a JSON manifest")
     p.add_argument("project")

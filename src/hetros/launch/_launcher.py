@@ -31,6 +31,7 @@ from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
 from ..transport import cleanup_stale, new_session, remove_session_segments
 from ._hosts import HostLink, local_host
+from ._registry import register, unregister
 
 log = get_logger("hetros.launch")
 
@@ -116,6 +117,7 @@ class Launcher:
                 signal.signal(sig, lambda *_: self.events.put({"event": "signal"}))
         result = LaunchResult(130, [], "interrupted during start-up")
         try:
+            register(self.session, self.plan)
             result = self._supervise()
         except KeyboardInterrupt:
             pass
@@ -126,6 +128,7 @@ class Launcher:
                              "threads and processes; raise them or spread the nodes over fewer processes\n")
             result = LaunchResult(1, [], f"out of resources ({cause})")
         finally:
+            unregister(self.session)
             if self.link is not None:
                 self.link.announce("leaving", ok=result.exit_code == 0, why=result.reason)
             failed_before = len(self.failures)

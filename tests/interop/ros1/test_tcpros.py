@@ -189,6 +189,8 @@ def test_a_master_that_is_down_at_start_is_retried(caplog: pytest.LogCaptureFixt
         timer.start()
         peer.advertise("/t", Ros1Type(TYPES, "std_msgs/msg/String"))
     assert f"ROS master at {uri} unreachable" in caplog.text and "retrying" in caplog.text
+    # the master answers as soon as it listens, which may be before its constructor returned to the timer
+    timer.join(10)
     assert started and started[0].state.getSystemState("/x")[2][0] == [["/t", ["/early"]]]
     peer.close()
     started[0].close()

@@ -32,7 +32,7 @@ from hetros.transport import (
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "hetros"
 TRANSPORT_PACKAGES = sorted(p.name for p in (SRC / "transport").iterdir() if (p / "__init__.py").exists())
-# what each package may import of hetros (besides itself and the modules below all: errors, log, net, QoS)
+# what each package may import of hetros (besides itself and the modules below all: errors, log, net, process, QoS)
 ALLOWED = {
     "msg": set(),
     "plan": set(),
@@ -41,7 +41,7 @@ ALLOWED = {
     "hw": {"msg", "plan"},
     "project": {"msg", "plan", "transport", "hw"},
 }
-BASE = {"_errors", "_log", "_net", "_qos"}
+BASE = {"_errors", "_log", "_net", "_process", "_qos"}
 
 
 def _imports(path: Path) -> list[tuple[str, int, str]]:

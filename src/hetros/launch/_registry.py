@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from .._errors import LaunchError
+from .._process import pid_alive
 from ..plan import Plan
 
 
@@ -63,16 +64,6 @@ def unregister(session: str) -> None:
     (registry_folder() / f"{session}.json").unlink(missing_ok=True)
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def running() -> list[LaunchRecord]:
     """This user's running launches, oldest first; records of launchers that are gone are removed."""
     found = []
@@ -83,7 +74,7 @@ def running() -> list[LaunchRecord]:
         except (OSError, ValueError, TypeError, KeyError):
             path.unlink(missing_ok=True)  # unreadable: half written by a launcher that died, or not ours
             continue
-        if _alive(record.pid):
+        if pid_alive(record.pid):
             found.append(record)
         else:
             path.unlink(missing_ok=True)

@@ -13,17 +13,6 @@ from ._sample import (
     MAX_SUBSCRIBER_SLOTS,
 )
 
-
-def pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 _SLOT_WORDS = 4
 _WORD = struct.Struct("<Q")
 _SLOT_TABLE = struct.Struct(f"<{_SLOT_WORDS * MAX_SUBSCRIBER_SLOTS}Q")

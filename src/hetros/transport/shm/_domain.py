@@ -10,9 +10,9 @@ from pathlib import Path
 from typing import Any
 
 from ..._errors import TransportError
+from ..._process import pid_alive
 from ..._qos import QoS
 from .._base import Codec, Wake
-from ._credits import pid_alive
 from ._endpoints import ShmReader, ShmWriter
 from ._events import (
     BackChannel,

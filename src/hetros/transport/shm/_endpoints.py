@@ -11,10 +11,10 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from ..._errors import SerializationError, TransportError
+from ..._process import pid_alive
 from ...msg import default_maker, get_path, set_path
 from .._base import Codec, Reader, Wake, Writer
 from .._codec import MessageCodec
-from ._credits import pid_alive
 from ._events import (
     WakeChannel,
     fd_hint,

@@ -11,9 +11,10 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..._errors import PublishTimeoutError, ShutdownError, TransportError
+from ..._process import pid_alive
 from ..._qos import QoS
 from .._codec import CDR_LE
-from ._credits import Credits, pid_alive
+from ._credits import Credits
 from ._events import (
     WakeChannel,
     fd_hint,

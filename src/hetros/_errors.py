@@ -26,7 +26,8 @@ one root and still tell the kinds apart::
     │       └── ActionTimeoutError  no answer, goal or result in time
     ├── HardwareError          an fpga target's topic network cannot be built as asked
     ├── ShutdownError          a blocking call interrupted by graph shutdown
-    └── LaunchError            starting or supervising the graph
+    ├── LaunchError            starting or supervising the graph
+    └── InspectError           looking inside a running launch (which one, what, refused)
 """
 
 from __future__ import annotations
@@ -140,3 +141,8 @@ class ShutdownError(Error):
 
 class LaunchError(Error):
     """The launcher could not start or keep the graph running."""
+
+
+class InspectError(Error):
+    """A look inside a running launch failed: no launch or several, an unknown topic or node, a
+    process that did not answer."""

@@ -423,6 +423,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("ps", help="the launches running on this machine as you: session, pid, project, hosts, start")
     p.add_argument("--json", action="store_true", help="as JSON, for machines")
     p.set_defaults(func=cmd_ps)
+    from ._inspect import add_commands
+
+    add_commands(sub)
     hw = sub.add_parser("hw", help="fpga targets: topic networks as RTL").add_subparsers(dest="hw", required=True)
     p = hw.add_parser("build", help="write an fpga target's topic network as Verilog, with a JSON manifest")
     p.add_argument("project")

@@ -16,7 +16,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Iterable
@@ -30,8 +29,9 @@ from .._net import is_local_address
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
 from ..transport import cleanup_stale, new_session, remove_session_segments
+from ._control import ControlServer
 from ._hosts import HostLink, local_host
-from ._registry import register, unregister
+from ._registry import register, session_folder, unregister, write_private
 
 log = get_logger("hetros.launch")
 
@@ -65,6 +65,7 @@ class Launcher:
         self.host: Host | None = None
         self.link: HostLink | None = None
         self._plan_file: Path | None = None
+        self.control: ControlServer | None = None
 
     # -- start -----------------------------------------------------------------------------
 
@@ -105,10 +106,8 @@ class Launcher:
     def run(self) -> LaunchResult:
         setup_logging()
         cleanup_stale()
-        fd, name = tempfile.mkstemp(prefix="hetros-plan-", suffix=".json")
-        with os.fdopen(fd, "w") as handle:
-            handle.write(self.plan.to_json())
-        self._plan_file = Path(name)
+        self._plan_file = session_folder(self.session) / "plan.json"
+        write_private(self._plan_file, self.plan.to_json())
         # SIGHUP: `hetros deploy` stops a remote host by hanging up its ssh terminal
         previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
         in_main = threading.current_thread() is threading.main_thread()
@@ -156,6 +155,7 @@ class Launcher:
             self.host = Host(self.plan, LAUNCHER, self.session, self._local_failure, self.stop,
                              lambda: self.events.put({"event": "local_done"}),
                              lambda node: self.events.put({"event": "node_done", "node": node}))
+            self.control = ControlServer(self.host, session_folder(self.session), LAUNCHER)
         waiting = set(self.children)
         # --duration bounds the whole launch, start-up included (a target may wait on a ROS master)
         patience = 60.0 if self.duration is None else min(60.0, self.duration)
@@ -332,6 +332,8 @@ class Launcher:
             child.stopping = True
             self._send(child, f"stop {reason}")
         stuck: list[str] = []
+        if self.control is not None:
+            self.control.close()
         if self.host is not None:
             stuck = self.host.stop(timeout=5.0)
         deadline = time.monotonic() + 5.0

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -46,22 +47,35 @@ def registry_folder() -> Path:
     return folder
 
 
+def session_folder(session: str) -> Path:
+    """The private folder of one launch: its plan (``plan.json``) and each process' control socket."""
+    folder = registry_folder() / session
+    folder.mkdir(exist_ok=True, mode=0o700)
+    return folder
+
+
+def write_private(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` readable by this user only, whole or not at all."""
+    partial = path.with_name(f".{path.name}.partial")
+    descriptor = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
+        handle.write(text)
+    os.replace(partial, path)
+
+
 def register(session: str, plan: Plan) -> Path:
     """Record this launch (the launcher's pid) until :func:`unregister`."""
     record = LaunchRecord(session, plan.name, plan.root, os.getpid(), time.time(), tuple(plan.hosts),
                           plan.local_host)
-    folder = registry_folder()
-    path = folder / f"{session}.json"
-    partial = folder / f".{session}.json.partial"
-    descriptor = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-    with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
-        json.dump(asdict(record), handle)
-    os.replace(partial, path)
+    path = registry_folder() / f"{session}.json"
+    write_private(path, json.dumps(asdict(record)))
     return path
 
 
 def unregister(session: str) -> None:
-    (registry_folder() / f"{session}.json").unlink(missing_ok=True)
+    folder = registry_folder()
+    (folder / f"{session}.json").unlink(missing_ok=True)
+    shutil.rmtree(folder / session, ignore_errors=True)
 
 
 def running() -> list[LaunchRecord]:
@@ -77,7 +91,7 @@ def running() -> list[LaunchRecord]:
         if pid_alive(record.pid):
             found.append(record)
         else:
-            path.unlink(missing_ok=True)
+            unregister(record.session)
     return sorted(found, key=lambda r: r.started)
 
 

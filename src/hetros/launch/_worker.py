@@ -95,6 +95,10 @@ def main(argv: list[str] | None = None) -> int:
             _remove_session_segments(args.session)
         return 2
     hosts.append(host)
+    from ._control import ControlServer
+    from ._registry import session_folder
+
+    looks = ControlServer(host, session_folder(args.session), args.target)
     host.graph.stop_reason = stop_reason[0]
     report("ready", pid=os.getpid(), cpus=sorted(os.sched_getaffinity(0)))
     while not stop.is_set():
@@ -102,6 +106,7 @@ def main(argv: list[str] | None = None) -> int:
             host.start()
             break
     stop.wait()
+    looks.close()
     stuck = host.stop()
     failed = [t.spec.name for t in host.threads if t.failed]
     if host.unacknowledged:

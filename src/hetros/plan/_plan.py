@@ -192,6 +192,20 @@ class Plan:
         """The nodes whose code runs in ``process`` (hardware nodes run in their target's simulator)."""
         return [n for n in self.nodes if self.process_of(n) == process and self._here(n) and not self.in_hardware(n)]
 
+    def runs_here(self, node: str) -> bool:
+        """Whether a process of this host runs ``node``'s code."""
+        return self._here(node) and not self.in_hardware(node)
+
+    def tap_sites(self, channel: str) -> tuple[Literal["publish", "subscribe"], list[str]]:
+        """Where this host looks at ``channel`` from outside (``hetros topic echo``): the processes
+        that publish it; else, when it comes from outside hetros or from another host, the first
+        process that subscribes to it (one, so that nothing is counted twice)."""
+        spec = self.channels[channel]
+        publishing = sorted({self.process_of(n) for n in spec.publishers if self.runs_here(n)})
+        if publishing:
+            return "publish", publishing
+        return "subscribe", sorted({self.process_of(n) for n in spec.subscribers if self.runs_here(n)})[:1]
+
     def processes(self) -> list[str]:
         return sorted({self.process_of(n) for n in self.nodes if self._here(n) and not self.in_hardware(n)}
                       - {LAUNCHER})

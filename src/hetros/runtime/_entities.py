@@ -10,6 +10,7 @@ import itertools
 import os
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
@@ -30,6 +31,7 @@ from ._qos_events import (
     DeadlineWatch,
     LivelinessWatch,
 )
+from ._taps import taking_tap
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -81,6 +83,8 @@ class Publisher(Generic[M]):
         self._last_make: Callable[[], M] = msg_type
         self.deadline: DeadlineWatch | None = None  # the topic's QoS deadline, offered (``on_deadline_missed``)
         self.manual_liveliness = False  # each publish asserts liveliness (the topic's is manual_by_topic)
+        # the topic's tap in this process: counts what is sent; sinks only while someone looks
+        self._tap = node.graph.tap_point(topic, self.typename)
 
     def publish(self, message: M) -> None:
         """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
@@ -88,6 +92,10 @@ class Publisher(Generic[M]):
             check_type(message, self.typename, f"topic {self.topic}")
         message._hetros_validate(message, self._short)
         self._writer.write(message)
+        tap = self._tap
+        tap.published += 1
+        if tap.sinks:
+            tap.offer(message)
         if self.deadline is not None:
             self.deadline.seen()
         if self.manual_liveliness:
@@ -128,17 +136,21 @@ class HandlingStats:
     """How long a node spends on each message of one endpoint (the "node time" of the papers' tables).
 
     For callbacks and service handlers it is the handler's duration; for ``take`` loops,
-    the time from one ``take`` returning to the next ``take`` call.
+    the time from one ``take`` returning to the next ``take`` call. The last
+    ``RECENT`` durations are kept for ``hetros top``'s percentiles.
     """
 
-    __slots__ = ("count", "total", "total_sq")
+    __slots__ = ("count", "recent", "total", "total_sq")
+    RECENT = 256
 
     def __init__(self) -> None:
         self.count = 0
         self.total = 0.0
         self.total_sq = 0.0
+        self.recent = [0.0] * self.RECENT
 
     def add(self, seconds: float) -> None:
+        self.recent[self.count % self.RECENT] = seconds
         self.count += 1
         self.total += seconds
         self.total_sq += seconds * seconds
@@ -149,6 +161,15 @@ class HandlingStats:
             return 0, 0.0, 0.0
         mean = self.total / self.count
         return self.count, mean * 1000.0, max(self.total_sq / self.count - mean * mean, 0.0) ** 0.5 * 1000.0
+
+    def snapshot(self) -> dict[str, float]:
+        """Count, total seconds, and the 50th and 99th percentile of the recent durations."""
+        count = self.count
+        recent = sorted(self.recent[:min(count, self.RECENT)])
+        if not recent:
+            return {"count": 0, "total_s": 0.0, "p50_s": 0.0, "p99_s": 0.0}
+        return {"count": count, "total_s": self.total, "p50_s": recent[len(recent) // 2],
+                "p99_s": recent[min(len(recent) - 1, int(len(recent) * 0.99))]}
 
 
 class Subscription(Generic[M]):
@@ -167,10 +188,34 @@ class Subscription(Generic[M]):
         self.stats = HandlingStats()
         self._spin = AdaptiveSpin()
         self.liveliness: LivelinessWatch | None = None  # set when its publishers' liveliness is watched
+        self._injected: deque[M] = deque()
+        self._inject_lock = threading.Lock()
+        self._plain_take: Callable[[], M | None] | None = None  # the take that injection stands in front of
 
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
         self._take = reader.taker()
+        point = self.node.graph.subscriber_tap(self.topic, self.typename)
+        if point is not None:
+            self._take = taking_tap(self._take, point)
+
+    def inject(self, message: M) -> None:
+        """Deliver ``message`` to this subscription as if a publisher had sent it (``hetros topic pub``):
+        a take function in front of the reader's, swapped in only while injected messages wait."""
+        with self._inject_lock:
+            self._injected.append(message)
+            if self._plain_take is None:
+                self._plain_take, self._take = self._take, self._take_injected
+        self._on_wake()
+
+    def _take_injected(self) -> M | None:
+        with self._inject_lock:
+            plain = self._plain_take
+            assert plain is not None
+            if self._injected:
+                return self._injected.popleft()
+            self._take, self._plain_take = plain, None
+        return plain()
 
     def _on_wake(self) -> None:
         if self.callback is not None:
@@ -342,13 +387,17 @@ class Service:
         if envelope is None:
             return False
         request_id, client, request = envelope
+        self._replies.send(request_id, client, self.handle(request))
+        return True
+
+    def handle(self, request: Any) -> Any:
+        """The handler's checked response to ``request`` (run in the node's executor)."""
         start = time.perf_counter()
         response = self.handler(request)
         self.stats.add(time.perf_counter() - start)
         check_type(response, self._response_type, f"the response of service {self.name}")
         response._hetros_validate(response, f"the response of {self.name}")
-        self._replies.send(request_id, client, response)
-        return True
+        return response
 
     def pending(self) -> bool:
         return self._reader.pending()

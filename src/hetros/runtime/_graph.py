@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from .._errors import UndeclaredEndpointError
 from .._log import get_logger
@@ -31,6 +32,10 @@ from ..transport import (
     transport_class,
 )
 from ._endpoints import EndpointWriter, MergedReader, Relay, RetainedReader, endpoint_writer
+from ._taps import TapPoint
+
+if TYPE_CHECKING:
+    from ._node import Node
 
 log = get_logger("hetros.graph")
 # the transport of a graph without a project (everything in this process)
@@ -63,6 +68,10 @@ class Graph:
         self._prepared: dict[tuple[str, str], RetainedReader] = {}
         self._transports: dict[str, Transport] = {}
         self._context = TransportContext(plan, process, session, self.stop, self.types, self._codec)
+        # what a look from outside finds (``launch._control``): the live nodes, the topics' taps
+        self.nodes: dict[str, Node] = {}
+        self._taps: dict[str, TapPoint] = {}
+        self._subscriber_taps: set[str] = set()
 
     def transport(self, kind: str) -> Transport:
         """This process' transport for edges of ``kind``, opened (and its module imported) on first use."""
@@ -150,6 +159,44 @@ class Graph:
     def standalone(cls) -> Graph:
         """A graph with no project: every endpoint allowed, everything in-process."""
         return cls(None)
+
+    # -- what a look from outside finds ----------------------------------------------------
+
+    def tap_point(self, topic: str, typename: str) -> TapPoint:
+        """The one tap of ``topic`` in this process, shared by its publishers here."""
+        point = self._taps.get(topic)
+        if point is None:
+            with self._lock:
+                point = self._taps.setdefault(topic, TapPoint(topic, typename))
+        return point
+
+    def subscriber_tap(self, topic: str, typename: str) -> TapPoint | None:
+        """The tap a subscription feeds when no process of this host publishes ``topic`` (it comes from
+        a ROS peer or another host) and this process is where the plan looks at it; else None."""
+        plan = self.plan
+        if plan is None or topic not in plan.channels or plan.channels[topic].kind != "topic":
+            return None
+        role, sites = plan.tap_sites(topic)
+        if role != "subscribe" or self.process not in sites:
+            return None
+        with self._lock:
+            if topic in self._subscriber_taps:
+                return None  # a second subscription here: the first one counts
+            self._subscriber_taps.add(topic)
+        return self.tap_point(topic, typename)
+
+    def taps(self) -> dict[str, TapPoint]:
+        with self._lock:
+            return dict(self._taps)
+
+    def node_started(self, node: Node) -> None:
+        with self._lock:
+            self.nodes[node.name] = node
+
+    def node_closed(self, node: Node) -> None:
+        with self._lock:
+            if self.nodes.get(node.name) is node:
+                del self.nodes[node.name]
 
     # -- declarations ----------------------------------------------------------------------
 

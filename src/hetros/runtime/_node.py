@@ -13,6 +13,8 @@ import logging
 import os
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import Future
+from concurrent.futures import TimeoutError as FutureTimeout
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from .._errors import (
@@ -23,7 +25,7 @@ from .._errors import (
 from .._qos import QoS
 from ..msg import ActionKind, Message, ServiceKind, service_type
 from ..plan import ROS1_TRANSPORT, request_channel
-from ._entities import Client, Publisher, Service, Subscription, Timer, typename_of
+from ._entities import Client, HandlingStats, Publisher, Service, Subscription, Timer, typename_of
 from ._executor import Executor
 from ._graph import Graph
 from ._log import node_logger
@@ -71,6 +73,7 @@ class Node:
         self.taken_by: Subscription[Any] | None = None
         self.taken_at = 0.0
         self.action_clients: dict[str, ActionClient] = {}
+        self.graph.node_started(self)
 
     # -- endpoints -------------------------------------------------------------------------
 
@@ -250,6 +253,54 @@ class Node:
     def parameters(self) -> dict[str, Any]:
         return dict(self._parameters)
 
+    def set_parameter(self, name: str, value: Any) -> None:
+        """Change a parameter while the node runs (``hetros param set``); ``get_parameter`` returns the
+        new value from then on. A parameter keeps its type, as ROS 2's do: an integer may become a
+        float, nothing else changes kind."""
+        if name in self._parameters:
+            old = self._parameters[name]
+            widened = isinstance(old, float) and isinstance(value, int) and not isinstance(value, bool)
+            if type(old) is not type(value) and not widened and old is not None:
+                raise ParameterError(f"parameter {name!r} of node {self.name!r} is a {type(old).__name__}, not a "
+                                     f"{type(value).__name__} ({value!r}): give a value of its type")
+            if widened:
+                value = float(value)
+        self._parameters = {**self._parameters, name: value}
+
+    # -- what a look from outside finds (``hetros node info``, ``top``, ``service call``) ----
+
+    def entities(self) -> list[Any]:
+        """The node's publishers, subscriptions, services, clients and actions, as created."""
+        return list(self._closables)
+
+    def handling_stats(self) -> dict[str, HandlingStats]:
+        """Per subscription and service: the node's time per message."""
+        found: dict[str, HandlingStats] = {}
+        for endpoint in list(self._closables):
+            if isinstance(endpoint, Subscription):
+                found[endpoint.topic] = endpoint.stats
+            elif isinstance(endpoint, Service):
+                found[endpoint.name] = endpoint.stats
+        return found
+
+    def call_in_executor(self, work: Callable[[], Any], timeout: float) -> Any:
+        """Run ``work`` in this node's executor, between its callbacks, and return its result: what
+        a request from the command line must do to keep the node's callbacks one at a time."""
+        future: Future[Any] = Future()
+
+        def fire() -> None:
+            try:
+                future.set_result(work())
+            except BaseException as exc:
+                future.set_exception(exc)
+                raise  # the node meets the failure as it would meet a real request's
+        self.executor.add_timer(time.monotonic(), fire)
+        try:
+            return future.result(timeout)
+        except FutureTimeout:
+            raise NodeError(f"node {self.name!r} did not run the request within {timeout:g} s: it is busy, or it "
+                            "does not spin (a node that serves must spin or call spin_once)") from None
+
     def report_times(self) -> None:
         """Log, per subscription and service, how many messages the node handled and how long each
         took: at INFO with ``hetros launch --node-times`` (``HETROS_NODE_TIMES=1``), else at DEBUG."""
@@ -263,6 +314,7 @@ class Node:
                 self.log.log(level, "node time on %s: %.3f ± %.3f ms per message over %d", name, mean, std, count)
 
     def close(self) -> None:
+        self.graph.node_closed(self)
         for endpoint in reversed(self._closables):
             endpoint.close()
         self._closables.clear()

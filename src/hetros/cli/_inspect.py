@@ -1,0 +1,504 @@
+"""``hetros topic|node|service|param|top``: ROS 2's command line, pointed at a running launch.
+
+Names, options and output follow ``ros2 topic``, ``ros2 node``, ``ros2 service`` and
+``ros2 param`` so that a ROS user's hands already know them; ``--session`` or ``--project``
+picks the launch when more than one runs (``hetros ps`` lists them).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections import deque
+from collections.abc import Callable, Iterable
+from typing import Any
+
+import yaml
+
+from .._errors import InspectError
+from ..launch._inspect import RunningLaunch, TapEvent
+from ..msg import Message, normalize_typename
+from ..msg._convert import DEFAULT_TRUNCATE_LENGTH, from_plain, to_plain
+from ..plan import ACTION_PREFIX
+
+# ros2 topic hz's default window (messages)
+HZ_WINDOW = 10000
+# ros2 topic bw's default window (messages)
+BW_WINDOW = 100
+
+
+def _launch(args: argparse.Namespace) -> RunningLaunch:
+    return RunningLaunch.find(args.session, args.project)
+
+
+def _hidden(name: str) -> bool:
+    return ACTION_PREFIX in name
+
+
+def _dump(data: Any, flow: bool = False) -> str:
+    return str(yaml.safe_dump(data, allow_unicode=True, width=sys.maxsize, default_flow_style=flow,
+                              sort_keys=False))
+
+
+def _values(text: str, where: str) -> Any:
+    try:
+        return yaml.safe_load(text) if text.strip() else {}
+    except yaml.YAMLError as exc:
+        raise InspectError(f"{where}: {text!r} is not YAML ({exc}); write values as \"{{data: hello}}\"") from None
+
+
+# -- topic --------------------------------------------------------------------------------------
+
+
+def cmd_topic_list(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    for name, channel in sorted(launch.plan.channels.items()):
+        if channel.kind == "topic" and (args.include_hidden_topics or not _hidden(name)):
+            print(f"{name} [{channel.type}]" if args.show_types else name)
+    return 0
+
+
+def cmd_topic_info(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    typename = launch.topic(args.topic)
+    channel = launch.plan.channels[args.topic]
+    print(f"Type: {typename}" + ("\n" if args.verbose else ""))
+    for role, nodes in (("Publisher", channel.publishers), ("Subscription", channel.subscribers)):
+        print(f"{role} count: {len(nodes)}" + ("\n" if args.verbose else ""))
+        if not args.verbose:
+            continue
+        for node in nodes:
+            spec = launch.plan.nodes[node]
+            edges = launch.plan.edges_of(args.topic, node, "publish" if role == "Publisher" else "subscribe")
+            transports = ", ".join(sorted({e.transport for e in edges})) or "-"
+            where = "hardware" if launch.plan.in_hardware(node) else launch.plan.process_of(node)
+            qos = channel.qos
+            print(f"Node name: {node}\nNode namespace: /\nTopic type: {typename}\n"
+                  f"Endpoint type: {role.upper()}\nTarget: {spec.target} ({where})\nTransports: {transports}\n"
+                  f"QoS profile:\n  Reliability: {qos.reliability.upper()}\n  History (Depth): "
+                  f"{qos.history.upper()} ({qos.depth})\n  Durability: {qos.durability.upper()}\n")
+    return 0
+
+
+def _field(message: Message, path: str) -> Any:
+    value: Any = message
+    for part in filter(None, path.split(".")):
+        if not hasattr(value, part):
+            raise InspectError(f"--field {path}: {type(value).__name__} has no field {part!r}")
+        value = getattr(value, part)
+    return value
+
+
+def cmd_topic_echo(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    typename = launch.topic(args.topic)
+    truncate = None if args.full_length else args.truncate_length
+    wanted = 1 if args.once else args.times
+    shown = 0
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    for event in launch.tap(args.topic, data=True):
+        if deadline is not None and time.monotonic() > deadline:
+            break
+        if event is None or event.data is None:
+            continue
+        message = launch.decode(typename, event.data)
+        value = _field(message, args.field) if args.field else message
+        if isinstance(value, Message):
+            plain: Any = to_plain(launch.types, value, truncate_length=truncate, no_arr=args.no_arr,
+                                  no_str=args.no_str)
+            text = _dump(plain, args.flow_style)
+        else:
+            text = _dump(value.tolist() if hasattr(value, "tolist") else value, args.flow_style)
+            text = text[:-len("...\n")] if text.endswith("...\n") else text
+        if args.lost_messages and event.dropped:
+            print(f"A message was lost!!!\n\ttotal count change:{event.dropped}\n\ttotal count: {event.dropped}")
+        sys.stdout.write(text + "---\n")
+        sys.stdout.flush()
+        shown += 1
+        if wanted and shown >= wanted:
+            break
+    return 0
+
+
+def _every_second(launch: RunningLaunch, topic: str, duration: float | None, data: bool,
+                  seen: Callable[[TapEvent], None], report: Callable[[], None]) -> int:
+    """Feed ``seen`` each message of ``topic`` and call ``report`` once a second, as ros2 topic hz does."""
+    launch.topic(topic)
+    start = time.monotonic()
+    next_report = start + 1.0
+    for event in launch.tap(topic, data=data):
+        now = time.monotonic()
+        if event is not None:
+            seen(event)
+        if now >= next_report:
+            report()
+            next_report = now + 1.0
+        if duration is not None and now - start >= duration:
+            break
+    return 0
+
+
+def _spread(values: Iterable[float]) -> tuple[float, float, float, float]:
+    """(mean, min, max, population std dev)."""
+    items = list(values)
+    mean = sum(items) / len(items)
+    return mean, min(items), max(items), math.sqrt(sum((v - mean) ** 2 for v in items) / len(items))
+
+
+def cmd_topic_hz(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    times: deque[int] = deque(maxlen=args.window + 1)
+
+    def report() -> None:
+        if len(times) < 2:
+            print("no new messages")
+            return
+        deltas = [(b - a) / 1e9 for a, b in zip(list(times)[:-1], list(times)[1:], strict=True)]
+        mean, low, high, std = _spread(deltas)
+        print(f"average rate: {1.0 / mean if mean > 0 else 0.0:.3f}\n\tmin: {low:.3f}s max: {high:.3f}s "
+              f"std dev: {std:.5f}s window: {len(deltas)}", flush=True)
+
+    return _every_second(launch, args.topic, args.duration, False, lambda e: times.append(e.time_ns), report)
+
+
+def _bytes(value: float) -> str:
+    if value < 1000:
+        return f"{value:.0f} B"
+    if value < 1000 * 1000:
+        return f"{value / 1000:.2f} KB"
+    return f"{value / 1e6:.2f} MB"
+
+
+def cmd_topic_bw(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    seen: deque[tuple[int, int]] = deque(maxlen=args.window)
+    print(f"Subscribed to [{args.topic}]", flush=True)
+
+    def report() -> None:
+        if len(seen) < 2:
+            return
+        span = (time.time_ns() - seen[0][0]) / 1e9
+        sizes = [size for _, size in seen]
+        mean, low, high, _ = _spread(sizes)
+        rate = sum(sizes) / span if span > 0 else 0.0
+        print(f"{_bytes(rate)}/s from {len(sizes)} messages\n\tMessage size mean: {_bytes(mean)} "
+              f"min: {_bytes(low)} max: {_bytes(high)}", flush=True)
+
+    return _every_second(launch, args.topic, args.duration, False, lambda e: seen.append((e.time_ns, e.size)),
+                         report)
+
+
+def cmd_topic_delay(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    delays: deque[float] = deque(maxlen=args.window)
+    stamped = [True]
+
+    def seen(event: TapEvent) -> None:
+        if event.stamp is None:
+            stamped[0] = False
+            return
+        delays.append((event.time_ns - event.stamp) / 1e9)
+
+    def report() -> None:
+        if not stamped[0]:
+            raise InspectError(f"{args.topic}'s messages have no header stamp: delay needs std_msgs/Header")
+        if not delays:
+            print("no new messages")
+            return
+        mean, low, high, std = _spread(delays)
+        print(f"average delay: {mean:.3f}\n\tmin: {low:.3f}s max: {high:.3f}s std dev: {std:.5f}s "
+              f"window: {len(delays)}", flush=True)
+
+    return _every_second(launch, args.topic, args.duration, False, seen, report)
+
+
+def _python_repr(typename: str, message: Message) -> str:
+    """A message as rclpy's repr shows it: ``std_msgs.msg.String(data='hi')``."""
+    return f"{typename.rsplit('/', 1)[0].replace('/', '.')}.{message!r}"
+
+
+def cmd_topic_pub(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    typename = launch.topic(args.topic)
+    given = normalize_typename(args.type, "msg")
+    if given != typename:
+        raise InspectError(f"{args.topic} carries {typename}, not {given}")
+    message = from_plain(launch.types, typename, _values(args.values, "values"))
+    times = 1 if args.once else args.times
+    sent = 0
+    print("publisher: beginning loop\n", flush=True)
+    while True:
+        reached = launch.publish(args.topic, message)
+        sent += 1
+        print(f"publishing #{sent}: {_python_repr(typename, message)}\n", flush=True)
+        if not reached:
+            print(f"warning: no subscription of {args.topic} is running yet", file=sys.stderr)
+        if times and sent >= times:
+            return 0
+        time.sleep(1.0 / args.rate)
+
+
+# -- node, service, param -----------------------------------------------------------------------
+
+
+def cmd_node_list(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    for name in sorted(launch.plan.nodes):
+        print(f"/{name}")
+    return 0
+
+
+def cmd_node_info(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    name = args.node.lstrip("/")
+    if name not in launch.plan.nodes:
+        raise InspectError(f"launch {launch.record.session} has no node {args.node} "
+                           f"(its nodes: {', '.join(sorted(launch.plan.nodes))})")
+    spec = launch.plan.nodes[name]
+
+    def section(title: str, entries: dict[str, str]) -> None:
+        print(f"  {title}:")
+        for entry, typename in sorted(entries.items()):
+            if args.include_hidden or not _hidden(entry):
+                print(f"    {entry}: {typename}")
+
+    print(f"/{name}")
+    section("Subscribers", spec.subscribe)
+    section("Publishers", spec.publish)
+    section("Service Servers", spec.services)
+    section("Service Clients", spec.clients)
+    section("Action Servers", spec.actions)
+    section("Action Clients", spec.action_clients)
+    return 0
+
+
+def cmd_service_list(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    types = {s: t for node in launch.plan.nodes.values() for s, t in node.services.items()}
+    for name in launch.services():
+        print(f"{name} [{types[name]}]" if args.show_types else name)
+    return 0
+
+
+def cmd_service_call(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    _node, typename = launch.server_of(args.service)
+    given = normalize_typename(args.type, "srv")
+    if given != typename:
+        raise InspectError(f"{args.service} is a {typename}, not a {given}")
+    request = from_plain(launch.types, f"{typename}_Request", _values(args.values, "values"))
+    print(f"requester: making request: {_python_repr(typename, request)}\n")
+    response = launch.call(args.service, request)
+    print(f"response:\n{_python_repr(typename, response)}\n")
+    return 0
+
+
+def _parameter_kind(value: Any) -> str:
+    if isinstance(value, bool):
+        return "Boolean"
+    if isinstance(value, int):
+        return "Integer"
+    if isinstance(value, float):
+        return "Double"
+    if isinstance(value, str):
+        return "String"
+    if isinstance(value, list):
+        return "Array"
+    return type(value).__name__
+
+
+def cmd_param_list(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    nodes = [args.node.lstrip("/")] if args.node else sorted(n for n in launch.plan.nodes if launch.plan.runs_here(n))
+    for node in nodes:
+        parameters = launch.parameters(node)
+        print(f"/{node}:")
+        for name in sorted(parameters):
+            print(f"  {name}")
+    return 0
+
+
+def cmd_param_get(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    parameters = launch.parameters(args.node.lstrip("/"))
+    if args.name not in parameters:
+        print("Parameter not set")
+        return 1
+    value = parameters[args.name]
+    print(f"{_parameter_kind(value)} value is: {value}")
+    return 0
+
+
+def cmd_param_set(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    try:
+        launch.set_parameter(args.node.lstrip("/"), args.name, _values(args.value, "value"))
+    except InspectError as exc:
+        print(f"Setting parameter failed: {exc}")
+        return 1
+    print("Set parameter successful")
+    return 0
+
+
+# -- top --------------------------------------------------------------------------------------
+
+
+def _top_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]) -> dict[str, Any]:
+    """Rates and CPU shares between two rounds of every process' counters."""
+    earlier = {p["process"]: p for p in before}
+    processes: list[dict[str, Any]] = []
+    nodes: list[dict[str, Any]] = []
+    topics: dict[str, dict[str, Any]] = {}
+    for now in after:
+        then = earlier.get(now["process"])
+        if then is None:
+            continue
+        span = max(now["time"] - then["time"], 1e-6)
+        processes.append({"process": now["process"], "pid": now["pid"], "rss_mb": now["rss"] / 1e6,
+                          "cpu_percent": 100.0 * (now["cpu_s"] - then["cpu_s"]) / span})
+        for name, node in now["nodes"].items():
+            old = then["nodes"].get(name, node)
+            handled = node["handling"]
+            p50 = max((h["p50_s"] for h in handled.values()), default=0.0)
+            p99 = max((h["p99_s"] for h in handled.values()), default=0.0)
+            nodes.append({"node": name, "process": now["process"], "alive": node["alive"],
+                          "cpu_percent": 100.0 * (node["cpu_s"] - old["cpu_s"]) / span,
+                          "callback_p50_ms": p50 * 1000.0, "callback_p99_ms": p99 * 1000.0})
+        for name, topic in now["topics"].items():
+            old_count = then["topics"].get(name, {"published": topic["published"]})["published"]
+            entry = topics.setdefault(name, {"topic": name, "type": topic["type"], "rate_hz": 0.0, "published": 0})
+            entry["rate_hz"] += (topic["published"] - old_count) / span
+            entry["published"] += topic["published"]
+    return {"processes": processes, "nodes": nodes, "topics": sorted(topics.values(), key=lambda t: t["topic"])}
+
+
+def _format_top(rows: dict[str, Any], session: str) -> str:
+    lines = [f"hetros top: launch {session}", "",
+             f"{'PROCESS':<20} {'PID':>7} {'CPU%':>6} {'RSS MB':>8}"]
+    lines += [f"{p['process']:<20} {p['pid']:>7} {p['cpu_percent']:>6.1f} {p['rss_mb']:>8.1f}"
+              for p in rows["processes"]]
+    lines += ["", f"{'NODE':<24} {'PROCESS':<16} {'CPU%':>6} {'CB p50 ms':>10} {'CB p99 ms':>10}"]
+    lines += [f"{n['node']:<24} {n['process']:<16} {n['cpu_percent']:>6.1f} {n['callback_p50_ms']:>10.3f} "
+              f"{n['callback_p99_ms']:>10.3f}" for n in rows["nodes"]]
+    lines += ["", f"{'TOPIC':<32} {'RATE Hz':>9} {'SENT':>10}  TYPE"]
+    lines += [f"{t['topic']:<32} {t['rate_hz']:>9.1f} {t['published']:>10}  {t['type']}" for t in rows["topics"]]
+    return "\n".join(lines)
+
+
+def cmd_top(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    before = launch.stats()
+    rounds = 0
+    while True:
+        time.sleep(args.interval)
+        after = launch.stats()
+        if not after:
+            raise InspectError(f"launch {launch.record.session} has ended")
+        rows = _top_rows(before, after)
+        if args.json:
+            print(json.dumps(rows), flush=True)
+        else:
+            sys.stdout.write(("\x1b[H\x1b[2J" if sys.stdout.isatty() else "") + _format_top(rows, launch.record.session)
+                             + "\n")
+            sys.stdout.flush()
+        before = after
+        rounds += 1
+        if args.once or (args.count and rounds >= args.count):
+            return 0
+
+
+# -- the parser ---------------------------------------------------------------------------------
+
+
+def _which(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--session", help="the launch's session (hetros ps); default: the only one running")
+    parser.add_argument("--project", help="the launch of this project file (or folder)")
+
+
+def add_commands(sub: Any) -> None:
+    """The introspection commands, added to ``hetros``'s subcommands."""
+    topic = sub.add_parser("topic", help="topics of a running launch (ros2 topic)").add_subparsers(
+        dest="topic_command", required=True)
+    p = topic.add_parser("list", help="the launch's topics")
+    p.add_argument("-t", "--show-types", action="store_true")
+    p.add_argument("--include-hidden-topics", action="store_true", help="also actions' topics")
+    p.set_defaults(func=cmd_topic_list)
+    p = topic.add_parser("info", help="a topic's type and endpoint counts")
+    p.add_argument("topic")
+    p.add_argument("-v", "--verbose", action="store_true", help="each endpoint: node, target, transports, QoS")
+    p.set_defaults(func=cmd_topic_info)
+    p = topic.add_parser("echo", help="print a topic's messages as YAML")
+    p.add_argument("topic")
+    p.add_argument("--once", action="store_true", help="print one message and exit")
+    p.add_argument("-n", "--times", type=int, default=0, help="print this many messages and exit")
+    p.add_argument("--field", help="print one field (header.stamp)")
+    p.add_argument("--no-arr", action="store_true", help="print arrays' types and lengths instead of their values")
+    p.add_argument("--no-str", action="store_true", help="print strings' lengths instead of their values")
+    p.add_argument("-l", "--truncate-length", type=int, default=DEFAULT_TRUNCATE_LENGTH,
+                   help="cut arrays and strings at this length (default %(default)s)")
+    p.add_argument("-f", "--full-length", action="store_true", help="do not cut arrays and strings")
+    p.add_argument("--flow-style", action="store_true")
+    p.add_argument("--lost-messages", action="store_true", help="report messages the tap dropped")
+    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.set_defaults(func=cmd_topic_echo)
+    for verb, function, window, what in (("hz", cmd_topic_hz, HZ_WINDOW, "publishing rate"),
+                                         ("bw", cmd_topic_bw, BW_WINDOW, "bandwidth"),
+                                         ("delay", cmd_topic_delay, HZ_WINDOW, "delay from header stamp")):
+        p = topic.add_parser(verb, help=f"a topic's {what}, printed every second")
+        p.add_argument("topic")
+        p.add_argument("-w", "--window", type=int, default=window, help="messages per figure (default %(default)s)")
+        p.add_argument("--duration", type=float, help="stop after this many seconds")
+        p.set_defaults(func=function)
+    p = topic.add_parser("pub", help="publish a message to a topic's subscribers")
+    p.add_argument("topic")
+    p.add_argument("type")
+    p.add_argument("values", nargs="?", default="{}", help="YAML field values: \"{data: hello}\"")
+    p.add_argument("-1", "--once", action="store_true", help="publish one message and exit")
+    p.add_argument("-t", "--times", type=int, default=0, help="publish this many messages and exit")
+    p.add_argument("-r", "--rate", type=float, default=1.0, help="messages per second (default 1)")
+    p.set_defaults(func=cmd_topic_pub)
+    node = sub.add_parser("node", help="nodes of a running launch (ros2 node)").add_subparsers(
+        dest="node_command", required=True)
+    p = node.add_parser("list")
+    p.set_defaults(func=cmd_node_list)
+    p = node.add_parser("info")
+    p.add_argument("node")
+    p.add_argument("--include-hidden", action="store_true", help="also actions' services and topics")
+    p.set_defaults(func=cmd_node_info)
+    service = sub.add_parser("service", help="services of a running launch (ros2 service)").add_subparsers(
+        dest="service_command", required=True)
+    p = service.add_parser("list")
+    p.add_argument("-t", "--show-types", action="store_true")
+    p.set_defaults(func=cmd_service_list)
+    p = service.add_parser("call", help="call a service and print the response")
+    p.add_argument("service")
+    p.add_argument("type")
+    p.add_argument("values", nargs="?", default="{}")
+    p.set_defaults(func=cmd_service_call)
+    param = sub.add_parser("param", help="parameters of a running launch's nodes (ros2 param)").add_subparsers(
+        dest="param_command", required=True)
+    p = param.add_parser("list")
+    p.add_argument("node", nargs="?")
+    p.set_defaults(func=cmd_param_list)
+    p = param.add_parser("get")
+    p.add_argument("node")
+    p.add_argument("name")
+    p.set_defaults(func=cmd_param_get)
+    p = param.add_parser("set")
+    p.add_argument("node")
+    p.add_argument("name")
+    p.add_argument("value", help="YAML: 5, 2.5, true, hello, [1, 2]")
+    p.set_defaults(func=cmd_param_set)
+    p = sub.add_parser("top", help="a running launch's live figures: CPU, memory, callback times, topic rates")
+    p.add_argument("--json", action="store_true", help="one JSON object per interval, for machines")
+    p.add_argument("--interval", type=float, default=1.0, help="seconds between figures (default 1)")
+    p.add_argument("--once", action="store_true", help="print one round and exit")
+    p.add_argument("-n", "--count", type=int, default=0, help="print this many rounds and exit")
+    p.set_defaults(func=cmd_top)
+    for group in (topic, node, service, param):
+        for parser in group.choices.values():
+            _which(parser)
+    _which(sub.choices["top"])

@@ -1,0 +1,287 @@
+"""Each process of a launch answers looks from outside on a Unix socket only its user can reach.
+
+The socket is ``<session folder>/<process>.sock`` in the private launch registry
+(``_registry.session_folder``: mode 0700, so another user cannot even reach it) and every
+connection's peer is checked again (``SO_PEERCRED``). What crosses it is JSON and raw CDR
+message bytes, never pickle.
+
+A frame is an 8-byte header (JSON length, payload length, little endian), the JSON object,
+then the payload. A request is one frame; most answers are one frame; a tap answers with a
+frame per message until the looker hangs up.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import socket
+import struct
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .._errors import InspectError
+from .._log import get_logger
+from ..msg import Message
+from ..runtime._taps import TapSink
+from ..transport import MessageCodec
+
+if TYPE_CHECKING:
+    from ..runtime import Host, Node
+
+log = get_logger("hetros.launch")
+_FRAME = struct.Struct("<II")
+MAX_HEADER = 1 << 20
+MAX_PAYLOAD = 1 << 30
+_SO_PEERCRED = struct.Struct("3i")
+
+
+def send_frame(sock: socket.socket, header: dict[str, Any], payload: bytes | bytearray | memoryview = b"") -> None:
+    text = json.dumps(header).encode()
+    sock.sendall(_FRAME.pack(len(text), len(payload)) + text)
+    if payload:
+        sock.sendall(payload)
+
+
+def _receive_exactly(sock: socket.socket, size: int) -> bytes:
+    chunks = bytearray()
+    while len(chunks) < size:
+        chunk = sock.recv(min(size - len(chunks), 1 << 20))
+        if not chunk:
+            raise InspectError(f"the other end closed the connection {len(chunks)} bytes into a {size}-byte read")
+        chunks += chunk
+    return bytes(chunks)
+
+
+def receive_frame(sock: socket.socket) -> tuple[dict[str, Any], bytes]:
+    """The next frame; a frame that breaks the format raises InspectError naming the offset and the fault."""
+    header_size, payload_size = _FRAME.unpack(_receive_exactly(sock, _FRAME.size))
+    if header_size > MAX_HEADER or payload_size > MAX_PAYLOAD:
+        raise InspectError(f"control frame claims a {header_size}-byte header and a {payload_size}-byte payload "
+                           f"(at most {MAX_HEADER} and {MAX_PAYLOAD}): not a hetros control peer")
+    raw = _receive_exactly(sock, header_size)
+    try:
+        header = json.loads(raw)
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InspectError(f"control frame header at offset {_FRAME.size} is not JSON: {exc}") from None
+    if not isinstance(header, dict):
+        raise InspectError(f"control frame header must be a JSON object, not {type(header).__name__}")
+    return header, _receive_exactly(sock, payload_size) if payload_size else b""
+
+
+@contextlib.contextmanager
+def short_path(path: Path) -> Iterator[str]:
+    """``path`` as a name short enough for a Unix socket (108 bytes at most): through an open
+    descriptor of its folder, so a deep ``$XDG_RUNTIME_DIR`` or temporary folder works too."""
+    folder = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        yield f"/proc/self/fd/{folder}/{path.name}"
+    finally:
+        os.close(folder)
+
+
+def peer_uid(sock: socket.socket) -> int:
+    _pid, uid, _gid = _SO_PEERCRED.unpack(sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, _SO_PEERCRED.size))
+    return int(uid)
+
+
+def _thread_cpu_seconds(native_id: int | None) -> float:
+    """CPU time (user + system) of one thread of this process, from /proc."""
+    if native_id is None:
+        return 0.0
+    try:
+        fields = Path(f"/proc/self/task/{native_id}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _resident_bytes() -> int:
+    try:
+        return int(Path("/proc/self/statm").read_text().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, IndexError, ValueError):
+        return 0
+
+
+class ControlServer:
+    """The look-in socket of one process of a launch."""
+
+    def __init__(self, host: Host, folder: Path, process: str) -> None:
+        self.host = host
+        self.graph = host.graph
+        self.process = process
+        self.path = folder / f"{process}.sock"
+        self.path.unlink(missing_ok=True)
+        self._listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        previous = os.umask(0o177)
+        try:
+            with short_path(self.path) as name:
+                self._listener.bind(name)
+        finally:
+            os.umask(previous)
+        self._listener.listen(16)
+        self._closed = False
+        self._codecs: dict[str, MessageCodec] = {}
+        self._thread = threading.Thread(target=self._accept, name=f"control:{process}", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        self._closed = True
+        with contextlib.suppress(OSError):
+            self._listener.shutdown(socket.SHUT_RDWR)
+        self._listener.close()
+        self.path.unlink(missing_ok=True)
+
+    def _accept(self) -> None:
+        while not self._closed:
+            try:
+                connection, _ = self._listener.accept()
+            except OSError:
+                return
+            if peer_uid(connection) != os.getuid():
+                connection.close()  # the folder's mode already keeps others out; this keeps out a moved socket
+                continue
+            threading.Thread(target=self._serve, args=(connection,), name=f"control:{self.process}:peer",
+                             daemon=True).start()
+
+    def _serve(self, connection: socket.socket) -> None:
+        with connection:
+            try:
+                request, payload = receive_frame(connection)
+                operation = request.get("op")
+                handler = getattr(self, f"_op_{operation}", None) if isinstance(operation, str) else None
+                if handler is None:
+                    send_frame(connection, {"error": f"unknown request {operation!r}"})
+                    return
+                handler(connection, request, payload)
+            except (OSError, InspectError):
+                return  # the looker hung up
+            except Exception as exc:  # a look must never take the graph down: report it to the looker
+                log.warning("a request from hetros' command line failed in %s: %s: %s", self.process,
+                            type(exc).__name__, exc)
+                with contextlib.suppress(OSError):
+                    send_frame(connection, {"error": f"{type(exc).__name__}: {exc}"})
+
+    def _codec(self, typename: str) -> MessageCodec:
+        codec = self._codecs.get(typename)
+        if codec is None:
+            codec = self._codecs[typename] = MessageCodec(self.graph.types, typename)
+        return codec
+
+    # -- requests ----------------------------------------------------------------------------
+
+    def _op_stats(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        nodes = {}
+        for thread in self.host.threads:
+            live = self.graph.nodes.get(thread.spec.name)
+            handling = {}
+            if live is not None:
+                for name, stats in live.handling_stats().items():
+                    handling[name] = stats.snapshot()
+            nodes[thread.spec.name] = {"cpu_s": _thread_cpu_seconds(thread.thread.native_id),
+                                       "alive": thread.thread.is_alive(), "handling": handling}
+        topics = {topic: {"published": point.published, "type": point.typename}
+                  for topic, point in self.graph.taps().items()}
+        send_frame(connection, {"process": self.process, "pid": os.getpid(), "time": time.time(),
+                                "cpu_s": sum(os.times()[:2]), "rss": _resident_bytes(), "nodes": nodes,
+                                "topics": topics})
+
+    def _op_tap(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        topic = str(request["topic"])
+        points = self.graph.taps()
+        point = points.get(topic)
+        if point is None:
+            send_frame(connection, {"error": f"{topic} has no publisher running in {self.process} yet"})
+            return
+        codec = self._codec(point.typename)
+        wants_data = bool(request.get("data", True))
+        sink = TapSink(_encoder(codec) if wants_data else None, float(request.get("max_rate", 0.0)))
+        point.attach(sink)
+        send_frame(connection, {"ok": True, "type": point.typename})
+        sent_drops = 0
+        try:
+            while not self._closed:
+                taken = sink.take(0.5)
+                if taken is None:
+                    send_frame(connection, {"idle": True})  # also finds out whether the looker is still there
+                    continue
+                stamp, item = taken
+                dropped, sent_drops = sink.dropped - sent_drops, sink.dropped
+                if wants_data:
+                    send_frame(connection, {"t": stamp, "dropped": dropped}, item)
+                else:
+                    send_frame(connection, {"t": stamp, "dropped": dropped, "size": codec.size(item),
+                                            "stamp": _header_stamp(item)})
+        finally:
+            point.detach(sink)
+
+    def _subscriptions(self, topic: str) -> list[Any]:
+        return [entity for node in list(self.graph.nodes.values()) for entity in node.entities()
+                if getattr(entity, "topic", None) == topic and hasattr(entity, "inject")]
+
+    def _op_pub(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        topic, typename = str(request["topic"]), str(request["type"])
+        message = self._codec(typename).decode(memoryview(payload))
+        reached = self._subscriptions(topic)
+        for subscription in reached:
+            subscription.inject(message)
+        send_frame(connection, {"ok": True, "subscriptions": [s.node.name for s in reached]})
+
+    def _service(self, name: str) -> tuple[Node, Any]:
+        for node in list(self.graph.nodes.values()):
+            for entity in node.entities():
+                if getattr(entity, "name", None) == name and hasattr(entity, "handler"):
+                    return node, entity
+        raise InspectError(f"no server of {name} runs in {self.process} (yet)")
+
+    def _op_call(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        node, service = self._service(str(request["service"]))
+        request_message = self._codec(f"{service.srv_type.name}_Request").decode(memoryview(payload))
+        response = node.call_in_executor(lambda: service.handle(request_message), float(request.get("timeout", 10)))
+        codec = self._codec(f"{service.srv_type.name}_Response")
+        buffer = bytearray(codec.size(response))
+        codec.encode_into(response, memoryview(buffer))
+        send_frame(connection, {"ok": True}, buffer)
+
+    def _node(self, name: str) -> Node:
+        node = self.graph.nodes.get(name)
+        if node is None:
+            raise InspectError(f"node {name} is not running in {self.process}")
+        return node
+
+    def _op_params(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        send_frame(connection, {"ok": True, "parameters": _jsonable(self._node(str(request["node"])).parameters)})
+
+    def _op_set_param(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        node = self._node(str(request["node"]))
+        node.set_parameter(str(request["name"]), request["value"])
+        send_frame(connection, {"ok": True})
+
+
+def _encoder(codec: MessageCodec) -> Callable[[Any], bytearray]:
+    def encode(message: Any) -> bytearray:
+        buffer = bytearray(codec.size(message))
+        codec.encode_into(message, memoryview(buffer))
+        return buffer
+    return encode
+
+
+def _header_stamp(message: Message) -> int | None:
+    header = getattr(message, "header", None)
+    stamp = getattr(header, "stamp", None)
+    if stamp is None or not hasattr(stamp, "nanosec"):
+        return None
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    return value

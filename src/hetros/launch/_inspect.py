@@ -1,0 +1,263 @@
+"""The looking side of ``launch._control``: find a running launch and ask its processes.
+
+The plan the launcher wrote into its private session folder says exactly which topics,
+nodes and services there are and which process to ask about each; the processes' control
+sockets answer for what only a running process knows (messages, rates, parameters).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import queue
+import socket
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .._errors import InspectError, LaunchError
+from ..msg import Message, TypeRegistry, registry
+from ..plan import Plan
+from ..transport import MessageCodec
+from ._control import receive_frame, send_frame, short_path
+from ._registry import LaunchRecord, registry_folder, running
+
+
+@dataclass(frozen=True)
+class TapEvent:
+    """One message seen by a tap: when (wall ns), what (encoded CDR, or None for a meta tap), how
+    big, its header stamp (ns, when it has one), and how many the tap dropped before it."""
+
+    time_ns: int
+    data: bytes | None
+    size: int
+    stamp: int | None
+    dropped: int
+
+
+def choose(records: list[LaunchRecord], session: str | None, project: str | None) -> LaunchRecord:
+    """The launch a command means: the one with ``session``, or whose project file is ``project``,
+    or the only one running."""
+    if session:
+        chosen = [r for r in records if r.session == session]
+        what = f"session {session}"
+    elif project:
+        path = Path(project).resolve()
+        if path.is_file():
+            name = _project_name(path)
+            chosen = [r for r in records if Path(r.root).resolve() == path.parent and r.project == name]
+        else:
+            chosen = [r for r in records if Path(r.root).resolve() == path or r.project == project]
+        what = f"project {project}"
+    else:
+        chosen, what = records, "any project"
+    if len(chosen) == 1:
+        return chosen[0]
+    if not chosen:
+        listing = ", ".join(f"{r.session} ({r.project})" for r in records) or "none"
+        raise InspectError(f"no running hetros launch of {what} (as this user, on this machine; running: {listing}); "
+                           "start one with `hetros launch`, or see `hetros ps`")
+    listing = "\n".join(f"  {r.session}  {r.project}  ({r.root})" for r in chosen)
+    raise InspectError(f"{len(chosen)} launches of {what} are running; name one with --session:\n{listing}")
+
+
+def _project_name(path: Path) -> str:
+    """The ``name:`` a project file gives its graph (what ``hetros ps`` lists)."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise InspectError(f"--project {path}: cannot read the project file ({exc})") from None
+    name = data.get("name") if isinstance(data, dict) else None
+    if not isinstance(name, str):
+        raise InspectError(f"--project {path}: the file has no name: (is it a hetros project file?)")
+    return name
+
+
+class RunningLaunch:
+    """One running launch, as seen from another terminal of the same user."""
+
+    def __init__(self, record: LaunchRecord) -> None:
+        self.record = record
+        self.folder = registry_folder() / record.session
+        try:
+            self.plan = Plan.from_json((self.folder / "plan.json").read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InspectError(f"launch {record.session} has no readable plan ({exc}); it is ending, or it "
+                               "was started by an older hetros") from None
+        self.types: TypeRegistry = registry()
+        for folder in self.plan.message_paths:
+            self.types.load_folder(Path(folder))
+
+    @classmethod
+    def find(cls, session: str | None = None, project: str | None = None) -> RunningLaunch:
+        return cls(choose(running(), session, project))
+
+    # -- talking to a process ----------------------------------------------------------------
+
+    def connect(self, process: str, request: dict[str, Any], payload: bytes = b"",
+                timeout: float | None = 10.0) -> socket.socket:
+        path = self.folder / f"{process}.sock"
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        sock.settimeout(timeout)
+        try:
+            with short_path(path) as name:
+                sock.connect(name)
+            send_frame(sock, request, payload)
+        except (FileNotFoundError, ConnectionRefusedError):
+            sock.close()
+            raise InspectError(f"process {process} of launch {self.record.session} has no control socket "
+                               f"({path}): it is starting, or it has ended") from None
+        except PermissionError:
+            sock.close()
+            raise InspectError(f"{path}: permission denied; only the user who started a launch can look "
+                               "inside it") from None
+        except OSError as exc:
+            sock.close()
+            raise InspectError(f"process {process} of launch {self.record.session} did not answer ({exc})") from None
+        return sock
+
+    def ask(self, process: str, request: dict[str, Any], payload: bytes = b"",
+            timeout: float = 15.0) -> tuple[dict[str, Any], bytes]:
+        with self.connect(process, request, payload, timeout) as sock:
+            try:
+                answer, data = receive_frame(sock)
+            except TimeoutError:
+                raise InspectError(f"process {process} did not answer {request.get('op')} within {timeout:g} s") \
+                    from None
+        if "error" in answer:
+            raise InspectError(f"{process}: {answer['error']}")
+        return answer, data
+
+    # -- what the plan says -------------------------------------------------------------------
+
+    def processes(self) -> list[str]:
+        """This host's processes of the launch that run nodes (the launcher's only when it hosts some)."""
+        local = sorted({self.plan.process_of(n) for n in self.plan.nodes if self.plan.runs_here(n)})
+        return local
+
+    def topic(self, name: str) -> str:
+        """The type of topic ``name``; InspectError naming the topics when there is no such topic."""
+        channel = self.plan.channels.get(name)
+        if channel is None or channel.kind != "topic":
+            known = ", ".join(sorted(n for n, c in self.plan.channels.items() if c.kind == "topic"))
+            raise InspectError(f"launch {self.record.session} has no topic {name} (its topics: {known})")
+        return channel.type
+
+    def codec(self, typename: str) -> MessageCodec:
+        return MessageCodec(self.types, typename)
+
+    # -- looks -------------------------------------------------------------------------------
+
+    def tap(self, topic: str, *, data: bool = True, max_rate: float = 0.0) -> Iterator[TapEvent | None]:
+        """Messages on ``topic`` as they are published, from every process that publishes it here;
+        None every half second when nothing came (so a caller can end on time)."""
+        self.topic(topic)
+        _role, sites = self.plan.tap_sites(topic)
+        if not sites:
+            where = ", ".join(sorted({self.plan.host_of(n) for n in self.plan.channels[topic].publishers})) or "?"
+            raise InspectError(f"{topic} is neither published nor subscribed on this machine (host "
+                               f"{self.record.host or '-'}); look at it on {where}")
+        events: queue.Queue[TapEvent | Exception | None] = queue.Queue()
+        sockets = []
+        for process in sites:
+            sock = self.connect(process, {"op": "tap", "topic": topic, "data": data, "max_rate": max_rate},
+                                timeout=None)
+            sockets.append(sock)
+            threading.Thread(target=_pump, args=(sock, process, events), daemon=True).start()
+        try:
+            while True:
+                event = events.get()
+                if isinstance(event, Exception):
+                    raise event
+                yield event
+        finally:
+            for sock in sockets:
+                with contextlib.suppress(OSError):
+                    sock.shutdown(socket.SHUT_RDWR)
+                sock.close()
+
+    def decode(self, typename: str, data: bytes) -> Message:
+        return self.codec(typename).decode(memoryview(data))
+
+    def publish(self, topic: str, message: Message) -> list[str]:
+        """Deliver ``message`` to every subscription of ``topic`` running here; the nodes reached."""
+        typename = self.topic(topic)
+        codec = self.codec(typename)
+        buffer = bytearray(codec.size(message))
+        codec.encode_into(message, memoryview(buffer))
+        channel = self.plan.channels[topic]
+        processes = sorted({self.plan.process_of(n) for n in channel.subscribers if self.plan.runs_here(n)})
+        reached: list[str] = []
+        for process in processes:
+            answer, _ = self.ask(process, {"op": "pub", "topic": topic, "type": typename}, bytes(buffer))
+            reached += answer["subscriptions"]
+        return reached
+
+    def server_of(self, service: str) -> tuple[str, str]:
+        """(node, service type) of the node serving ``service``."""
+        for name, node in self.plan.nodes.items():
+            if service in node.services and not service.startswith(tuple(f"{a}/_action/" for a in node.actions)):
+                if self.plan.in_hardware(name):
+                    raise InspectError(f"{service} is served in hardware (node {name} on fpga target {node.target}); "
+                                       "the command line calls software servers: call it from a node")
+                return name, node.services[service]
+        known = ", ".join(self.services()) or "none"
+        raise InspectError(f"launch {self.record.session} has no service {service} (its services: {known})")
+
+    def services(self) -> list[str]:
+        return sorted({s for node in self.plan.nodes.values() for s in node.services if "/_action/" not in s})
+
+    def call(self, service: str, request: Message, timeout: float = 10.0) -> Message:
+        node, typename = self.server_of(service)
+        codec = self.codec(f"{typename}_Request")
+        buffer = bytearray(codec.size(request))
+        codec.encode_into(request, memoryview(buffer))
+        _, data = self.ask(self.plan.process_of(node), {"op": "call", "service": service, "timeout": timeout},
+                           bytes(buffer), timeout + 5.0)
+        return self.decode(f"{typename}_Response", data)
+
+    def node_process(self, node: str) -> str:
+        if node not in self.plan.nodes:
+            known = ", ".join(sorted(self.plan.nodes))
+            raise InspectError(f"launch {self.record.session} has no node {node} (its nodes: {known})")
+        if not self.plan.runs_here(node):
+            raise InspectError(f"node {node} does not run in a process of this machine (it runs in hardware or on "
+                               f"host {self.plan.host_of(node) or '-'})")
+        return self.plan.process_of(node)
+
+    def parameters(self, node: str) -> dict[str, Any]:
+        answer, _ = self.ask(self.node_process(node), {"op": "params", "node": node})
+        parameters: dict[str, Any] = answer["parameters"]
+        return parameters
+
+    def set_parameter(self, node: str, name: str, value: Any) -> None:
+        self.ask(self.node_process(node), {"op": "set_param", "node": node, "name": name, "value": value})
+
+    def stats(self) -> list[dict[str, Any]]:
+        """Each process' counters (``hetros top``); a process that does not answer is left out."""
+        found = []
+        for process in self.processes():
+            with contextlib.suppress(InspectError, LaunchError):
+                found.append(self.ask(process, {"op": "stats"}, timeout=5.0)[0])
+        return found
+
+
+def _pump(sock: socket.socket, process: str, events: queue.Queue[TapEvent | Exception | None]) -> None:
+    try:
+        answer, _ = receive_frame(sock)
+        if "error" in answer:
+            events.put(InspectError(f"{process}: {answer['error']}"))
+            return
+        while True:
+            header, payload = receive_frame(sock)
+            if header.get("idle"):
+                events.put(None)
+                continue
+            events.put(TapEvent(int(header["t"]), payload if payload else None,
+                                int(header.get("size", len(payload))), header.get("stamp"),
+                                int(header.get("dropped", 0))))
+    except (OSError, InspectError) as exc:
+        events.put(InspectError(f"the tap in {process} ended: {exc}"))

@@ -1,0 +1,121 @@
+"""Taps: where a look from outside (``hetros topic echo``, ``hz``, ``record``, ``top``) meets a topic.
+
+Every topic published in a process has one :class:`TapPoint` there, made with the process'
+first publisher of it. The publisher counts what it sends (the figures ``hetros top`` shows,
+kept whether anyone looks or not) and offers each message to the point's sinks only when
+there are any: an idle tap is one attribute test per publish.
+
+A sink never holds a publisher back. It queues a bounded number of messages for the thread
+that sends them out; when that thread falls behind, a message is dropped and counted, and the
+counts travel with the next message sent. A sink that wants bytes (echo, record) encodes the
+message while the publisher waits, because a loaned array's memory is reused once subscribers
+are done with it; a sink that wants only times and sizes (hz, bw, delay) keeps the read-only
+message and measures it later, off the publisher's thread.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+# messages a sink keeps for its sender: meta records are small, encoded messages may be images
+META_DEPTH = 4096
+DATA_DEPTH = 64
+DATA_BYTES = 64 << 20
+
+
+class TapSink:
+    """One look at one topic: a bounded queue between the publisher and the sender."""
+
+    def __init__(self, encode: Callable[[Any], bytes | bytearray] | None, max_rate: float = 0.0) -> None:
+        self.encode = encode  # None: times and sizes only
+        self.max_rate = max_rate
+        self.dropped = 0
+        self._queue: deque[tuple[int, Any]] = deque()
+        self._queued_bytes = 0
+        self._ready = threading.Condition(threading.Lock())
+        self._next_allowed = 0
+        self.closed = False
+
+    def offer(self, message: Any) -> None:
+        now = time.time_ns()
+        if self.max_rate and now < self._next_allowed:
+            return  # a rate cap (a live view) thins the stream; it is not a loss
+        queue = self._queue
+        if self.encode is None:
+            if len(queue) >= META_DEPTH:
+                self.dropped += 1
+                return
+            item: Any = message
+        else:
+            if len(queue) >= DATA_DEPTH or self._queued_bytes >= DATA_BYTES:
+                self.dropped += 1
+                return
+            item = self.encode(message)
+            self._queued_bytes += len(item)
+        if self.max_rate:
+            self._next_allowed = now + int(1e9 / self.max_rate)
+        with self._ready:
+            queue.append((now, item))
+            self._ready.notify()
+
+    def take(self, timeout: float) -> tuple[int, Any] | None:
+        """The oldest queued (wall time in ns, message or bytes), or None after ``timeout``."""
+        with self._ready:
+            if not self._queue and not self.closed:
+                self._ready.wait(timeout)
+            if not self._queue:
+                return None
+            stamp, item = self._queue.popleft()
+        if isinstance(item, bytes | bytearray | memoryview):
+            self._queued_bytes -= len(item)
+        return stamp, item
+
+    def close(self) -> None:
+        with self._ready:
+            self.closed = True
+            self._ready.notify_all()
+
+
+class TapPoint:
+    """A topic as this process publishes it: counters kept always, sinks attached on demand."""
+
+    __slots__ = ("_lock", "bytes_hint", "published", "sinks", "topic", "typename")
+
+    def __init__(self, topic: str, typename: str) -> None:
+        self.topic = topic
+        self.typename = typename
+        self.published = 0  # messages this process' publishers sent on the topic
+        self.bytes_hint = 0  # not measured on the hot path: ``hetros top`` sizes a message when it looks
+        self.sinks: tuple[TapSink, ...] = ()
+        self._lock = threading.Lock()
+
+    def offer(self, message: Any) -> None:
+        for sink in self.sinks:
+            sink.offer(message)
+
+    def attach(self, sink: TapSink) -> None:
+        with self._lock:
+            self.sinks = (*self.sinks, sink)
+
+    def detach(self, sink: TapSink) -> None:
+        with self._lock:
+            self.sinks = tuple(s for s in self.sinks if s is not sink)
+        sink.close()
+
+
+def taking_tap(take: Callable[[], Any], point: TapPoint) -> Callable[[], Any]:
+    """A subscription's take function that also offers what it takes to ``point``: the tap of a
+    topic whose publisher is outside hetros (a ROS 1 or ROS 2 peer), swapped in only while tapped."""
+
+    def take_and_offer() -> Any:
+        message = take()
+        if message is not None:
+            point.published += 1
+            if point.sinks:
+                point.offer(message)
+        return message
+    return take_and_offer

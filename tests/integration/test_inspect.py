@@ -1,0 +1,176 @@
+"""Looking inside running launches from another terminal: ``hetros topic|node|service|param|top``
+against the examples, across processes, on shared-memory, in-process and hardware topics; two
+launches at once never mix; another user is refused."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import yaml
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+@contextlib.contextmanager
+def running(project: Path, env: dict[str, str], log: Path, duration: float = 60.0) -> Iterator[subprocess.Popen[str]]:
+    """``hetros launch project`` in the background until every process answers looks."""
+    with log.open("w") as out, subprocess.Popen(
+            [sys.executable, "-m", "hetros", "launch", str(project), "--duration", str(duration)],
+            stdout=out, stderr=subprocess.STDOUT, text=True, env=env) as proc:
+        try:
+            deadline = time.monotonic() + 90
+            while time.monotonic() < deadline:
+                assert proc.poll() is None, log.read_text()
+                done = hetros(env, "top", "--json", "--once", "--interval", "0.1", "--project", str(project),
+                              check=False)
+                if done.returncode == 0 and json.loads(done.stdout)["nodes"]:
+                    break
+                time.sleep(0.3)
+            else:
+                pytest.fail(f"the launch never answered: {log.read_text()}")
+            yield proc
+        finally:
+            proc.terminate()
+            proc.wait(30)
+
+
+def hetros(env: dict[str, str], *args: str, check: bool = True,
+           timeout: float = 60) -> subprocess.CompletedProcess[str]:
+    done = subprocess.run([sys.executable, "-m", "hetros", *args], capture_output=True, text=True, env=env,
+                          timeout=timeout, check=False)
+    if check:
+        assert done.returncode == 0, f"hetros {' '.join(args)}:\n{done.stdout}\n{done.stderr}"
+    return done
+
+
+def _last_figures(text: str, pattern: str) -> list[float]:
+    found = re.findall(pattern, text)
+    assert found, text
+    return [float(v) for v in found[-1]] if isinstance(found[-1], tuple) else [float(found[-1])]
+
+
+@pytest.fixture
+def env(tmp_path: Path) -> dict[str, str]:
+    """A registry of launches of this test's own (other tests' launches are not listed)."""
+    folder = tmp_path / "runtime"
+    folder.mkdir()
+    return dict(os.environ, XDG_RUNTIME_DIR=str(folder))
+
+
+def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -> None:
+    project = EXAMPLES / "talker_listener" / "project.yaml"
+    log = tmp_path / "launch.log"
+    with running(project, env, log):
+        assert hetros(env, "topic", "list").stdout == "/chatter\n"
+        assert hetros(env, "topic", "list", "-t").stdout == "/chatter [std_msgs/msg/String]\n"
+        assert hetros(env, "topic", "info", "/chatter").stdout == (
+            "Type: std_msgs/msg/String\nPublisher count: 1\nSubscription count: 2\n")
+        verbose = hetros(env, "topic", "info", "/chatter", "-v").stdout
+        assert "Node name: listener2" in verbose and "Transports: shm" in verbose and "KEEP_ALL (10)" in verbose
+        echoed = hetros(env, "topic", "echo", "/chatter", "--once").stdout
+        assert re.fullmatch(r"data: hello world \d+\n---\n", echoed), echoed
+        fields = hetros(env, "topic", "echo", "/chatter", "-n", "2", "--field", "data").stdout.split("---\n")
+        assert len(fields) == 3 and all(re.fullmatch(r"hello world \d+\n", f) for f in fields[:2]), fields
+        rate = _last_figures(hetros(env, "topic", "hz", "/chatter", "--duration", "3.2").stdout,
+                             r"average rate: ([\d.]+)")[0]
+        assert rate == pytest.approx(10.0, rel=0.05)
+        bandwidth = hetros(env, "topic", "bw", "/chatter", "--duration", "5.2").stdout
+        assert bandwidth.startswith("Subscribed to [/chatter]\n")
+        per_second, size = _last_figures(bandwidth, r"(\d+) B/s from \d+ messages\n\tMessage size mean: (\d+) B")
+        assert per_second == pytest.approx(10.0 * size, rel=0.10)
+        assert hetros(env, "node", "list").stdout == "/listener\n/listener2\n/talker\n"
+        assert hetros(env, "node", "info", "/talker").stdout == (
+            "/talker\n  Subscribers:\n  Publishers:\n    /chatter: std_msgs/msg/String\n  Service Servers:\n"
+            "  Service Clients:\n  Action Servers:\n  Action Clients:\n")
+        assert hetros(env, "param", "get", "/talker", "hz").stdout == "Double value is: 10.0\n"
+        assert hetros(env, "param", "set", "/talker", "hz", "12").stdout == "Set parameter successful\n"
+        assert hetros(env, "param", "get", "/talker", "hz").stdout == "Double value is: 12.0\n"
+        refused = hetros(env, "param", "set", "/talker", "hz", "fast", check=False)
+        assert refused.returncode == 1 and "is a float, not a str" in refused.stdout
+        assert hetros(env, "param", "list", "/talker").stdout == "/talker:\n  hz\n"
+        published = hetros(env, "topic", "pub", "/chatter", "std_msgs/msg/String", "{data: from the command line}",
+                           "--once").stdout
+        assert "publishing #1: std_msgs.msg.String(data='from the command line')" in published
+        top = json.loads(hetros(env, "top", "--json", "--once", "--interval", "1.5").stdout)
+        assert {p["process"] for p in top["processes"]} == {"cluster1", "cluster2"}
+        assert {n["node"] for n in top["nodes"]} == {"talker", "listener", "listener2"}
+        (chatter,) = top["topics"]
+        assert chatter["topic"] == "/chatter" and chatter["rate_hz"] == pytest.approx(10.0, abs=1.5)
+        listener = next(n for n in top["nodes"] if n["node"] == "listener")
+        assert 0 < listener["callback_p50_ms"] <= listener["callback_p99_ms"]
+        deadline = time.monotonic() + 10
+        while "I heard: [from the command line]" not in log.read_text() and time.monotonic() < deadline:
+            time.sleep(0.1)
+    heard = [line for line in log.read_text().splitlines() if "I heard: [from the command line]" in line]
+    assert len(heard) == 2, log.read_text()  # both listeners, once each
+
+
+def test_a_service_is_called_and_bad_requests_are_refused(tmp_path: Path, env: dict[str, str]) -> None:
+    shutil.copy(EXAMPLES / "add_two_ints" / "nodes.py", tmp_path)
+    project = tmp_path / "project.yaml"
+    data = yaml.safe_load((EXAMPLES / "add_two_ints" / "project.yaml").read_text())
+    del data["nodes"]["client"]
+    del data["targets"]["client_proc"]
+    project.write_text(yaml.safe_dump(data))
+    with running(project, env, tmp_path / "launch.log"):
+        assert hetros(env, "service", "list", "-t").stdout == "/add_two_ints [example_interfaces/srv/AddTwoInts]\n"
+        called = hetros(env, "service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts", "{a: 2, b: 40}")
+        assert called.stdout == ("requester: making request: example_interfaces.srv.AddTwoInts_Request(a=2, b=40)\n\n"
+                                 "response:\nexample_interfaces.srv.AddTwoInts_Response(sum=42)\n\n")
+        wrong = hetros(env, "service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts", "{a: 2, c: 1}",
+                       check=False)
+        assert wrong.returncode == 1 and "has no field 'c'; its fields are a, b" in wrong.stderr
+        typo = hetros(env, "service", "call", "/add_two_int", "example_interfaces/srv/AddTwoInts", check=False)
+        assert "has no service /add_two_int (its services: /add_two_ints)" in typo.stderr
+        off_range = hetros(env, "service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts",
+                           "{a: 99999999999999999999}", check=False)
+        assert off_range.returncode == 1 and "AddTwoInts_Request.a" in off_range.stderr
+        assert "sum=3" in hetros(env, "service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts",
+                                 "{a: 1, b: 2}").stdout
+
+
+def test_two_launches_at_once_do_not_mix_and_another_user_is_refused(tmp_path: Path, env: dict[str, str]) -> None:
+    first = EXAMPLES / "talker_listener" / "project.yaml"
+    second = EXAMPLES / "talker_listener" / "project_threads.yaml"
+    with running(first, env, tmp_path / "first.log"), running(second, env, tmp_path / "second.log"):
+        ambiguous = hetros(env, "topic", "list", check=False)
+        assert ambiguous.returncode == 1 and "2 launches of any project are running" in ambiguous.stderr
+        sessions = {r["project"]: r["session"] for r in json.loads(hetros(env, "ps", "--json").stdout)}
+        assert set(sessions) == {"talker_listener", "talker_listener_threads"}
+        threads = json.loads(hetros(env, "top", "--json", "--once", "--session",
+                                    sessions["talker_listener_threads"]).stdout)
+        assert {p["process"] for p in threads["processes"]} == {"launcher"}
+        by_project = json.loads(hetros(env, "top", "--json", "--once", "--project", str(first)).stdout)
+        assert {p["process"] for p in by_project["processes"]} == {"cluster1", "cluster2"}
+        echoed = hetros(env, "topic", "echo", "/chatter", "--once", "--session", sessions["talker_listener_threads"])
+        assert echoed.stdout.startswith("data: hello world")  # an in-process (inproc) topic, tapped alike
+        if os.geteuid() != 0:
+            return
+        folder = Path(env["XDG_RUNTIME_DIR"]) / "hetros" / "launches" / sessions["talker_listener"]
+        os.chmod(tmp_path, 0o755)
+        os.chmod(Path(env["XDG_RUNTIME_DIR"]), 0o755)
+        system_python = "/usr/bin/python3"  # the venv's interpreter lives where nobody may not read
+        if not Path(system_python).exists():
+            return
+        probe = ("import os, socket, sys\n"
+                 "s = socket.socket(socket.AF_UNIX)\n"
+                 "try:\n    d = os.open(os.path.dirname(sys.argv[1]), os.O_RDONLY)\n"
+                 "    s.connect(f'/proc/self/fd/{d}/' + os.path.basename(sys.argv[1]))\n"
+                 "except PermissionError:\n    print('refused')\n"
+                 "else:\n    print('connected')\n"
+                 "try:\n    open(sys.argv[2]).read()\nexcept PermissionError:\n    print('refused')\n"
+                 "else:\n    print('read')\n")
+        as_nobody = subprocess.run([system_python, "-c", probe, str(folder / "cluster1.sock"),
+                                    str(folder / "plan.json")], capture_output=True, text=True, timeout=30,
+                                   user="nobody", check=False)
+        assert as_nobody.stdout.split() == ["refused", "refused"], as_nobody.stderr

@@ -5,13 +5,12 @@ camera's timestamp to the command.
 """
 
 import json
-import time
 from pathlib import Path
 
 import numpy as np
 import vision
 
-from hetros import Node
+from hetros import Node, Time
 from hetros.interfaces.geometry_msgs.msg import TwistStamped
 from hetros.interfaces.lane_msgs.msg import LaneCentre, LightState
 from hetros.interfaces.sensor_msgs.msg import Image
@@ -41,7 +40,7 @@ def camera(node: Node) -> None:
         msg.data[:] = img.reshape(-1)
         msg.height, msg.width, msg.encoding, msg.step = img.shape[0], img.shape[1], "rgb8", img.shape[1] * 3
         msg.header.frame_id = f"frame{frame}"
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(time.monotonic_ns(), 1_000_000_000)
+        msg.header.stamp = node.get_clock().now().to_msg()
         header = msg.header.copy()
         pub.publish(msg)
         truth.publish(LaneCentre(header=header, found=True, centre_px=centre))
@@ -121,7 +120,7 @@ def monitor(node: Node) -> None:
     truth, seen, latencies, speeds, errors = {}, {}, [], {}, []
     for _ in range(frames):
         cmd = commands.take(timeout=30.0)
-        latencies.append((time.monotonic_ns() - (cmd.header.stamp.sec * 10**9 + cmd.header.stamp.nanosec)) / 1e6)
+        latencies.append((node.get_clock().now() - Time.from_msg(cmd.header.stamp)).nanoseconds / 1e6)
         frame = int(cmd.header.frame_id.removeprefix("frame"))
         speeds[frame] = cmd.twist.linear.x
         while (t := truths.try_take()) is not None:

@@ -159,7 +159,8 @@ def cmd_launch(args: argparse.Namespace) -> int:
     plan = plan_file(args.project)
     if args.node_times:
         os.environ[NODE_TIMES_VARIABLE] = "1"  # the worker processes inherit it
-    result = launch(plan, duration=args.duration, host=args.as_host)
+    result = launch(plan, duration=args.duration, host=args.as_host,
+                    record=Path(args.record) if args.record else None)
     if result.exit_code:
         print(f"[launch] graph stopped: {result.reason} (failed: {', '.join(result.failures) or '-'})",
               file=sys.stderr)
@@ -364,6 +365,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="stop after this many seconds")
     p.add_argument("--as", dest="as_host", metavar="HOST",
                    help="with hosts: run this host's targets (default: the host whose address is this machine's)")
+    p.add_argument("--record", metavar="RUN.MCAP", help="record every topic into this MCAP file while it runs")
     p.add_argument("--node-times", action="store_true",
                    help="at the end, log each node's time per message on each subscription and service")
     p.set_defaults(func=cmd_launch)

@@ -410,6 +410,48 @@ def cmd_top(args: argparse.Namespace) -> int:
             return 0
 
 
+# -- record, play ----------------------------------------------------------------------------------
+
+
+def cmd_record(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from ..launch._bag import record, recordable
+
+    launch = _launch(args)
+    if not args.all and not args.topics:
+        raise InspectError("name the topics to record (-t /a /b) or record them all (-a)")
+    topics = recordable(launch, None if args.all else args.topics)
+    out = Path(args.output or time.strftime("rosbag2_%Y_%m_%d-%H_%M_%S.mcap"))
+    print(f"recording {', '.join(topics)} of launch {launch.record.session} into {out}; Ctrl-C stops",
+          file=sys.stderr)
+    try:
+        summary = record(launch, topics, out, duration=args.duration)
+    except KeyboardInterrupt:
+        raise
+    print(summary.describe())
+    return 0
+
+
+def cmd_play(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from ..launch._bag import describe_played, play
+
+    if args.launch:
+        from ..launch._bag import play_launching
+
+        return play_launching(Path(args.bag), Path(args.launch), rate=args.rate, clock=args.clock,
+                              lockstep=args.lockstep, topics=args.topics)
+    launch = _launch(args)
+    while True:
+        counts = play(launch, Path(args.bag), rate=args.rate, loop=False, clock=args.clock, lockstep=args.lockstep,
+                      topics=args.topics)
+        print(describe_played(counts))
+        if not args.loop:
+            return 0
+
+
 # -- the parser ---------------------------------------------------------------------------------
 
 
@@ -498,7 +540,26 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--once", action="store_true", help="print one round and exit")
     p.add_argument("-n", "--count", type=int, default=0, help="print this many rounds and exit")
     p.set_defaults(func=cmd_top)
+    p = sub.add_parser("record", help="record a running launch's topics into MCAP (ros2 bag record)")
+    p.add_argument("-t", "--topics", nargs="+", help="the topics to record")
+    p.add_argument("-a", "--all", action="store_true", help="every topic this machine sees")
+    p.add_argument("-o", "--output", help="run.mcap (one file), or a folder for a rosbag2 bag")
+    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.set_defaults(func=cmd_record)
+    p = sub.add_parser("play", help="play a recording into a running launch (ros2 bag play)")
+    p.add_argument("bag", help="an .mcap file or a rosbag2 folder")
+    p.add_argument("-r", "--rate", type=float, default=1.0, help="speed factor (default 1)")
+    p.add_argument("-l", "--loop", action="store_true", help="play again and again")
+    p.add_argument("--clock", action="store_true", help="publish the recording's time on /clock (use_sim_time)")
+    p.add_argument("--lockstep", action="store_true",
+                   help="deliver each message only when its consumers finished the previous one, in the "
+                        "recording's time: the same outputs on every replay and every mapping")
+    p.add_argument("--topics", nargs="+", help="play only these topics")
+    p.add_argument("--launch", metavar="PROJECT", help="launch the part of this project that consumes the recording "
+                   "(its nodes that only publish recorded topics stay out), play into it, then stop it")
+    p.set_defaults(func=cmd_play)
     for group in (topic, node, service, param):
         for parser in group.choices.values():
             _which(parser)
-    _which(sub.choices["top"])
+    for name in ("top", "record", "play"):
+        _which(sub.choices[name])

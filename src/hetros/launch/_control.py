@@ -226,8 +226,18 @@ class ControlServer:
         topic, typename = str(request["topic"]), str(request["type"])
         message = self._codec(typename).decode(memoryview(payload))
         reached = self._subscriptions(topic)
+        handled = [subscription.stats.count for subscription in reached]
         for subscription in reached:
             subscription.inject(message)
+        wait = float(request.get("wait", 0.0))
+        if wait:
+            deadline = time.monotonic() + wait
+            while any(s.stats.count <= before and s.node.graph is self.graph and s.node.name in self.graph.nodes
+                      for s, before in zip(reached, handled, strict=True)):
+                if time.monotonic() > deadline:
+                    busy = [s.node.name for s, before in zip(reached, handled, strict=True) if s.stats.count <= before]
+                    raise InspectError(f"{', '.join(busy)} did not finish a message of {topic} within {wait:g} s")
+                time.sleep(0.0002)
         send_frame(connection, {"ok": True, "subscriptions": [s.node.name for s in reached]})
 
     def _service(self, name: str) -> tuple[Node, Any]:

@@ -11,7 +11,7 @@ import contextlib
 import queue
 import socket
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -154,20 +154,32 @@ class RunningLaunch:
     def tap(self, topic: str, *, data: bool = True, max_rate: float = 0.0) -> Iterator[TapEvent | None]:
         """Messages on ``topic`` as they are published, from every process that publishes it here;
         None every half second when nothing came (so a caller can end on time)."""
-        self.topic(topic)
-        _role, sites = self.plan.tap_sites(topic)
-        if not sites:
-            where = ", ".join(sorted({self.plan.host_of(n) for n in self.plan.channels[topic].publishers})) or "?"
-            raise InspectError(f"{topic} is neither published nor subscribed on this machine (host "
-                               f"{self.record.host or '-'}); look at it on {where}")
-        events: queue.Queue[TapEvent | Exception | None] = queue.Queue()
+        for _topic, event in self.tap_many([topic], data=data, max_rate=max_rate):
+            yield event
+
+    def tap_many(self, topics: list[str], *, data: bool = True, max_rate: float = 0.0,
+                 attached: Callable[[], None] = lambda: None) -> Iterator[tuple[str, TapEvent | None]]:
+        """``(topic, message)`` on any of ``topics``, merged in the order they arrive here; ``(topic, None)``
+        every half second a tap saw nothing. ``attached()`` is called once every tap is in place."""
+        for topic in topics:
+            self.topic(topic)
+            if not self.plan.tap_sites(topic)[1]:
+                where = ", ".join(sorted({self.plan.host_of(n) for n in self.plan.channels[topic].publishers}))
+                raise InspectError(f"{topic} is neither published nor subscribed on this machine (host "
+                                   f"{self.record.host or '-'}); look at it on {where or '?'}")
+        events: queue.Queue[tuple[str, TapEvent | None] | Exception] = queue.Queue()
         sockets = []
-        for process in sites:
-            sock = self.connect(process, {"op": "tap", "topic": topic, "data": data, "max_rate": max_rate},
-                                timeout=None)
-            sockets.append(sock)
-            threading.Thread(target=_pump, args=(sock, process, events), daemon=True).start()
         try:
+            for topic in topics:
+                for process in self.plan.tap_sites(topic)[1]:
+                    sock = self.connect(process, {"op": "tap", "topic": topic, "data": data,
+                                                  "max_rate": max_rate}, timeout=None)
+                    sockets.append(sock)
+                    answer, _ = receive_frame(sock)
+                    if "error" in answer:
+                        raise InspectError(f"{process}: {answer['error']}")
+                    threading.Thread(target=_pump, args=(sock, process, topic, events), daemon=True).start()
+            attached()
             while True:
                 event = events.get()
                 if isinstance(event, Exception):
@@ -182,17 +194,24 @@ class RunningLaunch:
     def decode(self, typename: str, data: bytes) -> Message:
         return self.codec(typename).decode(memoryview(data))
 
-    def publish(self, topic: str, message: Message) -> list[str]:
-        """Deliver ``message`` to every subscription of ``topic`` running here; the nodes reached."""
-        typename = self.topic(topic)
-        codec = self.codec(typename)
+    def publish(self, topic: str, message: Message, *, wait: float = 0.0) -> list[str]:
+        """Deliver ``message`` to every subscription of ``topic`` running here; the nodes reached.
+        With ``wait``, return only once each has finished with it (its callback returned, or its
+        take loop took the next message), at most ``wait`` seconds."""
+        codec = self.codec(self.topic(topic))
         buffer = bytearray(codec.size(message))
         codec.encode_into(message, memoryview(buffer))
+        return self.publish_bytes(topic, bytes(buffer), wait=wait)
+
+    def publish_bytes(self, topic: str, data: bytes, *, wait: float = 0.0) -> list[str]:
+        """:meth:`publish` of a message already encoded (CDR, as a recording holds it)."""
+        typename = self.topic(topic)
         channel = self.plan.channels[topic]
         processes = sorted({self.plan.process_of(n) for n in channel.subscribers if self.plan.runs_here(n)})
         reached: list[str] = []
         for process in processes:
-            answer, _ = self.ask(process, {"op": "pub", "topic": topic, "type": typename}, bytes(buffer))
+            answer, _ = self.ask(process, {"op": "pub", "topic": topic, "type": typename, "wait": wait}, data,
+                                 timeout=wait + 15.0)
             reached += answer["subscriptions"]
         return reached
 
@@ -245,19 +264,16 @@ class RunningLaunch:
         return found
 
 
-def _pump(sock: socket.socket, process: str, events: queue.Queue[TapEvent | Exception | None]) -> None:
+def _pump(sock: socket.socket, process: str, topic: str,
+          events: queue.Queue[tuple[str, TapEvent | None] | Exception]) -> None:
     try:
-        answer, _ = receive_frame(sock)
-        if "error" in answer:
-            events.put(InspectError(f"{process}: {answer['error']}"))
-            return
         while True:
             header, payload = receive_frame(sock)
             if header.get("idle"):
-                events.put(None)
+                events.put((topic, None))
                 continue
-            events.put(TapEvent(int(header["t"]), payload if payload else None,
-                                int(header.get("size", len(payload))), header.get("stamp"),
-                                int(header.get("dropped", 0))))
+            events.put((topic, TapEvent(int(header["t"]), payload if payload else None,
+                                        int(header.get("size", len(payload))), header.get("stamp"),
+                                        int(header.get("dropped", 0)))))
     except (OSError, InspectError) as exc:
-        events.put(InspectError(f"the tap in {process} ended: {exc}"))
+        events.put(InspectError(f"the tap of {topic} in {process} ended: {exc}"))

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
-from .._errors import LaunchError
+from .._errors import Error, LaunchError
 from .._log import get_logger
 from .._net import is_local_address
 from ..plan import LAUNCHER, Plan
@@ -54,8 +54,10 @@ class _Child:
 
 
 class Launcher:
-    def __init__(self, plan: Plan, *, duration: float | None = None) -> None:
+    def __init__(self, plan: Plan, *, duration: float | None = None, record: Path | None = None) -> None:
         self.plan = plan
+        self.record_to = record
+        self._recorder: threading.Thread | None = None
         self.duration = duration
         self.session = new_session()
         self.events: queue.Queue[dict[str, Any]] = queue.Queue()
@@ -136,6 +138,8 @@ class Launcher:
                 for sig, handler in previous.items():
                     signal.signal(sig, handler)
             self._plan_file.unlink(missing_ok=True)
+            if self._recorder is not None:
+                self._recorder.join(30.0)  # its taps ended with the processes: it writes the file's index
         if unclean:
             result.failures.extend(t for t in unclean if t not in result.failures)
             result.exit_code = result.exit_code or 1
@@ -185,6 +189,8 @@ class Launcher:
             refused = self._meet_hosts()
             if refused is not None:
                 return refused
+        if self.record_to is not None:
+            self._start_recording(self.record_to)
         for child in self.children.values():
             self._send(child, "go")
         if self.host is not None:
@@ -192,6 +198,27 @@ class Launcher:
         if self.link is not None:
             self.link.announce("running")
         return self._watch()
+
+    def _start_recording(self, out: Path) -> None:
+        """``launch --record``: every topic of this machine into ``out`` through taps, as ``hetros record``
+        would from another terminal, until the launch stops."""
+        from ._bag import record, recordable
+        from ._inspect import RunningLaunch
+
+        looking = RunningLaunch.find(session=self.session)
+        attached = threading.Event()
+
+        def recorder() -> None:
+            try:
+                summary = record(looking, recordable(looking, None), out, stop=self.stop, attached=attached.set)
+                log.info("%s", summary.describe())
+            except Error as exc:
+                log.error("recording into %s failed: %s", out, exc)
+            finally:
+                attached.set()
+        self._recorder = threading.Thread(target=recorder, name="recorder", daemon=True)
+        self._recorder.start()
+        attached.wait(30.0)  # its taps are in place before the first message is published
 
     def _meet_hosts(self) -> LaunchResult | None:
         """The start barrier across hosts: announce that this host is ready, then wait (for as long
@@ -268,6 +295,8 @@ class Launcher:
             kind = event["event"]
             if kind == "signal":
                 return LaunchResult(1 if self.failures else 0, self.failures, "interrupted")
+            if kind == "finished":  # something driving the launch from inside (``hetros play --launch``)
+                return LaunchResult(1 if self.failures or not event["ok"] else 0, self.failures, event["why"])
             if kind == "node_failed":
                 what = "restarting it" if event["restarting"] else "shutting the graph down"
                 sys.stderr.write(f"[ERROR] [launch]: node {event['node']} (target {event['target']}) "
@@ -367,7 +396,8 @@ class Launcher:
         return stuck
 
 
-def launch(plan: Plan, *, duration: float | None = None, host: str | None = None) -> LaunchResult:
+def launch(plan: Plan, *, duration: float | None = None, host: str | None = None,
+           record: Path | None = None) -> LaunchResult:
     """Run ``plan`` here; with hosts, this machine's share of it (``host``, else the host whose
     address is this machine's)."""
     if plan.hosts:
@@ -382,7 +412,7 @@ def launch(plan: Plan, *, duration: float | None = None, host: str | None = None
     elif host is not None:
         raise LaunchError(f"--as {host}: the project names no hosts (add a hosts: section)")
     _check_hardware(plan)
-    return Launcher(plan, duration=duration).run()
+    return Launcher(plan, duration=duration, record=record).run()
 
 
 def _check_hardware(plan: Plan) -> None:

@@ -6,6 +6,9 @@ Neither depends on the other: both depend on this package.
 
 from ._plan import (
     ACTION_PREFIX,
+    CLOCK_PREFIX,
+    CLOCK_TOPIC,
+    CLOCK_TYPE,
     GATEWAY_PREFIX,
     LAUNCHER,
     ROS1_TRANSPORT,
@@ -31,6 +34,9 @@ from ._plan import (
 
 __all__ = [
     "ACTION_PREFIX",
+    "CLOCK_PREFIX",
+    "CLOCK_TOPIC",
+    "CLOCK_TYPE",
     "GATEWAY_PREFIX",
     "LAUNCHER",
     "ROS1_TRANSPORT",

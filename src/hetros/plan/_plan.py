@@ -31,6 +31,10 @@ ROS2_BRIDGE = "hetros_ros2_bridge"
 # the node the planner adds to each fpga target whose topics cross to software: it runs the target's
 # simulator and is the software end of every gateway (see ``gateway_node``)
 GATEWAY_PREFIX = "hetros_gateway_"
+# with ``use_sim_time``: the node the planner adds to each process to follow /clock for the process' clock
+CLOCK_PREFIX = "hetros_clock_"
+CLOCK_TOPIC = "/clock"
+CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
 
 
 def gateway_node(target: str) -> str:
@@ -133,6 +137,8 @@ class Plan:
     dds_domain: int | None = None
     # of the project file and its message definitions: hosts running different ones refuse each other
     project_hash: str = ""
+    # every process' clock follows /clock (see CLOCK_PREFIX) instead of the wall
+    use_sim_time: bool = False
 
     def process_of(self, node: str) -> str:
         """Threads share their host's launcher process (called 'launcher'); others run alone."""
@@ -240,6 +246,7 @@ class Plan:
             hosts={k: HostPlan(**v) for k, v in raw.get("hosts", {}).items()},
             local_host=raw.get("local_host", ""),
             on_peer_lost=raw.get("on_peer_lost", "stop"),
+            use_sim_time=raw.get("use_sim_time", False),
             dds_domain=raw.get("dds_domain"),
             project_hash=raw.get("project_hash", ""),
         )

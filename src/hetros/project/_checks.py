@@ -117,7 +117,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
         else:
             report.warnings.append(f"{where('nodes')}: {problem}; `make install-rtl` brings the tools")
     external = bridged(project)
-    imported = {t for spec in external.values() for t in spec.import_}
+    imported = {t for spec in external.values() for t in spec.import_} | project.replayed
     _check_action_pairs(project, {a for spec in external.values() for a in spec.import_actions}, report)
     for topic, subscribed in subscribers.items():
         if topic in derived:

@@ -292,6 +292,9 @@ class Project(_Strict):
                                                       "the whole graph, or keep the rest running until it returns")
     dds_domain: int | None = Field(default=None, ge=0, le=232, description="the DDS domain of the edges between "
                                    "hosts (absent: $ROS_DOMAIN_ID, else 0)")
+    use_sim_time: bool = Field(default=False, description="every node's clock (get_clock, create_timer, rate) "
+                               "follows /clock (rosgraph_msgs/msg/Clock, published by a simulator node or "
+                               "`hetros play --clock`) instead of the wall")
 
     @field_validator("shm_budget")
     @classmethod
@@ -332,6 +335,8 @@ class LoadedProject:
         self.path = path
         self.root = path.parent
         self._lines = lines
+        # topics a recording feeds (``hetros play --launch``): subscribing to them needs no publisher
+        self.replayed: frozenset[str] = frozenset()
 
     def where(self, *yaml_path: str | int) -> str:
         """``file:line: a.b.c`` for a YAML path (the line of the nearest known ancestor)."""

@@ -9,6 +9,9 @@ from .._errors import CheckError
 from .._qos import QoS
 from ..msg import TypeRegistry, normalize_typename, registry
 from ..plan import (
+    CLOCK_PREFIX,
+    CLOCK_TOPIC,
+    CLOCK_TYPE,
     LAUNCHER,
     SERVICE_QOS,
     ChannelPlan,
@@ -74,11 +77,15 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
     gateways = _add_gateways(channels, fpga_of)
     for gateway, target in gateways.items():
         process_of[gateway] = target
+    clocks = _clock_followers(project, process_of, fpga_of, speaks_ros1) if model.use_sim_time else {}
+    for follower, target in clocks.items():
+        process_of[follower] = process_name(target, model.targets[target].kind)
+        _add(channels, CLOCK_TOPIC, CLOCK_TYPE, "topic", project, sub=follower)
     # every target on a host: its own, else the first one named (bridges run in the first host's launcher)
     first_host = next(iter(model.hosts), "")
     host_of_target = {t: spec.host or first_host for t, spec in model.targets.items()}
     host_of = ({n: host_of_target[s.target] for n, s in model.nodes.items()} | {b.name: first_host for b in bridges}
-               | {g: host_of_target[t] for g, t in gateways.items()})
+               | {g: host_of_target[t] for g, t in (gateways | clocks).items()})
 
     def transport(publisher: str, subscriber: str) -> TransportKind | None:
         if publisher in fpga_of or subscriber in fpga_of:
@@ -110,7 +117,8 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         } | {bridge.name: bridge for bridge in bridges}
         | {g: NodePlan(g, GATEWAY_RUN, t, {"target": t}, publish=_endpoints_of(channels, g, "publish"),
                        subscribe=_endpoints_of(channels, g, "subscribe"), services=_services_of(channels, g))
-           for g, t in gateways.items()},
+           for g, t in gateways.items()}
+        | {c: NodePlan(c, CLOCK_RUN, t, subscribe={CLOCK_TOPIC: CLOCK_TYPE}) for c, t in clocks.items()},
         channels=channels,
         edges=edges,
         ros1_master=ros1_master(project),
@@ -121,7 +129,24 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         on_peer_lost=model.on_peer_lost,
         dds_domain=model.dds_domain,
         project_hash=project_hash(project),
+        use_sim_time=model.use_sim_time,
     )
+
+
+# what a clock follower runs: a subscription to /clock that sets its process' clock
+CLOCK_RUN = "hetros.runtime._clock:follow_clock"
+
+
+def _clock_followers(project: LoadedProject, process_of: dict[str, str], fpga_of: dict[str, str],
+                     speaks_ros1: set[str]) -> dict[str, str]:
+    """``use_sim_time``: a clock follower per process that runs nodes, on one of the targets of that process."""
+    followers: dict[str, str] = {}
+    for node, spec in project.model.nodes.items():
+        if node in fpga_of or node in speaks_ros1:
+            continue
+        name = CLOCK_PREFIX + process_of[node]
+        followers.setdefault(name, spec.target)
+    return followers
 
 
 # what a gateway node runs: the fpga target's simulator, fed from and draining to software
@@ -167,7 +192,9 @@ def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, 
     if existing is None:
         if kind == "topic":
             spec = project.model.topics.get(name)
-            qos = spec if spec is not None else action_topic_qos(name) or QoS()
+            # /clock: only the latest time matters, and a simulator must never wait for a reader
+            default = QoS(history="keep_last", depth=1) if name == CLOCK_TOPIC else QoS()
+            qos = spec if spec is not None else action_topic_qos(name) or default
         else:
             qos = SERVICE_QOS
         existing = ChannelPlan(name, typename, kind, qos, (), (), service)  # type: ignore[arg-type]

@@ -1,6 +1,7 @@
 """Runtime: node API, per-node executor, per-process graph, the host of a process' nodes."""
 
 from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle
+from ._clock import Clock, Duration, SimulatedClock, Time
 from ._entities import Client, Publisher, Replies, Service, Subscription, Timer
 from ._graph import Graph
 from ._host import Host, resolve
@@ -14,7 +15,9 @@ __all__ = [
     "ActionServer",
     "Client",
     "ClientGoalHandle",
+    "Clock",
     "DeadlineMissedStatus",
+    "Duration",
     "GoalStatus",
     "Graph",
     "Host",
@@ -24,7 +27,9 @@ __all__ = [
     "Replies",
     "ServerGoalHandle",
     "Service",
+    "SimulatedClock",
     "Subscription",
+    "Time",
     "Timer",
     "resolve",
     "setup_logging",

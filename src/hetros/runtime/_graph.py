@@ -31,6 +31,7 @@ from ..transport import (
     Writer,
     transport_class,
 )
+from ._clock import Clock, SimulatedClock
 from ._endpoints import EndpointWriter, MergedReader, Relay, RetainedReader, endpoint_writer
 from ._taps import TapPoint
 
@@ -68,6 +69,8 @@ class Graph:
         self._prepared: dict[tuple[str, str], RetainedReader] = {}
         self._transports: dict[str, Transport] = {}
         self._context = TransportContext(plan, process, session, self.stop, self.types, self._codec)
+        # wall time, or /clock's with use_sim_time: what every node of this process reads
+        self.clock: Clock = SimulatedClock(self.stop) if plan is not None and plan.use_sim_time else Clock()
         # what a look from outside finds (``launch._control``): the live nodes, the topics' taps
         self.nodes: dict[str, Node] = {}
         self._taps: dict[str, TapPoint] = {}
@@ -104,6 +107,10 @@ class Graph:
                 self._prepared[(name, node)] = RetainedReader(reader, relay, self._give_back(name, node))
         for kind in self.plan.transports_of(nodes):
             self.transport(kind).prepare(nodes)
+        for channel in self.plan.channels.values():
+            # taps exist from the start, so a look (launch --record) can attach before the first publish
+            if channel.kind == "topic" and self.process in self.plan.tap_sites(channel.name)[1]:
+                self.tap_point(channel.name, channel.type)
 
     def _give_back(self, channel: str, node: str) -> Callable[[RetainedReader], None]:
         def release(reader: RetainedReader) -> None:
@@ -302,6 +309,7 @@ class Graph:
 
     def close(self) -> None:
         self.shutdown()
+        self.clock.close()
         self._close_prepared(None)
         with self._lock:
             transports, self._transports = self._transports, {}

@@ -25,6 +25,7 @@ from .._errors import (
 from .._qos import QoS
 from ..msg import ActionKind, Message, ServiceKind, service_type
 from ..plan import ROS1_TRANSPORT, request_channel
+from ._clock import Clock, SimulatedTimer
 from ._entities import Client, HandlingStats, Publisher, Service, Subscription, Timer, typename_of
 from ._executor import Executor
 from ._graph import Graph
@@ -172,9 +173,21 @@ class Node:
         self._closables.append(client)
         return client
 
-    def create_timer(self, period: float, callback: Callable[[], object]) -> Timer:
+    def create_timer(self, period: float, callback: Callable[[], object]) -> Timer | SimulatedTimer:
+        """Call ``callback`` every ``period`` seconds of the graph's clock (simulated time with
+        ``use_sim_time``), from this node's executor."""
+        clock = self.graph.clock
+        if clock.simulated:
+            if not period > 0:
+                raise NodeError(f"timer period must be positive seconds, not {period!r}")
+            self.executor.entities += 1
+            return SimulatedTimer(clock, self.executor, period, callback)
         self.executor.entities += 1
         return Timer(self, period, callback)
+
+    def get_clock(self) -> Clock:
+        """The graph's clock: ``now()`` is wall time, or the time on /clock with ``use_sim_time``."""
+        return self.graph.clock
 
     def _check_declared_type(self, channel: str, typename: str) -> None:
         plan = self.graph.plan
@@ -201,6 +214,10 @@ class Node:
         if not hz > 0:
             raise NodeError(f"rate must be positive Hz, not {hz!r}")
         period = 1.0 / hz
+        clock = self.graph.clock
+        if clock.simulated:
+            yield from self._simulated_rate(clock, int(period * 1e9))
+            return
         due = time.monotonic()
         for tick in itertools.count():
             if self.graph.stop.is_set():
@@ -212,6 +229,19 @@ class Node:
                 due = time.monotonic()
                 delay = 0.0
             if delay > 0 and self.graph.stop.wait(delay):
+                return
+
+    def _simulated_rate(self, clock: Clock, period_ns: int) -> Iterator[int]:
+        due = clock.now_ns()
+        for tick in itertools.count():
+            if self.graph.stop.is_set():
+                return
+            yield tick
+            due += period_ns
+            now = clock.now_ns()
+            if due < now - period_ns:
+                due = now
+            if not clock.wait_until(due, self.graph.stop):
                 return
 
     def spin(self, timeout: float | None = None) -> None:

@@ -1,0 +1,222 @@
+"""``hetros record`` and ``hetros play``: MCAP recordings of a running launch, played back into one.
+
+A recording is rosbag2's MCAP storage as rosbags writes it: ROS 2 CDR payloads, ``ros2msg``
+schemas, the rosbag2 metadata record inside the file. Foxglove and ``ros2 bag`` (with the MCAP
+storage plugin) open it. The recorder reads the launch through taps, so a publisher never waits
+for it: what the taps had to drop is counted and reported, never hidden.
+
+Playback delivers each message to the subscriptions of its topic where they run. ``--clock``
+publishes the recording's time on ``/clock`` (for ``use_sim_time`` projects); ``--lockstep``
+delivers a message only when every consumer has finished the one before, at the message's own
+time, so a replay gives the same outputs, bit for bit, however the graph is mapped.
+"""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .._errors import InspectError
+from ..plan import CLOCK_TOPIC, CLOCK_TYPE
+from ._inspect import RunningLaunch
+
+# how often --clock publishes the recording's time between messages (ros2 bag play's default)
+CLOCK_HZ = 40.0
+# how long --lockstep waits for a consumer to finish one message
+LOCKSTEP_PATIENCE = 60.0
+
+
+@dataclass
+class RecordSummary:
+    path: Path
+    messages: dict[str, int] = field(default_factory=dict)
+    dropped: dict[str, int] = field(default_factory=dict)
+
+    def describe(self) -> str:
+        lines = [f"wrote {self.path}: {sum(self.messages.values())} messages"]
+        for topic in sorted(self.messages):
+            lost = self.dropped.get(topic, 0)
+            note = f" ({lost} dropped by the tap: the recorder fell behind)" if lost else ""
+            lines.append(f"  {topic}: {self.messages[topic]}{note}")
+        return "\n".join(lines)
+
+
+def recordable(launch: RunningLaunch, topics: list[str] | None) -> list[str]:
+    """The topics to record: the ones named (each checked), or every topic this machine sees."""
+    if topics:
+        for topic in topics:
+            launch.topic(topic)
+        return topics
+    return sorted(name for name, channel in launch.plan.channels.items()
+                  if channel.kind == "topic" and "/_action/" not in name and launch.plan.tap_sites(name)[1])
+
+
+def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: float | None = None,
+           stop: threading.Event | None = None, attached: Callable[[], None] = lambda: None) -> RecordSummary:
+    """Record ``topics`` into ``out`` (an ``.mcap`` file, or a rosbag2 folder otherwise) until ``duration``
+    passed, ``stop`` is set, or the launch ends."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    if out.exists():
+        raise InspectError(f"{out} exists already: hetros record does not overwrite; choose another -o")
+    single = out.suffix == ".mcap"
+    folder = out.with_name(f".{out.stem}.recording") if single else out
+    shutil.rmtree(folder, ignore_errors=True)
+    writer = Writer(folder, version=9, storage_plugin=StoragePlugin.MCAP)
+    writer.open()
+    summary = RecordSummary(out)
+    stop = stop or threading.Event()
+    try:
+        connections = {topic: writer.add_connection(topic, launch.plan.channels[topic].type,
+                                                    typestore=launch.types.store) for topic in topics}
+        deadline = None if duration is None else time.monotonic() + duration
+        for topic, event in launch.tap_many(topics, data=True, attached=attached):
+            if event is not None and event.data is not None:
+                writer.write(connections[topic], event.time_ns, event.data)
+                summary.messages[topic] = summary.messages.get(topic, 0) + 1
+                if event.dropped:
+                    summary.dropped[topic] = summary.dropped.get(topic, 0) + event.dropped
+            if stop.is_set() or (deadline is not None and time.monotonic() >= deadline):
+                break
+    except InspectError as exc:
+        if "ended" not in str(exc):
+            raise
+        if not stop.is_set():  # `launch --record` stops the launch itself: nothing to say then
+            print(f"the launch ended: {exc}", file=sys.stderr)
+    finally:
+        writer.close()
+        if single:
+            (folder / f"{folder.name}.mcap").replace(out)
+            shutil.rmtree(folder, ignore_errors=True)
+    for topic in topics:
+        summary.messages.setdefault(topic, 0)
+    return summary
+
+
+def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = False, clock: bool = False,
+         lockstep: bool = False, topics: list[str] | None = None) -> dict[str, int]:
+    """Deliver a recording's messages into a running launch; the count per topic."""
+    from rosbags.rosbag2 import Reader
+
+    if not rate > 0:
+        raise InspectError(f"--rate must be positive, not {rate!r}")
+    if (clock or lockstep) and CLOCK_TOPIC not in launch.plan.channels:
+        if clock:
+            raise InspectError(f"--clock: launch {launch.record.session}'s project does not follow /clock; "
+                               "add `use_sim_time: true` to it")
+        clock = False
+    elif lockstep:
+        clock = True  # lockstep replays in the recording's time
+    with Reader(path) as reader:
+        wanted = []
+        for connection in reader.connections:
+            if topics and connection.topic not in topics:
+                continue
+            channel = launch.plan.channels.get(connection.topic)
+            if channel is None or channel.kind != "topic":
+                print(f"skipping {connection.topic}: launch {launch.record.session} has no such topic",
+                      file=sys.stderr)
+                continue
+            if channel.type != connection.msgtype:
+                raise InspectError(f"{path}: {connection.topic} was recorded as {connection.msgtype}, but the "
+                                   f"launch carries {channel.type} on it")
+            wanted.append(connection)
+        if not wanted:
+            raise InspectError(f"{path}: none of its topics is a topic of launch {launch.record.session}")
+        counts = {c.topic: 0 for c in wanted}
+        clock_codec = launch.codec(CLOCK_TYPE)
+        wait = LOCKSTEP_PATIENCE if lockstep else 0.0
+
+        def tell_time(nanoseconds: int) -> None:
+            message = launch.types.get(CLOCK_TYPE)(clock=launch.types.get("builtin_interfaces/msg/Time")(
+                sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000))
+            buffer = bytearray(clock_codec.size(message))
+            clock_codec.encode_into(message, memoryview(buffer))
+            launch.publish_bytes(CLOCK_TOPIC, bytes(buffer), wait=wait)
+
+        while True:
+            start_wall = time.monotonic()
+            first: int | None = None
+            last_clock = 0.0
+            for connection, timestamp, data in reader.messages(connections=wanted):
+                first = timestamp if first is None else first
+                if not lockstep:
+                    due = start_wall + (timestamp - first) / 1e9 / rate
+                    while (left := due - time.monotonic()) > 0:
+                        if clock and time.monotonic() - last_clock >= 1.0 / CLOCK_HZ:
+                            tell_time(first + int((time.monotonic() - start_wall) * rate * 1e9))
+                            last_clock = time.monotonic()
+                        time.sleep(min(left, 1.0 / CLOCK_HZ))
+                if clock:
+                    tell_time(timestamp)
+                    last_clock = time.monotonic()
+                reached = launch.publish_bytes(connection.topic, bytes(data), wait=wait)
+                patience = time.monotonic() + LOCKSTEP_PATIENCE
+                while lockstep and not reached and time.monotonic() < patience:
+                    time.sleep(0.05)  # lockstep loses nothing: wait for the consumers to subscribe
+                    reached = launch.publish_bytes(connection.topic, bytes(data), wait=wait)
+                counts[connection.topic] += 1
+            if not loop:
+                return counts
+
+
+def describe_played(counts: dict[str, int]) -> str:
+    return f"played {sum(counts.values())} messages: " + ", ".join(f"{t} {n}" for t, n in sorted(counts.items()))
+
+
+def recorded_topics(path: Path) -> dict[str, str]:
+    """Topic -> type of what ``path`` holds."""
+    from rosbags.rosbag2 import Reader
+
+    with Reader(path) as reader:
+        return {c.topic: c.msgtype for c in reader.connections}
+
+
+def play_launching(path: Path, project_file: Path, *, rate: float = 1.0, clock: bool = False, lockstep: bool = False,
+                   topics: list[str] | None = None) -> int:
+    """``hetros play --launch``: launch ``project_file`` without the nodes the recording stands in for (those
+    that publish only recorded topics), play the recording into it, and stop it; the launch's exit code."""
+    from ..project import load_project
+    from ..project._planner import plan as make_plan
+    from ._launcher import Launcher
+
+    fed = set(topics or recorded_topics(path))
+    project = load_project(project_file)
+    nodes = project.model.nodes
+    standing_in = {n for n, spec in nodes.items() if spec.publish and set(spec.types("publish")) <= fed}
+    project.model = project.model.model_copy(update={"nodes": {n: s for n, s in nodes.items() if n not in standing_in}})
+    project.replayed = frozenset(fed)
+    if standing_in:
+        print(f"the recording stands in for node(s) {', '.join(sorted(standing_in))}", file=sys.stderr)
+    launcher = Launcher(make_plan(project))
+
+    def player() -> None:
+        ok, why = False, "the recording could not be played"
+        try:
+            deadline = time.monotonic() + 60
+            while True:
+                try:
+                    looking = RunningLaunch.find(session=launcher.session)
+                    if len(looking.stats()) == len(looking.processes()):
+                        break
+                except InspectError:
+                    if time.monotonic() > deadline or launcher.stop.is_set():
+                        raise
+                time.sleep(0.1)
+            counts = play(looking, path, rate=rate, clock=clock, lockstep=lockstep, topics=topics)
+            ok, why = True, f"the recording was played ({sum(counts.values())} messages)"
+            print(describe_played(counts), flush=True)
+        except Exception as exc:
+            why = f"playing {path} failed: {exc}"
+        finally:
+            launcher.events.put({"event": "finished", "ok": ok, "why": why})
+    threading.Thread(target=player, name="player", daemon=True).start()
+    result = launcher.run()
+    if result.exit_code:
+        print(f"[play] graph stopped: {result.reason} (failed: {', '.join(result.failures) or '-'})", file=sys.stderr)
+    return result.exit_code

@@ -26,14 +26,14 @@ def running(project: Path, env: dict[str, str], log: Path, duration: float = 60.
     """``hetros launch project`` in the background until every process answers looks."""
     with log.open("w") as out, subprocess.Popen(
             [sys.executable, "-m", "hetros", "launch", str(project), "--duration", str(duration)],
-            stdout=out, stderr=subprocess.STDOUT, text=True, env=env) as proc:
+            stdout=out, stderr=subprocess.STDOUT, text=True, env=env, cwd=log.parent) as proc:
         try:
             deadline = time.monotonic() + 90
             while time.monotonic() < deadline:
                 assert proc.poll() is None, log.read_text()
                 done = hetros(env, "top", "--json", "--once", "--interval", "0.1", "--project", str(project),
                               check=False)
-                if done.returncode == 0 and json.loads(done.stdout)["nodes"]:
+                if done.returncode == 0 and not json.loads(done.stdout)["silent"]:
                     break
                 time.sleep(0.3)
             else:
@@ -272,3 +272,54 @@ def test_a_recording_holds_what_was_published_and_plays_back_into_a_running_laun
         while log.read_text().count("I heard: [hello world 2]") < 4 and time.monotonic() < deadline:
             time.sleep(0.1)
     assert log.read_text().count("I heard: [hello world 2]") >= 4  # each listener: the talker's and the replay's
+
+
+def test_the_vehicles_image_topic_is_echoed_without_slowing_its_publisher(tmp_path: Path,
+                                                                          env: dict[str, str]) -> None:
+    """examples/lane_following: 640x480 rgb8 images on loans over shared memory; echoing them does not slow
+    the camera, and the header stamps (node.get_clock()) give the chain's delay."""
+    with running(EXAMPLES / "lane_following" / "project.yaml", env, tmp_path / "launch.log"):
+        described = hetros(env, "topic", "echo", "/image_raw", "--once", "--no-arr").stdout
+        assert "data: '<sequence type: uint8, length: 921600>'" in described and "encoding: rgb8" in described
+        shown = yaml.safe_load(hetros(env, "topic", "echo", "/image_raw", "--once").stdout.split("---")[0])
+        assert len(shown["data"]) == 129 and shown["data"][-1] == "..." and any(shown["data"][:128])
+        with subprocess.Popen([sys.executable, "-m", "hetros", "topic", "echo", "/image_raw", "--duration", "6"],
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as echo:
+            rate = _last_figures(hetros(env, "topic", "hz", "/image_raw", "--duration", "4.2").stdout,
+                                 r"average rate: ([\d.]+)")[0]
+            echoed, _ = echo.communicate(timeout=60)
+        assert rate == pytest.approx(10.0, rel=0.05)  # the camera's rate while every image is echoed
+        assert echoed.count("---\n") >= 30
+        bandwidth = hetros(env, "topic", "bw", "/image_raw", "--duration", "4.2").stdout
+        megabytes, size = _last_figures(bandwidth, r"([\d.]+) MB/s from \d+ messages\n\tMessage size mean: "
+                                                   r"([\d.]+) KB")
+        assert size == pytest.approx(921.65, abs=0.01) and megabytes == pytest.approx(size * 10 / 1000, rel=0.10)
+        delay = _last_figures(hetros(env, "topic", "delay", "/cmd_vel", "--duration", "2.2").stdout,
+                              r"average delay: ([\d.]+)")[0]
+        assert 0 < delay < 2.0
+
+
+@pytest.mark.rtl
+@pytest.mark.skipif(shutil.which("verilator") is None, reason="Debian's verilator is not installed")
+def test_a_hardware_topic_is_echoed_through_its_gateway(tmp_path: Path, env: dict[str, str]) -> None:
+    """examples/sobel_hw on its fpga target: /image_edges comes out of the co-simulated Sobel, and its
+    gateway's publisher is where the command line looks."""
+    pytest.importorskip("amaranth")
+    example = EXAMPLES / "sobel_hw"
+    data = yaml.safe_load((example / "project_fpga.yaml").read_text())
+    for node in ("camera", "display"):
+        data["nodes"][node]["parameters"]["frames"] = 100_000
+    data["nodes"]["camera"]["parameters"]["hz"] = 20.0
+    project = tmp_path / "project_fpga.yaml"
+    project.write_text(yaml.safe_dump(data))
+    env = dict(env, PYTHONPATH=os.pathsep.join(filter(None, [str(example), env.get("PYTHONPATH", "")])))
+    with running(project, env, tmp_path / "launch.log"):
+        info = hetros(env, "topic", "info", "/image_edges", "-v").stdout
+        assert "Node name: sobel" in info and "Target: fpga (hardware)" in info
+        edges = yaml.safe_load(hetros(env, "topic", "echo", "/image_edges", "--once", "--full-length").stdout
+                               .split("---")[0])
+        assert (edges["width"], edges["height"], edges["encoding"]) == (64, 48, "mono8")
+        assert len(edges["data"]) == 64 * 48 and max(edges["data"]) > 0
+        top = json.loads(hetros(env, "top", "--json", "--once", "--interval", "1.5").stdout)
+        assert {p["process"] for p in top["processes"]} == {"io", "fpga"}
+        assert any(t["topic"] == "/image_edges" and t["rate_hz"] > 0 for t in top["topics"])

@@ -380,6 +380,8 @@ def _format_top(rows: dict[str, Any], session: str) -> str:
              f"{'PROCESS':<20} {'PID':>7} {'CPU%':>6} {'RSS MB':>8}"]
     lines += [f"{p['process']:<20} {p['pid']:>7} {p['cpu_percent']:>6.1f} {p['rss_mb']:>8.1f}"
               for p in rows["processes"]]
+    if rows["silent"]:
+        lines.append(f"(not answering: {', '.join(rows['silent'])})")
     lines += ["", f"{'NODE':<24} {'PROCESS':<16} {'CPU%':>6} {'CB p50 ms':>10} {'CB p99 ms':>10}"]
     lines += [f"{n['node']:<24} {n['process']:<16} {n['cpu_percent']:>6.1f} {n['callback_p50_ms']:>10.3f} "
               f"{n['callback_p99_ms']:>10.3f}" for n in rows["nodes"]]
@@ -398,6 +400,8 @@ def cmd_top(args: argparse.Namespace) -> int:
         if not after:
             raise InspectError(f"launch {launch.record.session} has ended")
         rows = _top_rows(before, after)
+        answered = {p["process"] for p in after}
+        rows["silent"] = [p for p in launch.processes() if p not in answered]  # starting, or stuck
         if args.json:
             print(json.dumps(rows), flush=True)
         else:

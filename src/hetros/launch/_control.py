@@ -25,7 +25,6 @@ from typing import TYPE_CHECKING, Any
 
 from .._errors import InspectError
 from .._log import get_logger
-from ..msg import Message
 from ..runtime._taps import TapSink
 from ..transport import MessageCodec
 
@@ -198,7 +197,7 @@ class ControlServer:
             return
         codec = self._codec(point.typename)
         wants_data = bool(request.get("data", True))
-        sink = TapSink(_encoder(codec) if wants_data else None, float(request.get("max_rate", 0.0)))
+        sink = TapSink(_encoder(codec) if wants_data else None, codec.size, float(request.get("max_rate", 0.0)))
         point.attach(sink)
         send_frame(connection, {"ok": True, "type": point.typename})
         sent_drops = 0
@@ -213,8 +212,8 @@ class ControlServer:
                 if wants_data:
                     send_frame(connection, {"t": stamp, "dropped": dropped}, item)
                 else:
-                    send_frame(connection, {"t": stamp, "dropped": dropped, "size": codec.size(item),
-                                            "stamp": _header_stamp(item)})
+                    size, header_stamp = item
+                    send_frame(connection, {"t": stamp, "dropped": dropped, "size": size, "stamp": header_stamp})
         finally:
             point.detach(sink)
 
@@ -277,14 +276,6 @@ def _encoder(codec: MessageCodec) -> Callable[[Any], bytearray]:
         codec.encode_into(message, memoryview(buffer))
         return buffer
     return encode
-
-
-def _header_stamp(message: Message) -> int | None:
-    header = getattr(message, "header", None)
-    stamp = getattr(header, "stamp", None)
-    if stamp is None or not hasattr(stamp, "nanosec"):
-        return None
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
 def _jsonable(value: Any) -> Any:

@@ -91,11 +91,11 @@ class Publisher(Generic[M]):
         if getattr(message, "__msgtype__", None) != self.typename:
             check_type(message, self.typename, f"topic {self.topic}")
         message._hetros_validate(message, self._short)
-        self._writer.write(message)
         tap = self._tap
         tap.published += 1
-        if tap.sinks:
+        if tap.sinks:  # before the write: a loan's arrays leave with a shared-memory send
             tap.offer(message)
+        self._writer.write(message)
         if self.deadline is not None:
             self.deadline.seen()
         if self.manual_liveliness:

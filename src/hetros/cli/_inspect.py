@@ -296,6 +296,35 @@ def cmd_service_call(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_action_list(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    for name, typename in sorted(launch.actions().items()):
+        print(f"{name} [{typename}]" if args.show_types else name)
+    return 0
+
+
+def cmd_action_send_goal(args: argparse.Namespace) -> int:
+    from ..runtime import GoalStatus
+
+    launch = _launch(args)
+    typename = launch.actions().get(args.action)
+    given = normalize_typename(args.type, "action")
+    if typename is not None and given != typename:
+        raise InspectError(f"{args.action} is a {typename}, not a {given}")
+    goal = from_plain(launch.types, f"{given}_Goal", _values(args.values, "values"))
+    print("Waiting for an action server to become available...\nSending goal:")
+    print("".join(f"     {line}\n" for line in _dump(to_plain(launch.types, goal)).splitlines()))
+    ended = launch.send_goal(args.action, goal)
+    if ended is None:
+        print("Goal was rejected.")
+        return 1
+    goal_id, status, result = ended
+    print(f"Goal accepted with ID: {goal_id}\n\nResult:")
+    print("".join(f"    {line}\n" for line in _dump(to_plain(launch.types, result)).splitlines()))
+    print(f"Goal finished with status: {GoalStatus(status).name}")
+    return 0 if status == GoalStatus.SUCCEEDED else 1
+
+
 def _parameter_kind(value: Any) -> str:
     if isinstance(value, bool):
         return "Boolean"
@@ -524,6 +553,16 @@ def add_commands(sub: Any) -> None:
     p.add_argument("type")
     p.add_argument("values", nargs="?", default="{}")
     p.set_defaults(func=cmd_service_call)
+    action = sub.add_parser("action", help="actions of a running launch (ros2 action)").add_subparsers(
+        dest="action_command", required=True)
+    p = action.add_parser("list")
+    p.add_argument("-t", "--show-types", action="store_true")
+    p.set_defaults(func=cmd_action_list)
+    p = action.add_parser("send_goal", help="send a goal and print its result")
+    p.add_argument("action")
+    p.add_argument("type")
+    p.add_argument("values", nargs="?", default="{}")
+    p.set_defaults(func=cmd_action_send_goal)
     param = sub.add_parser("param", help="parameters of a running launch's nodes (ros2 param)").add_subparsers(
         dest="param_command", required=True)
     p = param.add_parser("list")
@@ -562,7 +601,7 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--launch", metavar="PROJECT", help="launch the part of this project that consumes the recording "
                    "(its nodes that only publish recorded topics stay out), play into it, then stop it")
     p.set_defaults(func=cmd_play)
-    for group in (topic, node, service, param):
+    for group in (topic, node, service, action, param):
         for parser in group.choices.values():
             _which(parser)
     for name in ("top", "record", "play"):

@@ -255,6 +255,30 @@ class ControlServer:
         codec.encode_into(response, memoryview(buffer))
         send_frame(connection, {"ok": True}, buffer)
 
+    def _op_send_goal(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        action = str(request["action"])
+        node = next((n for n in list(self.graph.nodes.values()) if action in n.action_servers), None)
+        if node is None:
+            raise InspectError(f"no server of action {action} runs in {self.process} (yet)")
+        server = node.action_servers[action]
+        goal = self._codec(f"{server.type.name}_Goal").decode(memoryview(payload))
+        timeout = float(request.get("timeout", 600.0))
+        handle = node.call_in_executor(lambda: server.submit(goal), 30.0)
+        if handle is None:
+            send_frame(connection, {"accepted": False})
+            return
+        send_frame(connection, {"accepted": True, "goal_id": handle.goal_id.hex()})
+        deadline = time.monotonic() + timeout
+        while handle._open and time.monotonic() < deadline and not self._closed:
+            time.sleep(0.01)
+        if handle._open:
+            raise InspectError(f"goal {handle.goal_id.hex()[:8]} of {action} did not end within {timeout:g} s")
+        codec = self._codec(f"{server.type.name}_Result")
+        result = handle.result if handle.result is not None else server.type.Result()
+        buffer = bytearray(codec.size(result))
+        codec.encode_into(result, memoryview(buffer))
+        send_frame(connection, {"status": int(handle.status)}, buffer)
+
     def _node(self, name: str) -> Node:
         node = self.graph.nodes.get(name)
         if node is None:

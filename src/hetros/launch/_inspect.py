@@ -238,6 +238,34 @@ class RunningLaunch:
                            bytes(buffer), timeout + 5.0)
         return self.decode(f"{typename}_Response", data)
 
+    def actions(self) -> dict[str, str]:
+        """Action name -> type, of every action served in the launch."""
+        return {a: t for node in self.plan.nodes.values() for a, t in node.actions.items()}
+
+    def send_goal(self, action: str, goal: Message, timeout: float = 600.0) -> tuple[str, int, Message] | None:
+        """Send ``goal`` to ``action``'s server and wait for the end: (goal id, status, result), or None
+        when the server rejected it."""
+        server = next((n for n, spec in self.plan.nodes.items() if action in spec.actions), None)
+        if server is None:
+            known = ", ".join(sorted(self.actions())) or "none"
+            raise InspectError(f"launch {self.record.session} has no action {action} (its actions: {known})")
+        typename = self.plan.nodes[server].actions[action]
+        codec = self.codec(f"{typename}_Goal")
+        buffer = bytearray(codec.size(goal))
+        codec.encode_into(goal, memoryview(buffer))
+        with self.connect(self.node_process(server), {"op": "send_goal", "action": action, "timeout": timeout},
+                          bytes(buffer), timeout=timeout + 30.0) as sock:
+            answer, _ = receive_frame(sock)
+            if "error" in answer:
+                raise InspectError(answer["error"])
+            if not answer["accepted"]:
+                return None
+            goal_id = str(answer["goal_id"])
+            ended, data = receive_frame(sock)
+        if "error" in ended:
+            raise InspectError(ended["error"])
+        return goal_id, int(ended["status"]), self.decode(f"{typename}_Result", data)
+
     def node_process(self, node: str) -> str:
         if node not in self.plan.nodes:
             known = ", ".join(sorted(self.plan.nodes))

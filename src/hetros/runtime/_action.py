@@ -273,7 +273,16 @@ class ActionServer:
         self._replies[part].send(request_id, client, response)
 
     def _on_send_goal(self, request_id: int, client: str, request: Any) -> None:
-        goal_id = bytes(request.goal_id.uuid)
+        self._admit(bytes(request.goal_id.uuid), request.goal, client,
+                    lambda response: self._reply("send_goal", request_id, client, response))
+
+    def submit(self, goal: Any) -> ServerGoalHandle | None:
+        """A goal from the command line (``hetros action send_goal``), admitted as a client's would be:
+        its handle, or None when rejected. Run in the server node's executor."""
+        return self._admit(os.urandom(16), goal, "hetros action send_goal", lambda response: None)
+
+    def _admit(self, goal_id: bytes, goal: Any, client: str,
+               reply: Callable[[Any], None]) -> ServerGoalHandle | None:
         accepted = False
         with self._lock:
             duplicate = goal_id in self._goals
@@ -283,23 +292,24 @@ class ActionServer:
             pass
         else:
             try:
-                accepted = True if self.goal_callback is None else bool(self.goal_callback(request.goal))
+                accepted = True if self.goal_callback is None else bool(self.goal_callback(goal))
             except Exception:
                 log.exception("action %s: goal_callback raised; goal %s rejected", self.name, _short(goal_id))
-        handle = ServerGoalHandle(self, goal_id, request.goal)
+        handle = ServerGoalHandle(self, goal_id, goal)
         response = self._types["send_goal"].Response(accepted=accepted, stamp=handle.stamp)
         if not accepted:
-            self._reply("send_goal", request_id, client, response)
-            return
+            reply(response)
+            return None
         with self._lock:
             self._goals[goal_id] = handle
-        self._reply("send_goal", request_id, client, response)
+        reply(response)
         with self._lock:
             self._waiting_goals.append(handle)
             self._publish_status()
             self._changed.notify_all()
         if self.execute is not None:
             self._start_goals()
+        return handle
 
     def _on_get_result(self, request_id: int, client: str, request: Any) -> None:
         goal_id = bytes(request.goal_id.uuid)

@@ -37,9 +37,12 @@ class TapSink:
         self.measure = measure
         self.max_rate = max_rate
         self.dropped = 0
+        # appended by the publisher, taken by the sender (a deque's ends are thread-safe); the byte
+        # counts are kept one per side so that neither thread writes the other's
         self._queue: deque[tuple[int, Any]] = deque()
-        self._queued_bytes = 0
-        self._ready = threading.Condition(threading.Lock())
+        self._added_bytes = 0
+        self._taken_bytes = 0
+        self._nonempty = threading.Event()
         self._next_allowed = 0
         self.closed = False
 
@@ -54,33 +57,34 @@ class TapSink:
                 return
             item: Any = (self.measure(message), header_stamp(message))
         else:
-            if len(queue) >= DATA_DEPTH or self._queued_bytes >= DATA_BYTES:
+            if len(queue) >= DATA_DEPTH or self._added_bytes - self._taken_bytes >= DATA_BYTES:
                 self.dropped += 1
                 return
             item = self.encode(message)
-            self._queued_bytes += len(item)
+            self._added_bytes += len(item)
         if self.max_rate:
             self._next_allowed = now + int(1e9 / self.max_rate)
-        with self._ready:
-            queue.append((now, item))
-            self._ready.notify()
+        queue.append((now, item))
+        if not self._nonempty.is_set():
+            self._nonempty.set()
 
     def take(self, timeout: float) -> tuple[int, Any] | None:
-        """The oldest queued (wall time in ns, message or bytes), or None after ``timeout``."""
-        with self._ready:
-            if not self._queue and not self.closed:
-                self._ready.wait(timeout)
-            if not self._queue:
+        """The oldest queued (wall time in ns, size and stamp or encoded bytes), or None after ``timeout``."""
+        queue = self._queue
+        if not queue:
+            self._nonempty.clear()
+            if not queue and not self.closed:  # the publisher may have appended between the test and the clear
+                self._nonempty.wait(timeout)
+            if not queue:
                 return None
-            stamp, item = self._queue.popleft()
+        stamp, item = queue.popleft()
         if self.encode is not None:
-            self._queued_bytes -= len(item)
+            self._taken_bytes += len(item)
         return stamp, item
 
     def close(self) -> None:
-        with self._ready:
-            self.closed = True
-            self._ready.notify_all()
+        self.closed = True
+        self._nonempty.set()
 
 
 class TapPoint:

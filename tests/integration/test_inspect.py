@@ -98,6 +98,10 @@ def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -
         refused = hetros(env, "param", "set", "/talker", "hz", "fast", check=False)
         assert refused.returncode == 1 and "is a float, not a str" in refused.stdout
         assert hetros(env, "param", "list", "/talker").stdout == "/talker:\n  hz\n"
+        logged = hetros(env, "log", "--node", "listener2").stdout.splitlines()
+        stamps = [float(re.match(r"\[INFO\] \[([\d.]+)\] \[listener2\]: I heard: \[hello world \d+\]$", line)[1])
+                  for line in logged]
+        assert len(stamps) >= 10 and stamps == sorted(stamps)
         published = hetros(env, "topic", "pub", "/chatter", "std_msgs/msg/String", "{data: from the command line}",
                            "--once").stdout
         assert "publishing #1: std_msgs.msg.String(data='from the command line')" in published
@@ -137,6 +141,25 @@ def test_a_service_is_called_and_bad_requests_are_refused(tmp_path: Path, env: d
         assert off_range.returncode == 1 and "AddTwoInts_Request.a" in off_range.stderr
         assert "sum=3" in hetros(env, "service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts",
                                  "{a: 1, b: 2}").stdout
+
+
+def test_an_action_goal_is_sent_and_its_result_printed(tmp_path: Path, env: dict[str, str]) -> None:
+    example = EXAMPLES / "sort_action"
+    data = yaml.safe_load((example / "project.yaml").read_text())
+    del data["nodes"]["client"]
+    data["messages"] = [str(example / "msg")]
+    project = tmp_path / "project.yaml"
+    project.write_text(yaml.safe_dump(data))
+    env = dict(env, PYTHONPATH=os.pathsep.join(filter(None, [str(example), env.get("PYTHONPATH", "")])))
+    with running(project, env, tmp_path / "launch.log"):
+        assert hetros(env, "action", "list", "-t").stdout == "/sort [sorter_msgs/action/Sort]\n"
+        sent = hetros(env, "action", "send_goal", "/sort", "sorter_msgs/action/Sort", "{unsorted: [5, 3, 9, 1]}")
+        assert "Sending goal:\n     unsorted:\n     - 5\n" in sent.stdout
+        assert re.search(r"Goal accepted with ID: [0-9a-f]{32}\n\nResult:\n    sorted:\n    - 1\n    - 3\n    - 5\n"
+                         r"    - 9\n", sent.stdout), sent.stdout
+        assert sent.stdout.endswith("Goal finished with status: SUCCEEDED\n")
+        wrong = hetros(env, "action", "send_goal", "/sort", "sorter_msgs/action/Sort", "{unsorted: [-1]}", check=False)
+        assert wrong.returncode == 1 and "unsorted" in wrong.stderr
 
 
 def test_two_launches_at_once_do_not_mix_and_another_user_is_refused(tmp_path: Path, env: dict[str, str]) -> None:

@@ -10,10 +10,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 import time
 from collections import deque
 from collections.abc import Callable, Iterable
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -443,12 +445,64 @@ def cmd_top(args: argparse.Namespace) -> int:
             return 0
 
 
+# -- log ----------------------------------------------------------------------------------------
+
+_LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<time>\d+\.\d+)\] \[(?P<name>[^\]]+)\]: ")
+
+
+class _LogFile:
+    """One process' log of a launch, read as it grows; records keep their continuation lines."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.offset = 0
+        self.partial = ""
+
+    def new_records(self) -> list[tuple[float, str, str]]:
+        try:
+            with self.path.open("r", encoding="utf-8", errors="replace") as handle:
+                handle.seek(self.offset)
+                text = handle.read()
+                self.offset = handle.tell()
+        except OSError:
+            return []
+        text, self.partial = self.partial + text, ""
+        if not text.endswith("\n"):
+            text, _, self.partial = text.rpartition("\n")
+        records: list[tuple[float, str, str]] = []
+        for line in text.splitlines():
+            match = _LOG_LINE.match(line)
+            if match:
+                records.append((float(match["time"]), match["name"], line))
+            elif records:
+                records[-1] = (records[-1][0], records[-1][1], records[-1][2] + "\n" + line)
+        return records
+
+
+def cmd_log(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    files: dict[Path, _LogFile] = {}
+    nodes = {name.lstrip("/") for name in args.node or []}
+    unknown = nodes - set(launch.plan.nodes)
+    if unknown:
+        raise InspectError(f"launch {launch.record.session} has no node {', '.join(sorted(unknown))} "
+                           f"(its nodes: {', '.join(sorted(launch.plan.nodes))})")
+    while True:
+        for path in sorted(launch.folder.glob("*.log")):
+            files.setdefault(path, _LogFile(path))
+        records = sorted(r for log in files.values() for r in log.new_records())
+        for _, name, text in records:
+            if not nodes or name in nodes:
+                print(text, flush=True)
+        if not args.follow or not launch.folder.exists():
+            return 0
+        time.sleep(0.2)
+
+
 # -- record, play ----------------------------------------------------------------------------------
 
 
 def cmd_record(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from ..launch._bag import record, recordable
 
     launch = _launch(args)
@@ -467,8 +521,6 @@ def cmd_record(args: argparse.Namespace) -> int:
 
 
 def cmd_play(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from ..launch._bag import describe_played, play
 
     if args.launch:
@@ -583,6 +635,10 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--once", action="store_true", help="print one round and exit")
     p.add_argument("-n", "--count", type=int, default=0, help="print this many rounds and exit")
     p.set_defaults(func=cmd_top)
+    p = sub.add_parser("log", help="the log lines of a running launch's nodes, every process merged in time")
+    p.add_argument("-f", "--follow", action="store_true", help="keep printing new lines until the launch ends")
+    p.add_argument("--node", action="append", help="only this node's lines (repeatable)")
+    p.set_defaults(func=cmd_log)
     p = sub.add_parser("record", help="record a running launch's topics into MCAP (ros2 bag record)")
     p.add_argument("-t", "--topics", nargs="+", help="the topics to record")
     p.add_argument("-a", "--all", action="store_true", help="every topic this machine sees")
@@ -604,5 +660,5 @@ def add_commands(sub: Any) -> None:
     for group in (topic, node, service, action, param):
         for parser in group.choices.values():
             _which(parser)
-    for name in ("top", "record", "play"):
+    for name in ("top", "log", "record", "play"):
         _which(sub.choices[name])

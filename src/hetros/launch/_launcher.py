@@ -28,6 +28,7 @@ from .._log import get_logger
 from .._net import is_local_address
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
+from ..runtime._log import log_to_file, stop_logging_to
 from ..transport import cleanup_stale, new_session, remove_session_segments
 from ._control import ControlServer
 from ._hosts import HostLink, local_host
@@ -108,6 +109,7 @@ class Launcher:
     def run(self) -> LaunchResult:
         setup_logging()
         cleanup_stale()
+        logged = log_to_file(session_folder(self.session) / f"{LAUNCHER}.log")
         self._plan_file = session_folder(self.session) / "plan.json"
         write_private(self._plan_file, self.plan.to_json())
         # SIGHUP: `hetros deploy` stops a remote host by hanging up its ssh terminal
@@ -140,6 +142,7 @@ class Launcher:
             self._plan_file.unlink(missing_ok=True)
             if self._recorder is not None:
                 self._recorder.join(30.0)  # its taps ended with the processes: it writes the file's index
+            stop_logging_to(logged)
         if unclean:
             result.failures.extend(t for t in unclean if t not in result.failures)
             result.exit_code = result.exit_code or 1

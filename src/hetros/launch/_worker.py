@@ -36,6 +36,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--status-fd", type=int, required=True)
     args = parser.parse_args(argv)
     setup_logging()
+    from ..runtime._log import log_to_file
+    from ._registry import session_folder
+
+    log_to_file(session_folder(args.session) / f"{args.target}.log")
     status = os.fdopen(args.status_fd, "w", buffering=1)
     lock = threading.Lock()
 
@@ -96,7 +100,6 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     hosts.append(host)
     from ._control import ControlServer
-    from ._registry import session_folder
 
     looks = ControlServer(host, session_folder(args.session), args.target)
     host.graph.stop_reason = stop_reason[0]

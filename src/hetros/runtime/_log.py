@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import logging
+import os
 import sys
+from pathlib import Path
 
 NODE_LOGGER_PREFIX = "hetros.node."
 
@@ -38,3 +40,27 @@ def setup_logging(level: int = logging.INFO) -> None:
     root.addHandler(handler)
     root.setLevel(level)
     root.propagate = False
+
+
+class StampedFormatter(NodeFormatter):
+    """``[INFO] [1795662970.538698702] [listener]: I heard: hello 3``: ROS 2's console format, with the
+    wall time that lets ``hetros log`` merge the lines of every process of a launch."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        level, _, rest = super().format(record).partition(" ")
+        return f"{level} [{record.created:.9f}] {rest}"
+
+
+def log_to_file(path: Path) -> logging.Handler:
+    """Also write this process' hetros log lines to ``path`` (created readable by this user only),
+    until the handler returned is removed (``stop_logging_to``)."""
+    descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o600)
+    handler = logging.StreamHandler(os.fdopen(descriptor, "a", buffering=1, encoding="utf-8"))
+    handler.setFormatter(StampedFormatter())
+    logging.getLogger("hetros").addHandler(handler)
+    return handler
+
+
+def stop_logging_to(handler: logging.Handler) -> None:
+    logging.getLogger("hetros").removeHandler(handler)
+    handler.close()

@@ -346,3 +346,43 @@ def test_a_hardware_topic_is_echoed_through_its_gateway(tmp_path: Path, env: dic
         top = json.loads(hetros(env, "top", "--json", "--once", "--interval", "1.5").stdout)
         assert {p["process"] for p in top["processes"]} == {"io", "fpga"}
         assert any(t["topic"] == "/image_edges" and t["rate_hz"] > 0 for t in top["topics"])
+
+
+def test_foxglove_sees_the_topics_with_their_schemas_and_messages(tmp_path: Path, env: dict[str, str]) -> None:
+    """`hetros foxglove`: Foxglove's WebSocket protocol, as a Foxglove client speaks it."""
+    pytest.importorskip("foxglove")
+    sync_client = pytest.importorskip("websockets.sync.client")
+    from hetros.msg import registry
+    from hetros.transport import MessageCodec
+
+    with running(EXAMPLES / "talker_listener" / "project.yaml", env, tmp_path / "launch.log"), \
+            subprocess.Popen([sys.executable, "-m", "hetros", "foxglove", "--port", "0"], env=env, text=True,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE) as server:
+        try:
+            assert server.stdout is not None
+            url = re.search(r"ws://[\d.]+:\d+", server.stdout.readline())
+            assert url, server.stderr.read() if server.stderr else ""
+            assert url[0].startswith("ws://127.0.0.1:")
+            with sync_client.connect(url[0], subprotocols=["foxglove.sdk.v1"], open_timeout=20) as socket_:
+                channels: dict[str, dict[str, object]] = {}
+                while "/chatter" not in channels:
+                    text = socket_.recv(timeout=20)
+                    answer = json.loads(text) if isinstance(text, str) else {}
+                    if answer.get("op") == "advertise":
+                        channels.update({c["topic"]: c for c in answer["channels"]})
+                chatter = channels["/chatter"]
+                assert (chatter["encoding"], chatter["schemaName"], chatter["schemaEncoding"]) == (
+                    "cdr", "std_msgs/msg/String", "ros2msg")
+                assert chatter["schema"] == "string data\n"
+                socket_.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 7,
+                                                                                "channelId": chatter["id"]}]}))
+                while True:
+                    frame = socket_.recv(timeout=20)
+                    if isinstance(frame, bytes) and frame[0] == 1:
+                        break
+                assert int.from_bytes(frame[1:5], "little") == 7
+                message = MessageCodec(registry(), "std_msgs/msg/String").decode(memoryview(frame[13:]))
+                assert re.fullmatch(r"hello world \d+", message.data)
+        finally:
+            server.terminate()
+            server.wait(30)

@@ -537,6 +537,22 @@ def cmd_play(args: argparse.Namespace) -> int:
             return 0
 
 
+def cmd_foxglove(args: argparse.Namespace) -> int:
+    from ..launch._foxglove import FoxgloveView
+
+    launch = _launch(args)
+    view = FoxgloveView(launch, host=args.host, port=args.port, max_rate=args.max_rate)
+    print(f"serving launch {launch.record.session} ({launch.record.project}) to Foxglove at "
+          f"ws://{args.host}:{view.port}; Ctrl-C stops", flush=True)
+    try:
+        while launch.folder.exists():
+            time.sleep(0.5)
+    finally:
+        view.close()
+    print("the launch ended")
+    return 0
+
+
 # -- the parser ---------------------------------------------------------------------------------
 
 
@@ -639,6 +655,12 @@ def add_commands(sub: Any) -> None:
     p.add_argument("-f", "--follow", action="store_true", help="keep printing new lines until the launch ends")
     p.add_argument("--node", action="append", help="only this node's lines (repeatable)")
     p.set_defaults(func=cmd_log)
+    p = sub.add_parser("foxglove", help="serve a running launch to Foxglove (its WebSocket protocol)")
+    p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1 only)")
+    p.add_argument("--port", type=int, default=8765, help="default %(default)s; 0 picks a free one")
+    p.add_argument("--max-rate", type=float, default=30.0,
+                   help="messages per second per topic at most (default %(default)s); never slows a publisher")
+    p.set_defaults(func=cmd_foxglove)
     p = sub.add_parser("record", help="record a running launch's topics into MCAP (ros2 bag record)")
     p.add_argument("-t", "--topics", nargs="+", help="the topics to record")
     p.add_argument("-a", "--all", action="store_true", help="every topic this machine sees")
@@ -660,5 +682,5 @@ def add_commands(sub: Any) -> None:
     for group in (topic, node, service, action, param):
         for parser in group.choices.values():
             _which(parser)
-    for name in ("top", "log", "record", "play"):
+    for name in ("top", "log", "foxglove", "record", "play"):
         _which(sub.choices[name])

@@ -112,6 +112,9 @@ def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -
         assert chatter["topic"] == "/chatter" and chatter["rate_hz"] == pytest.approx(10.0, abs=1.5)
         listener = next(n for n in top["nodes"] if n["node"] == "listener")
         assert 0 < listener["callback_p50_ms"] <= listener["callback_p99_ms"]
+        drawn = hetros(env, "graph", "--live", "--out", str(tmp_path / "live")).stdout
+        assert 8.0 <= float(re.search(r"talker -> listener, listener2  \(([\d.]+) Hz\)", drawn)[1]) <= 12.0
+        assert 'label="shm ' in (tmp_path / "live.dot").read_text()
         deadline = time.monotonic() + 10
         while "I heard: [from the command line]" not in log.read_text() and time.monotonic() < deadline:
             time.sleep(0.1)

@@ -46,10 +46,18 @@ def cmd_graph(args: argparse.Namespace) -> int:
     from ..project import plan_file
     from ..project._graph import describe, write_graph
 
-    plan = plan_file(args.project)
-    print(describe(plan))
+    rates = None
+    if args.live:
+        from ._inspect import live_rates
+
+        plan, rates = live_rates(args.session, args.project)
+    elif args.project:
+        plan = plan_file(args.project)
+    else:
+        raise CheckError(["hetros graph needs a project file, or --live for a running launch"])
+    print(describe(plan, rates))
     if args.out:
-        for path in write_graph(plan, Path(args.out)):
+        for path in write_graph(plan, Path(args.out), rates):
             print(f"wrote {path}")
     return 0
 
@@ -357,8 +365,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("project")
     p.set_defaults(func=cmd_check)
     p = sub.add_parser("graph", help="print the computation and architecture graphs")
-    p.add_argument("project")
+    p.add_argument("project", nargs="?", help="the project file (with --live: picks its running launch)")
     p.add_argument("--out", help="write <out>.dot and <out>.svg")
+    p.add_argument("--live", action="store_true", help="of a running launch, with each topic's rate on its edges")
+    p.add_argument("--session", help="with --live: the launch's session (hetros ps)")
     p.set_defaults(func=cmd_graph)
     p = sub.add_parser("launch", help="run a project")
     p.add_argument("project")

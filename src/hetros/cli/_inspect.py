@@ -24,7 +24,7 @@ from .._errors import InspectError
 from ..launch._inspect import RunningLaunch, TapEvent
 from ..msg import Message, normalize_typename
 from ..msg._convert import DEFAULT_TRUNCATE_LENGTH, from_plain, to_plain
-from ..plan import ACTION_PREFIX
+from ..plan import ACTION_PREFIX, Plan
 
 # ros2 topic hz's default window (messages)
 HZ_WINDOW = 10000
@@ -404,6 +404,15 @@ def _top_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]) -> dict
             entry["rate_hz"] += (topic["published"] - old_count) / span
             entry["published"] += topic["published"]
     return {"processes": processes, "nodes": nodes, "topics": sorted(topics.values(), key=lambda t: t["topic"])}
+
+
+def live_rates(session: str | None, project: str | None) -> tuple[Plan, dict[str, float]]:
+    """A running launch's plan and each topic's rate over one second (``hetros graph --live``)."""
+    launch = RunningLaunch.find(session, project)
+    before = launch.stats()
+    time.sleep(1.0)
+    rows = _top_rows(before, launch.stats())
+    return launch.plan, {t["topic"]: t["rate_hz"] for t in rows["topics"]}
 
 
 def _format_top(rows: dict[str, Any], session: str) -> str:

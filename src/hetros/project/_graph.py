@@ -11,7 +11,12 @@ from .._errors import Error
 from ..plan import ACTION_PREFIX, ROS2_BRIDGE, Plan
 
 
-def describe(plan: Plan) -> str:
+def _rate(rates: dict[str, float] | None, topic: str) -> str:
+    return "" if rates is None else f" {rates.get(topic, 0.0):.1f} Hz"
+
+
+def describe(plan: Plan, rates: dict[str, float] | None = None) -> str:
+    """The graphs as text; with ``rates`` (a running launch's, topic -> Hz), each topic's rate."""
     lines = [f"project {plan.name}", "", "computation graph (nodes and topics):"]
     for name, node in plan.nodes.items():
         for action, typename in node.actions.items():
@@ -24,7 +29,8 @@ def describe(plan: Plan) -> str:
             continue
         if channel.kind == "topic":
             lines.append(f"  {channel.name} [{channel.type}]  {', '.join(channel.publishers)} -> "
-                         f"{', '.join(channel.subscribers) or '(no subscriber)'}")
+                         f"{', '.join(channel.subscribers) or '(no subscriber)'}"
+                         + (f"  ({_rate(rates, channel.name).strip()})" if rates is not None else ""))
         elif channel.kind == "request":
             lines.append(f"  service {channel.service} [{channel.type.removesuffix('_Request')}]  "
                          f"{', '.join(channel.publishers) or '(no client)'} -> {', '.join(channel.subscribers)}")
@@ -79,7 +85,7 @@ def _ros2_lines(plan: Plan) -> list[str]:
     return lines
 
 
-def to_dot(plan: Plan) -> str:
+def to_dot(plan: Plan, rates: dict[str, float] | None = None) -> str:
     out = ["digraph hetros {", "  rankdir=LR;", '  node [fontname="Helvetica"];']
     for target in plan.targets.values():
         members = [n for n, spec in plan.nodes.items() if spec.target == target.name]
@@ -97,8 +103,9 @@ def to_dot(plan: Plan) -> str:
         channel = plan.channels[edge.channel]
         style = "solid" if edge.transport == "inproc" else "bold"
         if channel.kind == "topic":
-            out.append(f'  "{edge.publisher}" -> "{channel.name}" [label="{edge.transport}", style={style}];')
-            out.append(f'  "{channel.name}" -> "{edge.subscriber}" [label="{edge.transport}", style={style}];')
+            label = f"{edge.transport}{_rate(rates, channel.name)}"
+            out.append(f'  "{edge.publisher}" -> "{channel.name}" [label="{label}", style={style}];')
+            out.append(f'  "{channel.name}" -> "{edge.subscriber}" [label="{label}", style={style}];')
         elif channel.kind == "request":
             out.append(f'  "{edge.publisher}" -> "{edge.subscriber}" [label="{channel.service} '
                        f'({edge.transport})", style=dashed];')
@@ -110,11 +117,11 @@ def to_dot(plan: Plan) -> str:
     return "\n".join(unique) + "\n"
 
 
-def write_graph(plan: Plan, out: Path) -> list[Path]:
+def write_graph(plan: Plan, out: Path, rates: dict[str, float] | None = None) -> list[Path]:
     """Write ``<out>.dot`` and render ``<out>.svg`` with Graphviz."""
     out.parent.mkdir(parents=True, exist_ok=True)
     dot_path = out.with_suffix(".dot")
-    dot_path.write_text(to_dot(plan), encoding="utf-8")
+    dot_path.write_text(to_dot(plan, rates), encoding="utf-8")
     svg_path = out.with_suffix(".svg")
     beside = Path(sys.executable).parent / "graphviz-pure"
     renderer = shutil.which("dot") or shutil.which("graphviz-pure") or (str(beside) if beside.exists() else None)

@@ -28,21 +28,13 @@ from hetros.runtime._taps import TapSink
 from hetros.transport import MessageCodec
 
 
-def _encoder(codec: MessageCodec) -> Any:
-    def encode(message: Any) -> bytearray:
-        buffer = bytearray(codec.size(message))
-        codec.encode_into(message, memoryview(buffer))
-        return buffer
-    return encode
-
-
 def _publish_ns(make: Any, typename: str, mode: str, count: int) -> float:
     node = Node(f"bench_{mode}")
     pub = node.create_publisher(type(make()), "/tapped")
     codec = MessageCodec(node.graph.types, typename)
     sink = None
     if mode != "idle":
-        sink = TapSink(_encoder(codec) if mode == "echo" else None, codec.size)
+        sink = TapSink(codec.encode if mode == "echo" else None, codec.size)
         node.graph.tap_point("/tapped", typename).attach(sink)
         drained = threading.Thread(target=lambda: [sink.take(0.05) for _ in iter(lambda: sink.closed, True)],
                                    daemon=True)

@@ -247,9 +247,7 @@ def _recording(path: Path) -> None:
     connection = writer.add_connection("/chatter", "std_msgs/msg/String", typestore=types.store)
     for index in range(6):
         message = types.get("std_msgs/msg/String")(data=f"m{index}")
-        buffer = bytearray(codec.size(message))
-        codec.encode_into(message, memoryview(buffer))
-        writer.write(connection, 10_000_000_000 + index * 500_000_000, bytes(buffer))
+        writer.write(connection, 10_000_000_000 + index * 500_000_000, bytes(codec.encode(message)))
     writer.close()
 
 

@@ -570,6 +570,15 @@ def _which(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--project", help="the launch of this project file (or folder)")
 
 
+def _request_parser(group: Any, verb: str, what: str, description: str,
+                    function: Callable[[argparse.Namespace], int]) -> None:
+    parser = group.add_parser(verb, help=description)
+    parser.add_argument(what)
+    parser.add_argument("type")
+    parser.add_argument("values", nargs="?", default="{}", help="YAML field values: \"{a: 1, b: 2}\"")
+    parser.set_defaults(func=function)
+
+
 def add_commands(sub: Any) -> None:
     """The introspection commands, added to ``hetros``'s subcommands."""
     topic = sub.add_parser("topic", help="topics of a running launch (ros2 topic)").add_subparsers(
@@ -620,26 +629,16 @@ def add_commands(sub: Any) -> None:
     p.add_argument("node")
     p.add_argument("--include-hidden", action="store_true", help="also actions' services and topics")
     p.set_defaults(func=cmd_node_info)
-    service = sub.add_parser("service", help="services of a running launch (ros2 service)").add_subparsers(
-        dest="service_command", required=True)
-    p = service.add_parser("list")
-    p.add_argument("-t", "--show-types", action="store_true")
-    p.set_defaults(func=cmd_service_list)
-    p = service.add_parser("call", help="call a service and print the response")
-    p.add_argument("service")
-    p.add_argument("type")
-    p.add_argument("values", nargs="?", default="{}")
-    p.set_defaults(func=cmd_service_call)
-    action = sub.add_parser("action", help="actions of a running launch (ros2 action)").add_subparsers(
-        dest="action_command", required=True)
-    p = action.add_parser("list")
-    p.add_argument("-t", "--show-types", action="store_true")
-    p.set_defaults(func=cmd_action_list)
-    p = action.add_parser("send_goal", help="send a goal and print its result")
-    p.add_argument("action")
-    p.add_argument("type")
-    p.add_argument("values", nargs="?", default="{}")
-    p.set_defaults(func=cmd_action_send_goal)
+    groups = {}
+    for word, verb, list_function, request_function, description in (
+            ("service", "call", cmd_service_list, cmd_service_call, "call a service and print the response"),
+            ("action", "send_goal", cmd_action_list, cmd_action_send_goal, "send a goal and print its result")):
+        group = groups[word] = sub.add_parser(word, help=f"{word}s of a running launch (ros2 {word})").add_subparsers(
+            dest=f"{word}_command", required=True)
+        p = group.add_parser("list")
+        p.add_argument("-t", "--show-types", action="store_true")
+        p.set_defaults(func=list_function)
+        _request_parser(group, verb, word, description, request_function)
     param = sub.add_parser("param", help="parameters of a running launch's nodes (ros2 param)").add_subparsers(
         dest="param_command", required=True)
     p = param.add_parser("list")
@@ -688,7 +687,7 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--launch", metavar="PROJECT", help="launch the part of this project that consumes the recording "
                    "(its nodes that only publish recorded topics stay out), play into it, then stop it")
     p.set_defaults(func=cmd_play)
-    for group in (topic, node, service, action, param):
+    for group in (topic, node, groups["service"], groups["action"], param):
         for parser in group.choices.values():
             _which(parser)
     for name in ("top", "log", "foxglove", "record", "play"):

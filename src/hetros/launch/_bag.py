@@ -135,9 +135,7 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
         def tell_time(nanoseconds: int) -> None:
             message = launch.types.get(CLOCK_TYPE)(clock=launch.types.get("builtin_interfaces/msg/Time")(
                 sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000))
-            buffer = bytearray(clock_codec.size(message))
-            clock_codec.encode_into(message, memoryview(buffer))
-            launch.publish_bytes(CLOCK_TOPIC, bytes(buffer), wait=wait)
+            launch.publish_bytes(CLOCK_TOPIC, bytes(clock_codec.encode(message)), wait=wait)
 
         while True:
             start_wall = time.monotonic()

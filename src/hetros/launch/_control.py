@@ -19,7 +19,7 @@ import socket
 import struct
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -197,7 +197,7 @@ class ControlServer:
             return
         codec = self._codec(point.typename)
         wants_data = bool(request.get("data", True))
-        sink = TapSink(_encoder(codec) if wants_data else None, codec.size, float(request.get("max_rate", 0.0)))
+        sink = TapSink(codec.encode if wants_data else None, codec.size, float(request.get("max_rate", 0.0)))
         point.attach(sink)
         send_frame(connection, {"ok": True, "type": point.typename})
         sent_drops = 0
@@ -250,10 +250,7 @@ class ControlServer:
         node, service = self._service(str(request["service"]))
         request_message = self._codec(f"{service.srv_type.name}_Request").decode(memoryview(payload))
         response = node.call_in_executor(lambda: service.handle(request_message), float(request.get("timeout", 10)))
-        codec = self._codec(f"{service.srv_type.name}_Response")
-        buffer = bytearray(codec.size(response))
-        codec.encode_into(response, memoryview(buffer))
-        send_frame(connection, {"ok": True}, buffer)
+        send_frame(connection, {"ok": True}, self._codec(f"{service.srv_type.name}_Response").encode(response))
 
     def _op_send_goal(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
         action = str(request["action"])
@@ -273,11 +270,8 @@ class ControlServer:
             time.sleep(0.01)
         if handle._open:
             raise InspectError(f"goal {handle.goal_id.hex()[:8]} of {action} did not end within {timeout:g} s")
-        codec = self._codec(f"{server.type.name}_Result")
         result = handle.result if handle.result is not None else server.type.Result()
-        buffer = bytearray(codec.size(result))
-        codec.encode_into(result, memoryview(buffer))
-        send_frame(connection, {"status": int(handle.status)}, buffer)
+        send_frame(connection, {"status": int(handle.status)}, self._codec(f"{server.type.name}_Result").encode(result))
 
     def _node(self, name: str) -> Node:
         node = self.graph.nodes.get(name)
@@ -292,14 +286,6 @@ class ControlServer:
         node = self._node(str(request["node"]))
         node.set_parameter(str(request["name"]), request["value"])
         send_frame(connection, {"ok": True})
-
-
-def _encoder(codec: MessageCodec) -> Callable[[Any], bytearray]:
-    def encode(message: Any) -> bytearray:
-        buffer = bytearray(codec.size(message))
-        codec.encode_into(message, memoryview(buffer))
-        return buffer
-    return encode
 
 
 def _jsonable(value: Any) -> Any:

@@ -198,10 +198,7 @@ class RunningLaunch:
         """Deliver ``message`` to every subscription of ``topic`` running here; the nodes reached.
         With ``wait``, return only once each has finished with it (its callback returned, or its
         take loop took the next message), at most ``wait`` seconds."""
-        codec = self.codec(self.topic(topic))
-        buffer = bytearray(codec.size(message))
-        codec.encode_into(message, memoryview(buffer))
-        return self.publish_bytes(topic, bytes(buffer), wait=wait)
+        return self.publish_bytes(topic, bytes(self.codec(self.topic(topic)).encode(message)), wait=wait)
 
     def publish_bytes(self, topic: str, data: bytes, *, wait: float = 0.0) -> list[str]:
         """:meth:`publish` of a message already encoded (CDR, as a recording holds it)."""
@@ -231,11 +228,8 @@ class RunningLaunch:
 
     def call(self, service: str, request: Message, timeout: float = 10.0) -> Message:
         node, typename = self.server_of(service)
-        codec = self.codec(f"{typename}_Request")
-        buffer = bytearray(codec.size(request))
-        codec.encode_into(request, memoryview(buffer))
         _, data = self.ask(self.plan.process_of(node), {"op": "call", "service": service, "timeout": timeout},
-                           bytes(buffer), timeout + 5.0)
+                           bytes(self.codec(f"{typename}_Request").encode(request)), timeout + 5.0)
         return self.decode(f"{typename}_Response", data)
 
     def actions(self) -> dict[str, str]:
@@ -250,11 +244,8 @@ class RunningLaunch:
             known = ", ".join(sorted(self.actions())) or "none"
             raise InspectError(f"launch {self.record.session} has no action {action} (its actions: {known})")
         typename = self.plan.nodes[server].actions[action]
-        codec = self.codec(f"{typename}_Goal")
-        buffer = bytearray(codec.size(goal))
-        codec.encode_into(goal, memoryview(buffer))
         with self.connect(self.node_process(server), {"op": "send_goal", "action": action, "timeout": timeout},
-                          bytes(buffer), timeout=timeout + 30.0) as sock:
+                          bytes(self.codec(f"{typename}_Goal").encode(goal)), timeout=timeout + 30.0) as sock:
             answer, _ = receive_frame(sock)
             if "error" in answer:
                 raise InspectError(answer["error"])

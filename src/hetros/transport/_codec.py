@@ -46,6 +46,12 @@ class MessageCodec(Codec):
         buffer[:4] = CDR_LE
         self.encode_body(message, buffer[4:])
 
+    def encode(self, message: Any) -> bytearray:
+        """The message's CDR bytes, encapsulation included, in a buffer of their own."""
+        buffer = bytearray(self.size(message))
+        self.encode_into(message, memoryview(buffer))
+        return buffer
+
     def decode_at(self, buffer: memoryview, at: int, end: int) -> Message:
         """Decode ``buffer[at:end]`` in place (``at + 4`` must be a multiple of 8)."""
         if end - at < 4 or buffer[at + 1] != 1:

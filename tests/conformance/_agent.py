@@ -60,6 +60,8 @@ def main() -> None:
                             "frozen": message.is_frozen}})
         elif op == "pending":
             send({"reply": reader.pending()})
+        elif op == "counters":
+            send({"reply": reader.counters()})
         elif op == "close":
             reader.close()
             assert domain is not None

@@ -347,6 +347,9 @@ def test_a_hardware_topic_is_echoed_through_its_gateway(tmp_path: Path, env: dic
         top = json.loads(hetros(env, "top", "--json", "--once", "--interval", "1.5").stdout)
         assert {p["process"] for p in top["processes"]} == {"io", "fpga"}
         assert any(t["topic"] == "/image_edges" and t["rate_hz"] > 0 for t in top["topics"])
+        ports = {g["port"]: g for g in top["gateways"]}
+        assert ports and all(g["gateway"] == "hetros_gateway_fpga" for g in ports.values())
+        assert any(g["messages"] > 0 and g["cycles_per_message"] > 64 * 48 / 8 for g in ports.values()), ports
 
 
 def test_foxglove_sees_the_topics_with_their_schemas_and_messages(tmp_path: Path, env: dict[str, str]) -> None:
@@ -387,3 +390,42 @@ def test_foxglove_sees_the_topics_with_their_schemas_and_messages(tmp_path: Path
         finally:
             server.terminate()
             server.wait(30)
+
+
+BUSY_NODES = """
+import time
+
+from hetros import Node
+from hetros.interfaces.std_msgs.msg import String
+
+
+def fast(node: Node) -> None:
+    publisher = node.create_publisher(String, node.get_parameter("topic"))
+    for tick in node.rate(200.0):
+        publisher.publish(String(data=str(tick)))
+
+
+def slow(node: Node) -> None:
+    node.create_subscription(String, node.get_parameter("topic"), lambda message: time.sleep(0.02))
+"""
+
+
+@pytest.mark.parametrize("kind", ["process", "thread"])
+def test_top_counts_a_slow_subscribers_stalls_and_drops(tmp_path: Path, env: dict[str, str], kind: str) -> None:
+    """A reliable keep_all topic holds its publisher back (stalls); a keep_last one drops the oldest."""
+    (tmp_path / "nodes.py").write_text(BUSY_NODES)
+    project = tmp_path / "project.yaml"
+    project.write_text(yaml.safe_dump({
+        "name": f"busy_{kind}", "targets": {"a": {"kind": kind}, "b": {"kind": kind}},
+        "nodes": {f"{role}_{topic}": {"run": f"nodes:{role}", "target": target, "parameters": {"topic": f"/{topic}"},
+                                      section: {f"/{topic}": "std_msgs/msg/String"}}
+                  for topic in ("steady", "lossy")
+                  for role, target, section in (("fast", "a", "publish"), ("slow", "b", "subscribe"))},
+        "topics": {"/steady": {"depth": 2}, "/lossy": {"history": "keep_last", "depth": 1}}}))
+    with running(project, env, tmp_path / "launch.log"):
+        time.sleep(1.0)
+        rows = json.loads(hetros(env, "top", "--json", "--once").stdout)
+    topics = {t["topic"]: t for t in rows["topics"]}
+    assert topics["/steady"]["stalls"] > 0 and topics["/steady"]["dropped"] == 0, topics
+    assert topics["/lossy"]["dropped"] > 0 and topics["/lossy"]["stalls"] == 0, topics
+    assert topics["/steady"]["rate_hz"] < 100 < topics["/lossy"]["rate_hz"]  # held to the subscriber's pace, or not

@@ -383,6 +383,7 @@ def _top_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]) -> dict
     processes: list[dict[str, Any]] = []
     nodes: list[dict[str, Any]] = []
     topics: dict[str, dict[str, Any]] = {}
+    gateways: list[dict[str, Any]] = []
     for now in after:
         then = earlier.get(now["process"])
         if then is None:
@@ -398,12 +399,20 @@ def _top_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]) -> dict
             nodes.append({"node": name, "process": now["process"], "alive": node["alive"],
                           "cpu_percent": 100.0 * (node["cpu_s"] - old["cpu_s"]) / span,
                           "callback_p50_ms": p50 * 1000.0, "callback_p99_ms": p99 * 1000.0})
+            figures = node.get("figures") or {}
+            for port, counts in figures.get("ports", {}).items():
+                gateways.append({"gateway": name, "port": port, "messages": counts["messages"],
+                                 "cycles_per_message": counts["cycles_per_message"],
+                                 "us_per_message": counts["cycles_per_message"] / figures["clock_mhz"]})
         for name, topic in now["topics"].items():
-            old_count = then["topics"].get(name, {"published": topic["published"]})["published"]
-            entry = topics.setdefault(name, {"topic": name, "type": topic["type"], "rate_hz": 0.0, "published": 0})
-            entry["rate_hz"] += (topic["published"] - old_count) / span
-            entry["published"] += topic["published"]
-    return {"processes": processes, "nodes": nodes, "topics": sorted(topics.values(), key=lambda t: t["topic"])}
+            old_topic = then["topics"].get(name, topic)
+            entry = topics.setdefault(name, {"topic": name, "type": topic["type"], "rate_hz": 0.0, "published": 0,
+                                             "dropped": 0, "stalls": 0})
+            entry["rate_hz"] += (topic["published"] - old_topic["published"]) / span
+            for counter in ("published", "dropped", "stalls"):
+                entry[counter] += topic.get(counter, 0)
+    return {"processes": processes, "nodes": nodes, "topics": sorted(topics.values(), key=lambda t: t["topic"]),
+            "gateways": gateways}
 
 
 def live_rates(session: str | None, project: str | None) -> tuple[Plan, dict[str, float]]:
@@ -425,8 +434,13 @@ def _format_top(rows: dict[str, Any], session: str) -> str:
     lines += ["", f"{'NODE':<24} {'PROCESS':<16} {'CPU%':>6} {'CB p50 ms':>10} {'CB p99 ms':>10}"]
     lines += [f"{n['node']:<24} {n['process']:<16} {n['cpu_percent']:>6.1f} {n['callback_p50_ms']:>10.3f} "
               f"{n['callback_p99_ms']:>10.3f}" for n in rows["nodes"]]
-    lines += ["", f"{'TOPIC':<32} {'RATE Hz':>9} {'SENT':>10}  TYPE"]
-    lines += [f"{t['topic']:<32} {t['rate_hz']:>9.1f} {t['published']:>10}  {t['type']}" for t in rows["topics"]]
+    lines += ["", f"{'TOPIC':<32} {'RATE Hz':>9} {'SENT':>10} {'DROPS':>7} {'STALLS':>7}  TYPE"]
+    lines += [f"{t['topic']:<32} {t['rate_hz']:>9.1f} {t['published']:>10} {t['dropped']:>7} {t['stalls']:>7}  "
+              f"{t['type']}" for t in rows["topics"]]
+    if rows["gateways"]:
+        lines += ["", f"{'GATEWAY PORT':<48} {'MESSAGES':>9} {'CYCLES/MSG':>11} {'US/MSG':>8}"]
+        lines += [f"{g['port']:<48} {g['messages']:>9} {g['cycles_per_message']:>11.0f} {g['us_per_message']:>8.2f}"
+                  for g in rows["gateways"]]
     return "\n".join(lines)
 
 

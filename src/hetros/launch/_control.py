@@ -180,10 +180,22 @@ class ControlServer:
             if live is not None:
                 for name, stats in live.handling_stats().items():
                     handling[name] = stats.snapshot()
+            figures = live.figures() if live is not None and live.figures is not None else {}
             nodes[thread.spec.name] = {"cpu_s": _thread_cpu_seconds(thread.thread.native_id),
-                                       "alive": thread.thread.is_alive(), "handling": handling}
-        topics = {topic: {"published": point.published, "type": point.typename}
-                  for topic, point in self.graph.taps().items()}
+                                       "alive": thread.thread.is_alive(), "handling": handling, "figures": figures}
+        topics: dict[str, dict[str, Any]] = {
+            topic: {"published": point.published, "type": point.typename, "dropped": 0, "stalls": 0}
+            for topic, point in self.graph.taps().items()}
+        for live in list(self.graph.nodes.values()):
+            for entity in live.entities():
+                topic_name = getattr(entity, "topic", None)
+                if topic_name is None or not hasattr(entity, "counters"):
+                    continue
+                entry = topics.setdefault(topic_name, {"published": 0, "type": entity.typename, "dropped": 0,
+                                                       "stalls": 0})
+                for counter, value in entity.counters().items():
+                    if counter in entry:
+                        entry[counter] += value
         send_frame(connection, {"process": self.process, "pid": os.getpid(), "time": time.time(),
                                 "cpu_s": sum(os.times()[:2]), "rss": _resident_bytes(), "nodes": nodes,
                                 "topics": topics})

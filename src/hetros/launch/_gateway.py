@@ -125,6 +125,7 @@ def gateway(node: Node) -> None:
     outputs = [_Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
     stop = node.graph.stop
     wall = 0.0
+    node.figures = lambda: _figures(simulation)
     pushed = popped = last_moved = 0
     quiet = idle_cycles
     try:
@@ -165,6 +166,18 @@ def gateway(node: Node) -> None:
 
 
 gateway.prepare = _prepare  # type: ignore[attr-defined]
+
+
+def _figures(simulation: TargetSimulation) -> dict[str, Any]:
+    """What ``hetros top`` shows of a gateway: cycles simulated, and per port messages and cycles per message."""
+    top = simulation.top
+    ports = {}
+    for output, each in ((False, simulation.inputs), (True, simulation.outputs)):
+        for port in each:
+            messages, beats, busy = top.stats(output, port.index)
+            ports[port.port.label] = {"messages": messages, "beats": beats,
+                                      "cycles_per_message": busy / messages if messages else 0.0}
+    return {"cycles": top.cycle, "clock_mhz": simulation.clock_mhz, "ports": ports}
 
 
 def _report(simulation: TargetSimulation, wall: float) -> None:

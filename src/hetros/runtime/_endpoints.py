@@ -8,7 +8,7 @@ message whose arrays live in a transport's memory (a loan) leaves with that tran
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
@@ -27,6 +27,15 @@ from ..msg import (
 )
 from ..msg import copy as copy_message
 from ..transport import Reader, Wake, Writer, carried_message
+
+
+def merge_counters(counters: Iterable[dict[str, int]]) -> dict[str, int]:
+    """Counters of several parts (or endpoints) of one topic, added up by name."""
+    total: dict[str, int] = {}
+    for each in counters:
+        for name, value in each.items():
+            total[name] = total.get(name, 0) + value
+    return total
 
 
 def _hand_over(item: Any, copy_arrays: bool) -> Any:
@@ -102,6 +111,9 @@ class EndpointWriter(Writer):
         for part in self._parts:
             part.write(message)
 
+    def counters(self) -> dict[str, int]:
+        return merge_counters(part.counters() for part in self._parts)
+
     def assert_liveliness(self) -> None:
         for part in self._parts:
             part.assert_liveliness()
@@ -151,6 +163,9 @@ class MergedReader(Reader):
         counts = [c for c in (part.liveliness() for part in self._parts) if c is not None]
         return (sum(c[0] for c in counts), sum(c[1] for c in counts)) if counts else None
 
+    def counters(self) -> dict[str, int]:
+        return merge_counters(part.counters() for part in self._parts)
+
     def close(self) -> None:
         for part in self._parts:
             part.close()
@@ -191,6 +206,9 @@ class RetainedReader(Reader):
 
     def liveliness(self) -> tuple[int, int] | None:
         return self.inner.liveliness()
+
+    def counters(self) -> dict[str, int]:
+        return self.inner.counters()
 
     def close(self) -> None:
         self.relay.target = None

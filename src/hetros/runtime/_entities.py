@@ -101,6 +101,10 @@ class Publisher(Generic[M]):
         if self.manual_liveliness:
             self._writer.assert_liveliness()
 
+    def counters(self) -> dict[str, int]:
+        """``stalls``: the sends that waited for a reliable subscriber's room (``hetros top``)."""
+        return self._writer.counters()
+
     def assert_liveliness(self) -> None:
         """Say this publisher is alive without publishing (``manual_by_topic`` liveliness)."""
         self._writer.assert_liveliness()
@@ -236,6 +240,11 @@ class Subscription(Generic[M]):
     def pending(self) -> bool:
         reader = self._reader
         return reader is not None and reader.pending()
+
+    def counters(self) -> dict[str, int]:
+        """``dropped``: keep_last messages replaced by newer ones before this subscription took them."""
+        reader = self._reader
+        return {} if reader is None else reader.counters()
 
     def try_take(self) -> M | None:
         """The next message, or None when the FIFO is empty (never blocks)."""

@@ -74,6 +74,8 @@ class Node:
         self.taken_by: Subscription[Any] | None = None
         self.taken_at = 0.0
         self.action_clients: dict[str, ActionClient] = {}
+        # what the node's own figures are for ``hetros top`` (a gateway's cycles per message), when it has any
+        self.figures: Callable[[], dict[str, Any]] | None = None
         self.graph.node_started(self)
 
     # -- endpoints -------------------------------------------------------------------------

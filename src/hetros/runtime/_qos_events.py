@@ -148,6 +148,9 @@ class WatchedReader(Reader):
     def liveliness(self) -> tuple[int, int] | None:
         return self.inner.liveliness()
 
+    def counters(self) -> dict[str, int]:
+        return self.inner.counters()
+
     def close(self) -> None:
         self.watch.stop()
         self.inner.close()

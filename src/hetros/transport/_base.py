@@ -62,6 +62,11 @@ class Writer(ABC, Generic[T]):
         """Whether ``message`` came from ``slot_loan_maker`` and has not been published yet."""
         return False
 
+    def counters(self) -> dict[str, int]:
+        """What ``hetros top`` shows of this writer: ``stalls``, the sends that waited for a reliable
+        subscriber's room; empty where the transport does not count."""
+        return {}
+
     def assert_liveliness(self) -> None:
         """Say this publisher is alive (a ``manual_by_topic`` topic's publish says it too);
         a transport that cannot tell liveliness has nothing to record."""
@@ -106,6 +111,11 @@ class Reader(ABC, Generic[T]):
         """(alive, not alive): the publishers this reader has heard from, by the topic's
         liveliness QoS; None where the transport cannot tell."""
         return None
+
+    def counters(self) -> dict[str, int]:
+        """What ``hetros top`` shows of this reader: ``dropped``, keep_last messages replaced by newer
+        ones before they were taken; empty where the transport does not count."""
+        return {}
 
     @abstractmethod
     def close(self) -> None: ...

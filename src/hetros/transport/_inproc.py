@@ -31,7 +31,8 @@ class Mailbox(Reader):
         self._lifespan = qos.lifespan or 0.0
         self._cond = threading.Condition()
         self._closed = False
-        self.dropped = 0
+        self.dropped = 0  # keep_last: items replaced by newer ones before the owner took them
+        self.stalls = 0  # puts that waited for room (reliable keep_all), counted here, reported by the writers
         self.expired = 0  # items dropped unread for being older than the lifespan
         self.source: InprocTopic | None = None  # whose writers' liveliness this mailbox reports
 
@@ -46,6 +47,7 @@ class Mailbox(Reader):
                         self._born.popleft()
                     self.dropped += 1
                 else:
+                    self.stalls += 1
                     while len(self._items) >= self.qos.depth and not self._closed:
                         remaining = deadline - time.monotonic()
                         if stop is not None and stop.is_set():
@@ -64,6 +66,9 @@ class Mailbox(Reader):
             if self._born is not None:
                 self._born.append(born or time.monotonic())
         self._wake()
+
+    def counters(self) -> dict[str, int]:
+        return {"dropped": self.dropped}
 
     def try_take(self) -> Any | None:
         with self._cond:
@@ -137,6 +142,10 @@ class InprocTopic:
             alive += 1
         return alive, len(writers) - alive
 
+    def stalls(self) -> int:
+        with self._lock:
+            return sum(mailbox.stalls for mailbox in self._mailboxes)
+
     def deliver(self, item: Any) -> None:
         now = time.monotonic()
         deadline = now + self.qos.publish_timeout
@@ -155,6 +164,9 @@ class InprocWriter(Writer):
 
     def write(self, message: Any) -> None:
         self._topic.deliver(message)
+
+    def counters(self) -> dict[str, int]:
+        return {"stalls": self._topic.stalls()}
 
     def assert_liveliness(self) -> None:
         self.asserted = time.monotonic()

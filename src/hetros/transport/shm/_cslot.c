@@ -661,11 +661,10 @@ static PyObject *take_cdr(PyObject *module, PyObject *const *args, Py_ssize_t na
         if (PyErr_Occurred() || service == NULL || get_u64(port, str_expected, &expected) < 0 ||
             get_u64(service, str_credits_at, &credits_at) < 0)
             goto error_service;
-        int blocking = get_flag(service, str_blocking);
-        if (blocking < 0)
-            goto error_service;
         uint64_t *credits = (uint64_t *)(uintptr_t)credits_at;
-        common = since == 0.0 && credits_at != 0 && !(blocking && seq != expected); /* else: the reference path */
+        /* else the reference path: a gap (a blocking topic's loss; a keep_last topic's overwritten
+           messages, which it counts) or a message from before this reader joined */
+        common = since == 0.0 && credits_at != 0 && seq == expected;
         if (common) {
             if (set_i64(port, str_expected, (long long)seq + 1) < 0)
                 goto error_service;

@@ -131,6 +131,9 @@ class ShmWriter(Writer):
         self._send_cdr = service.send_cdr
         service.publisher()
 
+    def counters(self) -> dict[str, int]:
+        return {"stalls": self._service.stalls}
+
     def write(self, message: Any) -> None:
         cdr = self._cdr
         if cdr is None:  # a service envelope: one contiguous sample
@@ -315,6 +318,7 @@ class ShmReader(Reader):
         lifespan = services[0].qos.lifespan if services else None
         self._lifespan_ns = None if lifespan is None else int(lifespan * 1e9)
         self.expired = 0  # messages dropped unread for being older than the lifespan
+        self.overwritten = 0  # keep_last: messages replaced by newer ones before this reader took them
         self._compiled = take_cdr is not None and self._decode_body is not None and self._lifespan_ns is None
         # how one publishing target's next message is taken: the compiled common case where it applies
         self._take_from: Callable[[_Port], Any | None] = (
@@ -322,6 +326,9 @@ class ShmReader(Reader):
         wake()
 
     # -- taking ----------------------------------------------------------------------------
+
+    def counters(self) -> dict[str, int]:
+        return {"dropped": self.overwritten}
 
     def pending(self) -> bool:
         for port in self._ports:  # a loop, not any(generator): this runs on every poll of a hot node
@@ -453,6 +460,8 @@ class ShmReader(Reader):
             missed, port.expected = seq - port.expected, seq + 1
             self._account(port, seq)
             self._lost(port, missed, seq - missed)
+        elif seq > port.expected:
+            self.overwritten += seq - port.expected  # keep_last: the publisher's newer ones replaced them
         # one sent before this reader joined may come after the join's mark: never count backwards
         seq = max(seq, port.expected - 1)
         port.expected = seq + 1

@@ -49,7 +49,8 @@ class Service:
 
     # slots, which the compiled send path reads and writes in place (``_hotpath.bind_slots``)
     __slots__ = ("_closed", "_publisher", "_scratch", "_wakes", "_wakes_version", "blocking", "buffer", "credits",
-                 "credits_at", "data", "domain", "lock", "next_seq", "qos", "room", "space", "target", "topic")
+                 "credits_at", "data", "domain", "lock", "next_seq", "qos", "room", "space", "stalls", "target",
+                 "topic")
 
     def __init__(self, domain: ShmDomain, node: Any, topic: str, target: str, qos: QoS) -> None:
         self.domain = domain
@@ -91,6 +92,7 @@ class Service:
         self._wakes: list[tuple[Any, Any]] = []
         self._wakes_version = -1
         self.next_seq = 1
+        self.stalls = 0  # sends that had to wait for a reliable subscriber's room (hetros top)
 
     # -- publishing side -------------------------------------------------------------------
 
@@ -175,6 +177,7 @@ class Service:
                     os.sched_yield()
                     continue
                 credits.waiting = True
+                self.stalls += 1
                 continue  # re-check after announcing: a take may have slipped in between
             remaining = deadline - time.monotonic()
             if remaining <= 0:

@@ -64,6 +64,16 @@ class Image(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
 
 
 @dataclass
+class Log(IdlStruct, typename="rcl_interfaces::msg::dds_::Log_"):
+    stamp: Time
+    level: t.uint8
+    name: str
+    msg: str
+    file: str
+    function: str
+    line: t.uint32
+
+
 class AddTwoIntsRequest(IdlStruct, typename="example_interfaces::srv::dds_::AddTwoInts_Request_"):
     client_guid: t.uint64
     sequence_number: t.int64

@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
 import sys
 import time
 from collections import deque
@@ -22,6 +21,7 @@ import yaml
 
 from .._errors import InspectError
 from ..launch._inspect import RunningLaunch, TapEvent
+from ..launch._logs import LaunchLogs
 from ..msg import Message, normalize_typename
 from ..msg._convert import DEFAULT_TRUNCATE_LENGTH, from_plain, to_plain
 from ..plan import ACTION_PREFIX, Plan
@@ -470,53 +470,18 @@ def cmd_top(args: argparse.Namespace) -> int:
 
 # -- log ----------------------------------------------------------------------------------------
 
-_LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<time>\d+\.\d+)\] \[(?P<name>[^\]]+)\]: ")
-
-
-class _LogFile:
-    """One process' log of a launch, read as it grows; records keep their continuation lines."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.offset = 0
-        self.partial = ""
-
-    def new_records(self) -> list[tuple[float, str, str]]:
-        try:
-            with self.path.open("r", encoding="utf-8", errors="replace") as handle:
-                handle.seek(self.offset)
-                text = handle.read()
-                self.offset = handle.tell()
-        except OSError:
-            return []
-        text, self.partial = self.partial + text, ""
-        if not text.endswith("\n"):
-            text, _, self.partial = text.rpartition("\n")
-        records: list[tuple[float, str, str]] = []
-        for line in text.splitlines():
-            match = _LOG_LINE.match(line)
-            if match:
-                records.append((float(match["time"]), match["name"], line))
-            elif records:
-                records[-1] = (records[-1][0], records[-1][1], records[-1][2] + "\n" + line)
-        return records
-
-
 def cmd_log(args: argparse.Namespace) -> int:
     launch = _launch(args)
-    files: dict[Path, _LogFile] = {}
+    logs = LaunchLogs(launch.folder)
     nodes = {name.lstrip("/") for name in args.node or []}
     unknown = nodes - set(launch.plan.nodes)
     if unknown:
         raise InspectError(f"launch {launch.record.session} has no node {', '.join(sorted(unknown))} "
                            f"(its nodes: {', '.join(sorted(launch.plan.nodes))})")
     while True:
-        for path in sorted(launch.folder.glob("*.log")):
-            files.setdefault(path, _LogFile(path))
-        records = sorted(r for log in files.values() for r in log.new_records())
-        for _, name, text in records:
-            if not nodes or name in nodes:
-                print(text, flush=True)
+        for record in logs.new_records():
+            if not nodes or record.name in nodes:
+                print(record.text, flush=True)
         if not args.follow or not launch.folder.exists():
             return 0
         time.sleep(0.2)

@@ -14,8 +14,10 @@ from typing import Any
 
 from ..msg import registry
 from ..runtime import Node
-from ..transport.tcpros import Ros1ActionType, Ros1Peer, Ros1ServiceType, Ros1Type
+from ..transport.tcpros import Ros1ActionType, Ros1NativeType, Ros1Peer, Ros1ServiceType, Ros1Type, ros1_store
 from ._bridging import Imported
+from ._logs import LaunchLogs
+from ._registry import session_folder
 from ._ros1_actions import ExportedAction, ImportedAction
 
 
@@ -52,9 +54,36 @@ def bridge(node: Node) -> None:
         imported = [*imports, *import_services, *import_actions]
         node.log.info("ROS 1 bridge %s at %s: exports %s, imports %s", peer.name, peer.master_uri,
                       ", ".join(exported) or "nothing", ", ".join(imported) or "nothing")
+        node.create_timer(0.2, _Rosout(node, peer).forward)
         node.spin()
     finally:
         peer.close()
+
+
+# rosgraph_msgs/Log's levels by Python's level names
+ROSOUT_LEVELS = {"DEBUG": 1, "INFO": 2, "WARNING": 4, "WARN": 4, "ERROR": 8, "CRITICAL": 16, "FATAL": 16}
+
+
+class _Rosout:
+    """The launch's log records (every process', from the session folder) published on ROS 1's /rosout,
+    as rosgraph_msgs/Log: what rosout, rqt_console and `rostopic echo /rosout` read."""
+
+    def __init__(self, node: Node, peer: Ros1Peer) -> None:
+        self._kind = Ros1NativeType("rosgraph_msgs/msg/Log")
+        self._publication = peer.advertise("/rosout", self._kind)
+        self._logs = LaunchLogs(session_folder(node.graph.session))
+        types = ros1_store().types
+        self._header, self._time = types["std_msgs/msg/Header"], types["builtin_interfaces/msg/Time"]
+        self._seq = 0
+
+    def forward(self) -> None:
+        for record in self._logs.new_records():
+            self._seq += 1
+            seconds = int(record.time)
+            stamp = self._time(sec=seconds, nanosec=round((record.time - seconds) * 1e9) % 1_000_000_000)
+            self._publication.publish(self._kind.cls(
+                header=self._header(seq=self._seq, stamp=stamp, frame_id=""), level=ROSOUT_LEVELS.get(record.level, 2),
+                name=f"/{record.name}", msg=record.message, file="", function="", line=0, topics=[]))
 
 
 def _forward(peer: Ros1Peer, service: str, kind: Ros1ServiceType) -> Callable[[Any], Any]:

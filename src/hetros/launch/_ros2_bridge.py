@@ -29,6 +29,8 @@ from ..transport.dds import (
     DiscoveryInfo,
 )
 from ._bridging import Imported
+from ._logs import LaunchLogs
+from ._registry import session_folder
 
 # how long a call from the graph waits for a ROS 2 server to be discovered before it is refused
 _DISCOVERY_WAIT = 5.0
@@ -76,6 +78,9 @@ def bridge(node: Node) -> None:
         imported = [*p("import", {}), *p("import_services", {})]
         node.log.info("ROS 2 bridge on DDS domain %d (%s): exports %s, imports %s", domain.domain_id,
                       domain.configured_by, ", ".join(exported) or "nothing", ", ".join(imported) or "nothing")
+        rosout = _Rosout(node, DdsTopicWriter(domain, types, "/rosout", ROSOUT_TYPE, ROSOUT_QOS), types)
+        endpoints.append(rosout.writer)
+        node.create_timer(0.2, rosout.forward)
         if imported_services:
             def retry() -> None:
                 for service in imported_services:
@@ -85,6 +90,32 @@ def bridge(node: Node) -> None:
         node.spin()
     finally:
         domain.close()
+
+
+# ROS 2's /rosout: every node's log records, kept for late joiners (rcl's QoS for it)
+ROSOUT_TYPE = "rcl_interfaces/msg/Log"
+ROSOUT_QOS = QoS(reliability="reliable", durability="transient_local", history="keep_last", depth=1000)
+# rcl_interfaces/msg/Log's levels by Python's level names
+ROSOUT_LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "WARN": 30, "ERROR": 40, "CRITICAL": 50, "FATAL": 50}
+
+
+class _Rosout:
+    """The launch's log records (every process', from the session folder) published on ROS 2's /rosout."""
+
+    def __init__(self, node: Node, writer: DdsTopicWriter, types: TypeRegistry) -> None:
+        self.node = node
+        self.writer = writer
+        self._logs = LaunchLogs(session_folder(node.graph.session))
+        self._log = types.get(ROSOUT_TYPE)
+        self._time = types.get("builtin_interfaces/msg/Time")
+
+    def forward(self) -> None:
+        for record in self._logs.new_records():
+            seconds = int(record.time)
+            self.writer.write(self._log(
+                stamp=self._time(sec=seconds, nanosec=round((record.time - seconds) * 1e9) % 1_000_000_000),
+                level=ROSOUT_LEVELS.get(record.level, 20), name=record.name, msg=record.message, file="",
+                function="", line=0))
 
 
 def _logged(node: Node, write: Any) -> Any:

@@ -242,9 +242,12 @@ def test_the_talker_listener_example_joins_ros1_both_ways(master: tuple[str, dic
         assert 'data: "hello world' in run_ros(env, "rostopic", "echo", "-n", "2", "/chatter", timeout=60)
         run_ros(env, "rostopic", "pub", "-1", "/chatter", "std_msgs/String", "data: from stock ROS 1", timeout=60)
         time.sleep(1)
+        # every node's log lines, as rosgraph_msgs/Log on /rosout (what rqt_console reads)
+        logged = run_ros(env, "rostopic", "echo", "-n", "3", "/rosout", timeout=60)
     finally:
         out = stop(launch, 30)
     assert "I heard: [from stock ROS 1]" in out, out
+    assert 'msg: "I heard: [hello world' in logged and 'name: "/listener' in logged and "level: 2" in logged, logged
 
 
 @needs_ros1

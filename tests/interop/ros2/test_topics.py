@@ -15,6 +15,7 @@ from rosbags.typesys import Stores, get_typestore
 from tests.support.ros2 import (
     Header,
     Image,
+    Log,
     Peer,
     String,
     Time,
@@ -136,3 +137,19 @@ def test_a_ros2_peer_reaches_hetros_subscribers(graph: tuple[int, Path, subproce
     lines = got.read_text().splitlines()
     assert [line for line in lines if line.startswith("from ROS 2")] == expected[:5]  # in order, once each
     assert launch.poll() is None
+
+
+def test_the_graphs_log_records_reach_ros2_on_rosout(graph: tuple[int, Path, subprocess.Popen[str]]) -> None:
+    """Every process' log lines, as rcl_interfaces/msg/Log on /rosout (what rqt_console and `ros2 topic echo
+    /rosout` read)."""
+    domain, _got, _launch = graph
+    rosout = Peer(domain).reader("rt/rosout", Log)
+
+    def bridge_said_hello() -> list[Log]:
+        found.extend(rosout.take(100))
+        return [r for r in found if r.name == "hetros_ros2_bridge" and r.msg.startswith("ROS 2 bridge on DDS domain")]
+
+    found: list[Log] = []
+    (record,) = wait_for(bridge_said_hello, 20, "the bridge's own log record on rt/rosout")
+    assert record.level == 20 and record.stamp.sec > 1_700_000_000
+    assert any(r.name == "launch" and "ready" in r.msg for r in found)  # the worker target's start, from its file

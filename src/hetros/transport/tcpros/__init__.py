@@ -6,7 +6,7 @@ from ._master import DEFAULT_PORT, Master, MasterState
 from ._peer import Ros1Peer, Ros1Publication, Ros1Subscription, get_ros1_parameter
 from ._stream import Ros1StreamReader, SocketWaiter
 from ._transport import Ros1Transport
-from ._types import Ros1ServiceType, Ros1Type, ros1_name
+from ._types import Ros1NativeType, Ros1ServiceType, Ros1Type, ros1_name, ros1_store
 
 __all__ = [
     "DEFAULT_PORT",
@@ -14,6 +14,7 @@ __all__ = [
     "Master",
     "MasterState",
     "Ros1ActionType",
+    "Ros1NativeType",
     "Ros1Peer",
     "Ros1Publication",
     "Ros1ServiceCaller",
@@ -28,4 +29,5 @@ __all__ = [
     "get_ros1_parameter",
     "open_ros1_reader",
     "ros1_name",
+    "ros1_store",
 ]

@@ -75,6 +75,27 @@ class Ros1Kind(Protocol):
     def deserialize(self, data: bytes | memoryview) -> Any: ...
 
 
+class Ros1NativeType:
+    """A ROS 1 type hetros has no message class for (``rosgraph_msgs/Log``): its messages are the ROS 1
+    store's own objects (``ros1_store().types[typename]``), serialized by rosbags."""
+
+    def __init__(self, typename: str) -> None:
+        self.typename = normalize_typename(typename)
+        self.name = ros1_name(self.typename)
+        self._store = ros1_store()
+        self.definition, self.md5 = self._store.generate_msgdef(self.typename, ros_version=1)
+        self.cls = self._store.types[self.typename]
+
+    def serialize(self, message: Any) -> Payload:
+        return bytes(self._store.serialize_ros1(message, self.typename))
+
+    def serialize_parts(self, message: Any) -> list[Payload]:
+        return [self.serialize(message)]
+
+    def deserialize(self, data: bytes | memoryview) -> Any:
+        return self._store.deserialize_ros1(bytes(data), self.typename)
+
+
 class Ros1Type:
     """One message type as both sides know it, with the converters between them."""
 

@@ -74,6 +74,7 @@ class Log(IdlStruct, typename="rcl_interfaces::msg::dds_::Log_"):
     line: t.uint32
 
 
+@dataclass
 class AddTwoIntsRequest(IdlStruct, typename="example_interfaces::srv::dds_::AddTwoInts_Request_"):
     client_guid: t.uint64
     sequence_number: t.int64

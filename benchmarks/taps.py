@@ -34,10 +34,14 @@ def _publish_ns(make: Any, typename: str, mode: str, count: int) -> float:
     codec = MessageCodec(node.graph.types, typename)
     sink = None
     if mode != "idle":
-        sink = TapSink(codec.encode if mode == "echo" else None, codec.size)
+        sink = TapSink(codec, data=mode == "echo")
         node.graph.tap_point("/tapped", typename).attach(sink)
-        drained = threading.Thread(target=lambda: [sink.take(0.05) for _ in iter(lambda: sink.closed, True)],
-                                   daemon=True)
+        def drain() -> None:  # as the control thread: each encoded message sent, its buffer given back
+            while not sink.closed:
+                taken = sink.take(0.05)
+                if taken is not None and mode == "echo":
+                    sink.give_back(taken[1])
+        drained = threading.Thread(target=drain, daemon=True)
         drained.start()
     messages = [make() for _ in range(count)]
     start = time.perf_counter_ns()

@@ -81,10 +81,10 @@ def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -
         assert re.fullmatch(r"data: hello world \d+\n---\n", echoed), echoed
         fields = hetros(env, "topic", "echo", "/chatter", "-n", "2", "--field", "data").stdout.split("---\n")
         assert len(fields) == 3 and all(re.fullmatch(r"hello world \d+\n", f) for f in fields[:2]), fields
-        rate = _last_figures(hetros(env, "topic", "hz", "/chatter", "--duration", "3.2").stdout,
+        rate = _last_figures(hetros(env, "topic", "hz", "/chatter", "--duration", "2.2").stdout,
                              r"average rate: ([\d.]+)")[0]
         assert rate == pytest.approx(10.0, rel=0.05)
-        bandwidth = hetros(env, "topic", "bw", "/chatter", "--duration", "5.2").stdout
+        bandwidth = hetros(env, "topic", "bw", "/chatter", "--duration", "4.2").stdout
         assert bandwidth.startswith("Subscribed to [/chatter]\n")
         per_second, size = _last_figures(bandwidth, r"(\d+) B/s from \d+ messages\n\tMessage size mean: (\d+) B")
         assert per_second == pytest.approx(10.0 * size, rel=0.10)
@@ -110,6 +110,7 @@ def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -
         assert {n["node"] for n in top["nodes"]} == {"talker", "listener", "listener2"}
         (chatter,) = top["topics"]
         assert chatter["topic"] == "/chatter" and chatter["rate_hz"] == pytest.approx(10.0, abs=1.5)
+        assert 15 < chatter["bytes_per_s"] / chatter["rate_hz"] < 40  # "hello world N" as CDR, per message
         listener = next(n for n in top["nodes"] if n["node"] == "listener")
         assert 0 < listener["callback_p50_ms"] <= listener["callback_p99_ms"]
         drawn = hetros(env, "graph", "--live", "--out", str(tmp_path / "live")).stdout
@@ -307,14 +308,14 @@ def test_the_vehicles_image_topic_is_echoed_without_slowing_its_publisher(tmp_pa
         assert "data: '<sequence type: uint8, length: 921600>'" in described and "encoding: rgb8" in described
         shown = yaml.safe_load(hetros(env, "topic", "echo", "/image_raw", "--once").stdout.split("---")[0])
         assert len(shown["data"]) == 129 and shown["data"][-1] == "..." and any(shown["data"][:128])
-        with subprocess.Popen([sys.executable, "-m", "hetros", "topic", "echo", "/image_raw", "--duration", "6"],
+        with subprocess.Popen([sys.executable, "-m", "hetros", "topic", "echo", "/image_raw", "--duration", "4.5"],
                               env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as echo:
-            rate = _last_figures(hetros(env, "topic", "hz", "/image_raw", "--duration", "4.2").stdout,
+            rate = _last_figures(hetros(env, "topic", "hz", "/image_raw", "--duration", "3.2").stdout,
                                  r"average rate: ([\d.]+)")[0]
             echoed, _ = echo.communicate(timeout=60)
         assert rate == pytest.approx(10.0, rel=0.05)  # the camera's rate while every image is echoed
-        assert echoed.count("---\n") >= 30
-        bandwidth = hetros(env, "topic", "bw", "/image_raw", "--duration", "4.2").stdout
+        assert echoed.count("---\n") >= 25
+        bandwidth = hetros(env, "topic", "bw", "/image_raw", "--duration", "3.2").stdout
         megabytes, size = _last_figures(bandwidth, r"([\d.]+) MB/s from \d+ messages\n\tMessage size mean: "
                                                    r"([\d.]+) KB")
         assert size == pytest.approx(921.65, abs=0.01) and megabytes == pytest.approx(size * 10 / 1000, rel=0.10)

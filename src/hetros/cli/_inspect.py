@@ -407,9 +407,12 @@ def _top_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]) -> dict
         for name, topic in now["topics"].items():
             old_topic = then["topics"].get(name, topic)
             entry = topics.setdefault(name, {"topic": name, "type": topic["type"], "rate_hz": 0.0, "published": 0,
-                                             "dropped": 0, "stalls": 0})
+                                             "dropped": 0, "stalls": 0, "bytes_per_s": None})
             entry["rate_hz"] += (topic["published"] - old_topic["published"]) / span
-            for counter in ("published", "dropped", "stalls"):
+            if topic.get("bytes"):  # counted where messages are serialized (shared memory); inproc copies nothing
+                sent = topic["bytes"] - old_topic.get("bytes", 0)
+                entry["bytes_per_s"] = (entry["bytes_per_s"] or 0.0) + sent / span
+            for counter in ("published", "dropped", "stalls"):  # totals since the start
                 entry[counter] += topic.get(counter, 0)
     return {"processes": processes, "nodes": nodes, "topics": sorted(topics.values(), key=lambda t: t["topic"]),
             "gateways": gateways}
@@ -434,9 +437,10 @@ def _format_top(rows: dict[str, Any], session: str) -> str:
     lines += ["", f"{'NODE':<24} {'PROCESS':<16} {'CPU%':>6} {'CB p50 ms':>10} {'CB p99 ms':>10}"]
     lines += [f"{n['node']:<24} {n['process']:<16} {n['cpu_percent']:>6.1f} {n['callback_p50_ms']:>10.3f} "
               f"{n['callback_p99_ms']:>10.3f}" for n in rows["nodes"]]
-    lines += ["", f"{'TOPIC':<32} {'RATE Hz':>9} {'SENT':>10} {'DROPS':>7} {'STALLS':>7}  TYPE"]
-    lines += [f"{t['topic']:<32} {t['rate_hz']:>9.1f} {t['published']:>10} {t['dropped']:>7} {t['stalls']:>7}  "
-              f"{t['type']}" for t in rows["topics"]]
+    lines += ["", f"{'TOPIC':<32} {'RATE Hz':>9} {'BW':>11} {'SENT':>10} {'DROPS':>7} {'STALLS':>7}  TYPE"]
+    lines += [f"{t['topic']:<32} {t['rate_hz']:>9.1f} "
+              f"{'-' if t['bytes_per_s'] is None else _bytes(t['bytes_per_s']) + '/s':>11} {t['published']:>10} "
+              f"{t['dropped']:>7} {t['stalls']:>7}  {t['type']}" for t in rows["topics"]]
     if rows["gateways"]:
         lines += ["", f"{'GATEWAY PORT':<48} {'MESSAGES':>9} {'CYCLES/MSG':>11} {'US/MSG':>8}"]
         lines += [f"{g['port']:<48} {g['messages']:>9} {g['cycles_per_message']:>11.0f} {g['us_per_message']:>8.2f}"

@@ -184,7 +184,7 @@ class ControlServer:
             nodes[thread.spec.name] = {"cpu_s": _thread_cpu_seconds(thread.thread.native_id),
                                        "alive": thread.thread.is_alive(), "handling": handling, "figures": figures}
         topics: dict[str, dict[str, Any]] = {
-            topic: {"published": point.published, "type": point.typename, "dropped": 0, "stalls": 0}
+            topic: {"published": point.published, "type": point.typename, "dropped": 0, "stalls": 0, "bytes": 0}
             for topic, point in self.graph.taps().items()}
         for live in list(self.graph.nodes.values()):
             for entity in live.entities():
@@ -192,7 +192,7 @@ class ControlServer:
                 if topic_name is None or not hasattr(entity, "counters"):
                     continue
                 entry = topics.setdefault(topic_name, {"published": 0, "type": entity.typename, "dropped": 0,
-                                                       "stalls": 0})
+                                                       "stalls": 0, "bytes": 0})
                 for counter, value in entity.counters().items():
                     if counter in entry:
                         entry[counter] += value
@@ -209,7 +209,7 @@ class ControlServer:
             return
         codec = self._codec(point.typename)
         wants_data = bool(request.get("data", True))
-        sink = TapSink(codec.encode if wants_data else None, codec.size, float(request.get("max_rate", 0.0)))
+        sink = TapSink(codec, data=wants_data, max_rate=float(request.get("max_rate", 0.0)))
         point.attach(sink)
         send_frame(connection, {"ok": True, "type": point.typename})
         sent_drops = 0
@@ -223,6 +223,7 @@ class ControlServer:
                 dropped, sent_drops = sink.dropped - sent_drops, sink.dropped
                 if wants_data:
                     send_frame(connection, {"t": stamp, "dropped": dropped}, item)
+                    sink.give_back(item)
                 else:
                     size, header_stamp = item
                     send_frame(connection, {"t": stamp, "dropped": dropped, "size": size, "stamp": header_stamp})

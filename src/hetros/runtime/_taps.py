@@ -22,6 +22,8 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
+from ..transport import MessageCodec
+
 # messages a sink keeps for its sender: meta records are small, encoded messages may be images
 META_DEPTH = 4096
 DATA_DEPTH = 64
@@ -31,10 +33,9 @@ DATA_BYTES = 64 << 20
 class TapSink:
     """One look at one topic: a bounded queue between the publisher and the sender."""
 
-    def __init__(self, encode: Callable[[Any], bytes | bytearray] | None, measure: Callable[[Any], int],
-                 max_rate: float = 0.0) -> None:
-        self.encode = encode  # None: times and sizes only
-        self.measure = measure
+    def __init__(self, codec: MessageCodec, *, data: bool, max_rate: float = 0.0) -> None:
+        self.codec = codec
+        self.data = data  # False: times and sizes only
         self.max_rate = max_rate
         self.dropped = 0
         # appended by the publisher, taken by the sender (a deque's ends are thread-safe); the byte
@@ -42,6 +43,9 @@ class TapSink:
         self._queue: deque[tuple[int, Any]] = deque()
         self._added_bytes = 0
         self._taken_bytes = 0
+        # buffers the sender has finished with, encoded into again: a camera's frames are all one size,
+        # and a fresh megabyte costs more in page faults than its encoding
+        self._spare: deque[bytearray] = deque(maxlen=4)
         self._nonempty = threading.Event()
         self._next_allowed = 0
         self.closed = False
@@ -51,22 +55,33 @@ class TapSink:
         if self.max_rate and now < self._next_allowed:
             return  # a rate cap (a live view) thins the stream; it is not a loss
         queue = self._queue
-        if self.encode is None:
+        if not self.data:
             if len(queue) >= META_DEPTH:
                 self.dropped += 1
                 return
-            item: Any = (self.measure(message), header_stamp(message))
+            item: Any = (self.codec.size(message), header_stamp(message))
         else:
             if len(queue) >= DATA_DEPTH or self._added_bytes - self._taken_bytes >= DATA_BYTES:
                 self.dropped += 1
                 return
-            item = self.encode(message)
+            item = self._encode(message)
             self._added_bytes += len(item)
         if self.max_rate:
             self._next_allowed = now + int(1e9 / self.max_rate)
         queue.append((now, item))
         if not self._nonempty.is_set():
             self._nonempty.set()
+
+    def _encode(self, message: Any) -> bytearray:
+        size = self.codec.size(message)
+        spare = self._spare
+        buffer = spare.popleft() if spare and len(spare[0]) == size else bytearray(size)
+        self.codec.encode_into(message, memoryview(buffer))
+        return buffer
+
+    def give_back(self, buffer: bytearray) -> None:
+        """The sender is done with an encoded message's buffer: the next one may reuse it."""
+        self._spare.append(buffer)
 
     def take(self, timeout: float) -> tuple[int, Any] | None:
         """The oldest queued (wall time in ns, size and stamp or encoded bytes), or None after ``timeout``."""
@@ -78,7 +93,7 @@ class TapSink:
             if not queue:
                 return None
         stamp, item = queue.popleft()
-        if self.encode is not None:
+        if self.data:
             self._taken_bytes += len(item)
         return stamp, item
 

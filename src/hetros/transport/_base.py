@@ -64,7 +64,7 @@ class Writer(ABC, Generic[T]):
 
     def counters(self) -> dict[str, int]:
         """What ``hetros top`` shows of this writer: ``stalls``, the sends that waited for a reliable
-        subscriber's room; empty where the transport does not count."""
+        subscriber's room, and ``bytes`` serialized (where it serializes); empty where it does not count."""
         return {}
 
     def assert_liveliness(self) -> None:

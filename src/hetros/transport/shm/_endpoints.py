@@ -129,10 +129,11 @@ class ShmWriter(Writer):
         self._loan_slot = service.loan_scratch
         self._send = service.send
         self._send_cdr = service.send_cdr
+        self.sent_bytes = 0  # what this writer put into shared memory (hetros top's bandwidth)
         service.publisher()
 
     def counters(self) -> dict[str, int]:
-        return {"stalls": self._service.stalls}
+        return {"stalls": self._service.stalls, "bytes": self.sent_bytes}
 
     def write(self, message: Any) -> None:
         cdr = self._cdr
@@ -141,6 +142,7 @@ class ShmWriter(Writer):
             sample, memory = self._loan_slot(size)
             self._codec.encode_into(message, memory[HEADER.size:size])
             self._send(sample, memory, LAYOUT_CDR, self._slot)
+            self.sent_bytes += size
             return
         loan = getattr(message, "_hetros_loan", None)  # set by every decoder and __init__; guarded all the same
         if loan is not None and loan.writer is self:
@@ -152,6 +154,7 @@ class ShmWriter(Writer):
             self._send_copy(message)
             return
         self._send_cdr(message, body_size, cdr.encode_body, self._slot)
+        self.sent_bytes += body_size
 
     def _send_copy(self, message: Any) -> None:
         """Large arrays go as aligned blobs (no zeroing, no CDR walk over them)."""
@@ -258,6 +261,7 @@ class ShmWriter(Writer):
                 "a loaned shared-memory slot keeps for them; shorten its strings or lists"
             ) from None
         self._service.send(loan.sample, loan.memory, LAYOUT_SPLIT, self._slot)
+        self.sent_bytes += loan.plan.size
 
     def assert_liveliness(self) -> None:
         self._service.publisher()  # a publisher that never sent is known (its pid) from now on

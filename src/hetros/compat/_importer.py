@@ -1,0 +1,68 @@
+"""The finder that serves ``rclpy`` (hetros.compat.rclpy) and ROS message packages (``std_msgs.msg`` ->
+``hetros.interfaces.std_msgs.msg``) in hetros's processes."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.abc
+import importlib.machinery
+import sys
+import types
+from collections.abc import Sequence
+
+from ..msg import registry
+
+# module names served from hetros.compat (the shims), and their prefix there
+_SHIMS = ("rclpy",)
+_KINDS = ("msg", "srv", "action")
+
+
+class _Alias(importlib.abc.Loader):
+    """Loads a module that already exists under another name (the shim, or a hetros interface module)."""
+
+    def __init__(self, target: str) -> None:
+        self.target = target
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
+        return importlib.import_module(self.target)
+
+    def exec_module(self, module: types.ModuleType) -> None:
+        return None
+
+
+class _RosNames(importlib.abc.MetaPathFinder):
+    def find_spec(self, fullname: str, path: Sequence[str] | None,
+                  target: types.ModuleType | None = None) -> importlib.machinery.ModuleSpec | None:
+        top = fullname.split(".", 1)[0]
+        if top in _SHIMS:
+            return self._spec(fullname, f"{__package__}.{fullname}")
+        parts = fullname.split(".")
+        if len(parts) > 2 or top not in _packages():
+            return None
+        if len(parts) == 2 and parts[1] not in _KINDS:
+            return None
+        return self._spec(fullname, f"hetros.interfaces.{fullname}")
+
+    @staticmethod
+    def _spec(fullname: str, target: str) -> importlib.machinery.ModuleSpec:
+        spec = importlib.machinery.ModuleSpec(fullname, _Alias(target), is_package=True)
+        spec.submodule_search_locations = []
+        return spec
+
+
+def _packages() -> set[str]:
+    """The interface packages the process' registry knows (shipped, rosbags', the project's)."""
+    types_ = registry()
+    names = {name.split("/", 1)[0] for name in types_.store.fielddefs}
+    names |= {name.split("/", 1)[0] for name in types_.services}
+    names |= {name.split("/", 1)[0] for name in types_.actions}
+    return names
+
+
+_FINDER = _RosNames()
+
+
+def install() -> None:
+    """Serve ``rclpy`` and ROS message packages in this process (idempotent)."""
+    if _FINDER not in sys.meta_path:
+        sys.meta_path.insert(0, _FINDER)

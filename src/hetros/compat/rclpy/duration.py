@@ -1,0 +1,5 @@
+"""rclpy.duration: hetros's Duration."""
+
+from ...runtime import Duration
+
+__all__ = ["Duration"]

@@ -1,0 +1,130 @@
+"""rclpy.executors on hetros: every rclpy node of a ``main()`` is a view of one hetros node, so an executor
+spins that node's own executor (callbacks one at a time, in its thread); ``MultiThreadedExecutor`` runs
+them one at a time as well."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+from ..._errors import ShutdownError
+from ...runtime import Node as HetrosNode
+from .. import _context
+from .task import Future
+
+
+class ExternalShutdownException(ShutdownError):
+    """The graph stopped (Ctrl-C, the launch ended): what rclpy raises from ``spin`` when its context is shut
+    down from outside. Uncaught, hetros reports the node as ended at shutdown."""
+
+
+def _running(hetros: HetrosNode) -> bool:
+    return not hetros.graph.stop.is_set() and not _context.shut_down()
+
+
+def spin_node(hetros: HetrosNode, timeout_sec: float | None = None) -> None:
+    """Run callbacks until the graph stops (rclpy raises ExternalShutdownException then), ``rclpy.shutdown()``,
+    or ``timeout_sec``."""
+    hetros.spun = True
+    deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
+    while _running(hetros):
+        left = None if deadline is None else deadline - time.monotonic()
+        if left is not None and left <= 0:
+            return
+        hetros.executor.spin_once(0.1 if left is None else min(left, 0.1))
+    if hetros.graph.stop.is_set():
+        raise ExternalShutdownException("the graph is shutting down")
+
+
+def spin_once_node(hetros: HetrosNode, timeout_sec: float | None) -> None:
+    hetros.spun = True
+    if hetros.graph.stop.is_set():
+        raise ExternalShutdownException("the graph is shutting down")
+    deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
+    while _running(hetros):
+        left = None if deadline is None else deadline - time.monotonic()
+        if left is not None and left <= 0:
+            return
+        if hetros.executor.spin_once(0.1 if left is None else min(left, 0.1)):
+            return
+
+
+def spin_until_done(hetros: HetrosNode, future: Future, timeout_sec: float | None) -> None:
+    hetros.spun = True
+    deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
+    while not future.done() and _running(hetros):
+        left = None if deadline is None else deadline - time.monotonic()
+        if left is not None and left <= 0:
+            return
+        hetros.executor.spin_once(0.05 if left is None else min(left, 0.05))
+    if not future.done() and hetros.graph.stop.is_set():
+        raise ExternalShutdownException("the graph is shutting down")
+
+
+class Executor:
+    def __init__(self, *, context: Any = None) -> None:
+        self._nodes: list[Any] = []
+
+    def add_node(self, node: Any) -> bool:
+        if node not in self._nodes:
+            self._nodes.append(node)
+            node.executor = self
+        return True
+
+    def remove_node(self, node: Any) -> None:
+        if node in self._nodes:
+            self._nodes.remove(node)
+
+    def get_nodes(self) -> list[Any]:
+        return list(self._nodes)
+
+    def _hetros(self) -> HetrosNode:
+        return self._nodes[0]._hetros if self._nodes else _context.bound_node()
+
+    def spin(self) -> None:
+        spin_node(self._hetros())
+
+    def spin_once(self, timeout_sec: float | None = None) -> None:
+        spin_once_node(self._hetros(), timeout_sec)
+
+    def spin_until_future_complete(self, future: Future, timeout_sec: float | None = None) -> None:
+        spin_until_done(self._hetros(), future, timeout_sec)
+
+    def create_task(self, callback: Callable[..., Any], *args: Any) -> Future:
+        future = Future()
+        try:
+            future.set_result(callback(*args))
+        except Exception as exc:
+            future.set_exception(exc)
+        return future
+
+    def shutdown(self, timeout_sec: float | None = None) -> bool:
+        return True
+
+
+class SingleThreadedExecutor(Executor):
+    pass
+
+
+class MultiThreadedExecutor(Executor):
+    def __init__(self, num_threads: int | None = None, *, context: Any = None) -> None:
+        super().__init__(context=context)
+        self.num_threads = num_threads
+
+
+class GuardCondition:
+    """``node.create_guard_condition(callback)``: ``trigger()`` runs the callback in the node's executor."""
+
+    def __init__(self, node: Any, callback: Callable[[], Any]) -> None:
+        self._hetros: HetrosNode = node._hetros
+        self.callback = callback
+
+    def trigger(self) -> None:
+        self._hetros.executor.add_timer(time.monotonic(), self._fire)
+
+    def _fire(self) -> None:
+        self.callback()
+
+    def destroy(self) -> None:
+        pass

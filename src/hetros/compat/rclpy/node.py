@@ -1,0 +1,368 @@
+"""rclpy.node.Node on a hetros node: the endpoints the plan wired, rclpy's calling conventions.
+
+Each ``Node`` an rclpy ``main()`` creates is a view of the hetros node the project runs it as
+(bound to the thread): its endpoints must be the ones the project declares for that node,
+and hetros's executor runs its callbacks. Names resolve as rclpy resolves them (``'topic'``
+-> ``/topic`` under the node's namespace, ``'~/x'`` -> ``/<namespace>/<node>/x``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from ..._errors import ParameterError
+from ...msg import copy as copy_message
+from ...runtime import Clock
+from ...runtime import Node as HetrosNode
+from .._context import bound_node
+from .callback_groups import CallbackGroup, MutuallyExclusiveCallbackGroup
+from .logging import RcutilsLogger
+from .parameter import Parameter
+from .qos import QoSProfile, to_hetros
+from .task import Future
+
+
+def resolve_name(name: str, namespace: str, node: str) -> str:
+    """rclpy's name resolution for topics and services."""
+    namespace = "/" + namespace.strip("/") if namespace.strip("/") else ""
+    if name.startswith("/"):
+        return name
+    if name.startswith("~"):
+        return f"{namespace}/{node}{name[1:]}" if name != "~" else f"{namespace}/{node}"
+    return f"{namespace}/{name}"
+
+
+class Publisher:
+    """Publishes as rclpy does: the message stays the caller's (it is copied, then handed over)."""
+
+    def __init__(self, node: Node, inner: Any, msg_type: type[Any], topic: str) -> None:
+        self._node = node
+        self._inner = inner
+        self.msg_type = msg_type
+        self.topic_name = topic
+
+    @property
+    def topic(self) -> str:
+        return self.topic_name
+
+    def publish(self, msg: Any) -> None:
+        self._inner.publish(copy_message(msg))
+
+    def get_subscription_count(self) -> int:
+        return self._node.count_subscribers(self.topic_name)
+
+    def assert_liveliness(self) -> None:
+        self._inner.assert_liveliness()
+
+    def destroy(self) -> None:
+        self._inner.close()
+
+
+class Subscription:
+    def __init__(self, inner: Any, msg_type: type[Any], topic: str, callback: Callable[[Any], None]) -> None:
+        self._inner = inner
+        self.msg_type = msg_type
+        self.topic_name = topic
+        self.callback = callback
+
+    @property
+    def topic(self) -> str:
+        return self.topic_name
+
+    def destroy(self) -> None:
+        self._inner.close()
+
+
+class Timer:
+    def __init__(self, node: Node, period: float, callback: Callable[[], Any], autostart: bool) -> None:
+        self._node = node
+        self._period = period
+        self.callback = callback
+        self._inner: Any = None
+        if autostart:
+            self.reset()
+
+    @property
+    def timer_period_ns(self) -> int:
+        return int(self._period * 1e9)
+
+    def is_canceled(self) -> bool:
+        return self._inner is None or bool(self._inner.cancelled)
+
+    def cancel(self) -> None:
+        if self._inner is not None:
+            self._inner.cancel()
+
+    def reset(self) -> None:
+        self.cancel()
+        self._inner = self._node._hetros.create_timer(self._period, self.callback)
+
+    def destroy(self) -> None:
+        self.cancel()
+
+
+class Client:
+    """A service client as rclpy's: ``call_async`` gives a Future completed while the node spins."""
+
+    def __init__(self, node: Node, inner: Any, srv_type: Any, name: str) -> None:
+        self._node = node
+        self._inner = inner
+        self.srv_type = srv_type
+        self.srv_name = name
+
+    def call_async(self, request: Any) -> Future:
+        return Future.wrapping(self._inner.call_async(copy_message(request)))
+
+    def call(self, request: Any, timeout_sec: float | None = None) -> Any:
+        return self._inner.call(copy_message(request), timeout=3600.0 if timeout_sec is None else timeout_sec)
+
+    def wait_for_service(self, timeout_sec: float | None = None) -> bool:
+        """True: the plan wires every client to its server before the graph starts, and a request waits in
+        the server's FIFO until the server takes it."""
+        return True
+
+    def service_is_ready(self) -> bool:
+        return True
+
+    def remove_pending_request(self, future: Future) -> None:
+        future.cancel()
+
+    def destroy(self) -> None:
+        self._inner.close()
+
+
+class Service:
+    def __init__(self, inner: Any, srv_type: Any, name: str) -> None:
+        self._inner = inner
+        self.srv_type = srv_type
+        self.srv_name = name
+
+    def destroy(self) -> None:
+        self._inner.close()
+
+
+class Rate:
+    """``node.create_rate(hz)``: ``sleep()`` until the next period of the graph's clock."""
+
+    def __init__(self, node: Node, frequency: float) -> None:
+        self._node = node
+        self._period_ns = int(1e9 / frequency)
+        self._due = node.get_clock().now_ns() + self._period_ns
+
+    def sleep(self) -> None:
+        clock = self._node.get_clock()
+        if not clock.wait_until(self._due, self._node._hetros.graph.stop):
+            from .executors import ExternalShutdownException
+
+            raise ExternalShutdownException("the graph is shutting down")
+        now = clock.now_ns()
+        self._due += self._period_ns
+        if self._due <= now:
+            self._due = now + self._period_ns
+
+    def destroy(self) -> None:
+        pass
+
+
+class SetParametersResult:
+    def __init__(self, successful: bool, reason: str = "") -> None:
+        self.successful = successful
+        self.reason = reason
+
+
+class Node:
+    """rclpy's Node, as a view of the hetros node this ``main()`` runs as."""
+
+    PARAM_REL_TOL = 1e-6
+
+    def __init__(self, node_name: str, *, context: Any = None, cli_args: list[str] | None = None,
+                 namespace: str | None = None, use_global_arguments: bool = True, enable_rosout: bool = True,
+                 start_parameter_services: bool = True, parameter_overrides: list[Parameter] | None = None,
+                 allow_undeclared_parameters: bool = False,
+                 automatically_declare_parameters_from_overrides: bool = False, **_ignored: Any) -> None:
+        self._hetros: HetrosNode = bound_node()
+        self._name = node_name
+        self._namespace = "/" + (namespace or "").strip("/")
+        self._logger = RcutilsLogger(node_name)
+        self._overrides: dict[str, Any] = dict(self._hetros.parameters)
+        for parameter in parameter_overrides or []:
+            self._overrides[parameter.name] = parameter.value
+        self._declared: dict[str, Parameter] = {}
+        self._allow_undeclared = allow_undeclared_parameters
+        self._on_set: list[Callable[[list[Parameter]], Any]] = []
+        self.default_callback_group: CallbackGroup = MutuallyExclusiveCallbackGroup()
+        self.executor: Any = None
+        if automatically_declare_parameters_from_overrides:
+            for name, value in self._overrides.items():
+                self._declared[name] = Parameter(name, value=value)
+
+    # -- names ---------------------------------------------------------------------------------
+
+    def get_name(self) -> str:
+        return self._name
+
+    def get_namespace(self) -> str:
+        return self._namespace
+
+    def get_fully_qualified_name(self) -> str:
+        return f"{self._namespace.rstrip('/')}/{self._name}"
+
+    def resolve_topic_name(self, topic: str, *, only_expand: bool = False) -> str:
+        return resolve_name(topic, self._namespace, self._name)
+
+    resolve_service_name = resolve_topic_name
+
+    def get_logger(self) -> RcutilsLogger:
+        return self._logger
+
+    def get_clock(self) -> Clock:
+        return self._hetros.get_clock()
+
+    # -- endpoints -----------------------------------------------------------------------------
+
+    def create_publisher(self, msg_type: type[Any], topic: str, qos_profile: QoSProfile | int, *,
+                         callback_group: CallbackGroup | None = None, **_ignored: Any) -> Publisher:
+        name = self.resolve_topic_name(topic)
+        return Publisher(self, self._hetros.create_publisher(msg_type, name, qos=to_hetros(qos_profile)), msg_type,
+                         name)
+
+    def create_subscription(self, msg_type: type[Any], topic: str, callback: Callable[[Any], None],
+                            qos_profile: QoSProfile | int, *, callback_group: CallbackGroup | None = None,
+                            **_ignored: Any) -> Subscription:
+        name = self.resolve_topic_name(topic)
+        inner = self._hetros.create_subscription(msg_type, name, callback, qos=to_hetros(qos_profile))
+        return Subscription(inner, msg_type, name, callback)
+
+    def create_timer(self, timer_period_sec: float, callback: Callable[[], Any],
+                     callback_group: CallbackGroup | None = None, clock: Any = None, autostart: bool = True) -> Timer:
+        return Timer(self, float(timer_period_sec), callback, autostart)
+
+    def create_rate(self, frequency: float, clock: Any = None) -> Rate:
+        return Rate(self, frequency)
+
+    def create_service(self, srv_type: Any, srv_name: str, callback: Callable[[Any, Any], Any], *,
+                       qos_profile: Any = None, callback_group: CallbackGroup | None = None) -> Service:
+        name = self.resolve_service_name(srv_name)
+
+        def handle(request: Any) -> Any:
+            return callback(request, srv_type.Response())  # rclpy hands the callback a response to fill
+        return Service(self._hetros.create_service(srv_type, name, handle), srv_type, name)
+
+    def create_client(self, srv_type: Any, srv_name: str, *, qos_profile: Any = None,
+                      callback_group: CallbackGroup | None = None) -> Client:
+        name = self.resolve_service_name(srv_name)
+        existing = self._hetros.clients.get(name)
+        inner = existing if existing is not None else self._hetros.create_client(srv_type, name)
+        return Client(self, inner, srv_type, name)
+
+    def create_guard_condition(self, callback: Callable[[], Any], callback_group: CallbackGroup | None = None) -> Any:
+        from .executors import GuardCondition
+
+        return GuardCondition(self, callback)
+
+    def count_publishers(self, topic: str) -> int:
+        return self._count(topic, "publishers")
+
+    def count_subscribers(self, topic: str) -> int:
+        return self._count(topic, "subscribers")
+
+    def _count(self, topic: str, role: str) -> int:
+        plan = self._hetros.graph.plan
+        channel = None if plan is None else plan.channels.get(self.resolve_topic_name(topic))
+        return 0 if channel is None else len(getattr(channel, role))
+
+    def get_topic_names_and_types(self, no_demangle: bool = False) -> list[tuple[str, list[str]]]:
+        plan = self._hetros.graph.plan
+        if plan is None:
+            return []
+        return sorted((c.name, [c.type]) for c in plan.channels.values() if c.kind == "topic")
+
+    def get_node_names(self) -> list[str]:
+        plan = self._hetros.graph.plan
+        return sorted(plan.nodes) if plan is not None else [self._name]
+
+    # -- parameters ----------------------------------------------------------------------------
+
+    def declare_parameter(self, name: str, value: Any = None, descriptor: Any = None,
+                          ignore_override: bool = False) -> Parameter:
+        if isinstance(value, Parameter.Type):
+            value = None  # declared by type only: its value comes from the overrides
+        chosen = value if ignore_override or name not in self._overrides else self._overrides[name]
+        parameter = Parameter(name, value=chosen)
+        self._declared[name] = parameter
+        if chosen is not None:
+            self._hetros.set_parameter(name, chosen)
+        return parameter
+
+    def declare_parameters(self, namespace: str, parameters: Iterable[tuple[Any, ...]],
+                           ignore_override: bool = False) -> list[Parameter]:
+        prefix = f"{namespace}." if namespace else ""
+        return [self.declare_parameter(prefix + entry[0], entry[1] if len(entry) > 1 else None,
+                                       ignore_override=ignore_override) for entry in parameters]
+
+    def has_parameter(self, name: str) -> bool:
+        return name in self._declared
+
+    def get_parameter(self, name: str) -> Parameter:
+        if name in self._declared:
+            live = self._hetros.parameters.get(name, self._declared[name].value)
+            return Parameter(name, value=live)
+        if self._allow_undeclared:
+            return Parameter(name, value=self._overrides.get(name))
+        raise ParameterError(f"node {self._name!r}: parameter {name!r} is not declared; call "
+                             f"declare_parameter({name!r}, default) first (as rclpy requires)")
+
+    def get_parameter_or(self, name: str, alternative_value: Parameter | None = None) -> Parameter:
+        if name in self._declared:
+            return self.get_parameter(name)
+        return alternative_value if alternative_value is not None else Parameter(name)
+
+    def get_parameters(self, names: Iterable[str]) -> list[Parameter]:
+        return [self.get_parameter(name) for name in names]
+
+    def set_parameters(self, parameters: list[Parameter]) -> list[SetParametersResult]:
+        results = []
+        for callback in self._on_set:
+            verdict = callback(parameters)
+            if verdict is not None and not getattr(verdict, "successful", True):
+                return [SetParametersResult(False, getattr(verdict, "reason", ""))] * len(parameters)
+        for parameter in parameters:
+            self._declared[parameter.name] = parameter
+            self._hetros.set_parameter(parameter.name, parameter.value)
+            results.append(SetParametersResult(True))
+        return results
+
+    def add_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], Any]) -> None:
+        self._on_set.append(callback)
+
+    def undeclare_parameter(self, name: str) -> None:
+        self._declared.pop(name, None)
+
+    # -- the end ---------------------------------------------------------------------------------
+
+    def destroy_node(self) -> None:
+        """rclpy frees the node's endpoints here; in hetros they belong to the planned node, closed when its
+        thread ends."""
+
+    def destroy_publisher(self, publisher: Publisher) -> bool:
+        publisher.destroy()
+        return True
+
+    def destroy_subscription(self, subscription: Subscription) -> bool:
+        subscription.destroy()
+        return True
+
+    def destroy_timer(self, timer: Timer) -> bool:
+        timer.destroy()
+        return True
+
+    def destroy_client(self, client: Client) -> bool:
+        return True
+
+    def destroy_service(self, service: Service) -> bool:
+        service.destroy()
+        return True
+
+    def destroy_rate(self, rate: Rate) -> bool:
+        return True

@@ -1,0 +1,98 @@
+"""rclpy.qos: QoS profiles as rclpy spells them, turned into hetros's QoS (which the project file's overrides)."""
+
+from __future__ import annotations
+
+import enum
+from typing import Any
+
+from ..._qos import QoS
+
+
+class HistoryPolicy(enum.IntEnum):
+    SYSTEM_DEFAULT = 0
+    KEEP_LAST = 1
+    KEEP_ALL = 2
+    UNKNOWN = 3
+
+
+class ReliabilityPolicy(enum.IntEnum):
+    SYSTEM_DEFAULT = 0
+    RELIABLE = 1
+    BEST_EFFORT = 2
+    UNKNOWN = 3
+    BEST_AVAILABLE = 4
+
+
+class DurabilityPolicy(enum.IntEnum):
+    SYSTEM_DEFAULT = 0
+    TRANSIENT_LOCAL = 1
+    VOLATILE = 2
+    UNKNOWN = 3
+    BEST_AVAILABLE = 4
+
+
+class LivelinessPolicy(enum.IntEnum):
+    SYSTEM_DEFAULT = 0
+    AUTOMATIC = 1
+    MANUAL_BY_TOPIC = 3
+    UNKNOWN = 4
+    BEST_AVAILABLE = 5
+
+
+QoSHistoryPolicy = HistoryPolicy
+QoSReliabilityPolicy = ReliabilityPolicy
+QoSDurabilityPolicy = DurabilityPolicy
+QoSLivelinessPolicy = LivelinessPolicy
+
+
+class QoSProfile:
+    """rclpy's QoSProfile: keep_last depth 10, reliable, volatile unless told otherwise."""
+
+    def __init__(self, *, history: HistoryPolicy = HistoryPolicy.KEEP_LAST, depth: int | None = None,
+                 reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE,
+                 durability: DurabilityPolicy = DurabilityPolicy.VOLATILE,
+                 liveliness: LivelinessPolicy = LivelinessPolicy.SYSTEM_DEFAULT, **_ignored: Any) -> None:
+        self.history = HistoryPolicy(history)
+        self.depth = 10 if depth is None else int(depth)
+        self.reliability = ReliabilityPolicy(reliability)
+        self.durability = DurabilityPolicy(durability)
+        self.liveliness = LivelinessPolicy(liveliness)
+
+    def __repr__(self) -> str:
+        return (f"QoSProfile(history={self.history.name}, depth={self.depth}, reliability={self.reliability.name}, "
+                f"durability={self.durability.name})")
+
+
+def to_hetros(profile: QoSProfile | int | None) -> QoS | None:
+    """What the code asked for, as hetros's QoS: a bare depth means keep_last of it, as in rclpy."""
+    if profile is None:
+        return None
+    if isinstance(profile, int):
+        profile = QoSProfile(depth=profile)
+    return QoS(reliability="best_effort" if profile.reliability == ReliabilityPolicy.BEST_EFFORT else "reliable",
+               history="keep_all" if profile.history == HistoryPolicy.KEEP_ALL else "keep_last",
+               depth=max(profile.depth, 1),
+               durability="transient_local" if profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+               else "volatile")
+
+
+qos_profile_system_default = QoSProfile()
+qos_profile_services_default = QoSProfile()
+qos_profile_parameters = QoSProfile(depth=1000)
+qos_profile_parameter_events = QoSProfile(depth=1000)
+qos_profile_sensor_data = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
+qos_profile_action_status_default = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class QoSPresetProfiles(enum.Enum):
+    SYSTEM_DEFAULT = qos_profile_system_default
+    SENSOR_DATA = qos_profile_sensor_data
+    SERVICES_DEFAULT = qos_profile_services_default
+    PARAMETERS = qos_profile_parameters
+    PARAMETER_EVENTS = qos_profile_parameter_events
+    ACTION_STATUS_DEFAULT = qos_profile_action_status_default
+
+    @classmethod
+    def get_from_short_key(cls, name: str) -> QoSProfile:
+        profile: QoSProfile = cls[name.upper()].value
+        return profile

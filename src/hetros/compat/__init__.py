@@ -10,7 +10,6 @@ in front of the environment's: a real rclpy installed beside hetros is not shado
 anywhere else.
 """
 
-from ._context import bound_node, ros_main, runs_as_ros_main
 from ._importer import install
 
-__all__ = ["bound_node", "install", "ros_main", "runs_as_ros_main"]
+__all__ = ["install"]

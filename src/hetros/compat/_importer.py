@@ -7,6 +7,7 @@ import importlib
 import importlib.abc
 import importlib.machinery
 import sys
+import threading
 import types
 from collections.abc import Sequence
 
@@ -31,13 +32,23 @@ class _Alias(importlib.abc.Loader):
 
 
 class _RosNames(importlib.abc.MetaPathFinder):
+    def __init__(self) -> None:
+        self._busy = threading.local()
+
     def find_spec(self, fullname: str, path: Sequence[str] | None,
                   target: types.ModuleType | None = None) -> importlib.machinery.ModuleSpec | None:
         top = fullname.split(".", 1)[0]
         if top in _SHIMS:
             return self._spec(fullname, f"{__package__}.{fullname}")
         parts = fullname.split(".")
-        if len(parts) > 2 or top not in _packages():
+        if len(parts) > 2 or getattr(self._busy, "on", False):
+            return None  # busy: the registry, asked below, imports modules of its own
+        self._busy.on = True
+        try:
+            known = top in _packages()
+        finally:
+            self._busy.on = False
+        if not known:
             return None
         if len(parts) == 2 and parts[1] not in _KINDS:
             return None
@@ -50,13 +61,21 @@ class _RosNames(importlib.abc.MetaPathFinder):
         return spec
 
 
-def _packages() -> set[str]:
-    """The interface packages the process' registry knows (shipped, rosbags', the project's)."""
+_known: tuple[tuple[int, int, int], frozenset[str]] = ((-1, -1, -1), frozenset())
+
+
+def _packages() -> frozenset[str]:
+    """The interface packages the process' registry knows (shipped, rosbags', the project's); worked out
+    again only when the registry grew, since every import in the process asks."""
+    global _known
     types_ = registry()
-    names = {name.split("/", 1)[0] for name in types_.store.fielddefs}
-    names |= {name.split("/", 1)[0] for name in types_.services}
-    names |= {name.split("/", 1)[0] for name in types_.actions}
-    return names
+    key = (len(types_.store.fielddefs), len(types_.services), len(types_.actions))
+    if key != _known[0]:
+        names = {name.split("/", 1)[0] for name in types_.store.fielddefs}
+        names |= {name.split("/", 1)[0] for name in types_.services}
+        names |= {name.split("/", 1)[0] for name in types_.actions}
+        _known = (key, frozenset(names))
+    return _known[1]
 
 
 _FINDER = _RosNames()
@@ -65,4 +84,5 @@ _FINDER = _RosNames()
 def install() -> None:
     """Serve ``rclpy`` and ROS message packages in this process (idempotent)."""
     if _FINDER not in sys.meta_path:
+        _packages()  # the registry made before the finder asks it from inside an import
         sys.meta_path.insert(0, _FINDER)

@@ -26,6 +26,7 @@ from typing import IO, Any
 from .._errors import Error, LaunchError
 from .._log import get_logger
 from .._net import is_local_address
+from ..compat import install as install_ros_names
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
 from ..runtime._log import log_to_file, stop_logging_to
@@ -158,6 +159,7 @@ class Launcher:
         for target in self.plan.processes():
             self.children[target] = self._spawn(target)
         local_nodes = self.plan.nodes_in(LAUNCHER)
+        install_ros_names()  # rclpy and ROS message packages for the nodes written for ROS
         if local_nodes:
             self.host = Host(self.plan, LAUNCHER, self.session, self._local_failure, self.stop,
                              lambda: self.events.put({"event": "local_done"}),

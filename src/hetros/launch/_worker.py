@@ -16,6 +16,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
+from ..compat import install as install_ros_names
 from ..plan import Plan
 from ..runtime import Host, setup_logging
 
@@ -84,6 +85,7 @@ def main(argv: list[str] | None = None) -> int:
 
     threading.Thread(target=control, name="control", daemon=True).start()
     try:
+        install_ros_names()  # rclpy and ROS message packages for the nodes written for ROS
         host = Host(plan, args.target, args.session,
                     lambda node, tb, restarting: report("node_failed", node=node, traceback=tb,
                                                         restarting=restarting), stop, stop.set,

@@ -26,10 +26,12 @@ def module_findable(project: LoadedProject, module: str) -> bool:
 _PROBE = """
 import importlib, json, sys
 from pathlib import Path
+from hetros.compat import install
 from hetros.msg import registry
 types = registry()
 for folder in json.loads(sys.argv[2]):
     types.load_folder(Path(folder))
+install()  # rclpy and ROS message packages, as a hetros worker serves them
 out = {}
 for run in json.loads(sys.argv[1]):
     module_name, _, attr = run.partition(":")
@@ -46,7 +48,8 @@ for run in json.loads(sys.argv[1]):
     if target is None:
         out[run] = f"module {module_name!r} has no {attr!r}; define it or fix 'run: {run}'"
     elif not callable(target):
-        out[run] = f"{run} must be a function or class taking the node, not {type(target).__name__}"
+        out[run] = (f"{run} must be a function or class taking the node, or a ROS main() taking no argument, "
+                    f"not {type(target).__name__}")
 print("\\n" + sys.argv[3] + json.dumps(out))
 """
 

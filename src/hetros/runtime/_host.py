@@ -18,6 +18,7 @@ from ..plan import NodePlan, Plan
 from ._graph import Graph
 from ._log import node_logger
 from ._node import Node
+from ._ros_main import ros_main, runs_as_ros_main
 
 log = get_logger("hetros.launch")
 
@@ -43,7 +44,12 @@ def resolve(run: str, root: str) -> Callable[..., Any]:
 
 def run_node_body(factory: Callable[..., Any], node: Node) -> None:
     """Call a node function or construct a node class; spin when it left callbacks behind
-    that it never spun itself (one that ran its own spin loop and returned is done)."""
+    that it never spun itself (one that ran its own spin loop and returned is done). A ROS
+    ``main()`` (no argument) runs with the node bound to this thread (``_ros_main``)."""
+    if runs_as_ros_main(factory):
+        with ros_main(node):
+            factory()
+        return
     result = factory(node)
     if inspect.isclass(factory) and hasattr(result, "run"):
         result.run()

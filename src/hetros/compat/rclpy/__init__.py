@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .. import _context
+from ...runtime import _ros_main as _context
 from .executors import (
     ExternalShutdownException,
     SingleThreadedExecutor,

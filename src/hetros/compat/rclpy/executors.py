@@ -10,7 +10,7 @@ from typing import Any
 
 from ..._errors import ShutdownError
 from ...runtime import Node as HetrosNode
-from .. import _context
+from ...runtime import _ros_main as _context
 from .task import Future
 
 
@@ -38,15 +38,19 @@ def spin_node(hetros: HetrosNode, timeout_sec: float | None = None) -> None:
 
 
 def spin_once_node(hetros: HetrosNode, timeout_sec: float | None) -> None:
+    """Wait for one piece of work and do it: a callback, or a reply or goal answer that arrived (hetros
+    takes those without the callback queue, so a loop of ``spin_once`` and ``future.done()`` ends)."""
     hetros.spun = True
     if hetros.graph.stop.is_set():
         raise ExternalShutdownException("the graph is shutting down")
+    executor = hetros.executor
+    seen = executor.generation
     deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
     while _running(hetros):
         left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             return
-        if hetros.executor.spin_once(0.1 if left is None else min(left, 0.1)):
+        if executor.spin_once(0.02 if left is None else min(left, 0.02)) or executor.generation != seen:
             return
 
 
@@ -124,7 +128,9 @@ class GuardCondition:
         self._hetros.executor.add_timer(time.monotonic(), self._fire)
 
     def _fire(self) -> None:
-        self.callback()
+        from .node import run_callback
+
+        run_callback(self._hetros, self.callback)()
 
     def destroy(self) -> None:
         pass

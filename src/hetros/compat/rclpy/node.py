@@ -8,6 +8,8 @@ and hetros's executor runs its callbacks. Names resolve as rclpy resolves them (
 
 from __future__ import annotations
 
+import inspect
+import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -15,12 +17,12 @@ from ..._errors import ParameterError
 from ...msg import copy as copy_message
 from ...runtime import Clock
 from ...runtime import Node as HetrosNode
-from .._context import bound_node
+from ...runtime._ros_main import bound_node
 from .callback_groups import CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
 from .parameter import Parameter
 from .qos import QoSProfile, to_hetros
-from .task import Future
+from .task import Future, Task
 
 
 def resolve_name(name: str, namespace: str, node: str) -> str:
@@ -31,6 +33,23 @@ def resolve_name(name: str, namespace: str, node: str) -> str:
     if name.startswith("~"):
         return f"{namespace}/{node}{name[1:]}" if name != "~" else f"{namespace}/{node}"
     return f"{namespace}/{name}"
+
+
+def run_callback(hetros: HetrosNode, callback: Callable[..., Any]) -> Callable[..., Any]:
+    """``callback`` as the node's executor calls it; one that is a coroutine (``async def``) becomes a task
+    stepped by the executor (rclpy runs coroutine callbacks so)."""
+
+    def schedule(step: Callable[[], None]) -> None:
+        hetros.executor.add_timer(time.monotonic(), lambda: step())
+
+    def run(*args: Any) -> Any:
+        result = callback(*args)
+        if inspect.iscoroutine(result):
+            task = Task(result, schedule)
+            task.step()
+            return task
+        return result
+    return run
 
 
 class Publisher:
@@ -96,7 +115,7 @@ class Timer:
 
     def reset(self) -> None:
         self.cancel()
-        self._inner = self._node._hetros.create_timer(self._period, self.callback)
+        self._inner = self._node._hetros.create_timer(self._period, run_callback(self._node._hetros, self.callback))
 
     def destroy(self) -> None:
         self.cancel()
@@ -231,7 +250,8 @@ class Node:
                             qos_profile: QoSProfile | int, *, callback_group: CallbackGroup | None = None,
                             **_ignored: Any) -> Subscription:
         name = self.resolve_topic_name(topic)
-        inner = self._hetros.create_subscription(msg_type, name, callback, qos=to_hetros(qos_profile))
+        inner = self._hetros.create_subscription(msg_type, name, run_callback(self._hetros, callback),
+                                                 qos=to_hetros(qos_profile))
         return Subscription(inner, msg_type, name, callback)
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any],

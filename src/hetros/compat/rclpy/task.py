@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
 from concurrent.futures import Future as _Concurrent
 from typing import Any
 
@@ -89,5 +89,29 @@ class Future:
 
     def __await__(self) -> Any:
         while not self._done:
-            yield
+            yield self  # the task driving the awaiting coroutine steps it again once this is done
         return self.result()
+
+
+class Task(Future):
+    """A coroutine callback (``async def``) driven by the node's executor, as rclpy's executors drive them:
+    stepped until it awaits a Future that is not done, stepped again once it is."""
+
+    def __init__(self, coroutine: Coroutine[Any, Any, Any], schedule: Callable[[Callable[[], None]], None]) -> None:
+        super().__init__()
+        self._coroutine = coroutine
+        self._schedule = schedule
+
+    def step(self) -> None:
+        try:
+            waited = self._coroutine.send(None)
+        except StopIteration as done:
+            self.set_result(done.value)
+            return
+        except BaseException as exc:
+            self.set_exception(exc)
+            raise
+        if isinstance(waited, Future) and not waited.done():
+            waited.add_done_callback(lambda _future: self._schedule(self.step))
+        else:
+            self._schedule(self.step)

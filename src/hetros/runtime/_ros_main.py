@@ -1,4 +1,9 @@
-"""Which hetros node a ROS ``main()`` runs as: bound to the node's thread while hetros runs it."""
+"""Which hetros node a ROS ``main()`` runs as: bound to the node's thread while hetros runs it.
+
+A ``run:`` target that takes no argument (``def main(args=None)``, the entry point of an rclpy
+node) is called with its hetros node bound to the thread; ``hetros.compat``'s rclpy finds it
+there (:func:`bound_node`).
+"""
 
 from __future__ import annotations
 
@@ -9,7 +14,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from .._errors import NodeError
-from ..runtime import Node
+from ._node import Node
 
 _bound = threading.local()
 

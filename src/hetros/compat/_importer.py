@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from ..msg import registry
 
 # module names served from hetros.compat (the shims), and their prefix there
-_SHIMS = ("rclpy",)
+_SHIMS = ("rclpy", "rospy")
 _KINDS = ("msg", "srv", "action")
 
 
@@ -52,13 +52,40 @@ class _RosNames(importlib.abc.MetaPathFinder):
             return None
         if len(parts) == 2 and parts[1] not in _KINDS:
             return None
-        return self._spec(fullname, f"hetros.interfaces.{fullname}")
+        spec = importlib.machinery.ModuleSpec(fullname, _Interfaces(), is_package=True)
+        spec.submodule_search_locations = []
+        return spec
 
     @staticmethod
     def _spec(fullname: str, target: str) -> importlib.machinery.ModuleSpec:
         spec = importlib.machinery.ModuleSpec(fullname, _Alias(target), is_package=True)
         spec.submodule_search_locations = []
         return spec
+
+
+class _Interfaces(importlib.abc.Loader):
+    """``std_msgs.msg`` (or ``.srv``, ``.action``) with every type of the package in it, so that ``from
+    rospy_tutorials.srv import *`` works too; a service's request and response also under ROS 1's names
+    (``AddTwoIntsRequest``), an action's parts under actionlib's (``FibonacciGoal``)."""
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
+        module = types.ModuleType(spec.name)
+        module.__path__ = []
+        return module
+
+    def exec_module(self, module: types.ModuleType) -> None:
+        parts = module.__name__.split(".")
+        if len(parts) == 1:
+            return
+        source = importlib.import_module(f"hetros.interfaces.{module.__name__}")
+        names: dict[str, object] = {}
+        suffixes = {"srv": ("Request", "Response"), "action": ("Goal", "Result", "Feedback")}.get(parts[1], ())
+        for name in dir(source):
+            value = getattr(source, name)
+            names[name] = value
+            for part in suffixes:
+                names[f"{name}{part}"] = getattr(value, part)
+        module.__dict__.update(names, __all__=sorted(names))
 
 
 _known: tuple[tuple[int, int, int], frozenset[str]] = ((-1, -1, -1), frozenset())

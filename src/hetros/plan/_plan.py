@@ -91,6 +91,8 @@ class NodePlan:
     max_goals: dict[str, int] = field(default_factory=dict)
     # "module:Component": the node's hardware implementation, which runs where it is on an fpga target
     hw: str = ""
+    # a script's command-line arguments (``run:`` a script's path)
+    args: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -230,7 +232,7 @@ class Plan:
                                    v.get("data_width", 64), v.get("part", ""), v.get("host", ""),
                                    v.get("sim", "verilator"))
                      for k, v in raw["targets"].items()},
-            nodes={k: NodePlan(**v) for k, v in raw["nodes"].items()},
+            nodes={k: NodePlan(**{**v, "args": tuple(v.get("args", ()))}) for k, v in raw["nodes"].items()},
             channels={
                 k: ChannelPlan(
                     name=v["name"], type=v["type"], kind=v["kind"], qos=QoS(**v["qos"]),

@@ -79,7 +79,12 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
         if problem:
             report.errors.append(f"{where('nodes', nname)}: {problem}")
         module = spec.run.partition(":")[0]
-        if not module_findable(project, module):
+        if ":" not in spec.run:
+            if not (project.root / spec.run).is_file():
+                report.errors.append(f"{where('nodes', nname, 'run')}: script {spec.run!r} is not a file (looked "
+                                     f"for {project.root / spec.run}); write module:function for a node function, "
+                                     "or a script's path relative to the project file")
+        elif not module_findable(project, module):
             report.errors.append(
                 f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the "
                 "project file nor in the environment"

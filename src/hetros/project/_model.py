@@ -103,7 +103,9 @@ class ActionSpec(_Strict):
 
 class NodeSpec(_Strict):
     run: str = Field(description="module:function (or module:Class) of the node's code, the module beside the "
-                     "project file")
+                     "project file; or the path of a script (relative to the project file) run as __main__, "
+                     "as a ROS 1 node's script is")
+    args: list[str] = Field(default_factory=list, description="a script's command-line arguments (its sys.argv[1:])")
     hw: str | None = Field(default=None, description="module:Component or file.v:module: the node's hardware "
                            "implementation, an Amaranth component or a Verilog module whose stream ports are named "
                            "after its topics; on an fpga target it is what runs")
@@ -161,8 +163,10 @@ class NodeSpec(_Strict):
     @classmethod
     def _run(cls, value: str) -> str:
         module, sep, attr = value.partition(":")
-        if not sep or not module or not attr:
-            raise ValueError(f"run must be 'module:function_or_class', not {value!r}")
+        if sep and (not module or not attr):
+            raise ValueError(f"run must be 'module:function_or_class' or a script's path, not {value!r}")
+        if not value.strip():
+            raise ValueError("run must not be empty: give 'module:function_or_class' or a script's path")
         return value
 
     @field_validator("hw")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import runpy
 import sys
 import threading
 import traceback
@@ -11,7 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .._errors import LaunchError, ShutdownError
+from .._errors import LaunchError, NodeError, ShutdownError
 from .._log import get_logger
 from ..msg import registry
 from ..plan import NodePlan, Plan
@@ -26,8 +27,11 @@ FailureReport = Callable[[str, str, bool], None]
 DoneReport = Callable[[str], None]
 
 
-def resolve(run: str, root: str) -> Callable[..., Any]:
-    """``module:object``, looked up next to the project file first, then in the environment."""
+def resolve(run: str, root: str, args: tuple[str, ...] = ()) -> Callable[..., Any]:
+    """``module:object``, looked up next to the project file first, then in the environment; or a
+    script's path (no ``:``), run as ``__main__`` with ``args`` as its command line."""
+    if ":" not in run:
+        return script_main(Path(root) / run, args)
     module_name, _, attr = run.partition(":")
     if root and root not in sys.path:
         sys.path.insert(0, root)
@@ -40,6 +44,24 @@ def resolve(run: str, root: str) -> Callable[..., Any]:
     except AttributeError:
         raise LaunchError(f"module {module_name!r} has no {attr!r} (run: {run!r})") from None
     return target
+
+
+def script_main(path: Path, args: tuple[str, ...]) -> Callable[[], None]:
+    """A script as a ROS main(): run as ``__main__`` (a ROS 1 node's script keeps its logic under
+    ``if __name__ == "__main__":``), ``sys.argv`` its path and ``args``. The argv is the process'."""
+    if not path.is_file():
+        raise LaunchError(f"run: {path} is not a file: give a script's path relative to the project file, or "
+                          "module:function")
+
+    def main() -> None:
+        sys.argv = [str(path), *args]
+        try:
+            runpy.run_path(str(path), run_name="__main__")
+        except SystemExit as exit_:
+            if exit_.code not in (None, 0):
+                raise NodeError(f"script {path.name} exited with {exit_.code!r}") from None
+    main.__qualname__ = main.__name__ = path.name
+    return main
 
 
 def run_node_body(factory: Callable[..., Any], node: Node) -> None:
@@ -94,7 +116,7 @@ class NodeThread:
             node = Node(self.spec.name, self.graph)
             finished = False
             try:
-                run_node_body(resolve(self.spec.run, root), node)
+                run_node_body(resolve(self.spec.run, root, self.spec.args), node)
                 finished = True
                 if not self.graph.stop.is_set():
                     self.on_done(self.spec.name)
@@ -147,7 +169,7 @@ class Host:
         self.threads = [NodeThread(plan.nodes[n], self.graph, on_failure, self._exited, on_done)
                         for n in plan.nodes_in(process)]
         for nthread in self.threads:
-            function = resolve(nthread.spec.run, plan.root)
+            function = resolve(nthread.spec.run, plan.root, nthread.spec.args)
             prepare = getattr(function, "prepare", None)
             if callable(prepare):
                 # start-up work that must not count against the graph's time (a simulator's

@@ -1,0 +1,415 @@
+"""rospy, as hetros serves it to the nodes it runs (``hetros.compat``): ``init_node``, ``Publisher``,
+``Subscriber``, ``Rate``, ``spin``, services and parameters with rospy's names and calling conventions,
+on the hetros node the project wires. Outside hetros's processes ``import rospy`` is ROS 1's own.
+
+As in rospy, callbacks run beside the node's main thread: the first subscriber or service starts a
+thread that runs the node's callbacks, so a ``while not rospy.is_shutdown()`` loop and callbacks go on
+together. Names resolve as rospy's: ``'chatter'`` is ``/chatter``, ``'~x'`` is ``/<node>/x``.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time as _time
+from collections.abc import Callable
+from typing import Any
+
+from ..._errors import Error, ParameterError, ShutdownError
+from ...msg import Message
+from ...msg import copy as copy_message
+from ...runtime import Node as HetrosNode
+from ...runtime import _ros_main
+from ...runtime._log import node_logger
+
+__all__ = [
+    "Duration",
+    "Publisher",
+    "ROSException",
+    "ROSInterruptException",
+    "Rate",
+    "Service",
+    "ServiceException",
+    "ServiceProxy",
+    "Subscriber",
+    "Time",
+    "get_caller_id",
+    "get_name",
+    "get_param",
+    "get_rostime",
+    "get_time",
+    "has_param",
+    "init_node",
+    "is_shutdown",
+    "logdebug",
+    "logerr",
+    "logfatal",
+    "loginfo",
+    "logwarn",
+    "myargv",
+    "on_shutdown",
+    "set_param",
+    "signal_shutdown",
+    "sleep",
+    "spin",
+    "wait_for_message",
+    "wait_for_service",
+]
+
+
+class ROSException(Error):
+    """rospy's base exception."""
+
+
+class ROSInterruptException(ROSException, ShutdownError):
+    """The node is shutting down: raised from ``Rate.sleep`` and ``rospy.sleep``, as rospy does."""
+
+
+class ServiceException(ROSException):
+    """A service call that failed."""
+
+
+class _State:
+    """The rospy state of one hetros node (its thread): name, callback thread, shutdown hooks."""
+
+    def __init__(self, hetros: HetrosNode) -> None:
+        self.hetros = hetros
+        self.name = hetros.name
+        self.spinner: threading.Thread | None = None
+        self.shutdown_reason = ""
+        self.lock = threading.Lock()
+        # what a callback raised in the callbacks' thread: the node's main thread raises it (the node fails,
+        # the launcher reports it) at its next rospy call
+        self.failure: BaseException | None = None
+
+    def start_callbacks(self) -> None:
+        """rospy runs callbacks in threads of their own: one thread here runs the node's, beside its main."""
+        with self.lock:
+            if self.spinner is not None:
+                return
+            hetros = self.hetros
+            hetros.spun = True
+
+            def run() -> None:
+                with _ros_main.ros_main(hetros):  # callbacks call rospy too: this thread runs as the node
+                    try:
+                        while not hetros.graph.stop.is_set() and not self.shutdown_reason and self.failure is None:
+                            hetros.executor.spin_once(0.1)
+                    except BaseException as exc:
+                        self.failure = exc
+            self.spinner = threading.Thread(target=run, name=f"rospy callbacks:{hetros.name}", daemon=True)
+            self.spinner.start()
+
+
+_states: dict[int, _State] = {}
+_states_lock = threading.Lock()
+
+
+def _state() -> _State:
+    hetros = _ros_main.bound_node()
+    with _states_lock:
+        state = _states.get(id(hetros))
+        if state is None or state.hetros is not hetros:
+            state = _states[id(hetros)] = _State(hetros)
+        return state
+
+
+def _resolve(name: str) -> str:
+    if name.startswith("/"):
+        return name
+    if name.startswith("~"):
+        return f"/{_state().name}/{name[1:].lstrip('/')}"
+    return f"/{name}"
+
+
+# -- the node -------------------------------------------------------------------------------------
+
+
+def init_node(name: str, argv: list[str] | None = None, anonymous: bool = False, log_level: int | None = None,
+              disable_rostime: bool = False, disable_rosout: bool = False, disable_signals: bool = False,
+              xmlrpc_port: int = 0, tcpros_port: int = 0) -> None:
+    """Name the node (its logs and ``get_name()``); its endpoints are the ones the project gives its hetros
+    node. ``anonymous`` adds rospy's suffix to the name it reports."""
+    state = _state()
+    state.name = f"{name}_{id(state) % 100000}_{int(_time.time() * 1000) % 100000}" if anonymous else name
+
+
+def get_name() -> str:
+    return f"/{_state().name}"
+
+
+get_caller_id = get_name
+
+
+def myargv(argv: list[str] | None = None) -> list[str]:
+    """``argv`` without ROS remapping arguments (``name:=value``)."""
+    return [arg for arg in (sys.argv if argv is None else argv) if ":=" not in arg]
+
+
+def is_shutdown() -> bool:
+    state = _state()
+    if state.failure is not None:
+        raise state.failure
+    return state.hetros.graph.stop.is_set() or bool(state.shutdown_reason)
+
+
+def signal_shutdown(reason: str) -> None:
+    _state().shutdown_reason = reason or "signal_shutdown"
+
+
+def on_shutdown(hook: Callable[[], Any]) -> None:
+    _state().hetros.graph.on_stop(hook)
+
+
+def spin() -> None:
+    """Keep the node alive until shutdown; its callbacks run meanwhile (in their thread)."""
+    state = _state()
+    state.start_callbacks()
+    while not is_shutdown():
+        state.hetros.graph.stop.wait(0.1)
+
+
+# -- time -----------------------------------------------------------------------------------------
+
+
+class Duration:
+    """rospy.Duration: ``secs``, ``nsecs``, ``to_sec()``."""
+
+    def __init__(self, secs: float = 0, nsecs: int = 0) -> None:
+        total = int(secs * 1_000_000_000) + int(nsecs)
+        self.secs, self.nsecs = divmod(total, 1_000_000_000)
+
+    @classmethod
+    def from_sec(cls, seconds: float) -> Duration:
+        return cls(seconds)
+
+    def to_sec(self) -> float:
+        return self.secs + self.nsecs / 1e9
+
+    def to_nsec(self) -> int:
+        return self.secs * 1_000_000_000 + self.nsecs
+
+
+class Time(Duration):
+    """rospy.Time: the graph's clock (``Time.now()``)."""
+
+    @classmethod
+    def now(cls) -> Time:
+        return cls(0, _state().hetros.get_clock().now_ns())
+
+    def __repr__(self) -> str:
+        return f"rospy.Time[{self.to_nsec()}]"
+
+
+def get_rostime() -> Time:
+    return Time.now()
+
+
+def get_time() -> float:
+    return Time.now().to_sec()
+
+
+def sleep(duration: float | Duration) -> None:
+    """Sleep on the graph's clock; ROSInterruptException when the node shuts down meanwhile."""
+    seconds = duration.to_sec() if isinstance(duration, Duration) else float(duration)
+    hetros = _state().hetros
+    clock = hetros.get_clock()
+    if not clock.wait_until(clock.now_ns() + int(seconds * 1e9), hetros.graph.stop) or is_shutdown():
+        raise ROSInterruptException("rospy.sleep() interrupted: the node is shutting down")
+
+
+class Rate:
+    """``Rate(hz).sleep()``: the rest of the period, on the graph's clock."""
+
+    def __init__(self, hz: float) -> None:
+        self._period_ns = int(1e9 / hz)
+        self._hetros = _state().hetros
+        self._due = self._hetros.get_clock().now_ns() + self._period_ns
+
+    def sleep(self) -> None:
+        clock = self._hetros.get_clock()
+        if not clock.wait_until(self._due, self._hetros.graph.stop) or is_shutdown():
+            raise ROSInterruptException("rospy.Rate.sleep() interrupted: the node is shutting down")
+        now = clock.now_ns()
+        self._due += self._period_ns
+        if self._due <= now:
+            self._due = now + self._period_ns
+
+    def remaining(self) -> Duration:
+        return Duration(0, max(self._due - self._hetros.get_clock().now_ns(), 0))
+
+
+# -- logging --------------------------------------------------------------------------------------
+
+
+def _log(level: int, message: Any, *args: Any) -> None:
+    text = str(message) % args if args else str(message)
+    node_logger(_state().name).log(level, "%s", text)
+
+
+def logdebug(message: Any, *args: Any, **_kwargs: Any) -> None:
+    _log(10, message, *args)
+
+
+def loginfo(message: Any, *args: Any, **_kwargs: Any) -> None:
+    _log(20, message, *args)
+
+
+def logwarn(message: Any, *args: Any, **_kwargs: Any) -> None:
+    _log(30, message, *args)
+
+
+def logerr(message: Any, *args: Any, **_kwargs: Any) -> None:
+    _log(40, message, *args)
+
+
+def logfatal(message: Any, *args: Any, **_kwargs: Any) -> None:
+    _log(50, message, *args)
+
+
+# -- topics ---------------------------------------------------------------------------------------
+
+
+def _message(data_class: type[Any], args: tuple[Any, ...], kwargs: dict[str, Any]) -> Any:
+    """rospy's publish and call conventions: a message, or the fields of one (positional or by name)."""
+    if len(args) == 1 and not kwargs and isinstance(args[0], Message):
+        return copy_message(args[0])
+    return data_class(*args, **kwargs)
+
+
+class Publisher:
+    def __init__(self, name: str, data_class: type[Any], subscriber_listener: Any = None, tcp_nodelay: bool = False,
+                 latch: bool = False, headers: Any = None, queue_size: int | None = None) -> None:
+        self.name = _resolve(name)
+        self.data_class = data_class
+        self.type = getattr(data_class, "__msgtype__", "")
+        self._inner = _state().hetros.create_publisher(data_class, self.name)
+
+    def publish(self, *args: Any, **kwargs: Any) -> None:
+        self._inner.publish(_message(self.data_class, args, kwargs))
+
+    def get_num_connections(self) -> int:
+        plan = _state().hetros.graph.plan
+        channel = None if plan is None else plan.channels.get(self.name)
+        return 0 if channel is None else len(channel.subscribers)
+
+    def unregister(self) -> None:
+        self._inner.close()
+
+
+class Subscriber:
+    def __init__(self, name: str, data_class: type[Any], callback: Callable[..., Any] | None = None,
+                 callback_args: Any = None, queue_size: int | None = None, buff_size: int = 65536,
+                 tcp_nodelay: bool = False) -> None:
+        self.name = _resolve(name)
+        self.data_class = data_class
+        state = _state()
+
+        def deliver(message: Any) -> None:
+            if callback is not None:
+                callback(message) if callback_args is None else callback(message, callback_args)
+        self._inner = state.hetros.create_subscription(data_class, self.name, deliver)
+        state.start_callbacks()
+
+    def unregister(self) -> None:
+        self._inner.close()
+
+
+def wait_for_message(topic: str, topic_type: type[Any], timeout: float | None = None) -> Any:
+    subscription = _state().hetros.create_subscription(topic_type, _resolve(topic))
+    try:
+        return subscription.take(timeout)
+    except Error as exc:
+        raise ROSException(f"wait_for_message({topic}): {exc}") from exc
+    finally:
+        subscription.close()
+
+
+# -- services -------------------------------------------------------------------------------------
+
+
+class Service:
+    """Serves a service; the handler returns the response, or its fields (one value, a tuple, a dict)."""
+
+    def __init__(self, name: str, service_class: Any, handler: Callable[[Any], Any], buff_size: int = 65536,
+                 error_handler: Any = None) -> None:
+        self.resolved_name = _resolve(name)
+        response_class = service_class.Response
+
+        def handle(request: Any) -> Any:
+            answer = handler(request)
+            if isinstance(answer, Message):
+                return answer
+            if isinstance(answer, dict):
+                return response_class(**answer)
+            return response_class(*answer) if isinstance(answer, tuple | list) else response_class(answer)
+        state = _state()
+        self._inner = state.hetros.create_service(service_class, self.resolved_name, handle)
+        state.start_callbacks()
+
+    def shutdown(self, reason: str = "") -> None:
+        self._inner.close()
+
+
+class ServiceProxy:
+    """``proxy(a, b)`` or ``proxy.call(request)``: the response, or ServiceException."""
+
+    def __init__(self, name: str, service_class: Any, persistent: bool = False, headers: Any = None) -> None:
+        self.resolved_name = _resolve(name)
+        self._request = service_class.Request
+        hetros = _state().hetros
+        existing = hetros.clients.get(self.resolved_name)
+        self._inner = existing if existing is not None else hetros.create_client(service_class, self.resolved_name)
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self.call(*args, **kwargs)
+
+    def call(self, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return self._inner.call(_message(self._request, args, kwargs), timeout=3600.0)
+        except Error as exc:
+            raise ServiceException(f"service [{self.resolved_name}] call failed: {exc}") from exc
+
+    def close(self) -> None:
+        pass
+
+
+def wait_for_service(service: str, timeout: float | None = None) -> None:
+    """Returns at once: the plan wires every client to its server before the graph starts, and a request
+    waits in the server's FIFO until the server takes it."""
+
+
+# -- parameters -----------------------------------------------------------------------------------
+
+_MISSING: Any = object()
+
+
+def _parameter_name(name: str) -> str:
+    """The project's parameters belong to the node: ``~x``, ``x`` and ``/<node>/x`` all name ``x``."""
+    state = _state()
+    private = f"/{state.name}/"
+    if name.startswith("~"):
+        return name[1:].lstrip("/")
+    if name.startswith(private):
+        return name[len(private):]
+    return name.lstrip("/")
+
+
+def get_param(name: str, default: Any = _MISSING) -> Any:
+    hetros = _state().hetros
+    try:
+        return hetros.get_parameter(_parameter_name(name)) if default is _MISSING else \
+            hetros.get_parameter(_parameter_name(name), default)
+    except ParameterError as exc:
+        raise KeyError(name) from exc
+
+
+def has_param(name: str) -> bool:
+    return get_param(name, _MISSING_DEFAULT) is not _MISSING_DEFAULT
+
+
+_MISSING_DEFAULT = object()
+
+
+def set_param(name: str, value: Any) -> None:
+    _state().hetros.set_parameter(_parameter_name(name), value)

@@ -84,7 +84,7 @@ def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -
         rate = _last_figures(hetros(env, "topic", "hz", "/chatter", "--duration", "2.2").stdout,
                              r"average rate: ([\d.]+)")[0]
         assert rate == pytest.approx(10.0, rel=0.05)
-        bandwidth = hetros(env, "topic", "bw", "/chatter", "--duration", "4.2").stdout
+        bandwidth = hetros(env, "topic", "bw", "/chatter", "--duration", "3.2").stdout
         assert bandwidth.startswith("Subscribed to [/chatter]\n")
         per_second, size = _last_figures(bandwidth, r"(\d+) B/s from \d+ messages\n\tMessage size mean: (\d+) B")
         assert per_second == pytest.approx(10.0 * size, rel=0.10)

@@ -469,24 +469,24 @@ def test_backpressure_blocks_then_times_out(make: Callable[[QoS], Harness]) -> N
     assert [m.width for m in drain(reader)] == [1, 2, 3]
 
 
-def test_keep_last_drops_the_oldest(make: Callable[[QoS], Harness]) -> None:
+def _ten_into_keep_last_three(make: Callable[[QoS], Harness]) -> Reader:
+    """A keep_last FIFO of 3 that was sent 10: what it keeps is the newest three."""
     h = make(QoS(history="keep_last", depth=3))
     reader = h.reader()
     writer = h.writer()
     for seq in range(10):
         writer.write(image(0, seq))
     assert [m.width for m in drain(reader)] == [7, 8, 9]
+    return reader
+
+
+def test_keep_last_drops_the_oldest(make: Callable[[QoS], Harness]) -> None:
+    _ten_into_keep_last_three(make)
 
 
 def test_keep_last_drops_are_counted(make: Callable[[QoS], Harness]) -> None:
     """What hetros top shows as drops: a keep_last reader's messages replaced by newer ones."""
-    h = make(QoS(history="keep_last", depth=3))
-    reader = h.reader()
-    writer = h.writer()
-    for seq in range(10):
-        writer.write(image(0, seq))
-    assert [m.width for m in drain(reader)] == [7, 8, 9]
-    assert reader.counters() == {"dropped": 7}
+    assert _ten_into_keep_last_three(make).counters() == {"dropped": 7}
 
 
 def test_reliable_stalls_are_counted(make: Callable[[QoS], Harness]) -> None:

@@ -165,6 +165,26 @@ class SimulatedClock(Clock):
             self._changed.notify_all()
 
 
+class Ticker:
+    """The due times of a fixed period on a clock, as rclpy's and rospy's ``Rate`` keep them: a sleeper
+    that fell more than a period behind starts again from now instead of catching up."""
+
+    def __init__(self, clock: Clock, period_ns: int) -> None:
+        self.clock = clock
+        self.period_ns = period_ns
+        self.due = clock.now_ns() + period_ns
+
+    def sleep(self, stop: threading.Event) -> bool:
+        """Sleep until the next due time; False when ``stop`` was set first."""
+        if not self.clock.wait_until(self.due, stop):
+            return False
+        now = self.clock.now_ns()
+        self.due += self.period_ns
+        if self.due <= now:
+            self.due = now + self.period_ns
+        return True
+
+
 def follow_clock(node: Node) -> None:
     """The planned node (``hetros_clock_<process>``) that moves its process' simulated clock to each
     time published on ``/clock``."""

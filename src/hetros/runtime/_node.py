@@ -25,7 +25,7 @@ from .._errors import (
 from .._qos import QoS
 from ..msg import ActionKind, Message, ServiceKind, service_type
 from ..plan import ROS1_TRANSPORT, request_channel
-from ._clock import Clock, SimulatedTimer
+from ._clock import Clock, SimulatedTimer, Ticker
 from ._entities import Client, HandlingStats, Publisher, Service, Subscription, Timer, typename_of
 from ._executor import Executor
 from ._graph import Graph
@@ -234,16 +234,12 @@ class Node:
                 return
 
     def _simulated_rate(self, clock: Clock, period_ns: int) -> Iterator[int]:
-        due = clock.now_ns()
+        ticker = Ticker(clock, period_ns)
         for tick in itertools.count():
             if self.graph.stop.is_set():
                 return
             yield tick
-            due += period_ns
-            now = clock.now_ns()
-            if due < now - period_ns:
-                due = now
-            if not clock.wait_until(due, self.graph.stop):
+            if not ticker.sleep(self.graph.stop):
                 return
 
     def spin(self, timeout: float | None = None) -> None:

@@ -17,6 +17,7 @@ from ..._errors import ParameterError
 from ...msg import copy as copy_message
 from ...runtime import Clock
 from ...runtime import Node as HetrosNode
+from ...runtime._clock import Ticker
 from ...runtime._ros_main import bound_node
 from .callback_groups import CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
@@ -165,20 +166,14 @@ class Rate:
     """``node.create_rate(hz)``: ``sleep()`` until the next period of the graph's clock."""
 
     def __init__(self, node: Node, frequency: float) -> None:
-        self._node = node
-        self._period_ns = int(1e9 / frequency)
-        self._due = node.get_clock().now_ns() + self._period_ns
+        self._stop = node._hetros.graph.stop
+        self._ticker = Ticker(node.get_clock(), int(1e9 / frequency))
 
     def sleep(self) -> None:
-        clock = self._node.get_clock()
-        if not clock.wait_until(self._due, self._node._hetros.graph.stop):
+        if not self._ticker.sleep(self._stop):
             from .executors import ExternalShutdownException
 
             raise ExternalShutdownException("the graph is shutting down")
-        now = clock.now_ns()
-        self._due += self._period_ns
-        if self._due <= now:
-            self._due = now + self._period_ns
 
     def destroy(self) -> None:
         pass

@@ -20,6 +20,7 @@ from ...msg import Message
 from ...msg import copy as copy_message
 from ...runtime import Node as HetrosNode
 from ...runtime import _ros_main
+from ...runtime._clock import Ticker
 from ...runtime._log import node_logger
 
 __all__ = [
@@ -222,21 +223,15 @@ class Rate:
     """``Rate(hz).sleep()``: the rest of the period, on the graph's clock."""
 
     def __init__(self, hz: float) -> None:
-        self._period_ns = int(1e9 / hz)
         self._hetros = _state().hetros
-        self._due = self._hetros.get_clock().now_ns() + self._period_ns
+        self._ticker = Ticker(self._hetros.get_clock(), int(1e9 / hz))
 
     def sleep(self) -> None:
-        clock = self._hetros.get_clock()
-        if not clock.wait_until(self._due, self._hetros.graph.stop) or is_shutdown():
+        if not self._ticker.sleep(self._hetros.graph.stop) or is_shutdown():
             raise ROSInterruptException("rospy.Rate.sleep() interrupted: the node is shutting down")
-        now = clock.now_ns()
-        self._due += self._period_ns
-        if self._due <= now:
-            self._due = now + self._period_ns
 
     def remaining(self) -> Duration:
-        return Duration(0, max(self._due - self._hetros.get_clock().now_ns(), 0))
+        return Duration(0, max(self._ticker.due - self._ticker.clock.now_ns(), 0))
 
 
 # -- logging --------------------------------------------------------------------------------------

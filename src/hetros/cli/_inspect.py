@@ -504,11 +504,8 @@ def cmd_record(args: argparse.Namespace) -> int:
     out = Path(args.output or time.strftime("rosbag2_%Y_%m_%d-%H_%M_%S.mcap"))
     print(f"recording {', '.join(topics)} of launch {launch.record.session} into {out}; Ctrl-C stops",
           file=sys.stderr)
-    try:
-        summary = record(launch, topics, out, duration=args.duration)
-    except KeyboardInterrupt:
-        raise
-    print(summary.describe())
+    # Ctrl-C ends the recording with its file whole (record closes it on the way out)
+    print(record(launch, topics, out, duration=args.duration).describe())
     return 0
 
 

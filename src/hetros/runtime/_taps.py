@@ -105,13 +105,12 @@ class TapSink:
 class TapPoint:
     """A topic as this process publishes it: counters kept always, sinks attached on demand."""
 
-    __slots__ = ("_lock", "bytes_hint", "published", "sinks", "topic", "typename")
+    __slots__ = ("_lock", "published", "sinks", "topic", "typename")
 
     def __init__(self, topic: str, typename: str) -> None:
         self.topic = topic
         self.typename = typename
         self.published = 0  # messages this process' publishers sent on the topic
-        self.bytes_hint = 0  # not measured on the hot path: ``hetros top`` sizes a message when it looks
         self.sinks: tuple[TapSink, ...] = ()
         self._lock = threading.Lock()
 

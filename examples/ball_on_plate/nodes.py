@@ -31,8 +31,8 @@ ROLLING = 5.0 / 7.0 * 9.81
 
 
 def physics(node: Node) -> None:
-    pub = node.create_publisher(BallState, "/ball_state")
-    pose = node.create_subscription(Vector3, "/platform_pose")
+    pub = node.create_publisher(BallState, "ball_state")
+    pose = node.create_subscription(Vector3, "platform_pose")
     rng = np.random.default_rng(node.get_parameter("seed", 3))
     x, y = rng.uniform(-0.06, 0.06, 2)
     vx, vy = rng.uniform(-0.05, 0.05, 2)
@@ -66,10 +66,10 @@ def physics(node: Node) -> None:
 
 
 def touch(node: Node) -> None:
-    pub = node.create_publisher(Point, "/ball_position")
+    pub = node.create_publisher(Point, "ball_position")
     rng = np.random.default_rng(11)
     noise = node.get_parameter("noise_m", 0.002)
-    for state in node.create_subscription(BallState, "/ball_state"):
+    for state in node.create_subscription(BallState, "ball_state"):
         pub.publish(Point(x=state.x + rng.normal(0, noise), y=state.y + rng.normal(0, noise)))
 
 
@@ -93,14 +93,14 @@ class Kalman:
 
 
 def control(node: Node) -> None:
-    pub = node.create_publisher(UInt32, "/platform_angles")
+    pub = node.create_publisher(UInt32, "platform_angles")
     noise = node.get_parameter("noise_m", 0.002)
     filters = [Kalman(noise), Kalman(noise)]
     kp, ki, kd = node.get_parameter("kp", 1.3), node.get_parameter("ki", 0.1), node.get_parameter("kd", 0.7)
     integral = np.zeros(2)
     arrivals: list[float] = []
     try:
-        for measured in node.create_subscription(Point, "/ball_position"):
+        for measured in node.create_subscription(Point, "ball_position"):
             arrivals.append(time.monotonic())
             (px, vx), (py, vy) = filters[0].update(measured.x), filters[1].update(measured.y)
             integral += np.array([px, py]) * DT
@@ -117,8 +117,8 @@ def control(node: Node) -> None:
 
 
 def inverse(node: Node) -> None:
-    pub = node.create_publisher(ServoPwm, "/servo_pwm")
-    for msg in node.create_subscription(UInt32, "/platform_angles"):
+    pub = node.create_publisher(ServoPwm, "servo_pwm")
+    for msg in node.create_subscription(UInt32, "platform_angles"):
         x, y = unpack(msg.data)
         pub.publish(ServoPwm(command=msg.data, pwm=to_pwm(servo_angles(x, y))))
 
@@ -136,8 +136,8 @@ def forward(pwm: np.ndarray, guess: np.ndarray) -> np.ndarray:
 
 
 def servo(node: Node) -> None:
-    pub = node.create_publisher(Vector3, "/platform_pose")
+    pub = node.create_publisher(Vector3, "platform_pose")
     tilt = np.zeros(2)
-    for msg in node.create_subscription(ServoPwm, "/servo_pwm"):
+    for msg in node.create_subscription(ServoPwm, "servo_pwm"):
         tilt = forward(msg.pwm, tilt)
         pub.publish(Vector3(x=float(tilt[0]), y=float(tilt[1])))

@@ -138,16 +138,23 @@ def ball_on_plate(tmp_path: Path, mapping: str, seed: int) -> subprocess.Complet
     return variant(tmp_path, "ball_on_plate", mapping, "physics", seed=seed, hz=200.0)
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
-def test_ball_on_plate_settles_from_random_starts(tmp_path: Path, seed: int) -> None:
-    result = ball_on_plate(tmp_path, "project.yaml", seed)
+def test_three_ball_on_plate_stations_from_one_definition_settle() -> None:
+    """project_stations.yaml includes the station three times under namespaces, each with its own starting
+    ball (seeds 1, 2, 3): three independent control loops over one set of node code."""
+    result = subprocess.run([sys.executable, "-m", "hetros", "launch", str(EXAMPLES / "ball_on_plate" /
+                                                                              "project_stations.yaml"),
+                             "--duration", "14"], capture_output=True, text=True, timeout=180, check=False)
     assert result.returncode == 0, result.stderr
-    found = re.search(r"after 10\.0 s: ball at \S+ \S+ m, ([\d.]+) m from the centre; farthest ([\d.]+) m; "
-                      r"settled at ([\d.]+) s", result.stderr)
-    assert found, result.stderr
-    distance, farthest, settled = (float(v) for v in found.groups())
-    assert distance < 0.01 and farthest < 0.10 and settled < 10.0
-    assert re.search(r"\[control\]: control period [\d.]+ ± [\d.]+ ms", result.stderr)
+    outcomes = {}
+    for station in ("station1", "station2", "station3"):
+        found = re.search(rf"\[{station}_physics\]: after 10\.0 s: ball at \S+ \S+ m, ([\d.]+) m from the "
+                          r"centre; farthest ([\d.]+) m; settled at ([\d.]+) s", result.stderr)
+        assert found, result.stderr
+        distance, farthest, settled = (float(v) for v in found.groups())
+        assert distance < 0.01 and farthest < 0.10 and settled < 10.0
+        assert re.search(rf"\[{station}_control\]: control period [\d.]+ ± [\d.]+ ms", result.stderr)
+        outcomes[station] = found.group(0).split(":", 1)[1]
+    assert len(set(outcomes.values())) == 3, "each station started from its own ball"
 
 
 def test_ball_on_plate_mappings_agree(tmp_path: Path) -> None:

@@ -17,7 +17,7 @@ def _declared(example: Path) -> dict[str, dict[str, set[str]]]:
     """function of nodes.py -> section -> endpoint names, over every project file of the example."""
     found: dict[str, dict[str, set[str]]] = {}
     for project in sorted(example.glob("project*.yaml")):
-        for spec in yaml.safe_load(project.read_text(encoding="utf-8"))["nodes"].values():
+        for spec in yaml.safe_load(project.read_text(encoding="utf-8")).get("nodes", {}).values():
             module, _, function = spec["run"].partition(":")
             if module != "nodes":
                 continue

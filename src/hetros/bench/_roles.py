@@ -11,6 +11,7 @@ sequence number into a 16-byte prefix.
 from __future__ import annotations
 
 import ctypes
+import importlib
 import json
 import os
 import queue
@@ -19,6 +20,7 @@ import sys
 import threading
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -325,8 +327,12 @@ class CycloneEndpoint(Endpoint):
 
 # -- driver ------------------------------------------------------------------------------------
 
+# echo nodes written the ROS way (their ping side is hetros-shm's)
+ROS_STYLE = {"hetros-rclpy-cb": "rclpy", "hetros-rospy-cb": "rospy"}
+
+
 def open_endpoint(system: str, role: str, cfg: dict[str, Any]) -> Endpoint:
-    if system in ("hetros-shm", "hetros-shm-cb"):
+    if system in ("hetros-shm", "hetros-shm-cb", *ROS_STYLE):
         return open_hetros_shm(role, cfg, loaned=False)
     if system in ("hetros-shm-loan", "hetros-shm-loan-cb"):
         return open_hetros_shm(role, cfg, loaned=True)
@@ -434,6 +440,82 @@ def callback_echo(cfg: dict[str, Any], loaned: bool) -> dict[str, Any]:
     return {"one_way_ns": one_way}
 
 
+def ros_echo(cfg: dict[str, Any], flavour: str) -> dict[str, Any]:
+    """The echo node written the rclpy way or the rospy way, as users port it unchanged: a subscription
+    callback that fills a new message from the received one and publishes it, through hetros's shims."""
+    from hetros import Node
+    from hetros.compat import install
+    from hetros.runtime import Graph
+    from hetros.runtime._ros_main import ros_main
+
+    graph = Graph(_hetros_plan(16), "p1", cfg["session"])
+    graph.prepare(["echo"])
+    node = Node("echo", graph)
+    install()
+    one_way: list[int] = []
+
+    def arrived(msg: Any) -> bool:
+        """Record the one-way time; False for the last message."""
+        now = time.monotonic_ns()
+        seq = msg.height if not msg.width else msg.height - (1 << 32)
+        if seq == STOP:
+            return False
+        if seq >= cfg["warmup"]:
+            one_way.append(now - (msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec))
+        return True
+
+    with ros_main(node):
+        if flavour == "rclpy":
+            _rclpy_echo(arrived)
+        else:
+            _rospy_echo(arrived)
+    node.close()
+    graph.close()
+    return {"one_way_ns": one_way}
+
+
+def _rclpy_echo(arrived: Callable[[Any], bool]) -> None:
+    # what `import rclpy` and `from sensor_msgs.msg import Image` give inside hetros's processes
+    rclpy = importlib.import_module("rclpy")
+    Image = importlib.import_module("sensor_msgs.msg").Image
+
+    class Echo(importlib.import_module("rclpy.node").Node):  # type: ignore[misc]
+        def __init__(self) -> None:
+            super().__init__("echo")
+            self.publisher = self.create_publisher(Image, "/recv", 16)
+            self.create_subscription(Image, "/send", self.on_ping, 16)
+
+        def on_ping(self, msg: Any) -> None:
+            if not arrived(msg):
+                rclpy.shutdown()
+                return
+            out = Image()
+            out.header = msg.header
+            out.height, out.width = msg.height, msg.width
+            out.data = msg.data
+            self.publisher.publish(out)
+
+    rclpy.init()
+    rclpy.spin(Echo())
+
+
+def _rospy_echo(arrived: Callable[[Any], bool]) -> None:
+    rospy = importlib.import_module("rospy")
+    Image = importlib.import_module("sensor_msgs.msg").Image
+
+    rospy.init_node("echo")
+    publisher = rospy.Publisher("/recv", Image, queue_size=16)
+
+    def on_ping(msg: Any) -> None:
+        if not arrived(msg):
+            rospy.signal_shutdown("done")
+            return
+        publisher.publish(Image(header=msg.header, height=msg.height, width=msg.width, data=msg.data))
+
+    rospy.Subscriber("/send", Image, on_ping, queue_size=16)
+    rospy.spin()
+
+
 def run_inproc(cfg: dict[str, Any]) -> dict[str, Any]:
     """Both roles as threads of one process on one hetros graph (the inproc transport).
 
@@ -475,7 +557,9 @@ def main() -> None:
     else:
         if cfg.get("cpus"):
             os.sched_setaffinity(0, [cfg["cpus"][0 if role == "ping" else 1]])
-        if role == "echo" and system.endswith("-cb"):
+        if role == "echo" and system in ROS_STYLE:
+            result = ros_echo(cfg, ROS_STYLE[system])
+        elif role == "echo" and system.endswith("-cb"):
             result = callback_echo(cfg, loaned="loan" in system)
         else:
             endpoint = open_endpoint(system, role, cfg)

@@ -36,11 +36,12 @@ SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "
 # -cb: the echo node is a subscription callback that publishes (what users write); the others
 # take in a loop on both sides. -py: the same with HETROS_PURE_PYTHON=1 (no compiled hot path)
 PURE_PYTHON = "-py"
+# -rclpy-cb / -rospy-cb: the callback echo node written the rclpy or rospy way, run through hetros's shims
 SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb",
-           "hetros-shm-py", "hetros-shm-cb-py", "iceoryx2", "cyclonedds", "zenoh", "dora-rs", "rospy", "mp-pipe",
-           "numpy-copy"]
-HETROS_SHM = ("hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb", "hetros-shm-py",
-              "hetros-shm-cb-py")
+           "hetros-rclpy-cb", "hetros-rospy-cb", "hetros-shm-py", "hetros-shm-cb-py", "iceoryx2", "cyclonedds",
+           "zenoh", "dora-rs", "rospy", "mp-pipe", "numpy-copy"]
+HETROS_SHM = ("hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb", "hetros-rclpy-cb",
+              "hetros-rospy-cb", "hetros-shm-py", "hetros-shm-cb-py")
 HERE = Path(__file__).resolve().parent
 LOOPBACK_CYCLONEDDS = textwrap.dedent("""\
     <CycloneDDS><Domain id="any">
@@ -411,6 +412,16 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
             return f"{value:.2f}x" if invert else f"{value:.1f}x"
         return cell
 
+    def shim_cost(size: int, shim: str) -> str:
+        mine, native = by.get((shim, size)), by.get(("hetros-shm-cb", size))
+        if mine is None or native is None or mine.one_way is None or native.one_way is None:
+            return "-"
+        return f"{mine.one_way.p50 / native.one_way.p50:.2f}x"
+
+    shims: list[str] = [s for s in ("hetros-rclpy-cb", "hetros-rospy-cb") if s in shown]
+    if shims and "hetros-shm-cb" in shown:
+        _table(lines, "Cost of the rclpy and rospy shims: p50 one-way of the unchanged ROS-style echo node / "
+                      "hetros-shm-cb p50", shims, sizes, shim_cost)
     peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
     for ours in ("hetros-shm-cb", "hetros-shm-loan-cb", "hetros-shm-loan", "hetros-inproc"):
         if ours in shown:

@@ -12,6 +12,7 @@ import types
 from collections.abc import Sequence
 
 from ..msg import registry
+from . import _flavour
 
 # module names served from hetros.compat (the shims), and their prefix there
 _SHIMS = ("rclpy", "rospy")
@@ -66,7 +67,8 @@ class _RosNames(importlib.abc.MetaPathFinder):
 class _Interfaces(importlib.abc.Loader):
     """``std_msgs.msg`` (or ``.srv``, ``.action``) with every type of the package in it, so that ``from
     rospy_tutorials.srv import *`` works too; a service's request and response also under ROS 1's names
-    (``AddTwoIntsRequest``), an action's parts under actionlib's (``FibonacciGoal``)."""
+    (``AddTwoIntsRequest``), an action's parts under actionlib's (``FibonacciGoal``). Types come in
+    rclpy's flavour (:mod:`hetros.compat._flavour`)."""
 
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
         module = types.ModuleType(spec.name)
@@ -81,7 +83,7 @@ class _Interfaces(importlib.abc.Loader):
         names: dict[str, object] = {}
         suffixes = {"srv": ("Request", "Response"), "action": ("Goal", "Result", "Feedback")}.get(parts[1], ())
         for name in dir(source):
-            value = getattr(source, name)
+            value = _flavour.served(getattr(source, name))
             names[name] = value
             for part in suffixes:
                 names[f"{name}{part}"] = getattr(value, part)

@@ -78,7 +78,7 @@ class Launcher:
         read_fd, write_fd = os.pipe()
         cmd = [sys.executable, "-m", "hetros.launch._worker", "--plan", str(self._plan_file),
                "--target", target, "--session", self.session, "--status-fd", str(write_fd)]
-        env = dict(os.environ)
+        env = dict(os.environ) | self.plan.env_of(target)
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [self.plan.root, env.get("PYTHONPATH", "")]))
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, pass_fds=(write_fd,), text=True, env=env,
                                 start_new_session=True)
@@ -159,6 +159,7 @@ class Launcher:
         for target in self.plan.processes():
             self.children[target] = self._spawn(target)
         local_nodes = self.plan.nodes_in(LAUNCHER)
+        os.environ.update(self.plan.env_of(LAUNCHER))  # after the children took their own copy
         install_ros_names()  # rclpy and ROS message packages for the nodes written for ROS
         if local_nodes:
             self.host = Host(self.plan, LAUNCHER, self.session, self._local_failure, self.stop,

@@ -4,6 +4,7 @@
 Neither depends on the other: both depend on this package.
 """
 
+from ._names import join_namespace, resolve_name
 from ._plan import (
     ACTION_PREFIX,
     CLOCK_PREFIX,
@@ -54,8 +55,10 @@ __all__ = [
     "action_endpoints",
     "action_topic_qos",
     "gateway_node",
+    "join_namespace",
     "process_name",
     "reply_channel",
     "request_channel",
+    "resolve_name",
     "service_of",
 ]

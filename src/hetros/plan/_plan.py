@@ -93,6 +93,14 @@ class NodePlan:
     hw: str = ""
     # a script's command-line arguments (``run:`` a script's path)
     args: tuple[str, ...] = ()
+    # how its code's names resolve (``_expand.resolve_name``): namespace, remaps, its ROS name ("" = its own)
+    namespace: str = ""
+    remap: dict[str, str] = field(default_factory=dict)
+    ros_name: str = ""
+    # environment variables its process sets before nodes start
+    env: dict[str, str] = field(default_factory=dict)
+    # the folder its run: is found in ("" = the project's)
+    root: str = ""
 
 
 @dataclass(frozen=True)
@@ -199,6 +207,13 @@ class Plan:
     def nodes_in(self, process: str) -> list[str]:
         """The nodes whose code runs in ``process`` (hardware nodes run in their target's simulator)."""
         return [n for n in self.nodes if self.process_of(n) == process and self._here(n) and not self.in_hardware(n)]
+
+    def env_of(self, process: str) -> dict[str, str]:
+        """The environment its nodes ask of ``process`` (the checks refuse nodes that disagree)."""
+        env: dict[str, str] = {}
+        for node in self.nodes_in(process):
+            env.update(self.nodes[node].env)
+        return env
 
     def runs_here(self, node: str) -> bool:
         """Whether a process of this host runs ``node``'s code."""

@@ -13,8 +13,10 @@ from .._qos import QoS
 from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
 from ..plan import (
     ACTION_PREFIX,
+    LAUNCHER,
     ROS2_BRIDGE,
     process_name,
+    resolve_name,
 )
 from ..transport import reserved_bytes
 from ._bridges import (
@@ -42,6 +44,22 @@ def load_messages(project: LoadedProject, types: TypeRegistry, report: CheckRepo
             report.errors.append(f"{project.where('messages', index)}: {exc}")
 
 
+def _check_env(project: LoadedProject, report: CheckReport) -> None:
+    """Nodes that share a process share its environment: they must not ask different values of one variable."""
+    model = project.model
+    asked: dict[tuple[str, str], tuple[str, str]] = {}
+    for nname, spec in model.nodes.items():
+        target = model.targets.get(spec.target)
+        process = LAUNCHER if target is not None and target.kind == "thread" else spec.target
+        for variable, value in spec.env.items():
+            first = asked.setdefault((process, variable), (nname, value))
+            if first[1] != value:
+                report.errors.append(
+                    f"{project.where('nodes', nname, 'env', variable)}: {variable}={value!r}, but node {first[0]!r} "
+                    f"in the same process asks {variable}={first[1]!r}; a process has one environment: agree, or "
+                    "put the nodes on targets of their own")
+
+
 def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckReport:
     """Every check ``hetros check`` promises; errors name file:line and the YAML path."""
     types = types or registry()
@@ -58,6 +76,7 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                     f"machine ({os.cpu_count()} CPUs: 0..{(os.cpu_count() or 1) - 1})"
                 )
     _check_hosts(project, report)
+    _check_env(project, report)
     speaks_ros1 = ros1_nodes(project)
     for reserved, graph in ((ROS1_BRIDGE, "ROS 1"), (ROS2_BRIDGE, "ROS 2")):
         if reserved in model.nodes or reserved in model.targets:
@@ -75,9 +94,11 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
                 f"{where('nodes', nname, 'target')}: unknown target {spec.target!r}; "
                 f"define it under targets (known: {', '.join(model.targets) or 'none'})"
             )
-        problem = node_name_problem(nname)
+        problem = node_name_problem(nname) or (node_name_problem(spec.name) if spec.name else None)
         if problem:
             report.errors.append(f"{where('nodes', nname)}: {problem}")
+        if spec.namespace and (problem := topic_name_problem(spec.namespace)):
+            report.errors.append(f"{where('nodes', nname, 'namespace')}: namespace {spec.namespace!r}: {problem}")
         module = spec.run.partition(":")[0]
         if ":" not in spec.run:
             if not (project.root / spec.run).is_file():
@@ -441,13 +462,14 @@ def _check_sources(project: LoadedProject, report: CheckReport) -> None:
             continue
         for section, endpoints in found.endpoints.items():
             declared = {name: typename for name, typename in getattr(spec, section).items()}
-            for endpoint, code_type in endpoints.items():
-                at = f"{path.name}:{found.lines.get((section, endpoint), found.line)}"
+            for written, code_type in endpoints.items():
+                at = f"{path.name}:{found.lines.get((section, written), found.line)}"
+                endpoint = resolve_name(written, spec.namespace, spec.name or nname, spec.remap)
                 if endpoint not in declared:
                     report.errors.append(
                         f"{project.where('nodes', nname, section)}: the code of {nname} ({at}) creates "
                         f"{section} endpoint {endpoint} that the project does not declare"
-                        f"{_nearest(endpoint, declared)} (add '{endpoint}: {code_type}' here otherwise)")
+                        f"{_nearest(endpoint, declared)} (add '{written}: {code_type}' here otherwise)")
                     continue
                 entry = declared[endpoint]
                 wanted = entry if isinstance(entry, str) else entry.type

@@ -14,6 +14,7 @@ from .._errors import MessageError, ProjectError
 from .._qos import QoS
 from ..msg import normalize_typename
 from ..plan import ACTION_PREFIX, LAUNCHER, action_endpoints
+from ._expand import declared_args, expand, substitute
 from ._names import plain_name_problem
 
 # goals an action server executes at once unless the project file says otherwise
@@ -109,7 +110,8 @@ class NodeSpec(_Strict):
     hw: str | None = Field(default=None, description="module:Component or file.v:module: the node's hardware "
                            "implementation, an Amaranth component or a Verilog module whose stream ports are named "
                            "after its topics; on an fpga target it is what runs")
-    target: str = Field(description="the target it runs on, a name under targets:")
+    target: str = Field(default="main", description="the target it runs on, a name under targets: (absent: main, "
+                        "the default thread target)")
     publish: dict[str, str | EndpointSpec] = Field(
         default_factory=dict, description="topic -> type, or topic -> {type: ..., QoS offered}")
     subscribe: dict[str, str | EndpointSpec] = Field(
@@ -125,6 +127,21 @@ class NodeSpec(_Strict):
                                                    "starts again, its subscriptions kept")
     required: bool = Field(default=False, description="when this node returns, the whole launch ends")
     max_restarts: int = Field(default=3, ge=0, description="restarts after which a failing node stays failed")
+    namespace: str = Field(default="", description="the node's namespace: relative endpoint names (chatter, "
+                           "~/x) resolve under it, as in ROS; a relative namespace nests in its group's or "
+                           "include's")
+    name: str | None = Field(default=None, description="the node's ROS name (rclpy's get_name(), logs, ROS "
+                             "graphs); absent: the name its code gives, else the key")
+    remap: dict[str, str] = Field(default_factory=dict, description="name -> name: topics, services and actions "
+                                  "renamed after resolution (relative names resolve under the namespace)")
+    env: dict[str, str] = Field(default_factory=dict, description="environment variables of the node's process "
+                                "(nodes sharing a process must agree)")
+    parameter_files: list[str] = Field(default_factory=list, description="ROS 2 parameter files (node: "
+                                       "{ros__parameters: ...}, /** wildcards), relative to the project file; "
+                                       "parameters: wins over them")
+    instances: dict[str, InstanceSpec] = Field(default_factory=dict, description="name -> an instance: the node "
+                                               "runs once per entry (not under its own key), each with its own "
+                                               "namespace, name, remaps, parameters")
 
     def types(self, section: str) -> dict[str, str]:
         """Endpoint name -> type name for a section, its actions' services and topics included.
@@ -176,6 +193,46 @@ class NodeSpec(_Strict):
         if value is not None and (not sep or not module or not attr):
             raise ValueError(f"hw must be 'module:Component' (Amaranth) or 'file.v:module' (Verilog), not {value!r}")
         return value
+
+
+class InstanceSpec(_Strict):
+    """One instance of a node: what differs from the node's own entry."""
+
+    namespace: str | None = Field(default=None, description="its namespace (absent: the node's)")
+    name: str | None = Field(default=None, description="its ROS name (absent: the node's)")
+    target: str | None = Field(default=None, description="its target (absent: the node's)")
+    remap: dict[str, str] = Field(default_factory=dict, description="remaps added to the node's")
+    parameters: dict[str, Any] = Field(default_factory=dict, description="parameters over the node's")
+    parameter_files: list[str] = Field(default_factory=list, description="parameter files after the node's")
+    env: dict[str, str] = Field(default_factory=dict, description="environment over the node's")
+    args: list[str] | None = Field(default=None, description="a script's arguments (absent: the node's)")
+
+
+class GroupSpec(_Strict):
+    """Nodes that share a namespace, remaps, environment and parameters (ROS launch's group)."""
+
+    namespace: str = Field(default="", description="the namespace of the group's nodes (a node's relative "
+                           "namespace nests in it)")
+    remap: dict[str, str] = Field(default_factory=dict, description="remaps of every node in the group")
+    env: dict[str, str] = Field(default_factory=dict, description="environment of every node in the group")
+    parameters: dict[str, Any] = Field(default_factory=dict, description="parameters of every node in the group")
+    parameter_files: list[str] = Field(default_factory=list, description="parameter files of every node in "
+                                       "the group")
+    nodes: dict[str, NodeSpec] = Field(description="name -> a node, as under the project's nodes:")
+
+
+class IncludeSpec(_Strict):
+    """Another project file's nodes, targets and topics, under a namespace."""
+
+    file: str = Field(description="the project file, relative to this one")
+    namespace: str = Field(default="", description="the namespace its nodes' relative names resolve under")
+    args: dict[str, str | int | float | bool] = Field(default_factory=dict, description="values for its "
+                                                      "$(arg name) substitutions")
+    targets: dict[str, str] = Field(default_factory=dict, description="its target -> a target of this file; "
+                                    "targets not named here stay its own, named <include>_<target>")
+
+
+NodeSpec.model_rebuild()
 
 
 # which actions' endpoints each section holds: (actions section, 0 = services / 1 = topics)
@@ -286,7 +343,8 @@ class Project(_Strict):
                                   "(bytes, or like 4GiB)")
     targets: dict[str, TargetSpec] = Field(default_factory=lambda: {"main": TargetSpec(kind="thread")},
                                            description="name -> where nodes run (absent: one thread target, main)")
-    nodes: dict[str, NodeSpec] = Field(description="name -> a node: its code, its target, its endpoints")
+    nodes: dict[str, NodeSpec] = Field(default_factory=dict, description="name -> a node: its code, its target, "
+                                       "its endpoints (a project may also bring its nodes by groups: and include:)")
     topics: dict[str, QoS] = Field(default_factory=dict, description="topic -> its QoS (absent: reliable, keep_all, "
                                    "depth 10)")
     external: ExternalSpec | None = Field(default=None, description="the ROS 1 and ROS 2 graphs this one joins")
@@ -296,6 +354,15 @@ class Project(_Strict):
                                                       "the whole graph, or keep the rest running until it returns")
     dds_domain: int | None = Field(default=None, ge=0, le=232, description="the DDS domain of the edges between "
                                    "hosts (absent: $ROS_DOMAIN_ID, else 0)")
+    args: dict[str, str | int | float | bool] = Field(default_factory=dict, description="name -> default: the "
+                                                      "values of $(arg name) in this file (an include's args: "
+                                                      "override them); $(env NAME) and $(env NAME default) "
+                                                      "read the environment")
+    groups: dict[str, GroupSpec] = Field(default_factory=dict, description="name -> nodes sharing a namespace, "
+                                         "remaps, environment and parameters")
+    include: dict[str, IncludeSpec] = Field(default_factory=dict, description="name -> another project file "
+                                            "whose nodes join this graph (named <name>_<node>) under a "
+                                            "namespace")
     use_sim_time: bool = Field(default=False, description="every node's clock (get_clock, create_timer, rate) "
                                "follows /clock (rosgraph_msgs/msg/Clock, published by a simulator node or "
                                "`hetros play --clock`) instead of the wall")
@@ -334,17 +401,27 @@ class Project(_Strict):
 class LoadedProject:
     """A validated project plus where it came from (for paths and line numbers)."""
 
-    def __init__(self, model: Project, path: Path, lines: dict[tuple[str, ...], int]) -> None:
+    def __init__(self, model: Project, path: Path, lines: dict[tuple[str, ...], int],
+                 aliases: dict[tuple[str, ...], tuple[str, ...]] | None = None,
+                 roots: dict[str, str] | None = None) -> None:
         self.model = model
         self.path = path
         self.root = path.parent
         self._lines = lines
+        # a node's or endpoint's expanded path -> the path it was written at (groups, instances, includes)
+        self._aliases = aliases or {}
+        # node -> the folder its run: is found in, for nodes of an included file elsewhere
+        self.node_roots = roots or {}
         # topics a recording feeds (``hetros play --launch``): subscribing to them needs no publisher
         self.replayed: frozenset[str] = frozenset()
 
     def where(self, *yaml_path: str | int) -> str:
         """``file:line: a.b.c`` for a YAML path (the line of the nearest known ancestor)."""
         key = tuple(str(p) for p in yaml_path)
+        for length in range(len(key), 0, -1):
+            if key[:length] in self._aliases:
+                key = self._aliases[key[:length]] + key[length:]
+                break
         while key and key not in self._lines:
             key = key[:-1]
         line = self._lines.get(key)
@@ -428,9 +505,32 @@ def _read_text(path: Path) -> str:
 
 
 def load_project(path: str | Path) -> LoadedProject:
-    """Read and validate a project file; every error names file:line and the YAML path."""
+    """Read and validate a project file; every error names file:line and the YAML path. Groups, instances,
+    includes, namespaces, remaps and parameter files are expanded (``_expand``): the project returned is
+    flat, every endpoint under its final name."""
     path = Path(path)
+    model, lines = _parse(path, {})
+
+    def load_included(file: Path, args: dict[str, object], depth: int) -> dict[str, Any]:
+        return _parse(file, args)[0].model_dump(by_alias=True)
+    expanded = expand(model.model_dump(by_alias=True), path, load_included)
+    flat = {**model.model_dump(by_alias=True, exclude_unset=True), "nodes": expanded.nodes,
+            "targets": expanded.targets, "topics": expanded.topics, "messages": expanded.messages,
+            "groups": {}, "include": {}}
+    if not expanded.nodes:
+        raise ProjectError(f"{path}:1: the project has no nodes; list them under nodes: (or bring them with "
+                           "groups: or include:)")
+    try:
+        model = Project.model_validate(flat)
+    except ValidationError as exc:
+        raise ProjectError(f"{path}: after expanding groups, instances and includes: {exc}") from None
+    return LoadedProject(model, path, lines, expanded.aliases, expanded.roots)
+
+
+def _parse(path: Path, args: dict[str, object]) -> tuple[Project, dict[tuple[str, ...], int]]:
     text = _read_text(path)
+    if "$(" in text:
+        text = substitute(text, path, {**declared_args(text), **args})
     if "\x00" in text:
         raise ProjectError(f"{path}:{text.count(chr(10), 0, text.index(chr(0))) + 1}: a NUL character; "
                            "a project file is YAML text")
@@ -483,4 +583,4 @@ def load_project(path: str | Path) -> LoadedProject:
                 message = f"{message}, not {error.get('input')!r}"
             problems.append(f"{loaded.where(*loc)}: {message}")
         raise ProjectError("invalid project file:\n" + "\n".join(f"  - {p}" for p in problems)) from None
-    return LoadedProject(model, path, lines)
+    return model, lines

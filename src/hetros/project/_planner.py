@@ -112,7 +112,8 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
                         s.types("publish"), s.types("subscribe"), s.types("services"), s.types("clients"),
                         {a: normalize_typename(t, "action") for a, t in s.types("actions").items()},
                         {a: normalize_typename(t, "action") for a, t in s.types("action_clients").items()},
-                        s.max_goals(), s.hw or "", tuple(s.args))
+                        s.max_goals(), s.hw or "", tuple(s.args), s.namespace, dict(s.remap), s.name or "",
+                        dict(s.env), project.node_roots.get(n, ""))
             for n, s in model.nodes.items()
         } | {bridge.name: bridge for bridge in bridges}
         | {g: NodePlan(g, GATEWAY_RUN, t, {"target": t}, publish=_endpoints_of(channels, g, "publish"),

@@ -590,6 +590,13 @@ class ClientGoalHandle:
         self.status = GoalStatus(int(response.status))
         return response.result
 
+    def result_async(self) -> Future[Any]:
+        """The future of the server's ``GetResult`` response (``status`` and ``result``) for this accepted goal."""
+        if not self.accepted or self._result is None:
+            raise GoalRejectedError(f"goal {_short(self.goal_id)} on {self.client.name} was rejected by the server; "
+                                    "it has no result")
+        return self._result
+
     def cancel(self, timeout: float = 5.0) -> bool:
         """Ask the server to cancel this goal; True when it agreed (the goal then ends canceled)."""
         return self.goal_id in self.client._cancel(self.goal_id, timeout)
@@ -665,39 +672,72 @@ class ActionClient:
                                          "server node running (see `hetros graph`)?")
             executor.wait(seen, _TICK if left is None else min(left, _TICK))
 
-    def send_goal(self, goal: Any, feedback_cb: Callable[[Any], object] | None = None,
-                  timeout: float = 10.0) -> ClientGoalHandle:
-        """Send ``goal``; return its handle once the server accepted or rejected it (``handle.accepted``)."""
+    def send_goal_async(self, goal: Any, feedback_cb: Callable[[Any], object] | None = None,
+                        goal_id: bytes | None = None) -> Future[ClientGoalHandle]:
+        """Send ``goal`` without waiting: the future gives its handle once the server accepted or rejected it.
+        ``goal_id`` (16 bytes) is made up when not given."""
+        return self._send(goal, feedback_cb, goal_id)[1]
+
+    def _send(self, goal: Any, feedback_cb: Callable[[Any], object] | None,
+              goal_id: bytes | None = None) -> tuple[bytes, Future[ClientGoalHandle]]:
         check_type(goal, typename_of(self.type.Goal), f"a goal of action {self.name}")
         goal._hetros_validate(goal, f"the goal of {self.name}")
-        goal_id = os.urandom(16)
+        if goal_id is None:
+            goal_id = os.urandom(16)
+        elif len(goal_id) != 16:
+            raise ActionError(f"a goal id must be 16 bytes, not {goal_id!r}")
         handle = ClientGoalHandle(self, goal_id, feedback_cb)
         with self._lock:
             self._handles[goal_id] = handle
-        request = self.type.SendGoal.Request(goal_id=_uuid(goal_id), goal=goal)
+        answered: Future[ClientGoalHandle] = Future()
+
+        def on_answer(answer: Future[Any]) -> None:
+            if answered.cancelled():  # send_goal gave up waiting
+                return
+            try:
+                response = answer.result()
+            except BaseException as exc:
+                self._forget(goal_id)
+                answered.set_exception(exc)
+                return
+            handle.accepted = bool(response.accepted)
+            handle.stamp = response.stamp
+            if not handle.accepted:
+                self._forget(goal_id)
+            else:
+                handle.status = max(handle.status, ACCEPTED)
+                handle._result = self._get_result.call_async(self.type.GetResult.Request(goal_id=_uuid(goal_id)))
+            answered.set_result(handle)
         try:
-            response = self._wait(self._send_goal.call_async(request), timeout, f"the answer to goal {_short(goal_id)}")
+            self._send_goal.call_async(self.type.SendGoal.Request(goal_id=_uuid(goal_id), goal=goal)) \
+                .add_done_callback(on_answer)
         except BaseException:
-            with self._lock:
-                self._handles.pop(goal_id, None)
+            self._forget(goal_id)
             raise
-        handle.accepted = bool(response.accepted)
-        handle.stamp = response.stamp
-        if not handle.accepted:
-            with self._lock:
-                self._handles.pop(goal_id, None)
-            return handle
-        handle.status = max(handle.status, ACCEPTED)
-        handle._result = self._get_result.call_async(self.type.GetResult.Request(goal_id=_uuid(goal_id)))
+        return goal_id, answered
+
+    def send_goal(self, goal: Any, feedback_cb: Callable[[Any], object] | None = None,
+                  timeout: float = 10.0) -> ClientGoalHandle:
+        """Send ``goal``; return its handle once the server accepted or rejected it (``handle.accepted``)."""
+        goal_id, answered = self._send(goal, feedback_cb)
+        try:
+            handle: ClientGoalHandle = self._wait(answered, timeout, f"the answer to goal {_short(goal_id)}")
+        except BaseException:
+            answered.cancel()
+            self._forget(goal_id)
+            raise
         return handle
 
-    def _cancel(self, goal_id: bytes, timeout: float) -> set[bytes]:
+    def cancel_async(self, goal_id: bytes) -> Future[Any]:
+        """Ask the server to cancel goal ``goal_id`` (all goals: 16 zero bytes); the future gives its
+        ``action_msgs/srv/CancelGoal`` response."""
         types = registry()
         info = types.get("action_msgs/msg/GoalInfo")(goal_id=_uuid(goal_id),
                                                      stamp=types.get("builtin_interfaces/msg/Time")())
-        request = self._cancel_goal.srv_type.Request(goal_info=info)
-        response = self._wait(self._cancel_goal.call_async(request), timeout,
-                              f"the answer to canceling {_short(goal_id)}")
+        return self._cancel_goal.call_async(self._cancel_goal.srv_type.Request(goal_info=info))
+
+    def _cancel(self, goal_id: bytes, timeout: float) -> set[bytes]:
+        response = self._wait(self.cancel_async(goal_id), timeout, f"the answer to canceling {_short(goal_id)}")
         return {bytes(g.goal_id.uuid) for g in response.goals_canceling}
 
     def cancel_all(self, timeout: float = 5.0) -> int:

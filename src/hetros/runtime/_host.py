@@ -70,7 +70,14 @@ def run_node_body(factory: Callable[..., Any], node: Node) -> None:
     ``main()`` (no argument) runs with the node bound to this thread (``_ros_main``)."""
     if runs_as_ros_main(factory):
         with ros_main(node):
-            factory()
+            try:
+                factory()
+            except SystemExit as exit_:  # sys.exit() in a main() ends its node, not the process
+                if exit_.code in (None, 0):
+                    return
+                if node.graph.stop.is_set():
+                    raise ShutdownError(f"main() exited with {exit_.code!r} as the graph stopped") from None
+                raise NodeError(f"main() exited with {exit_.code!r}") from None
         return
     result = factory(node)
     if inspect.isclass(factory) and hasattr(result, "run"):
@@ -116,7 +123,7 @@ class NodeThread:
             node = Node(self.spec.name, self.graph)
             finished = False
             try:
-                run_node_body(resolve(self.spec.run, root, self.spec.args), node)
+                run_node_body(resolve(self.spec.run, self.spec.root or root, self.spec.args), node)
                 finished = True
                 if not self.graph.stop.is_set():
                     self.on_done(self.spec.name)
@@ -169,7 +176,7 @@ class Host:
         self.threads = [NodeThread(plan.nodes[n], self.graph, on_failure, self._exited, on_done)
                         for n in plan.nodes_in(process)]
         for nthread in self.threads:
-            function = resolve(nthread.spec.run, plan.root, nthread.spec.args)
+            function = resolve(nthread.spec.run, nthread.spec.root or plan.root, nthread.spec.args)
             prepare = getattr(function, "prepare", None)
             if callable(prepare):
                 # start-up work that must not count against the graph's time (a simulator's

@@ -24,7 +24,7 @@ from .._errors import (
 )
 from .._qos import QoS
 from ..msg import ActionKind, Message, ServiceKind, service_type
-from ..plan import ROS1_TRANSPORT, request_channel
+from ..plan import ROS1_TRANSPORT, NodePlan, request_channel, resolve_name
 from ._clock import Clock, SimulatedTimer, Ticker
 from ._entities import Client, HandlingStats, Publisher, Service, Subscription, Timer, typename_of
 from ._executor import Executor
@@ -80,12 +80,32 @@ class Node:
 
     # -- endpoints -------------------------------------------------------------------------
 
+    @property
+    def namespace(self) -> str:
+        """The node's namespace from the project file ("" at the root)."""
+        planned = self._planned()
+        return planned.namespace if planned is not None else ""
+
+    def _planned(self) -> NodePlan | None:
+        plan = self.graph.plan
+        return plan.nodes.get(self.name) if plan is not None else None
+
+    def resolve_name(self, name: str, namespace: str | None = None, node_name: str | None = None) -> str:
+        """A topic, service or action name as ROS resolves it for this node: ``chatter`` under its
+        namespace, ``~/x`` under its name, then its remaps (all from the project file)."""
+        planned = self._planned()
+        if planned is None:
+            return name if name.startswith("/") else "/" + name.lstrip("~/")
+        return resolve_name(name, planned.namespace if namespace is None else namespace,
+                            node_name or planned.ros_name or self.name, planned.remap)
+
     def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None,
                          on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None
                          ) -> Publisher[M]:
         """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
         ``deadline`` and this publisher let a period pass without publishing."""
         typename = typename_of(msg_type)
+        topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
         writer = self.graph.open_writer(topic, self.name, typename, qos=qos)
         publisher = Publisher(self, msg_type, topic, writer)
@@ -109,6 +129,7 @@ class Node:
         ``on_liveliness_changed(status)`` when a publisher it hears from becomes alive or not
         alive (a process that ended; a ``manual_by_topic`` publisher silent past its lease)."""
         typename = typename_of(msg_type)
+        topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
         subscription = Subscription(self, msg_type, topic, callback)
         if callback is not None:
@@ -127,6 +148,7 @@ class Node:
 
     def create_service(self, srv_type: ServiceKind, name: str, handler: Callable[[Any], Any]) -> Service:
         srv_type = service_type(srv_type)
+        name = self.resolve_name(name)
         self._check_declared_type(request_channel(name), typename_of(srv_type.Request))
         service = Service(self, srv_type, name, handler)
         self.executor.entities += 1
@@ -135,6 +157,7 @@ class Node:
 
     def create_client(self, srv_type: ServiceKind, name: str) -> Client:
         srv_type = service_type(srv_type)
+        name = self.resolve_name(name)
         if name in self.clients:
             raise NodeError(f"node {self.name!r} already has a client of {name}; reuse it")
         self._check_declared_type(request_channel(name), typename_of(srv_type.Request))
@@ -156,6 +179,7 @@ class Node:
         """
         from ._action import ActionServer
 
+        name = self.resolve_name(name)
         if name in self.action_servers:
             raise NodeError(f"node {self.name!r} already serves action {name}")
         server = ActionServer(self, action_type, name, execute, goal_callback=goal_callback,
@@ -168,6 +192,7 @@ class Node:
     def create_action_client(self, action_type: ActionKind, name: str) -> ActionClient:
         from ._action import ActionClient
 
+        name = self.resolve_name(name)
         if name in self.action_clients:
             raise NodeError(f"node {self.name!r} already has a client of action {name}; reuse it")
         client = ActionClient(self, action_type, name)

@@ -1,8 +1,12 @@
-"""rclpy.callback_groups: accepted everywhere rclpy takes them. A hetros node runs its callbacks one at a
-time (its executor), so a reentrant group runs them one at a time too; a callback may still wait on a
-service or an action from inside, as hetros's clients wait without the executor."""
+"""rclpy.callback_groups, with rclpy's protocol: before a callback runs, its group is asked
+(``can_execute``, ``beginning_execution``) and told when it ended (``ending_execution``). A hetros node
+runs its callbacks one at a time, so the built-in groups matter only where rclpy code runs callbacks in
+threads of its own (a custom executor's pool); a custom group (a token bucket, say) is obeyed as rclpy
+obeys it: a timer it refuses skips that tick, a message it refuses is offered again shortly."""
 
 from __future__ import annotations
+
+import threading
 
 
 class CallbackGroup:
@@ -15,9 +19,37 @@ class CallbackGroup:
     def has_entity(self, entity: object) -> bool:
         return entity in self.entities
 
+    def can_execute(self, entity: object) -> bool:
+        return True
+
+    def beginning_execution(self, entity: object) -> bool:
+        return True
+
+    def ending_execution(self, entity: object) -> None:
+        return None
+
 
 class MutuallyExclusiveCallbackGroup(CallbackGroup):
-    pass
+    """One callback of the group at a time."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._lock = threading.Lock()
+        self._active = False
+
+    def can_execute(self, entity: object) -> bool:
+        return not self._active
+
+    def beginning_execution(self, entity: object) -> bool:
+        with self._lock:
+            if self._active:
+                return False
+            self._active = True
+            return True
+
+    def ending_execution(self, entity: object) -> None:
+        with self._lock:
+            self._active = False
 
 
 class ReentrantCallbackGroup(CallbackGroup):

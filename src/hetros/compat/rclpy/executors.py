@@ -87,10 +87,45 @@ class Executor:
         return self._nodes[0]._hetros if self._nodes else _context.bound_node()
 
     def spin(self) -> None:
-        spin_node(self._hetros())
+        """Spin the node's executor; an executor class that overrides ``spin_once`` (a custom executor) has
+        its own ``spin_once`` called in a loop, as rclpy's ``spin`` does."""
+        hetros = self._hetros()
+        if type(self).spin_once is Executor.spin_once:
+            spin_node(hetros)
+            return
+        hetros.spun = True
+        while _running(hetros):
+            self.spin_once(timeout_sec=0.1)
+        if hetros.graph.stop.is_set():
+            raise ExternalShutdownException("the graph is shutting down")
 
     def spin_once(self, timeout_sec: float | None = None) -> None:
         spin_once_node(self._hetros(), timeout_sec)
+
+    def wait_for_ready_callbacks(self, timeout_sec: float | None = None, nodes: Any = None,
+                                 condition: Any = None) -> tuple[Callable[[], Any], Any, Any]:
+        """The next ready callback as (handler, group, node), for a custom executor to run where it likes
+        (``handler()``); its message is already taken. StopIteration when none came within ``timeout_sec``."""
+        from .node import capturing
+
+        hetros = self._hetros()
+        ready: list[Any] = []
+        deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
+        capturing(ready)
+        try:
+            while not ready and _running(hetros):
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
+                    break
+                hetros.executor.spin_once(0.1 if left is None else min(left, 0.1))
+        finally:
+            capturing(None)
+        if not ready:
+            raise StopIteration
+        handler, group, node = ready[0]
+        for extra in ready[1:]:  # more than one came in one turn: run in order, here
+            extra[0]()
+        return handler, group, node
 
     def spin_until_future_complete(self, future: Future, timeout_sec: float | None = None) -> None:
         spin_until_done(self._hetros(), future, timeout_sec)

@@ -9,31 +9,24 @@ and hetros's executor runs its callbacks. Names resolve as rclpy resolves them (
 from __future__ import annotations
 
 import inspect
+import threading
 import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
 from ..._errors import ParameterError
 from ...msg import copy as copy_message
+from ...plan import join_namespace
 from ...runtime import Clock
 from ...runtime import Node as HetrosNode
 from ...runtime._clock import Ticker
 from ...runtime._ros_main import bound_node
+from .._flavour import received, viewer
 from .callback_groups import CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
 from .parameter import Parameter
 from .qos import QoSProfile, to_hetros
 from .task import Future, Task
-
-
-def resolve_name(name: str, namespace: str, node: str) -> str:
-    """rclpy's name resolution for topics and services."""
-    namespace = "/" + namespace.strip("/") if namespace.strip("/") else ""
-    if name.startswith("/"):
-        return name
-    if name.startswith("~"):
-        return f"{namespace}/{node}{name[1:]}" if name != "~" else f"{namespace}/{node}"
-    return f"{namespace}/{name}"
 
 
 def run_callback(hetros: HetrosNode, callback: Callable[..., Any]) -> Callable[..., Any]:
@@ -51,6 +44,43 @@ def run_callback(hetros: HetrosNode, callback: Callable[..., Any]) -> Callable[.
             return task
         return result
     return run
+
+
+# what a custom executor's wait_for_ready_callbacks() receives instead of the callback running (per thread)
+_capture = threading.local()
+Ready = tuple[Callable[[], Any], CallbackGroup, "Node"]
+
+
+def capturing(into: list[Ready] | None) -> None:
+    """Make this thread's callbacks land in ``into`` as (handler, group, node) instead of running (None: run)."""
+    _capture.ready = into
+
+
+def guarded(node: Node, hetros: HetrosNode, callback: Callable[..., Any], group: CallbackGroup | None,
+            entity: list[Any], again: bool) -> Callable[..., Any]:
+    """``callback`` run as rclpy's executors run it: its group asked first and told after. A refused call is
+    offered again in 10 ms when ``again`` (a message), else dropped (a timer's tick)."""
+    run = run_callback(hetros, callback)
+    chosen = group if group is not None else node.default_callback_group
+
+    def attempt(*args: Any) -> Any:
+        subject = entity[0] if entity else None
+        if not chosen.can_execute(subject) or not chosen.beginning_execution(subject):
+            if again:
+                hetros.executor.add_timer(time.monotonic() + 0.01, lambda: attempt(*args))
+            return None
+        try:
+            return run(*args)
+        finally:
+            chosen.ending_execution(subject)
+
+    def call(*args: Any) -> Any:
+        ready: list[Ready] | None = getattr(_capture, "ready", None)
+        if ready is not None:
+            ready.append((lambda: attempt(*args), chosen, node))
+            return None
+        return attempt(*args)
+    return call
 
 
 class Publisher:
@@ -95,11 +125,14 @@ class Subscription:
 
 
 class Timer:
-    def __init__(self, node: Node, period: float, callback: Callable[[], Any], autostart: bool) -> None:
+    def __init__(self, node: Node, period: float, callback: Callable[[], Any], autostart: bool,
+                 group: CallbackGroup | None = None) -> None:
         self._node = node
         self._period = period
         self.callback = callback
+        self.callback_group = group
         self._inner: Any = None
+        self._run = guarded(node, node._hetros, callback, group, [self], again=False)
         if autostart:
             self.reset()
 
@@ -116,7 +149,7 @@ class Timer:
 
     def reset(self) -> None:
         self.cancel()
-        self._inner = self._node._hetros.create_timer(self._period, run_callback(self._node._hetros, self.callback))
+        self._inner = self._node._hetros.create_timer(self._period, self._run)
 
     def destroy(self) -> None:
         self.cancel()
@@ -132,10 +165,11 @@ class Client:
         self.srv_name = name
 
     def call_async(self, request: Any) -> Future:
-        return Future.wrapping(self._inner.call_async(copy_message(request)))
+        return Future.wrapping(self._inner.call_async(copy_message(request)), received, self._node._schedule)
 
     def call(self, request: Any, timeout_sec: float | None = None) -> Any:
-        return self._inner.call(copy_message(request), timeout=3600.0 if timeout_sec is None else timeout_sec)
+        return received(self._inner.call(copy_message(request),
+                                         timeout=3600.0 if timeout_sec is None else timeout_sec))
 
     def wait_for_service(self, timeout_sec: float | None = None) -> bool:
         """True: the plan wires every client to its server before the graph starts, and a request waits in
@@ -196,9 +230,11 @@ class Node:
                  allow_undeclared_parameters: bool = False,
                  automatically_declare_parameters_from_overrides: bool = False, **_ignored: Any) -> None:
         self._hetros: HetrosNode = bound_node()
-        self._name = node_name
-        self._namespace = "/" + (namespace or "").strip("/")
-        self._logger = RcutilsLogger(node_name)
+        planned = self._hetros.graph.plan.nodes.get(self._hetros.name) if self._hetros.graph.plan else None
+        # the project's name and namespace stand over the code's, as a launch file's do in ROS 2
+        self._name = planned.ros_name if planned is not None and planned.ros_name else node_name
+        self._namespace = join_namespace(self._hetros.namespace, namespace or "") or "/"
+        self._logger = RcutilsLogger(self.get_fully_qualified_name().lstrip("/").replace("/", "."))
         self._overrides: dict[str, Any] = dict(self._hetros.parameters)
         for parameter in parameter_overrides or []:
             self._overrides[parameter.name] = parameter.value
@@ -223,9 +259,13 @@ class Node:
         return f"{self._namespace.rstrip('/')}/{self._name}"
 
     def resolve_topic_name(self, topic: str, *, only_expand: bool = False) -> str:
-        return resolve_name(topic, self._namespace, self._name)
+        return self._hetros.resolve_name(topic, self._namespace.rstrip("/"), self._name)
 
     resolve_service_name = resolve_topic_name
+
+    def _schedule(self, work: Callable[[], None]) -> None:
+        """Run ``work`` in the node's thread, between callbacks (where rclpy runs a future's callbacks)."""
+        self._hetros.executor.add_timer(time.monotonic(), work)
 
     def get_logger(self) -> RcutilsLogger:
         return self._logger
@@ -245,13 +285,23 @@ class Node:
                             qos_profile: QoSProfile | int, *, callback_group: CallbackGroup | None = None,
                             **_ignored: Any) -> Subscription:
         name = self.resolve_topic_name(topic)
-        inner = self._hetros.create_subscription(msg_type, name, run_callback(self._hetros, callback),
-                                                 qos=to_hetros(qos_profile))
-        return Subscription(inner, msg_type, name, callback)
+        entity: list[Any] = []
+        run = guarded(self, self._hetros, callback, callback_group, entity, again=True)
+        show = viewer(msg_type.__msgtype__)
+        if show is not None:
+            shown = run
+
+            def run(message: Any) -> Any:
+                show(message)
+                return shown(message)
+        inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile))
+        subscription = Subscription(inner, msg_type, name, callback)
+        entity.append(subscription)
+        return subscription
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any],
                      callback_group: CallbackGroup | None = None, clock: Any = None, autostart: bool = True) -> Timer:
-        return Timer(self, float(timer_period_sec), callback, autostart)
+        return Timer(self, float(timer_period_sec), callback, autostart, callback_group)
 
     def create_rate(self, frequency: float, clock: Any = None) -> Rate:
         return Rate(self, frequency)
@@ -260,8 +310,8 @@ class Node:
                        qos_profile: Any = None, callback_group: CallbackGroup | None = None) -> Service:
         name = self.resolve_service_name(srv_name)
 
-        def handle(request: Any) -> Any:
-            return callback(request, srv_type.Response())  # rclpy hands the callback a response to fill
+        def handle(request: Any) -> Any:  # rclpy hands the callback a response to fill
+            return copy_message(callback(received(request), srv_type.Response()))
         return Service(self._hetros.create_service(srv_type, name, handle), srv_type, name)
 
     def create_client(self, srv_type: Any, srv_name: str, *, qos_profile: Any = None,

@@ -7,11 +7,15 @@ from collections.abc import Callable, Coroutine
 from concurrent.futures import Future as _Concurrent
 from typing import Any
 
+# the Future a coroutine awaits, seen by the Task that stepped it (per thread: tasks step in their node's thread)
+_awaited = threading.local()
+
 
 class Future:
     """rclpy's Future: ``done()``, ``result()``, ``exception()``, ``add_done_callback``, ``cancel``."""
 
-    def __init__(self, *, executor: Any = None) -> None:
+    def __init__(self, *, executor: Any = None, schedule: Callable[[Callable[[], None]], None] | None = None) -> None:
+        self._schedule = schedule  # how done-callbacks reach the node's thread (rclpy runs them in its executor)
         self._lock = threading.Lock()
         self._done = False
         self._cancelled = False
@@ -21,9 +25,10 @@ class Future:
         self._finished = threading.Event()
 
     @classmethod
-    def wrapping(cls, inner: _Concurrent[Any], convert: Callable[[Any], Any] = lambda value: value) -> Future:
+    def wrapping(cls, inner: _Concurrent[Any], convert: Callable[[Any], Any] = lambda value: value,
+                 schedule: Callable[[Callable[[], None]], None] | None = None) -> Future:
         """An rclpy Future completed when ``inner`` (hetros's) is, through ``convert``."""
-        future = cls()
+        future = cls(schedule=schedule)
 
         def finish(done: _Concurrent[Any]) -> None:
             if done.cancelled():
@@ -75,21 +80,28 @@ class Future:
             callbacks, self._callbacks = self._callbacks, []
         self._finished.set()
         for callback in callbacks:
+            self._call(callback)
+
+    def _call(self, callback: Callable[[Future], None]) -> None:
+        if self._schedule is None:
             callback(self)
+        else:
+            self._schedule(lambda: callback(self))
 
     def add_done_callback(self, callback: Callable[[Future], None]) -> None:
         with self._lock:
             if not self._done:
                 self._callbacks.append(callback)
                 return
-        callback(self)
+        self._call(callback)
 
     def wait(self, timeout: float | None = None) -> bool:
         return self._finished.wait(timeout)
 
     def __await__(self) -> Any:
         while not self._done:
-            yield self  # the task driving the awaiting coroutine steps it again once this is done
+            _awaited.future = self  # the Task stepping the coroutine resumes it once this is done
+            yield  # a bare yield, as rclpy's: asyncio's loop, driving the coroutine instead, steps it again soon
         return self.result()
 
 
@@ -98,20 +110,40 @@ class Task(Future):
     stepped until it awaits a Future that is not done, stepped again once it is."""
 
     def __init__(self, coroutine: Coroutine[Any, Any, Any], schedule: Callable[[Callable[[], None]], None]) -> None:
-        super().__init__()
+        super().__init__(schedule=schedule)
         self._coroutine = coroutine
-        self._schedule = schedule
+        self._resume = schedule
 
     def step(self) -> None:
+        _awaited.future = None
         try:
-            waited = self._coroutine.send(None)
+            self._coroutine.send(None)
         except StopIteration as done:
             self.set_result(done.value)
             return
         except BaseException as exc:
             self.set_exception(exc)
             raise
+        waited, _awaited.future = _awaited.future, None
         if isinstance(waited, Future) and not waited.done():
-            waited.add_done_callback(lambda _future: self._schedule(self.step))
+            waited.add_done_callback(lambda _future: self._resume(self.step))
         else:
-            self._schedule(self.step)
+            self._resume(self.step)
+
+
+def run_to_end(coroutine: Coroutine[Any, Any, Any], stop: threading.Event) -> Any:
+    """Drive ``coroutine`` in this thread until it returns (an ``async def`` execute callback runs so in its
+    goal's thread): each awaited Future is waited for here."""
+    while True:
+        _awaited.future = None
+        try:
+            coroutine.send(None)
+        except StopIteration as done:
+            return done.value
+        waited, _awaited.future = _awaited.future, None
+        while isinstance(waited, Future) and not waited.wait(0.1):
+            if stop.is_set():
+                coroutine.close()
+                from .executors import ExternalShutdownException
+
+                raise ExternalShutdownException("the graph is shutting down")

@@ -116,11 +116,10 @@ def _state() -> _State:
 
 
 def _resolve(name: str) -> str:
-    if name.startswith("/"):
-        return name
-    if name.startswith("~"):
-        return f"/{_state().name}/{name[1:].lstrip('/')}"
-    return f"/{name}"
+    """rospy's resolution (``~x`` is private, as ``~/x``) under the namespace and remaps the project gives."""
+    state = _state()
+    private = "~/" + name[1:].lstrip("/") if name.startswith("~") else name
+    return state.hetros.resolve_name(private, node_name=state.name)
 
 
 # -- the node -------------------------------------------------------------------------------------
@@ -136,7 +135,8 @@ def init_node(name: str, argv: list[str] | None = None, anonymous: bool = False,
 
 
 def get_name() -> str:
-    return f"/{_state().name}"
+    state = _state()
+    return f"{state.hetros.namespace}/{state.name}"
 
 
 get_caller_id = get_name
@@ -269,7 +269,7 @@ def _message(data_class: type[Any], args: tuple[Any, ...], kwargs: dict[str, Any
     """rospy's publish and call conventions: a message, or the fields of one (positional or by name)."""
     if len(args) == 1 and not kwargs and isinstance(args[0], Message):
         return copy_message(args[0])
-    return data_class(*args, **kwargs)
+    return copy_message(data_class(*args, **kwargs))  # into hetros's own class (served types are flavoured)
 
 
 class Publisher:

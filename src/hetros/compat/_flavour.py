@@ -1,0 +1,164 @@
+"""rclpy's message flavour on hetros's message classes: numeric sequences as ``array.array``.
+
+rclpy gives an unbounded or bounded numeric sequence (``int32[]``, ``float64[<=8]``) as an
+``array.array`` (``msg.sequence.append(1)``; printed ``array('i', [0, 1])``); fixed arrays are
+numpy arrays in both. hetros keeps numpy arrays, which travel without copies. The rclpy code
+hetros runs sees rclpy's flavour where it can tell the difference:
+
+* messages it constructs are of a thin subclass (same slots, same ``__msgtype__``) that turns a
+  list assigned to a numeric sequence into an ``array.array``, and starts it as an empty one;
+* messages it receives keep their numpy arrays, shown through :class:`SequenceView`, a
+  zero-copy view that prints as ``array.array`` does.
+
+Outgoing messages are copied into hetros's own class first (the shim's publishers, replies and
+goals do so), so the transports only ever see hetros's classes.
+"""
+
+from __future__ import annotations
+
+import array
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from rosbags.interfaces import Nodetype
+
+from ..msg import ActionType, ServiceType, registry
+
+# array.array's type codes, as rclpy picks them per ROS type
+_TYPECODES = {"int8": "b", "uint8": "B", "byte": "B", "char": "B", "int16": "h", "uint16": "H", "int32": "i",
+              "uint32": "I", "int64": "q", "uint64": "Q", "float32": "f", "float64": "d"}
+
+_DTYPE_CODES = {"i1": "b", "u1": "B", "i2": "h", "u2": "H", "i4": "i", "u4": "I", "i8": "q", "u8": "Q", "f4": "f",
+                "f8": "d"}
+
+
+class SequenceView(np.ndarray):
+    """A received numeric sequence: the message's numpy array, printed as rclpy's ``array.array``."""
+
+    @property
+    def typecode(self) -> str:
+        return _DTYPE_CODES.get(self.dtype.str[1:], self.dtype.char)
+
+    def copy(self, order: Any = "C") -> np.ndarray[Any, Any]:  # type: ignore[override]
+        """A plain numpy copy: what a copied message holds (hetros's compiled codec takes exactly numpy's)."""
+        return np.array(self, order=order)
+
+    def __repr__(self) -> str:
+        values = self.tolist()
+        return f"array({self.typecode!r}, {values!r})" if values else f"array({self.typecode!r})"
+
+    __str__ = __repr__
+
+
+def _sequences(typename: str) -> dict[str, str]:
+    """The numeric sequence fields of ``typename`` and their type codes."""
+    found = {}
+    for name, desc in registry().store.fielddefs[typename][1]:
+        if desc[0] == Nodetype.SEQUENCE and desc[1][0][0] == Nodetype.BASE and desc[1][0][1][0] in _TYPECODES:
+            found[name] = _TYPECODES[desc[1][0][1][0]]
+    return found
+
+
+def _nested(typename: str) -> dict[str, tuple[str, bool]]:
+    """The message-typed fields of ``typename``: name -> (type, whether a list of them)."""
+    found = {}
+    for name, desc in registry().store.fielddefs[typename][1]:
+        if desc[0] == Nodetype.NAME:
+            found[name] = (str(desc[1]), False)
+        elif desc[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE) and desc[1][0][0] == Nodetype.NAME:
+            found[name] = (str(desc[1][0][1]), True)
+    return found
+
+
+_classes: dict[type[Any], type[Any]] = {}
+
+
+def flavoured(cls: type[Any]) -> type[Any]:
+    """``cls`` as rclpy code constructs it: the same class when it has no numeric sequence."""
+    if cls in _classes:
+        return _classes[cls]
+    sequences = _sequences(cls.__msgtype__)
+    if not sequences:
+        _classes[cls] = cls
+        return cls
+    base_init = cls.__init__
+
+    def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
+        base_init(self, *args, **kwargs)
+        for name, code in sequences.items():
+            value = getattr(self, name)
+            if isinstance(value, np.ndarray) and value.size == 0:
+                object.__setattr__(self, name, array.array(code))
+
+    def __setattr__(self: Any, name: str, value: Any) -> None:
+        code = sequences.get(name)
+        if code is not None and not isinstance(value, (array.array, np.ndarray)):
+            value = array.array(code, value)
+        object.__setattr__(self, name, value)
+
+    made = type(cls.__name__, (cls,), {"__slots__": (), "__init__": __init__, "__setattr__": __setattr__,
+                                       "__module__": cls.__module__, "__qualname__": cls.__qualname__})
+    _classes[cls] = made
+    return made
+
+
+def flavoured_service(service: ServiceType) -> ServiceType:
+    return dataclasses.replace(service, Request=flavoured(service.Request), Response=flavoured(service.Response))
+
+
+def flavoured_action(action: ActionType) -> ActionType:
+    return dataclasses.replace(action, Goal=flavoured(action.Goal), Result=flavoured(action.Result),
+                               Feedback=flavoured(action.Feedback),
+                               SendGoal=flavoured_service(action.SendGoal),
+                               GetResult=flavoured_service(action.GetResult),
+                               FeedbackMessage=flavoured(action.FeedbackMessage))
+
+
+def served(value: Any) -> Any:
+    """What a served interface module holds for ``value`` of a hetros one: types flavoured, the rest as is."""
+    if isinstance(value, ActionType):
+        return flavoured_action(value)
+    if isinstance(value, ServiceType):
+        return flavoured_service(value)
+    if isinstance(value, type) and getattr(value, "__msgtype__", None):
+        return flavoured(value)
+    return value
+
+
+Viewer = Callable[[Any], None]
+_viewers: dict[str, Viewer | None] = {}
+
+
+def viewer(typename: str) -> Viewer | None:
+    """What shows a received ``typename``'s numeric sequences as :class:`SequenceView`; None when it has none
+    (nor have the messages inside it), so most types cost nothing."""
+    if typename in _viewers:
+        return _viewers[typename]
+    _viewers[typename] = None  # a type that contains itself is refused by the registry; this ends the walk
+    sequences = list(_sequences(typename))
+    inner = [(name, nested_viewer, many) for name, (nested, many) in _nested(typename).items()
+             if (nested_viewer := viewer(nested)) is not None]
+    if not sequences and not inner:
+        return None
+
+    def show(message: Any) -> None:
+        for name in sequences:
+            value = getattr(message, name)
+            if type(value) is np.ndarray:
+                object.__setattr__(message, name, value.view(SequenceView))
+        for name, nested_viewer, many in inner:
+            value = getattr(message, name)
+            for item in (value if many else (value,)):
+                nested_viewer(item)
+    _viewers[typename] = show
+    return show
+
+
+def received(message: Any) -> Any:
+    """``message`` (as a transport delivered it) shown in rclpy's flavour."""
+    show = viewer(message.__msgtype__)
+    if show is not None:
+        show(message)
+    return message

@@ -7,8 +7,10 @@ hetros runs sees rclpy's flavour where it can tell the difference:
 
 * messages it constructs are of a thin subclass (same slots, same ``__msgtype__``) that turns a
   list assigned to a numeric sequence into an ``array.array``, and starts it as an empty one;
-* messages it receives keep their numpy arrays, shown through :class:`SequenceView`, a
-  zero-copy view that prints as ``array.array`` does.
+* replies, goals, feedback and results it receives keep their numpy arrays, shown through
+  :class:`SequenceView`, a zero-copy view that prints as ``array.array`` does. A topic's message
+  is not shown so: on that hot path the view would cost a quarter of a small message's one-way
+  latency; its arrays are hetros's read-only numpy arrays.
 
 Outgoing messages are copied into hetros's own class first (the shim's publishers, replies and
 goals do so), so the transports only ever see hetros's classes.
@@ -75,31 +77,44 @@ def _nested(typename: str) -> dict[str, tuple[str, bool]]:
 _classes: dict[type[Any], type[Any]] = {}
 
 
+def _shown(value: Any) -> Any:
+    return value.view(SequenceView) if type(value) is np.ndarray else value
+
+
+def _sequence_property(base: type[Any], name: str, code: str) -> property:
+    """A numeric sequence over ``base``'s slot: read through :class:`SequenceView`; written as rclpy converts
+    (a list becomes an ``array.array``; an array is kept, plain, so that it travels without a copy)."""
+    slot = next(k.__dict__[name] for k in base.__mro__ if name in k.__dict__)
+    read, write = slot.__get__, slot.__set__
+
+    def get(self: Any) -> Any:
+        return _shown(read(self, None))
+
+    def put(self: Any, value: Any) -> None:
+        kind = type(value)
+        if kind is SequenceView:
+            value = value.view(np.ndarray)
+        elif kind is np.ndarray:
+            if not value.size and value.flags.writeable:
+                value = array.array(code)  # a new message's empty sequence, ready to append to
+        elif kind is not array.array:
+            value = value.view(np.ndarray) if isinstance(value, np.ndarray) else array.array(code, value)
+        write(self, value)
+
+    return property(get, put)
+
+
 def flavoured(cls: type[Any]) -> type[Any]:
-    """``cls`` as rclpy code constructs it: the same class when it has no numeric sequence."""
+    """``cls`` as rclpy code constructs it: the same class when it has no numeric sequence. The subclass adds
+    no storage, so hetros's compiled codec copies and encodes it as ``cls`` itself."""
     if cls in _classes:
         return _classes[cls]
     sequences = _sequences(cls.__msgtype__)
-    if not sequences:
-        _classes[cls] = cls
-        return cls
-    base_init = cls.__init__
-
-    def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
-        base_init(self, *args, **kwargs)
-        for name, code in sequences.items():
-            value = getattr(self, name)
-            if isinstance(value, np.ndarray) and value.size == 0:
-                object.__setattr__(self, name, array.array(code))
-
-    def __setattr__(self: Any, name: str, value: Any) -> None:
-        code = sequences.get(name)
-        if code is not None and not isinstance(value, (array.array, np.ndarray)):
-            value = array.array(code, value)
-        object.__setattr__(self, name, value)
-
-    made = type(cls.__name__, (cls,), {"__slots__": (), "__init__": __init__, "__setattr__": __setattr__,
-                                       "__module__": cls.__module__, "__qualname__": cls.__qualname__})
+    made = cls
+    if sequences:
+        members = {name: _sequence_property(cls, name, code) for name, code in sequences.items()}
+        made = type(cls.__name__, (cls,), {"__slots__": (), "__module__": cls.__module__,
+                                           "__qualname__": cls.__qualname__, **members})
     _classes[cls] = made
     return made
 
@@ -143,11 +158,15 @@ def viewer(typename: str) -> Viewer | None:
     if not sequences and not inner:
         return None
 
+    cls = registry().get(typename)
+    slots = [(next(k.__dict__[n] for k in cls.__mro__ if n in k.__dict__)) for n in sequences]
+    fields = [(slot.__get__, slot.__set__) for slot in slots]
+
     def show(message: Any) -> None:
-        for name in sequences:
-            value = getattr(message, name)
+        for read, write in fields:
+            value = read(message, None)
             if type(value) is np.ndarray:
-                object.__setattr__(message, name, value.view(SequenceView))
+                write(message, value.view(SequenceView))  # a frozen message too: it is its field's view
         for name, nested_viewer, many in inner:
             value = getattr(message, name)
             for item in (value if many else (value,)):

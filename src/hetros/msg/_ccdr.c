@@ -161,11 +161,16 @@ fail:
 
 #define SLOT(obj, offset) (*(PyObject **)((char *)(obj) + (offset)))
 
-/* the message's own type or its frozen twin: only then are the slot offsets the program's */
+/* the message's own type or its frozen twin, or a subclass of either that adds no storage (the
+   rclpy flavour's classes: properties over the same slots): only then are the slot offsets the
+   program's */
 static inline int is_type(PyObject *obj, const Type *type)
 {
     PyTypeObject *actual = Py_TYPE(obj);
-    return actual == type->cls || actual == type->frozen;
+    if (actual == type->cls || actual == type->frozen)
+        return 1;
+    return actual->tp_basicsize == type->cls->tp_basicsize && actual->tp_dictoffset == 0 &&
+           (PyType_IsSubtype(actual, type->cls) || PyType_IsSubtype(actual, type->frozen));
 }
 
 static inline Py_ssize_t align(Py_ssize_t pos, int size, int ros1)

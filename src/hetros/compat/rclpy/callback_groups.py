@@ -54,3 +54,6 @@ class MutuallyExclusiveCallbackGroup(CallbackGroup):
 
 class ReentrantCallbackGroup(CallbackGroup):
     pass
+
+
+BUILT_IN_GROUPS = (CallbackGroup, MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup)

@@ -21,8 +21,8 @@ from ...runtime import Clock
 from ...runtime import Node as HetrosNode
 from ...runtime._clock import Ticker
 from ...runtime._ros_main import bound_node
-from .._flavour import received, viewer
-from .callback_groups import CallbackGroup, MutuallyExclusiveCallbackGroup
+from .._flavour import received
+from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
 from .parameter import Parameter
 from .qos import QoSProfile, to_hetros
@@ -38,17 +38,26 @@ def run_callback(hetros: HetrosNode, callback: Callable[..., Any]) -> Callable[.
 
     def run(*args: Any) -> Any:
         result = callback(*args)
-        if inspect.iscoroutine(result):
+        if result is not None and inspect.iscoroutine(result):
             task = Task(result, schedule)
             task.step()
             return task
         return result
-    return run
+    # a plain function or method cannot start a coroutine of its own: called as it is, one frame fewer
+    return callback if inspect.isroutine(callback) and not inspect.iscoroutinefunction(callback) else run
 
 
-# what a custom executor's wait_for_ready_callbacks() receives instead of the callback running (per thread)
-_capture = threading.local()
 Ready = tuple[Callable[[], Any], CallbackGroup, "Node"]
+
+
+class _Capture(threading.local):
+    """What a custom executor's wait_for_ready_callbacks() receives instead of the callback running (per
+    thread); a class default, since asking a thread-local for a missing attribute costs a raised error."""
+
+    ready: list[Ready] | None = None
+
+
+_capture = _Capture()
 
 
 def capturing(into: list[Ready] | None) -> None:
@@ -57,11 +66,21 @@ def capturing(into: list[Ready] | None) -> None:
 
 
 def guarded(node: Node, hetros: HetrosNode, callback: Callable[..., Any], group: CallbackGroup | None,
-            entity: list[Any], again: bool) -> Callable[..., Any]:
+            entity: list[Any], again: bool, show: Callable[[Any], None] | None = None) -> Callable[..., Any]:
     """``callback`` run as rclpy's executors run it: its group asked first and told after. A refused call is
-    offered again in 10 ms when ``again`` (a message), else dropped (a timer's tick)."""
+    offered again in 10 ms when ``again`` (a message), else dropped (a timer's tick). rclpy's own groups
+    matter only where callbacks run in threads of their own (a custom executor's): elsewhere hetros's
+    executor runs one callback at a time, and they are not asked. ``show`` prepares a message for the
+    callback (rclpy's flavour, :mod:`.._flavour`). This runs before every callback: one flat call."""
     run = run_callback(hetros, callback)
     chosen = group if group is not None else node.default_callback_group
+    custom = type(chosen) not in BUILT_IN_GROUPS
+    if show is not None:
+        inner = run
+
+        def run(message: Any) -> Any:
+            show(message)
+            return inner(message)
 
     def attempt(*args: Any) -> Any:
         subject = entity[0] if entity else None
@@ -75,11 +94,11 @@ def guarded(node: Node, hetros: HetrosNode, callback: Callable[..., Any], group:
             chosen.ending_execution(subject)
 
     def call(*args: Any) -> Any:
-        ready: list[Ready] | None = getattr(_capture, "ready", None)
+        ready = _capture.ready
         if ready is not None:
             ready.append((lambda: attempt(*args), chosen, node))
             return None
-        return attempt(*args)
+        return attempt(*args) if custom else run(*args)
     return call
 
 
@@ -286,14 +305,11 @@ class Node:
                             **_ignored: Any) -> Subscription:
         name = self.resolve_topic_name(topic)
         entity: list[Any] = []
+        # a topic's message reaches the callback as hetros delivered it: numeric sequences stay numpy arrays
+        # (zero-copy, read-only; they index, iterate and tolist() as array.array does). Showing them in
+        # rclpy's flavour costs a view per field per message, 1.25x the one-way latency of small messages
+        # (docs/PERFORMANCE.md); services and actions, off the hot path, show it.
         run = guarded(self, self._hetros, callback, callback_group, entity, again=True)
-        show = viewer(msg_type.__msgtype__)
-        if show is not None:
-            shown = run
-
-            def run(message: Any) -> Any:
-                show(message)
-                return shown(message)
         inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile))
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)

@@ -1,6 +1,7 @@
-"""rclpy nodes, unchanged, under `hetros launch`: the ros2/examples minimal publishers, subscribers,
-services and clients (tests/data/ros2_examples, copied as they are), across two processes, printing
-what they print under ROS 2."""
+"""rclpy nodes, unchanged, under `hetros launch` with the project `hetros init` writes for them: the
+ros2/examples minimal publishers, subscribers, services, clients, action servers and clients and the
+executors package (tests/data/ros2_examples, copied as they are), each node in a process of its own,
+printing what they print under ROS 2."""
 
 from __future__ import annotations
 
@@ -9,26 +10,43 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
 
 RCLPY = Path(__file__).resolve().parents[1] / "data" / "ros2_examples" / "rclpy"
+PACKAGES = [RCLPY / "topics" / "minimal_publisher", RCLPY / "topics" / "minimal_subscriber",
+            RCLPY / "services" / "minimal_service", RCLPY / "services" / "minimal_client",
+            RCLPY / "actions" / "minimal_action_server", RCLPY / "actions" / "minimal_action_client",
+            RCLPY / "executors"]
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(str(p) for p in PACKAGES))
 
 
-def launch(tmp_path: Path, nodes: dict[str, dict[str, object]], packages: list[Path], duration: float,
-           topics: dict[str, object] | None = None) -> subprocess.CompletedProcess[str]:
-    """Check, then launch, a two-process project of the given nodes (code found on ``packages``)."""
+def init(tmp_path: Path, *sources: Path) -> dict[str, Any]:
+    """The project `hetros init` writes for ``sources`` (files or package folders)."""
     project = tmp_path / "project.yaml"
-    project.write_text(yaml.safe_dump({"name": "rclpy_examples",
-                                       "targets": {"a": {"kind": "process"}, "b": {"kind": "process"}},
-                                       "nodes": nodes, "topics": topics or {}}))
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(str(p) for p in packages))
-    checked = subprocess.run([sys.executable, "-m", "hetros", "check", str(project)], capture_output=True,
-                             text=True, env=env, timeout=120, check=False)
+    made = subprocess.run([sys.executable, "-m", "hetros", "init", *map(str, sources), "-o", str(project),
+                           "--name", "rclpy_examples"], capture_output=True, text=True, timeout=60, check=False)
+    assert made.returncode == 0, made.stderr
+    data: dict[str, Any] = yaml.safe_load(project.read_text())
+    return data
+
+
+def launch(tmp_path: Path, project: dict[str, Any], duration: float) -> subprocess.CompletedProcess[str]:
+    """Check, then launch, ``project`` (the packages' code on PYTHONPATH, as colcon would put it)."""
+    path = tmp_path / "project.yaml"
+    path.write_text(yaml.safe_dump(project))
+    checked = subprocess.run([sys.executable, "-m", "hetros", "check", str(path)], capture_output=True,
+                             text=True, env=ENV, timeout=120, check=False)
     assert checked.returncode == 0, checked.stdout + checked.stderr
-    return subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration", str(duration)],
-                          capture_output=True, text=True, env=env, timeout=120, check=False, cwd=tmp_path)
+    return subprocess.run([sys.executable, "-m", "hetros", "launch", str(path), "--duration", str(duration)],
+                          capture_output=True, text=True, env=ENV, timeout=120, check=False, cwd=tmp_path)
+
+
+def module(package: str, name: str) -> Path:
+    folder = next(p for p in PACKAGES if (p / package).is_dir())
+    return folder / package / f"{name}.py"
 
 
 @pytest.mark.parametrize(("publisher", "subscriber"), [
@@ -37,14 +55,12 @@ def launch(tmp_path: Path, nodes: dict[str, dict[str, object]], packages: list[P
     ("publisher_local_function", "subscriber_lambda"),
 ])
 def test_the_minimal_publishers_and_subscribers(tmp_path: Path, publisher: str, subscriber: str) -> None:
-    topics = RCLPY / "topics"
-    done = launch(tmp_path, {
-        "minimal_publisher": {"run": f"examples_rclpy_minimal_publisher.{publisher}:main", "target": "a",
-                              "publish": {"/topic": "std_msgs/msg/String"}},
-        "minimal_subscriber": {"run": f"examples_rclpy_minimal_subscriber.{subscriber}:main", "target": "b",
-                               "subscribe": {"/topic": "std_msgs/msg/String"}},
-    }, [topics / "minimal_publisher", topics / "minimal_subscriber"], 2.2,
-        {"/topic": {"history": "keep_last", "depth": 10}})  # rclpy's create_publisher(String, 'topic', 10)
+    project = init(tmp_path, module("examples_rclpy_minimal_publisher", publisher),
+                   module("examples_rclpy_minimal_subscriber", subscriber))
+    # create_publisher(String, 'topic', 10)
+    assert project["topics"] == {"/topic": {"history": "keep_last", "depth": 10}}
+    assert set(project["nodes"]) == {"minimal_publisher", "minimal_subscriber"}
+    done = launch(tmp_path, project, 2.2)
     assert done.returncode == 0, done.stderr
     published = re.findall(r"\[minimal_publisher\]: (.*)", done.stderr)
     heard = re.findall(r"\[minimal_subscriber\]: (.*)", done.stderr)
@@ -60,13 +76,11 @@ def test_the_minimal_publishers_and_subscribers(tmp_path: Path, publisher: str, 
     ("service_member_function", "client_async_callback", "minimal_client"),
 ])
 def test_the_minimal_services_and_clients(tmp_path: Path, server: str, client: str, client_name: str) -> None:
-    services = RCLPY / "services"
-    done = launch(tmp_path, {
-        "minimal_service": {"run": f"examples_rclpy_minimal_service.{server}:main", "target": "a",
-                            "services": {"/add_two_ints": "example_interfaces/srv/AddTwoInts"}},
-        "minimal_client": {"run": f"examples_rclpy_minimal_client.{client}:main", "target": "b", "required": True,
-                           "clients": {"/add_two_ints": "example_interfaces/srv/AddTwoInts"}},
-    }, [services / "minimal_service", services / "minimal_client"], 30)
+    project = init(tmp_path, module("examples_rclpy_minimal_service", server),
+                   module("examples_rclpy_minimal_client", client))
+    assert project["nodes"]["minimal_service"]["services"] == {"add_two_ints": "example_interfaces/srv/AddTwoInts"}
+    project["nodes"][client_name]["required"] = True  # the launch ends when the client is done
+    done = launch(tmp_path, project, 30)
     assert done.returncode == 0, done.stderr
     assert "[minimal_service]: Incoming request\na: 41 b: 1\n" in done.stderr
     assert f"[{client_name}]: Result of add_two_ints: for 41 + 1 = 42\n" in done.stderr
@@ -80,16 +94,18 @@ FIBONACCI = "array('i', [0, 1, 1, 2, 3, 5, 8, 13, 21, 34, 55])"
 def test_the_minimal_action_servers_and_clients(tmp_path: Path) -> None:
     """Four server/client pairs at once, each pair in a namespace of its own (their code names the same
     action, 'fibonacci'): results, feedback, deferred execution and cancel, printed as ROS 2 prints them."""
-    actions = RCLPY / "actions"
     pairs = {"plain": ("server", "client"), "deferred": ("server_defer", "client"),
              "functions": ("server_not_composable", "client_not_composable"), "cancel": ("server", "client_cancel")}
-    nodes: dict[str, dict[str, object]] = {}
-    for namespace, (server, client) in pairs.items():
-        nodes[f"{namespace}_server"] = {"run": f"examples_rclpy_minimal_action_server.{server}:main", "target": "a",
-                                        "namespace": namespace, "actions": {"fibonacci": ACTION}}
-        nodes[f"{namespace}_client"] = {"run": f"examples_rclpy_minimal_action_client.{client}:main", "target": "b",
-                                        "namespace": namespace, "action_clients": {"fibonacci": ACTION}}
-    done = launch(tmp_path, nodes, [actions / "minimal_action_server", actions / "minimal_action_client"], 13.5)
+    project = init(tmp_path, *(module("examples_rclpy_minimal_action_server", server) for server, _ in pairs.values()),
+                   *(module("examples_rclpy_minimal_action_client", client) for _, client in pairs.values()))
+    servers = sorted(k for k in project["nodes"] if k.startswith("minimal_action_server"))
+    clients = sorted(k for k in project["nodes"] if k.startswith("minimal_action_client"))
+    assert len(servers) == len(clients) == 4
+    for node in project["nodes"].values():
+        assert node.get("actions", node.get("action_clients")) == {"fibonacci": ACTION}
+    for namespace, server, client in zip(pairs, servers, clients, strict=True):
+        project["nodes"][server]["namespace"] = project["nodes"][client]["namespace"] = namespace
+    done = launch(tmp_path, project, 13.5)
     assert done.returncode == 0, done.stderr
     out = done.stderr
     for namespace in ("plain", "deferred", "functions"):
@@ -111,27 +127,24 @@ EXECUTORS = RCLPY / "executors"
 def test_the_executors_examples(tmp_path: Path) -> None:
     """ros2/examples' executors package: talker and listener in two processes, and in one process each the
     composed nodes, a callback group, a custom (token-bucket) callback group and a custom executor."""
-    chatter = {"chatter": "std_msgs/msg/String"}
-    mains = "examples_rclpy_executors.{}:main".format
-    (tmp_path / "estop.py").write_text(
+    project = init(tmp_path, EXECUTORS)
+    assert set(project["nodes"]) == {"talker", "listener", "composed", "callback_group", "intermittent_talker",
+                                     "custom_executor"}
+    assert project["nodes"]["custom_executor"]["subscribe"] == {"chatter": "std_msgs/msg/String",
+                                                                "estop": "std_msgs/msg/String"}
+    namespaces = {"talker": "apart", "listener": "apart", "composed": "composed", "callback_group": "grouped",
+                  "intermittent_talker": "throttled", "custom_executor": "prioritised"}
+    for key, namespace in namespaces.items():
+        project["nodes"][key]["namespace"] = namespace
+    project["topics"] = {"/throttled/chatter": {"history": "keep_last", "depth": 10}}
+    (tmp_path / "estop.py").write_text(  # what `ros2 topic pub /estop` would be, as a node
         "from std_msgs.msg import String\n\n"
         "def estop(node):\n"
         "    publisher = node.create_publisher(String, 'estop')\n"
         "    node.create_timer(1.0, lambda: publisher.publish(String(data='STOP')))\n")
-    done = launch(tmp_path, {
-        "talker": {"run": mains("talker"), "target": "a", "namespace": "apart", "publish": chatter},
-        "listener": {"run": mains("listener"), "target": "b", "namespace": "apart", "subscribe": chatter},
-        "composed": {"run": mains("composed"), "target": "a", "namespace": "composed", "publish": chatter,
-                     "subscribe": chatter},
-        "callback_group": {"run": mains("callback_group"), "target": "b", "namespace": "grouped",
-                           "publish": chatter, "subscribe": chatter},
-        "custom_callback_group": {"run": mains("custom_callback_group"), "target": "a", "namespace": "throttled",
-                                  "publish": chatter},
-        "custom_executor": {"run": mains("custom_executor"), "target": "b", "namespace": "prioritised",
-                            "publish": chatter, "subscribe": {**chatter, "estop": "std_msgs/msg/String"}},
-        "estop": {"run": "estop:estop", "target": "a", "namespace": "prioritised",
-                  "publish": {"estop": "std_msgs/msg/String"}},
-    }, [EXECUTORS, tmp_path], 3.6, {"/throttled/chatter": {"history": "keep_last", "depth": 10}})
+    project["nodes"]["estop"] = {"run": "estop:estop", "target": "talker", "namespace": "prioritised",
+                                 "publish": {"estop": "std_msgs/msg/String"}}
+    done = launch(tmp_path, project, 3.6)
     assert done.returncode == 0, done.stderr
     out = done.stderr
     for namespace in ("apart", "composed", "prioritised"):

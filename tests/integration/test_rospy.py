@@ -1,6 +1,7 @@
-"""rospy nodes, unchanged, under `hetros launch`: the ros_tutorials talker/listener and add_two_ints
-server/client (tests/data/ros_tutorials, copied as they are) across two processes, and a stock
-Debian rospy listener hearing the unchanged talker through the ROS 1 bridge."""
+"""rospy nodes, unchanged, under `hetros launch` with the project `hetros init` writes for them: the
+ros_tutorials talker/listener and add_two_ints server/client (tests/data/ros_tutorials, copied as they
+are), each in a process of its own, and a stock Debian rospy listener hearing the unchanged talker
+through the ROS 1 bridge."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -19,11 +21,21 @@ TUTORIALS = Path(__file__).resolve().parents[1] / "data" / "ros_tutorials"
 RUN = f"{TUTORIALS}/rospy_tutorials"
 
 
-def launch(tmp_path: Path, project: dict[str, object], duration: float,
+def init(tmp_path: Path, folder: str) -> dict[str, Any]:
+    """The project `hetros init` writes for a folder of rospy scripts."""
+    made = subprocess.run([sys.executable, "-m", "hetros", "init", f"{RUN}/{folder}", "-o",
+                           str(tmp_path / "project.yaml"), "--name", "rospy_tutorials"],
+                          capture_output=True, text=True, timeout=60, check=False)
+    assert made.returncode == 0, made.stderr
+    project: dict[str, Any] = yaml.safe_load((tmp_path / "project.yaml").read_text())
+    return project
+
+
+def launch(tmp_path: Path, project: dict[str, Any], duration: float,
            env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     path = tmp_path / "project.yaml"
-    path.write_text(yaml.safe_dump({"targets": {"a": {"kind": "process"}, "b": {"kind": "process"}}, **project}))
-    environment = dict(env or os.environ, PYTHONPATH=f"{RUN}/001_talker_listener")
+    path.write_text(yaml.safe_dump(project))
+    environment = dict(env or os.environ)
     checked = subprocess.run([sys.executable, "-m", "hetros", "check", str(path)], capture_output=True, text=True,
                              env=environment, timeout=120, check=False)
     assert checked.returncode == 0, checked.stdout + checked.stderr
@@ -32,10 +44,11 @@ def launch(tmp_path: Path, project: dict[str, object], duration: float,
 
 
 def test_the_talker_and_listener(tmp_path: Path) -> None:
-    done = launch(tmp_path, {"name": "rospy_talker_listener", "nodes": {
-        "talker": {"run": "talker:talker", "target": "a", "publish": {"/chatter": "std_msgs/msg/String"}},
-        "listener": {"run": "listener:listener", "target": "b", "subscribe": {"/chatter": "std_msgs/msg/String"}},
-    }}, 2.5)
+    project = init(tmp_path, "001_talker_listener")
+    assert project["nodes"]["talker"]["publish"] == {"chatter": "std_msgs/msg/String"}
+    assert project["nodes"]["listener"]["subscribe"] == {"chatter": "std_msgs/msg/String"}
+    assert project["targets"] == {"talker": {"kind": "process"}, "listener": {"kind": "process"}}
+    done = launch(tmp_path, project, 2.5)
     assert done.returncode == 0, done.stderr
     said = re.findall(r"\[talker_\d+_\d+\]: (hello world [\d.]+)", done.stderr)
     heard = re.findall(r"\[listener_\d+_\d+\]: /listener_\d+_\d+I heard (hello world [\d.]+)", done.stderr)
@@ -44,13 +57,11 @@ def test_the_talker_and_listener(tmp_path: Path) -> None:
 
 
 def test_the_add_two_ints_server_and_client(tmp_path: Path) -> None:
-    services = {"/add_two_ints": "rospy_tutorials/srv/AddTwoInts"}
-    done = launch(tmp_path, {"name": "rospy_add_two_ints", "messages": [str(TUTORIALS / "msg")], "nodes": {
-        "add_two_ints_server": {"run": f"{RUN}/005_add_two_ints/add_two_ints_server", "target": "a",
-                                "services": services},
-        "add_two_ints_client": {"run": f"{RUN}/005_add_two_ints/add_two_ints_client", "args": ["3", "4"],
-                                "target": "b", "required": True, "clients": services},
-    }}, 30)
+    project = init(tmp_path, "005_add_two_ints")
+    assert project["nodes"]["add_two_ints_server"]["services"] == {"add_two_ints": "rospy_tutorials/srv/AddTwoInts"}
+    project["messages"] = [str(TUTORIALS / "msg")]  # the tutorials' .srv, kept apart in this copy
+    project["nodes"]["add_two_ints_client"].update(args=["3", "4"], required=True)  # its command line
+    done = launch(tmp_path, project, 30)
     assert done.returncode == 0, done.stderr
     assert "Requesting 3+4\n" in done.stdout and "3 + 4 = 7\n" in done.stdout, done.stdout + done.stderr
     assert done.stdout.count("Returning [3 + 4 = 7]\n") == 2  # the simplified and the formal call
@@ -68,9 +79,10 @@ def test_a_stock_rospy_listener_hears_the_unchanged_talker(tmp_path: Path) -> No
         time.sleep(1.0)
         listener = subprocess.Popen([ROS_PYTHON, f"{RUN}/001_talker_listener/listener.py"], env=env, text=True,
                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-        done = launch(tmp_path, {"name": "rospy_talker_ros1", "nodes": {
-            "talker": {"run": "talker:talker", "target": "a", "publish": {"/chatter": "std_msgs/msg/String"}},
-        }, "external": {"ros1": {"export": ["/chatter"]}}}, 6, env)
+        project = init(tmp_path, "001_talker_listener")
+        del project["nodes"]["listener"], project["targets"]["listener"]
+        project["external"] = {"ros1": {"export": ["/chatter"]}}
+        done = launch(tmp_path, project, 6, env)
         assert done.returncode == 0, done.stderr
     finally:
         if listener is not None:

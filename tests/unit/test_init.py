@@ -53,3 +53,72 @@ def test_what_init_cannot_follow_is_named_with_file_and_line(tmp_path: Path) -> 
     assert template["nodes"]["left"]["publish"] == {"/left": "std_msgs/msg/String"}
     assert unresolved == ["nodes.py:5: create_subscription(..., node.get_parameter('topic')) names its subscribe "
                           "endpoint at run time; add it to nodes.chooser.subscribe by hand"]
+
+
+ROS2_EXAMPLES = Path(__file__).resolve().parents[1] / "data" / "ros2_examples" / "rclpy"
+TUTORIALS = Path(__file__).resolve().parents[1] / "data" / "ros_tutorials" / "rospy_tutorials"
+
+
+def test_init_reads_an_rclpy_package_from_its_entry_points() -> None:
+    from hetros.project import ros_template
+
+    project, notes = ros_template([ROS2_EXAMPLES / "topics" / "minimal_publisher"], "p", Path.cwd())
+    assert notes == []
+    # setup.py's console_scripts, one written as two adjacent strings; all three name their node the same
+    assert set(project["nodes"]) == {"minimal_publisher", "minimal_publisher_2", "minimal_publisher_3"}
+    runs = {n["run"] for n in project["nodes"].values()}
+    assert runs == {f"examples_rclpy_minimal_publisher.{m}:main"
+                    for m in ("publisher_old_school", "publisher_local_function", "publisher_member_function")}
+    for key, node in project["nodes"].items():
+        assert node["publish"] == {"topic": "std_msgs/msg/String"}
+        assert node["target"] == key and project["targets"][key] == {"kind": "process"}
+        assert node.get("name", key) == "minimal_publisher"
+    assert project["topics"] == {"/topic": {"history": "keep_last", "depth": 10}}
+
+
+def test_init_follows_a_main_into_the_package_and_names_a_composition_after_its_entry_point() -> None:
+    from hetros.project import ros_template
+
+    project, _ = ros_template([ROS2_EXAMPLES / "executors" / "examples_rclpy_executors" / "custom_executor.py",
+                               ROS2_EXAMPLES / "actions" / "minimal_action_server"], "p", Path.cwd())
+    composed = project["nodes"]["custom_executor"]  # Listener, Talker (imported classes) and Estopper
+    assert "name" not in composed
+    assert composed["publish"] == {"chatter": "std_msgs/msg/String"}
+    assert composed["subscribe"] == {"chatter": "std_msgs/msg/String", "estop": "std_msgs/msg/String"}
+    servers = [n for n in project["nodes"].values() if "actions" in n]
+    assert len(servers) == 5 and all(n["actions"] == {"fibonacci": "example_interfaces/action/Fibonacci"}
+                                     for n in servers)
+
+
+def test_init_reads_rospy_scripts_and_their_star_imported_types(tmp_path: Path) -> None:
+    from hetros.project import ros_template
+
+    project, _ = ros_template([TUTORIALS], "p", tmp_path)
+    nodes = project["nodes"]
+    assert nodes["talker"]["publish"] == {"chatter": "std_msgs/msg/String"}
+    assert nodes["listener"]["subscribe"] == {"chatter": "std_msgs/msg/String"}
+    assert nodes["add_two_ints_server"]["services"] == {"add_two_ints": "rospy_tutorials/srv/AddTwoInts"}
+    assert nodes["add_two_ints_client"]["clients"] == {"add_two_ints": "rospy_tutorials/srv/AddTwoInts"}
+    assert (tmp_path / nodes["talker"]["run"]).resolve() == (TUTORIALS / "001_talker_listener" / "talker.py")
+
+
+def test_init_leaves_a_placeholder_that_check_refuses_naming_file_and_line(tmp_path: Path) -> None:
+    from hetros.project import check, load_project, ros_template
+
+    (tmp_path / "relay.py").write_text(
+        "import rclpy\nfrom rclpy.node import Node\nfrom std_msgs.msg import String\n\n\n"
+        "class Relay(Node):\n"
+        "    def __init__(self):\n"
+        "        super().__init__('relay')\n"
+        "        topic = self.declare_parameter('topic', 'in').value\n"
+        "        self.create_subscription(String, topic, print, rclpy.qos.qos_profile_sensor_data)\n"
+        "        self.create_publisher(String, 'out', rclpy.qos.qos_profile_sensor_data)\n\n\n"
+        "def main():\n    rclpy.init()\n    rclpy.spin(Relay())\n", encoding="utf-8")
+    project, notes = ros_template([tmp_path / "relay.py"], "p", tmp_path)
+    assert notes == ["relay.py:10: self.create_subscription(..., topic) names its subscribe endpoint at run time; "
+                     "replace the placeholder under nodes.relay.subscribe with the name (hetros check refuses it "
+                     "until then)"]
+    assert project["topics"] == {"/out": {"reliability": "best_effort", "history": "keep_last", "depth": 5}}
+    (tmp_path / "p.yaml").write_text(yaml.safe_dump(project))
+    report = check(load_project(tmp_path / "p.yaml"))
+    assert len(report.errors) == 1 and "placeholder 'topic at relay.py:10' left by `hetros init`" in report.errors[0]

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import shlex
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import yaml
 
@@ -15,6 +17,9 @@ from .._errors import CheckError, Error, HardwareError, ProjectError
 from ..msg import _compiled as compiled_codecs
 from ..msg import registry
 from ..plan import Plan
+
+if TYPE_CHECKING:
+    from ..project import LoadedProject
 
 EXIT_ERROR = 1
 
@@ -39,7 +44,29 @@ def cmd_check(args: argparse.Namespace) -> int:
         print(CheckError(report.errors), file=sys.stderr)
         return EXIT_ERROR
     print(f"{args.project}: OK ({len(project.model.nodes)} nodes)")
+    if args.resolved:
+        print(resolved_graph(project))
     return 0
+
+
+_SECTIONS = ("publish", "subscribe", "services", "clients", "actions", "action_clients")
+
+
+def resolved_graph(project: LoadedProject) -> str:
+    """Each node as the project resolves it: its target, ROS name, namespace, remaps and final endpoint names."""
+    lines = []
+    for key, node in project.model.nodes.items():
+        ros = f"{node.namespace}/{node.name or key}"
+        lines.append(f"{key}  (ROS name {ros}, target {node.target})")
+        for section in _SECTIONS:
+            for endpoint, entry in getattr(node, section).items():
+                typename = entry if isinstance(entry, str) else entry.type
+                lines.append(f"  {section:<15} {endpoint}  {typename}")
+        for source, target in node.remap.items():
+            lines.append(f"  {'remap':<15} {source} -> {target}")
+        for name, value in node.parameters.items():
+            lines.append(f"  {'parameter':<15} {name} = {value!r}")
+    return "\n".join(lines)
 
 
 def cmd_graph(args: argparse.Namespace) -> int:
@@ -189,13 +216,22 @@ def cmd_deploy(args: argparse.Namespace) -> int:
 
 
 def cmd_init(args: argparse.Namespace) -> int:
-    from ..project import template_from_sources
+    from ..project import ros_template, template_from_sources, writes_ros
 
     files = [Path(f) for f in args.files]
+    missing = [str(f) for f in files if not f.exists()]
+    if missing:
+        print(f"error: no such file or folder: {', '.join(missing)}", file=sys.stderr)
+        return EXIT_ERROR
     root = Path(args.root) if args.root else (files[0].parent if files else Path.cwd())
-    data, unresolved = template_from_sources(files, root, args.name or root.resolve().name)
+    name = args.name or re.sub(r"[^A-Za-z0-9_-]", "_", root.resolve().name).lstrip("_-0123456789") or "project"
+    if any(f.is_dir() or writes_ros(f) for f in files):
+        data, unresolved = ros_template(files, name, Path(args.output).parent if args.output else Path.cwd())
+    else:
+        data, unresolved = template_from_sources(files, root, name)
     if not data["nodes"]:
-        print("no create_* calls found in the given files", file=sys.stderr)
+        print("no nodes found: no create_* calls, ROS entry points (setup.py, setup.cfg) or rospy.init_node in "
+              "the given files", file=sys.stderr)
         return EXIT_ERROR
     _write_yaml(data, args.output)
     print(f"found {len(data['nodes'])} node(s): {', '.join(data['nodes'])}", file=sys.stderr)
@@ -205,8 +241,18 @@ def cmd_init(args: argparse.Namespace) -> int:
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    from ..project import import_reconros, import_roslite
+    from ..project import import_launch, import_reconros, import_roslite
 
+    if args.format in ("roslaunch", "ros2launch"):
+        given = dict(item.partition("=")[::2] for item in args.arg or [])
+        project, notes = import_launch(Path(args.file), args.format == "ros2launch",
+                                       [Path(p) for p in args.package_path or []],
+                                       Path(args.output).parent if args.output else Path.cwd(), given)
+        _write_yaml(project, args.output)
+        for note in notes:
+            print(f"warning: {note}", file=sys.stderr)
+        print(f"imported {len(project['nodes'])} node(s): {', '.join(project['nodes'])}", file=sys.stderr)
+        return 0
     if args.format == "roslite":
         _write_yaml(import_roslite(Path(args.file), module=args.module), args.output)
         return 0
@@ -363,6 +409,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("check", help="validate a project file")
     p.add_argument("project")
+    p.add_argument("--resolved", action="store_true", help="also print each node with its namespace, remaps, "
+                   "parameters and endpoints, as groups, instances and includes resolve them")
     p.set_defaults(func=cmd_check)
     p = sub.add_parser("graph", help="print the computation and architecture graphs")
     p.add_argument("project", nargs="?", help="the project file (with --live: picks its running launch)")
@@ -386,17 +434,24 @@ def build_parser() -> argparse.ArgumentParser:
                    help="how a remote host runs hetros in the project's folder (default: %(default)s)")
     p.add_argument("--print", action="store_true", help="print each host's command instead of running it")
     p.set_defaults(func=cmd_deploy)
-    p = sub.add_parser("init", help="write a template project from node sources")
-    p.add_argument("files", nargs="+")
+    p = sub.add_parser("init", help="write a project from node sources: hetros nodes, or rclpy and rospy "
+                                     "packages (their entry points) and files")
+    p.add_argument("files", nargs="+", help="Python files, or ROS package folders (setup.py/setup.cfg entry points, "
+                   "rospy scripts)")
     p.add_argument("-o", "--output")
     p.add_argument("--name")
     p.add_argument("--root", help="folder the modules are relative to (default: the first file's)")
     p.set_defaults(func=cmd_init)
-    p = sub.add_parser("import", help="convert a ROS-lite .map or a ReconROS build.cfg")
-    p.add_argument("format", choices=["roslite", "reconros"])
+    p = sub.add_parser("import", help="a project from a ROS 1 launch file, a ROS 2 launch file (XML, YAML), a "
+                                       "ROS-lite .map or a ReconROS build.cfg")
+    p.add_argument("format", choices=["roslaunch", "ros2launch", "roslite", "reconros"])
     p.add_argument("file")
     p.add_argument("-o", "--output")
-    p.add_argument("--module", default="nodes", help="module holding the node functions")
+    p.add_argument("--module", default="nodes", help="module holding the node functions (roslite, reconros)")
+    p.add_argument("--package-path", action="append", metavar="DIR",
+                   help="a folder the launch file's packages are found under (repeatable; the launch file's own "
+                        "folder is searched too)")
+    p.add_argument("--arg", action="append", metavar="NAME=VALUE", help="a launch argument (repeatable)")
     p.set_defaults(func=cmd_import)
     p = sub.add_parser("reference", help="print the project file's reference (every key, kind and default)")
     p.set_defaults(func=cmd_reference)

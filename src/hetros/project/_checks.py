@@ -32,6 +32,7 @@ from ._model import LoadedProject, NodeSpec
 from ._names import node_name_problem, topic_name_problem
 from ._probe import hardware_problems, module_findable, runnable_problems
 from ._report import CheckReport
+from ._ros_scan import PLACEHOLDER
 from ._scan import scan_file
 
 
@@ -42,6 +43,21 @@ def load_messages(project: LoadedProject, types: TypeRegistry, report: CheckRepo
             types.load_folder(path)
         except DefinitionError as exc:
             report.errors.append(f"{project.where('messages', index)}: {exc}")
+
+
+def _check_placeholders(project: LoadedProject, report: CheckReport) -> bool:
+    """What ``hetros init`` could not read from the code (a name built at run time) and left for the user."""
+    for nname, spec in project.model.nodes.items():
+        for section in ("publish", "subscribe", "services", "clients", "actions", "action_clients"):
+            for endpoint, entry in getattr(spec, section).items():
+                typename = entry if isinstance(entry, str) else entry.type
+                for text in (endpoint, typename):
+                    if text.lstrip("/").startswith(PLACEHOLDER):
+                        report.errors.append(
+                            f"{project.where('nodes', nname, section, endpoint)}: placeholder "
+                            f"{text.lstrip('/')[1:]!r} left by `hetros init`: the code names this at run time; "
+                            "replace it with the name or type it has")
+    return bool(report.errors)
 
 
 def _check_env(project: LoadedProject, report: CheckReport) -> None:
@@ -67,6 +83,8 @@ def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckRep
     model = project.model
     load_messages(project, types, report)
     where = project.where
+    if _check_placeholders(project, report):
+        return report  # the project is not finished: everything else would follow from the placeholders
 
     for tname, target in model.targets.items():
         for index, cpu in enumerate(target.cpus):

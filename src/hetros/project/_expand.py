@@ -210,7 +210,8 @@ def _one(out: Expanded, key: str, spec: dict[str, Any], scope: _Scope, origin: t
                            "set of names); rename one")
     namespace = join_namespace(scope.namespace, spec.get("namespace", ""))
     remap_given = {**dict(scope.remap), **spec.get("remap", {})}
-    ros_name = remap_given.pop("__node", None) or spec.get("name")
+    # an included node keeps its own name in ROS (its key takes the include's prefix: it must be unique here)
+    ros_name = remap_given.pop("__node", None) or spec.get("name") or (key if scope.prefix else None)
     namespace = join_namespace(namespace, remap_given.pop("__ns", "")) if "__ns" in remap_given else namespace
     own_name = ros_name or key
     remap = {resolve_name(k, namespace, own_name): resolve_name(v, namespace, own_name)

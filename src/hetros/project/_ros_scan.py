@@ -1,0 +1,330 @@
+"""``hetros init`` for code written for ROS: rclpy and rospy nodes found by reading their sources.
+
+A package's nodes are its entry points (``console_scripts`` in ``setup.py`` or ``setup.cfg``) and
+its scripts that call ``rospy.init_node``; a file given alone is a node when it has a ``main``. What
+a node creates is read from the syntax tree, nothing is imported: ``Node`` subclasses and
+``rclpy.create_node`` with their ``create_publisher(T, 'name', qos)`` calls and friends,
+``ActionServer(node, T, 'name')``, rospy's ``Publisher('name', T)`` and friends, followed into the
+package's own modules the entry point imports. A name only known at run time becomes a placeholder
+naming file:line, which ``hetros check`` refuses until it is replaced.
+"""
+
+from __future__ import annotations
+
+import ast
+import configparser
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+# placeholders start with this: not a ROS name, so the checks refuse them with their own message
+PLACEHOLDER = "?"
+
+_RCLPY_CALLS = {"create_publisher": ("publish", 0, 1, 2), "create_subscription": ("subscribe", 0, 1, 3),
+                "create_service": ("services", 0, 1, None), "create_client": ("clients", 0, 1, None)}
+# call -> (section, index of the type, index of the name): rclpy.action's classes take the node first
+_ACTION_CALLS = {"ActionServer": ("actions", 1, 2), "ActionClient": ("action_clients", 1, 2)}
+# rospy: (section, index of the name, index of the type)
+_ROSPY_CALLS = {"Publisher": ("publish", 0, 1), "Subscriber": ("subscribe", 0, 1), "Service": ("services", 0, 1),
+                "ServiceProxy": ("clients", 0, 1)}
+_PRESETS = {"qos_profile_sensor_data": {"reliability": "best_effort", "history": "keep_last", "depth": 5},
+            "qos_profile_system_default": {"history": "keep_last", "depth": 10},
+            "qos_profile_services_default": {"history": "keep_last", "depth": 10}}
+
+
+@dataclass
+class RosNode:
+    """One node as ``hetros init`` writes it."""
+
+    key: str
+    run: str
+    ros_names: list[str] = field(default_factory=list)
+    endpoints: dict[str, dict[str, str]] = field(default_factory=dict)
+    qos: dict[str, dict[str, Any]] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+
+def entry_points(package: Path) -> dict[str, str]:
+    """``console_scripts`` name -> ``module:function`` from setup.py and setup.cfg."""
+    found: dict[str, str] = {}
+    setup_py = package / "setup.py"
+    if setup_py.is_file():
+        tree = ast.parse(setup_py.read_text(encoding="utf-8"), filename=str(setup_py))
+        names: dict[str, str] = {}  # package_name = '...': what setup.py's strings are built from
+        for stmt in tree.body:
+            if isinstance(stmt, ast.Assign) and len(stmt.targets) == 1 and isinstance(stmt.targets[0], ast.Name):
+                if (text := _joined(stmt.value, names)) is not None:
+                    names[stmt.targets[0].id] = text
+        for table in ast.walk(tree):
+            if not isinstance(table, ast.Dict):
+                continue
+            for key, value in zip(table.keys, table.values, strict=True):
+                if key is not None and _string(key) == "console_scripts" and isinstance(value, ast.List):
+                    for item in value.elts:
+                        name, sep, target = (_joined(item, names) or "").partition("=")
+                        if sep:
+                            found[name.strip()] = target.strip()
+    setup_cfg = package / "setup.cfg"
+    if setup_cfg.is_file():
+        parser = configparser.ConfigParser()
+        parser.read(setup_cfg, encoding="utf-8")
+        if parser.has_option("options.entry_points", "console_scripts"):
+            for line in parser.get("options.entry_points", "console_scripts").splitlines():
+                name, sep, target = line.partition("=")
+                if sep:
+                    found[name.strip()] = target.strip()
+    return found
+
+
+def package_name(package: Path) -> str:
+    """The package's name from package.xml (else its folder's name)."""
+    xml = package / "package.xml"
+    if xml.is_file():
+        found = re.search(r"<name>\s*([\w-]+)\s*</name>", xml.read_text(encoding="utf-8"))
+        if found:
+            return found.group(1)
+    return package.name
+
+
+def _module_file(root: Path, module: str) -> Path | None:
+    for candidate in (root.joinpath(*module.split(".")).with_suffix(".py"),
+                      root.joinpath(*module.split("."), "__init__.py")):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+class _Reader:
+    """What one module creates, and where its names come from."""
+
+    def __init__(self, path: Path, root: Path) -> None:
+        self.path = path
+        self.root = root
+        self.tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        self.types: dict[str, str] = {}  # local name -> pkg/kind/Type
+        self.imported: dict[str, str] = {}  # local name -> module it comes from (the package's own)
+        self.starred: list[str] = []  # pkg/kind of `from pkg.srv import *`
+        for stmt in ast.walk(self.tree):
+            if isinstance(stmt, ast.ImportFrom) and stmt.module:
+                parts = stmt.module.split(".")
+                if len(parts) == 2 and parts[1] in ("msg", "srv", "action") and stmt.names[0].name == "*":
+                    self.starred.append(f"{parts[0]}/{parts[1]}")
+                    continue
+                for alias in stmt.names:
+                    local = alias.asname or alias.name
+                    if len(parts) == 2 and parts[1] in ("msg", "srv", "action"):
+                        self.types[local] = f"{parts[0]}/{parts[1]}/{alias.name}"
+                    elif _module_file(root, stmt.module) is not None:
+                        self.imported[local] = stmt.module
+        self.classes = {s.name: s for s in self.tree.body if isinstance(s, ast.ClassDef)}
+        self.functions = {s.name: s for s in self.tree.body if isinstance(s, ast.FunctionDef | ast.AsyncFunctionDef)}
+
+    def where(self, node: ast.AST) -> str:
+        return f"{self.path.name}:{getattr(node, 'lineno', 0)}"
+
+    def type_of(self, expr: ast.expr, kind: str) -> str:
+        if isinstance(expr, ast.Name) and expr.id in self.types:
+            return self.types[expr.id]
+        starred = [m for m in self.starred if m.endswith(f"/{kind}")]
+        if isinstance(expr, ast.Name) and len(starred) == 1:
+            return f"{starred[0]}/{expr.id}"  # from pkg.srv import *
+        if isinstance(expr, ast.Attribute) and isinstance(expr.value, ast.Name):
+            return f"{expr.value.id}/{expr.attr}"
+        return f"{PLACEHOLDER}type of {ast.unparse(expr)} at {self.where(expr)}"
+
+    def collect(self, scope: ast.AST, node: RosNode, seen: set[str]) -> None:
+        """The endpoints ``scope`` creates, following the package's classes and functions it uses."""
+        for call in ast.walk(scope):
+            if not isinstance(call, ast.Call):
+                continue
+            callee = call.func.attr if isinstance(call.func, ast.Attribute) else \
+                call.func.id if isinstance(call.func, ast.Name) else ""
+            if callee in _RCLPY_CALLS and isinstance(call.func, ast.Attribute) and len(call.args) >= 2:
+                section, type_at, name_at, qos_at = _RCLPY_CALLS[callee]
+                self._add(node, section, call, call.args[type_at], call.args[name_at],
+                          call.args[qos_at] if qos_at is not None and len(call.args) > qos_at else
+                          _keyword(call, "qos_profile"))
+            elif callee in _ACTION_CALLS and len(call.args) >= 3:
+                section, type_at, name_at = _ACTION_CALLS[callee]
+                self._add(node, section, call, call.args[type_at], call.args[name_at], None)
+            elif callee in _ROSPY_CALLS and _is_rospy(call.func) and len(call.args) >= 2:
+                section, name_at, type_at = _ROSPY_CALLS[callee]
+                self._add(node, section, call, call.args[type_at], call.args[name_at], _keyword(call, "queue_size"))
+            elif callee in ("init_node", "create_node") and call.args:
+                node.ros_names.append(_string(call.args[0]) or "")
+            elif callee == "__init__" and isinstance(call.func, ast.Attribute) and call.args:
+                node.ros_names.append(_string(call.args[0]) or "")  # super().__init__('name') of a Node subclass
+            elif callee in self.classes and callee not in seen:
+                self.collect(self.classes[callee], node, seen | {callee})
+            elif callee in self.functions and callee not in seen:
+                self.collect(self.functions[callee], node, seen | {callee})
+            elif callee in self.imported and callee not in seen:
+                path = _module_file(self.root, self.imported[callee])
+                if path is not None:
+                    other = _Reader(path, self.root)
+                    definition = other.classes.get(callee) or other.functions.get(callee)
+                    if definition is not None:
+                        other.collect(definition, node, seen | {callee})
+
+    def _add(self, node: RosNode, section: str, call: ast.Call, type_expr: ast.expr, name_expr: ast.expr,
+             qos: ast.expr | None) -> None:
+        name = _string(name_expr)
+        kind = {"services": "srv", "clients": "srv", "actions": "action", "action_clients": "action"}.get(section,
+                                                                                                          "msg")
+        typename = self.type_of(type_expr, kind)
+        if typename.count("/") == 2 and f"/{kind}/" not in typename:
+            typename = f"{PLACEHOLDER}{typename} is not a {kind} type ({self.where(call)})"
+        if name is None:
+            name = f"{PLACEHOLDER}{ast.unparse(name_expr)} at {self.where(call)}"
+            node.notes.append(f"{self.where(call)}: {ast.unparse(call.func)}(..., {ast.unparse(name_expr)}) names its "
+                              f"{section} endpoint at run time; replace the placeholder under nodes.{{node}}."
+                              f"{section} with the name (hetros check refuses it until then)")
+        node.endpoints.setdefault(section, {})[name] = typename
+        if section in ("publish", "subscribe") and qos is not None:
+            described = _qos(qos)
+            if described:
+                node.qos[name] = described
+
+
+def _is_rospy(func: ast.expr) -> bool:
+    return isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name) and func.value.id == "rospy"
+
+
+def _keyword(call: ast.Call, name: str) -> ast.expr | None:
+    return next((k.value for k in call.keywords if k.arg == name), None)
+
+
+def _joined(expr: ast.expr, names: dict[str, str]) -> str | None:
+    """A string constant, a name bound to one, or a ``+`` of those."""
+    if isinstance(expr, ast.Name):
+        return names.get(expr.id)
+    if isinstance(expr, ast.BinOp) and isinstance(expr.op, ast.Add):
+        left, right = _joined(expr.left, names), _joined(expr.right, names)
+        return None if left is None or right is None else left + right
+    return _string(expr)
+
+
+def _string(expr: ast.expr) -> str | None:
+    return expr.value if isinstance(expr, ast.Constant) and isinstance(expr.value, str) else None
+
+
+def _qos(expr: ast.expr) -> dict[str, Any]:
+    """A QoS the code asks for, as the project's topics: section writes it (what the scan can read)."""
+    if isinstance(expr, ast.Constant) and isinstance(expr.value, int) and not isinstance(expr.value, bool):
+        return {"history": "keep_last", "depth": max(expr.value, 1)}
+    preset = expr.id if isinstance(expr, ast.Name) else expr.attr if isinstance(expr, ast.Attribute) else ""
+    if preset in _PRESETS:
+        return dict(_PRESETS[preset])
+    if isinstance(expr, ast.Call) and getattr(expr.func, "id", getattr(expr.func, "attr", "")) == "QoSProfile":
+        out: dict[str, Any] = {"history": "keep_last", "depth": 10}
+        for keyword in expr.keywords:
+            value = ast.unparse(keyword.value)
+            if keyword.arg == "depth" and isinstance(keyword.value, ast.Constant):
+                out["depth"] = keyword.value.value
+            elif keyword.arg == "reliability":
+                out["reliability"] = "best_effort" if "BEST_EFFORT" in value else "reliable"
+            elif keyword.arg == "history":
+                out["history"] = "keep_all" if "KEEP_ALL" in value else "keep_last"
+            elif keyword.arg == "durability":
+                out["durability"] = "transient_local" if "TRANSIENT_LOCAL" in value else "volatile"
+        return out
+    return {}
+
+
+def scan_ros_entry(root: Path, key: str, target: str) -> RosNode:
+    """The node whose entry point is ``target`` (``module:function``) of the package rooted at ``root``."""
+    module, _, function = target.partition(":")
+    node = RosNode(key, target)
+    path = _module_file(root, module)
+    if path is None:
+        node.notes.append(f"{target}: module {module} is not under {root}; add its endpoints by hand")
+        return node
+    reader = _Reader(path, root)
+    scope = reader.functions.get(function)
+    if scope is None:
+        node.notes.append(f"{path.name}: no function {function!r} (entry point {key}); add its endpoints by hand")
+        return node
+    reader.collect(scope, node, {function})
+    return node
+
+
+def scan_ros_script(path: Path, root: Path, base: Path) -> RosNode:
+    """A rospy script (run as ``__main__``; its path relative to ``base``, the project file's folder): everything
+    the file creates."""
+    key = re.sub(r"\W", "_", path.stem)
+    node = RosNode(key, os.path.relpath(path.resolve(), base.resolve()))
+    reader = _Reader(path, root)
+    reader.collect(reader.tree, node, set())
+    return node
+
+
+def writes_ros(path: Path) -> bool:
+    """Whether ``path`` is code written for rclpy or rospy."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    return re.search(r"^\s*(import|from)\s+(rclpy|rospy)\b", text, re.MULTILINE) is not None
+
+
+def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, Any], list[str]]:
+    """The project for ROS code: each package's entry points and rospy scripts, or each file given (its
+    ``main``, else the whole file as a script); each node on a process of its own, as ``ros2 run`` runs it.
+    ``base`` is the folder the project file goes to (scripts are named relative to it)."""
+    nodes: list[RosNode] = []
+    for given in paths:
+        if given.is_dir():
+            root = given
+            for key, target in sorted(entry_points(given).items()):
+                nodes.append(scan_ros_entry(root, key, target))
+            for script in sorted(given.rglob("*")):
+                if script.is_file() and script.suffix in ("", ".py") and "setup" not in script.name and \
+                        writes_ros(script) and "init_node" in script.read_text(encoding="utf-8") and \
+                        not any(n.run.partition(":")[0].replace(".", "/") in str(script) for n in nodes):
+                    nodes.append(scan_ros_script(script, root, base))
+        else:
+            root = _package_root(given)
+            module = ".".join(given.resolve().relative_to(root.resolve()).with_suffix("").parts)
+            reader = _Reader(given, root)
+            if "main" in reader.functions:
+                nodes.append(scan_ros_entry(root, given.stem, f"{module}:main"))
+            else:
+                nodes.append(scan_ros_script(given, root, base))
+    project: dict[str, Any] = {"name": name, "targets": {}, "nodes": {}, "topics": {}}
+    notes: list[str] = []
+    for node in nodes:
+        # a main that makes one node is named after it; one that makes several (composed) after its entry point
+        ros_name = node.ros_names[0] if len(set(node.ros_names)) == 1 else ""
+        key = _unique(ros_name or node.key, project["nodes"])
+        project["targets"][key] = {"kind": "process"}
+        entry: dict[str, Any] = {"run": node.run, "target": key}
+        if ros_name and ros_name != key:
+            entry["name"] = ros_name
+        for section in ("publish", "subscribe", "services", "clients", "actions", "action_clients"):
+            if node.endpoints.get(section):
+                entry[section] = dict(node.endpoints[section])
+        project["nodes"][key] = entry
+        for topic, qos in node.qos.items():
+            if not topic.startswith((PLACEHOLDER, "~")):
+                project["topics"].setdefault(topic if topic.startswith("/") else f"/{topic}", qos)
+        notes += [note.replace("{node}", key) for note in node.notes]
+    if not project["topics"]:
+        del project["topics"]
+    return project, notes
+
+
+def _unique(wanted: str, taken: dict[str, Any]) -> str:
+    key, number = re.sub(r"\W", "_", wanted), 2
+    while key in taken:
+        key, number = f"{wanted}_{number}", number + 1
+    return key
+
+
+def _package_root(path: Path) -> Path:
+    """The folder a module path is imported from: above the last folder holding an ``__init__.py``."""
+    folder = path.resolve().parent
+    while (folder / "__init__.py").is_file():
+        folder = folder.parent
+    return folder

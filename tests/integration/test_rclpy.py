@@ -12,7 +12,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import pytest
 import yaml
 
 RCLPY = Path(__file__).resolve().parents[1] / "data" / "ros2_examples" / "rclpy"
@@ -49,41 +48,63 @@ def module(package: str, name: str) -> Path:
     return folder / package / f"{name}.py"
 
 
-@pytest.mark.parametrize(("publisher", "subscriber"), [
-    ("publisher_member_function", "subscriber_member_function"),
-    ("publisher_old_school", "subscriber_old_school"),
-    ("publisher_local_function", "subscriber_lambda"),
-])
-def test_the_minimal_publishers_and_subscribers(tmp_path: Path, publisher: str, subscriber: str) -> None:
-    project = init(tmp_path, module("examples_rclpy_minimal_publisher", publisher),
-                   module("examples_rclpy_minimal_subscriber", subscriber))
+def keyed(project: dict[str, Any], entry: str) -> str:
+    """The key `hetros init` gave the node whose run: is ``entry``'s main."""
+    return next(k for k, n in project["nodes"].items() if n["run"].endswith(f".{entry}:main"))
+
+
+def test_the_minimal_publishers_and_subscribers(tmp_path: Path) -> None:
+    """Every publisher and subscriber variant at once, each pair in a namespace; one pair as threads of the
+    launching process, the others each node in a process of its own."""
+    project = init(tmp_path, RCLPY / "topics" / "minimal_publisher", RCLPY / "topics" / "minimal_subscriber")
     # create_publisher(String, 'topic', 10)
     assert project["topics"] == {"/topic": {"history": "keep_last", "depth": 10}}
-    assert set(project["nodes"]) == {"minimal_publisher", "minimal_subscriber"}
-    done = launch(tmp_path, project, 2.2)
+    assert len(project["nodes"]) == 6
+    project["topics"] = {}
+    project["targets"]["main"] = {"kind": "thread"}
+    pairs = {"members": ("publisher_member_function", "subscriber_member_function"),
+             "old": ("publisher_old_school", "subscriber_old_school"),
+             "threads": ("publisher_local_function", "subscriber_lambda")}
+    for namespace, entries in pairs.items():
+        for entry in entries:
+            node = project["nodes"][keyed(project, entry)]
+            node["namespace"] = namespace
+            if namespace == "threads":
+                node["target"] = "main"
+        project["topics"][f"/{namespace}/topic"] = {"history": "keep_last", "depth": 10}
+    done = launch(tmp_path, project, 2.4)
     assert done.returncode == 0, done.stderr
-    published = re.findall(r"\[minimal_publisher\]: (.*)", done.stderr)
-    heard = re.findall(r"\[minimal_subscriber\]: (.*)", done.stderr)
-    assert published[:3] == [f'Publishing: "Hello World: {i}"' for i in range(3)], done.stderr
-    assert heard[:3] == [f'I heard: "Hello World: {i}"' for i in range(3)], done.stderr
+    for namespace in pairs:
+        published = re.findall(rf"\[{namespace}\.minimal_publisher\]: (.*)", done.stderr)
+        heard = re.findall(rf"\[{namespace}\.minimal_subscriber\]: (.*)", done.stderr)
+        assert published[:3] == [f'Publishing: "Hello World: {i}"' for i in range(3)], done.stderr
+        assert heard[:3] == [f'I heard: "Hello World: {i}"' for i in range(3)], done.stderr
     assert "Traceback" not in done.stderr
 
 
-@pytest.mark.parametrize(("server", "client", "client_name"), [
-    ("service", "client", "minimal_client"),
-    ("service_member_function", "client_async", "minimal_client_async"),
-    ("service", "client_async_member_function", "minimal_client_async"),
-    ("service_member_function", "client_async_callback", "minimal_client"),
-])
-def test_the_minimal_services_and_clients(tmp_path: Path, server: str, client: str, client_name: str) -> None:
-    project = init(tmp_path, module("examples_rclpy_minimal_service", server),
-                   module("examples_rclpy_minimal_client", client))
-    assert project["nodes"]["minimal_service"]["services"] == {"add_two_ints": "example_interfaces/srv/AddTwoInts"}
-    project["nodes"][client_name]["required"] = True  # the launch ends when the client is done
-    done = launch(tmp_path, project, 30)
+def test_the_minimal_services_and_clients(tmp_path: Path) -> None:
+    """Every client variant at once, each with a server in its namespace."""
+    project = init(tmp_path, RCLPY / "services" / "minimal_service", RCLPY / "services" / "minimal_client")
+    server = keyed(project, "service")
+    assert project["nodes"][server]["services"] == {"add_two_ints": "example_interfaces/srv/AddTwoInts"}
+    pairs = {"plain": ("service", "client", "minimal_client"),
+             "future": ("service_member_function", "client_async", "minimal_client_async"),
+             "member": ("service", "client_async_member_function", "minimal_client_async"),
+             "callback": ("service_member_function", "client_async_callback", "minimal_client")}
+    nodes = dict(project["nodes"])
+    project["nodes"] = {}
+    for namespace, (service, client, _) in pairs.items():
+        for entry in (service, client):
+            node = dict(nodes[keyed({"nodes": nodes}, entry)], namespace=namespace)
+            project["nodes"][f"{namespace}_{entry}"] = node
+    project["targets"] = {key: {"kind": "process"} for key in project["nodes"]}
+    for key, node in project["nodes"].items():
+        node["target"] = key
+    done = launch(tmp_path, project, 5)
     assert done.returncode == 0, done.stderr
-    assert "[minimal_service]: Incoming request\na: 41 b: 1\n" in done.stderr
-    assert f"[{client_name}]: Result of add_two_ints: for 41 + 1 = 42\n" in done.stderr
+    for namespace, (_, _, client_name) in pairs.items():
+        assert f"[{namespace}.minimal_service]: Incoming request\na: 41 b: 1\n" in done.stderr
+        assert f"[{namespace}.{client_name}]: Result of add_two_ints: for 41 + 1 = 42\n" in done.stderr
     assert "Traceback" not in done.stderr
 
 

@@ -80,7 +80,8 @@ def _now_stamp() -> Any:
     return registry().get("builtin_interfaces/msg/Time")(sec=now // 1_000_000_000, nanosec=now % 1_000_000_000)
 
 
-def _uuid(goal_id: bytes) -> Any:
+def uuid_message(goal_id: bytes) -> Any:
+    """``unique_identifier_msgs/msg/UUID`` of a 16-byte goal id."""
     return registry().get("unique_identifier_msgs/msg/UUID")(uuid=np.frombuffer(goal_id, np.uint8).copy())
 
 
@@ -369,7 +370,8 @@ class ActionServer:
             self._changed.notify_all()
         goal_info = registry().get("action_msgs/msg/GoalInfo")
         response = self._types["cancel_goal"].Response(
-            return_code=code, goals_canceling=[goal_info(goal_id=_uuid(h.goal_id), stamp=h.stamp) for h in canceling])
+            return_code=code,
+            goals_canceling=[goal_info(goal_id=uuid_message(h.goal_id), stamp=h.stamp) for h in canceling])
         self._reply("cancel_goal", request_id, client, response)
 
     # -- goals -------------------------------------------------------------------------------
@@ -442,7 +444,7 @@ class ActionServer:
         if not handle.is_active:
             raise ActionError(f"goal {_short(handle.goal_id)} of {self.name} already ended "
                               f"({STATUS_NAMES[handle.status]}); it takes no more feedback")
-        message = self._feedback_type(goal_id=_uuid(handle.goal_id), feedback=feedback)
+        message = self._feedback_type(goal_id=uuid_message(handle.goal_id), feedback=feedback)
         with self._lock:
             self._feedback.write(message)
 
@@ -507,7 +509,7 @@ class ActionServer:
         types = registry()
         status, info = types.get("action_msgs/msg/GoalStatus"), types.get("action_msgs/msg/GoalInfo")
         message = types.get("action_msgs/msg/GoalStatusArray")(status_list=[
-            status(goal_info=info(goal_id=_uuid(h.goal_id), stamp=h.stamp), status=h.status)
+            status(goal_info=info(goal_id=uuid_message(h.goal_id), stamp=h.stamp), status=h.status)
             for h in self._goals.values()
         ])
         self._status.write(message)
@@ -706,10 +708,10 @@ class ActionClient:
                 self._forget(goal_id)
             else:
                 handle.status = max(handle.status, ACCEPTED)
-                handle._result = self._get_result.call_async(self.type.GetResult.Request(goal_id=_uuid(goal_id)))
+                handle._result = self._get_result.call_async(self.type.GetResult.Request(goal_id=uuid_message(goal_id)))
             answered.set_result(handle)
         try:
-            self._send_goal.call_async(self.type.SendGoal.Request(goal_id=_uuid(goal_id), goal=goal)) \
+            self._send_goal.call_async(self.type.SendGoal.Request(goal_id=uuid_message(goal_id), goal=goal)) \
                 .add_done_callback(on_answer)
         except BaseException:
             self._forget(goal_id)
@@ -732,7 +734,7 @@ class ActionClient:
         """Ask the server to cancel goal ``goal_id`` (all goals: 16 zero bytes); the future gives its
         ``action_msgs/srv/CancelGoal`` response."""
         types = registry()
-        info = types.get("action_msgs/msg/GoalInfo")(goal_id=_uuid(goal_id),
+        info = types.get("action_msgs/msg/GoalInfo")(goal_id=uuid_message(goal_id),
                                                      stamp=types.get("builtin_interfaces/msg/Time")())
         return self._cancel_goal.call_async(self._cancel_goal.srv_type.Request(goal_info=info))
 

@@ -10,6 +10,10 @@ from pathlib import Path
 NODE_LOGGER_PREFIX = "hetros.node."
 
 
+# ROS's severity names where Python's differ
+_SEVERITY = {"WARNING": "WARN", "CRITICAL": "FATAL"}
+
+
 class NodeFormatter(logging.Formatter):
     """``[INFO] [listener]: I heard: hello 3`` (the shape ROS users know)."""
 
@@ -19,7 +23,7 @@ class NodeFormatter(logging.Formatter):
             name = name[len(NODE_LOGGER_PREFIX):]
         elif name.startswith("hetros."):
             name = name[len("hetros."):]
-        text = f"[{record.levelname}] [{name}]: {record.getMessage()}"
+        text = f"[{_SEVERITY.get(record.levelname, record.levelname)}] [{name}]: {record.getMessage()}"
         if record.exc_info:
             text += "\n" + self.formatException(record.exc_info)
         return text

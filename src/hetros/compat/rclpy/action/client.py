@@ -8,19 +8,13 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
 from ....msg import copy as copy_message
-from ....msg import registry
 from ....runtime import ActionClient as HetrosActionClient
 from ....runtime._action import ClientGoalHandle as HetrosGoalHandle
+from ....runtime._action import uuid_message
 from ..._flavour import flavoured_action, received
 from ..executors import spin_until_done
 from ..task import Future
-
-
-def _uuid(goal_id: bytes) -> Any:
-    return registry().get("unique_identifier_msgs/msg/UUID")(uuid=np.frombuffer(goal_id, np.uint8).copy())
 
 
 class ClientGoalHandle:
@@ -32,7 +26,7 @@ class ClientGoalHandle:
 
     @property
     def goal_id(self) -> Any:
-        return _uuid(self._inner.goal_id)
+        return uuid_message(self._inner.goal_id)
 
     @property
     def stamp(self) -> Any:
@@ -100,7 +94,7 @@ class ActionClient:
             message_type = self._type.FeedbackMessage
 
             def relay(feedback: Any) -> None:
-                message = message_type(goal_id=_uuid(goal_id), feedback=received(feedback))
+                message = message_type(goal_id=uuid_message(goal_id), feedback=received(feedback))
                 self._schedule(lambda: callback(message))
         sent = self._inner.send_goal_async(copy_message(goal), relay, goal_id)
         return Future.wrapping(sent, lambda inner: ClientGoalHandle(self, inner), self._schedule)

@@ -9,13 +9,11 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
 from ...._log import get_logger
 from ....msg import copy as copy_message
-from ....msg import registry
 from ....runtime import ActionServer as HetrosActionServer
 from ....runtime._action import ServerGoalHandle as HetrosGoalHandle
+from ....runtime._action import uuid_message
 from ..._flavour import received
 from ..task import run_to_end
 
@@ -54,8 +52,7 @@ class ServerGoalHandle:
 
     @property
     def goal_id(self) -> Any:
-        uuid = registry().get("unique_identifier_msgs/msg/UUID")
-        return uuid(uuid=np.frombuffer(self._inner.goal_id, np.uint8).copy())
+        return uuid_message(self._inner.goal_id)
 
     @property
     def is_active(self) -> bool:

@@ -9,7 +9,8 @@ one root and still tell the kinds apart::
     │   ├── UnknownTypeError   a type name nobody defines
     │   ├── SerializationError bytes that do not decode as the type says (offset)
     │   ├── FieldValueError    a field holds a value its type cannot carry (field, type, value)
-    │   └── ReadOnlyMessageError  writing to a message that was handed over
+    │   ├── ReadOnlyMessageError  writing to a message that was handed over
+    │   └── MissingFieldError  a ROS 1 field ROS 2's layout dropped (header.seq), asked by rospy code
     ├── ProjectError           the project file (YAML path)
     │   └── CheckError         `hetros check` found problems (carries all of them)
     ├── TransportError         moving messages
@@ -67,6 +68,10 @@ class FieldValueError(MessageError, ValueError):
 
 class ReadOnlyMessageError(MessageError, AttributeError):
     """A delivered (or published) message was written to."""
+
+
+class MissingFieldError(MessageError, AttributeError):
+    """rospy code used a field of a ROS 1 message that hetros's (ROS 2) layout of the type lacks."""
 
 
 class ProjectError(Error):

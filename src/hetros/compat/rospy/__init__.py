@@ -15,8 +15,8 @@ import time as _time
 from collections.abc import Callable
 from typing import Any
 
-from ..._errors import Error, ParameterError, ShutdownError
-from ...msg import Message
+from ..._errors import Error, MissingFieldError, ParameterError, ShutdownError
+from ...msg import Message, registry
 from ...msg import copy as copy_message
 from ...runtime import Node as HetrosNode
 from ...runtime import _ros_main
@@ -120,6 +120,24 @@ def _resolve(name: str) -> str:
     state = _state()
     private = "~/" + name[1:].lstrip("/") if name.startswith("~") else name
     return state.hetros.resolve_name(private, node_name=state.name)
+
+
+def _no_seq(header: Any, value: Any = None) -> Any:
+    raise MissingFieldError(
+        "std_msgs/Header has no seq in hetros: every hetros transport, rclpy node and ROS 2 peer shares ROS 2's "
+        "layout of it (stamp, frame_id), which dropped seq; count messages in the node if it needs a number (ROS 1 "
+        "peers across the bridge see seq 0)")
+
+
+def _explain_ros1_fields() -> None:
+    """ROS 1's ``header.seq``, asked by rospy code, fails saying why and what to do instead of a bare
+    AttributeError (the class gains a property only: its slots and codec stay as they are)."""
+    header = registry().get("std_msgs/msg/Header")
+    if not isinstance(header.__dict__.get("seq"), property):
+        header.seq = property(_no_seq, _no_seq)
+
+
+_explain_ros1_fields()
 
 
 # -- the node -------------------------------------------------------------------------------------

@@ -1,0 +1,84 @@
+"""hetros.compat's message flavour and ROS 1 field errors, without a running graph."""
+
+from __future__ import annotations
+
+import array
+import threading
+
+import numpy as np
+import pytest
+
+from hetros import MissingFieldError, ReadOnlyMessageError
+from hetros.compat._flavour import SequenceView, flavoured, flavoured_action, received
+from hetros.compat.rclpy.task import Future, run_to_end
+from hetros.msg import copy, freeze, registry
+
+
+def test_a_constructed_numeric_sequence_is_an_array_array_as_in_rclpy() -> None:
+    feedback = flavoured(registry().get("example_interfaces/action/Fibonacci_Feedback"))()
+    assert isinstance(feedback.sequence, array.array) and feedback.sequence.typecode == "i"
+    feedback.sequence = [0, 1]
+    feedback.sequence.append(1)
+    assert f"{feedback.sequence}" == "array('i', [0, 1, 1])"
+    copied = copy(feedback)  # what the shims hand to the transports: hetros's own class, numpy arrays
+    assert type(copied) is registry().get("example_interfaces/action/Fibonacci_Feedback")
+    assert np.array_equal(copied.sequence, [0, 1, 1])
+
+
+def test_types_without_numeric_sequences_are_served_as_they_are() -> None:
+    string = registry().get("std_msgs/msg/String")
+    assert flavoured(string) is string
+    fibonacci = flavoured_action(registry().get_action("example_interfaces/action/Fibonacci"))
+    assert fibonacci.Result().sequence.typecode == "i"
+
+
+def test_a_received_sequence_is_a_zero_copy_view_printed_as_rclpy_prints_it() -> None:
+    image_type = registry().get("sensor_msgs/msg/Image")
+    data = np.arange(4, dtype=np.uint8)
+    message = freeze(registry().deserialize(registry().serialize(image_type(data=data)), "sensor_msgs/msg/Image"))
+    plain = message.data
+    received(message)
+    assert type(message.data) is SequenceView and repr(message.data) == "array('B', [0, 1, 2, 3])"
+    assert np.shares_memory(message.data, plain)
+    with pytest.raises(ReadOnlyMessageError):
+        message.data = [1]
+    reply = flavoured(image_type)()
+    reply.data = message.data  # stored as the plain array: the compiled codec takes it
+    assert type(copy(reply).data) is np.ndarray
+
+
+def test_nested_sequences_are_shown_too() -> None:
+    message_type = registry().get("example_interfaces/action/Fibonacci_FeedbackMessage")
+    message = freeze(message_type())
+    received(message)
+    assert repr(message.feedback.sequence) == "array('i')"
+
+
+def test_rospy_code_asking_header_seq_is_told_why() -> None:
+    import hetros.compat.rospy  # noqa: F401  (installs the explanation)
+
+    header = registry().get("std_msgs/msg/Header")()
+    assert not hasattr(header, "seq")
+    with pytest.raises(MissingFieldError, match="ROS 2's layout"):
+        header.seq = 3
+
+
+def test_an_async_callback_runs_to_its_end_awaiting_futures() -> None:
+    later = Future()
+
+    async def execute() -> int:
+        return int(await later) + 1
+
+    threading.Timer(0.05, later.set_result, args=(41,)).start()
+    assert run_to_end(execute(), threading.Event()) == 42
+
+
+def test_a_futures_callbacks_run_where_it_schedules_them() -> None:
+    ran: list[str] = []
+    queued: list[object] = []
+    future = Future(schedule=queued.append)
+    future.add_done_callback(lambda f: ran.append(f.result()))
+    future.set_result("done")
+    assert ran == [] and len(queued) == 1
+    queued[0]()  # type: ignore[operator]
+    assert ran == ["done"]

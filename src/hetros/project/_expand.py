@@ -81,7 +81,7 @@ def parameters_from_files(files: list[Path], fq_name: str) -> dict[str, Any]:
             if _matches(str(key), fq_name, short):
                 if not isinstance(entry, dict) or not isinstance(entry.get("ros__parameters"), dict):
                     raise ProjectError(f"{file}: {key}: must hold ros__parameters: a mapping of parameter values")
-                found.update(_flatten(entry["ros__parameters"]))
+                found.update(flatten(entry["ros__parameters"]))
     return found
 
 
@@ -94,11 +94,12 @@ def _matches(key: str, fq_name: str, short: str) -> bool:
     return False
 
 
-def _flatten(values: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+def flatten(values: Mapping[str, Any], joiner: str = ".", prefix: str = "") -> dict[str, Any]:
+    """Nested parameter mappings as flat names (``gains: {p: 2}`` -> ``gains.p``; ROS 1 joins with ``/``)."""
     flat: dict[str, Any] = {}
     for key, value in values.items():
         if isinstance(value, Mapping):
-            flat.update(_flatten(value, f"{prefix}{key}."))
+            flat.update(flatten(value, joiner, f"{prefix}{key}{joiner}"))
         else:
             flat[f"{prefix}{key}"] = value
     return flat

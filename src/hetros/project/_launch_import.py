@@ -25,8 +25,9 @@ from typing import Any
 import yaml
 
 from .._errors import ProjectError
-from ..plan import resolve_name
-from ._ros_scan import entry_points, package_name, scan_ros_entry, scan_ros_script
+from ..plan import join_namespace, resolve_name
+from ._expand import flatten
+from ._ros_scan import entry_points, package_name, scan_ros_entry, scan_ros_script, unique_key
 
 _EXECUTABLE_FOLDERS = ("scripts", "nodes", "bin", "src", "")
 
@@ -207,12 +208,12 @@ class LaunchImporter:
     _on_let = _on_arg
 
     def _on_group(self, element: _Element, scope: _Scope, path: Path) -> None:
-        inner = _Scope(self._nested(scope.namespace, self.attribute(element, "ns", scope, path, "")),
+        inner = _Scope(join_namespace(scope.namespace, self.attribute(element, "ns", scope, path, "")),
                        dict(scope.remap), dict(scope.env), dict(scope.args), dict(scope.params))
         self._actions(element.children, inner, path)
 
     def _on_push_ros_namespace(self, element: _Element, scope: _Scope, path: Path) -> None:
-        scope.namespace = self._nested(scope.namespace, self.attribute(element, "namespace", scope, path))
+        scope.namespace = join_namespace(scope.namespace, self.attribute(element, "namespace", scope, path))
 
     def _on_remap(self, element: _Element, scope: _Scope, path: Path) -> None:
         scope.remap[self.attribute(element, "from", scope, path)] = self.attribute(element, "to", scope, path)
@@ -232,7 +233,7 @@ class LaunchImporter:
         file = Path(self.attribute(element, "file", scope, path))
         if not file.is_absolute():
             file = path.parent / file
-        inner = _Scope(self._nested(scope.namespace, self.attribute(element, "ns", scope, path, "")),
+        inner = _Scope(join_namespace(scope.namespace, self.attribute(element, "ns", scope, path, "")),
                        dict(scope.remap), dict(scope.env), {}, dict(scope.params))
         for child in element.children:
             if child.tag != "arg":
@@ -252,7 +253,7 @@ class LaunchImporter:
         executable = self.attribute(element, "exec" if self.ros2 else "type", scope, path)
         found = self._code(package, self.find_package(package, where), executable, where)
         key_name = self.attribute(element, "name", scope, path, "") or found.key
-        namespace = self._nested(scope.namespace, self.attribute(element, "namespace" if self.ros2 else "ns", scope,
+        namespace = join_namespace(scope.namespace, self.attribute(element, "namespace" if self.ros2 else "ns", scope,
                                                                  path, ""))
         remap = dict(scope.remap)
         env = dict(scope.env)
@@ -267,7 +268,7 @@ class LaunchImporter:
             else:
                 raise ProjectError(f"{path}:{child.line}: <node> holds <remap>, <param>, <rosparam> and <env>, not "
                                    f"<{child.tag}>")
-        key = _unique(re.sub(r"\W", "_", key_name), self.project["nodes"])
+        key = unique_key(key_name, self.project["nodes"])
         node: dict[str, Any] = {"run": found.run, "target": key}
         if namespace:
             node["namespace"] = namespace
@@ -300,12 +301,6 @@ class LaunchImporter:
         self.notes += [note.replace("{node}", key) for note in found.notes]
 
     # -- helpers -----------------------------------------------------------------------------
-
-    def _nested(self, outer: str, inner: str) -> str:
-        if not inner:
-            return outer
-        joined = inner if inner.startswith("/") else f"{outer.rstrip('/')}/{inner}"
-        return "/" + joined.strip("/")
 
     def _code(self, name: str, folders: list[Path], executable: str, where: str) -> Any:
         if self.ros2:
@@ -347,10 +342,10 @@ class LaunchImporter:
                 values: dict[str, Any] = {}
                 for entry in data.values():
                     if isinstance(entry, dict) and isinstance(entry.get("ros__parameters"), dict):
-                        values.update(_flatten(entry["ros__parameters"]))
+                        values.update(flatten(entry["ros__parameters"]))
                 return values
             prefix = element.attributes.get("ns", "")
-            return {f"{prefix}/{k}".lstrip("/") if prefix else k: v for k, v in _flatten(data, "/").items()}
+            return {f"{prefix}/{k}".lstrip("/") if prefix else k: v for k, v in flatten(data, "/").items()}
         if element.tag == "rosparam":
             body = element.attributes.get("command", "load")
             raise ProjectError(f"{where}: <rosparam command={body!r}> without a file has no counterpart; use a "
@@ -361,23 +356,6 @@ class LaunchImporter:
         if kind in ("str", "string"):
             value = str(self.attribute(element, "value", scope, path))
         return {name.lstrip("/~"): value}
-
-
-def _flatten(values: dict[str, Any], joiner: str = ".", prefix: str = "") -> dict[str, Any]:
-    flat: dict[str, Any] = {}
-    for key, value in values.items():
-        if isinstance(value, dict):
-            flat.update(_flatten(value, joiner, f"{prefix}{key}{joiner}"))
-        else:
-            flat[f"{prefix}{key}"] = value
-    return flat
-
-
-def _unique(wanted: str, taken: dict[str, Any]) -> str:
-    key, number = wanted, 2
-    while key in taken:
-        key, number = f"{wanted}_{number}", number + 1
-    return key
 
 
 def import_launch(path: Path, ros2: bool, package_paths: list[Path], base: Path,

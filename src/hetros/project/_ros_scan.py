@@ -297,7 +297,7 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     for node in nodes:
         # a main that makes one node is named after it; one that makes several (composed) after its entry point
         ros_name = node.ros_names[0] if len(set(node.ros_names)) == 1 else ""
-        key = _unique(ros_name or node.key, project["nodes"])
+        key = unique_key(ros_name or node.key, project["nodes"])
         project["targets"][key] = {"kind": "process"}
         entry: dict[str, Any] = {"run": node.run, "target": key}
         if ros_name and ros_name != key:
@@ -315,8 +315,10 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     return project, notes
 
 
-def _unique(wanted: str, taken: dict[str, Any]) -> str:
-    key, number = re.sub(r"\W", "_", wanted), 2
+def unique_key(wanted: str, taken: dict[str, Any]) -> str:
+    """``wanted`` as a node key (non-word characters to ``_``), numbered when taken."""
+    wanted = re.sub(r"\W", "_", wanted)
+    key, number = wanted, 2
     while key in taken:
         key, number = f"{wanted}_{number}", number + 1
     return key

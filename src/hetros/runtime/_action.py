@@ -677,11 +677,7 @@ class ActionClient:
     def send_goal_async(self, goal: Any, feedback_cb: Callable[[Any], object] | None = None,
                         goal_id: bytes | None = None) -> Future[ClientGoalHandle]:
         """Send ``goal`` without waiting: the future gives its handle once the server accepted or rejected it.
-        ``goal_id`` (16 bytes) is made up when not given."""
-        return self._send(goal, feedback_cb, goal_id)[1]
-
-    def _send(self, goal: Any, feedback_cb: Callable[[Any], object] | None,
-              goal_id: bytes | None = None) -> tuple[bytes, Future[ClientGoalHandle]]:
+        ``goal_id`` (16 bytes) is made up when not given. Cancelling the future forgets the goal."""
         check_type(goal, typename_of(self.type.Goal), f"a goal of action {self.name}")
         goal._hetros_validate(goal, f"the goal of {self.name}")
         if goal_id is None:
@@ -694,7 +690,8 @@ class ActionClient:
         answered: Future[ClientGoalHandle] = Future()
 
         def on_answer(answer: Future[Any]) -> None:
-            if answered.cancelled():  # send_goal gave up waiting
+            if not answered.set_running_or_notify_cancel():  # the sender gave up waiting
+                self._forget(goal_id)
                 return
             try:
                 response = answer.result()
@@ -716,12 +713,13 @@ class ActionClient:
         except BaseException:
             self._forget(goal_id)
             raise
-        return goal_id, answered
+        return answered
 
     def send_goal(self, goal: Any, feedback_cb: Callable[[Any], object] | None = None,
                   timeout: float = 10.0) -> ClientGoalHandle:
         """Send ``goal``; return its handle once the server accepted or rejected it (``handle.accepted``)."""
-        goal_id, answered = self._send(goal, feedback_cb)
+        goal_id = os.urandom(16)
+        answered = self.send_goal_async(goal, feedback_cb, goal_id)
         try:
             handle: ClientGoalHandle = self._wait(answered, timeout, f"the answer to goal {_short(goal_id)}")
         except BaseException:

@@ -86,6 +86,13 @@ class Node:
         planned = self._planned()
         return planned.namespace if planned is not None else ""
 
+    @property
+    def ros_name(self) -> str:
+        """The name the project file gives the node in ROS (``name:``); "" when it gives none, so that the
+        name its code gives (rclpy's ``Node('talker')``) stands."""
+        planned = self._planned()
+        return planned.ros_name if planned is not None else ""
+
     def _planned(self) -> NodePlan | None:
         plan = self.graph.plan
         return plan.nodes.get(self.name) if plan is not None else None
@@ -94,10 +101,8 @@ class Node:
         """A topic, service or action name as ROS resolves it for this node: ``chatter`` under its
         namespace, ``~/x`` under its name, then its remaps (all from the project file)."""
         planned = self._planned()
-        if planned is None:
-            return name if name.startswith("/") else "/" + name.lstrip("~/")
-        return resolve_name(name, planned.namespace if namespace is None else namespace,
-                            node_name or planned.ros_name or self.name, planned.remap)
+        return resolve_name(name, self.namespace if namespace is None else namespace,
+                            node_name or self.ros_name or self.name, planned.remap if planned is not None else None)
 
     def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None,
                          on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None

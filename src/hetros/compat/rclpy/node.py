@@ -249,9 +249,8 @@ class Node:
                  allow_undeclared_parameters: bool = False,
                  automatically_declare_parameters_from_overrides: bool = False, **_ignored: Any) -> None:
         self._hetros: HetrosNode = bound_node()
-        planned = self._hetros.graph.plan.nodes.get(self._hetros.name) if self._hetros.graph.plan else None
         # the project's name and namespace stand over the code's, as a launch file's do in ROS 2
-        self._name = planned.ros_name if planned is not None and planned.ros_name else node_name
+        self._name = self._hetros.ros_name or node_name
         self._namespace = join_namespace(self._hetros.namespace, namespace or "") or "/"
         self._logger = RcutilsLogger(self.get_fully_qualified_name().lstrip("/").replace("/", "."))
         self._overrides: dict[str, Any] = dict(self._hetros.parameters)

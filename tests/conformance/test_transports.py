@@ -160,6 +160,7 @@ class _AgentReader(Reader):
     def __init__(self, harness: ShmProcessHarness, index: int, wake: Callable[[], None]) -> None:
         self.wake = wake
         self.replies: queue.Queue[Any] = queue.Queue()
+        self.calling = threading.Lock()  # one command in flight: replies carry no id to pair them
         self.proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("_agent.py"))],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         threading.Thread(target=self._pump, daemon=True).start()
@@ -178,9 +179,10 @@ class _AgentReader(Reader):
 
     def call(self, command: dict[str, Any]) -> Any:
         assert self.proc.stdin is not None
-        self.proc.stdin.write(json.dumps(command) + "\n")
-        self.proc.stdin.flush()
-        return self.replies.get(timeout=30)
+        with self.calling:
+            self.proc.stdin.write(json.dumps(command) + "\n")
+            self.proc.stdin.flush()
+            return self.replies.get(timeout=30)
 
     def try_take(self) -> Any | None:
         reply = self.call({"op": "take"})

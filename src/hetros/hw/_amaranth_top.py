@@ -48,7 +48,7 @@ class _Out(_Port):
 class AmaranthTop:
     """One instance of a top module in Amaranth's simulator (see the module's docstring)."""
 
-    def __init__(self, top: Any, ports: list[StreamPort], data_width: int, monitored: list[str]) -> None:
+    def __init__(self, top: Any, ports: list[StreamPort], data_width: int, monitored: list[tuple[str, str]]) -> None:
         from amaranth.sim import Simulator
 
         wrapper = Module()
@@ -92,9 +92,9 @@ class AmaranthTop:
                 what |= self._watch(ctx, port, sink)
             if self._monitored:
                 broken = ctx.get(self._top.violations)
-                for index, label in enumerate(self._monitored):
+                for index, (label, rule) in enumerate(self._monitored):
                     if broken >> index & 1:
-                        what |= self._fail(label, "TVALID dropped, or TDATA/TKEEP/TLAST changed, before TREADY")
+                        what |= self._fail(label, rule)
                         break
             await ctx.tick()
             for state, took in zip(self._in, fired, strict=True):

@@ -27,6 +27,11 @@ from ._stream import TopicNetwork
 from ._verilog_node import verilog_sources
 
 _FIELDS = (("tdata", None), ("tkeep", None), ("tlast", 1), ("tvalid", 1), ("tready", 1))
+# the endpoint of a topic the target frames for ROS 1 itself (hardware TCPROS, ``_tcpros``): its port
+# carries TCPROS frames (``m_axis_<topic>_tcpros`` to ROS 1 subscribers, ``s_axis_<topic>_tcpros`` from a
+# ROS 1 publisher), moved to and from the sockets unchanged by the gateway
+TCPROS = "tcpros"
+_HELD_RULE = "TVALID dropped, or TDATA/TKEEP/TLAST changed, before TREADY"
 
 
 @dataclass(frozen=True)
@@ -73,6 +78,7 @@ def hardware_topics(plan: Plan, target: str, only: set[str] | None = None) -> li
         raise HardwareError(f"target must be an fpga target of the project ({', '.join(fpga) or 'none'}), "
                             f"not {target!r}")
     gateway = gateway_node(target)
+    spec = plan.targets[target]
 
     def inside(node: str) -> bool:
         return node != gateway and plan.nodes[node].target == target and (only is None or node in only)
@@ -90,6 +96,11 @@ def hardware_topics(plan: Plan, target: str, only: set[str] | None = None) -> li
         if publishers and publishers != (gateway,) and \
                 (gateway in channel.publishers or any(not inside(n) for n in sinks)):
             subscribers += (gateway,)
+        if channel.kind == "topic" and only is None:
+            if channel.name in spec.ros1_export and any(inside(n) for n in sources):
+                subscribers += (TCPROS,)
+            if channel.name in spec.ros1_import and any(inside(n) for n in sinks):
+                publishers += (TCPROS,)
         if not publishers or not subscribers or publishers == subscribers == (gateway,):
             continue  # an endpoint with nobody on the other side has nothing to wire
         topics.append(HardwareTopic(channel.name, channel.type, publishers, subscribers, channel.qos.hw_fifo,
@@ -112,10 +123,14 @@ class FpgaTop(Elaboratable):
     hardware implementation where the node has one, else behind an AXI4-Stream port of the top."""
 
     def __init__(self, topics: list[HardwareTopic], data_width: int,
-                 hardware_nodes: dict[str, Elaboratable] | None = None, monitor: bool = False) -> None:
+                 hardware_nodes: dict[str, Elaboratable] | None = None, monitor: bool = False,
+                 framing: dict[str, Any] | None = None, max_frame: int = 4096) -> None:
         self.topics = topics
         self.data_width = data_width
         self.hardware_nodes = dict(hardware_nodes or {})
+        # hardware TCPROS: topic -> its ``Ros1Program``, for the topics with a TCPROS endpoint
+        self.framing = dict(framing or {})
+        self.max_frame = max_frame
         # (port prefix, topic index, "pub"/"sub", endpoint index) -> signals by field
         self.ports: dict[str, dict[str, Any]] = {}
         self._where: dict[str, tuple[int, str, int]] = {}
@@ -136,8 +151,18 @@ class FpgaTop(Elaboratable):
         # with ``monitor`` (co-simulation), each stream a hardware node drives is watched for the AXI4-Stream
         # rule (once TVALID is shown, it and the payload hold until TREADY): bit k of ``violations`` is
         # ``monitored[k]`` breaking it this cycle
-        self.monitored = [f"hardware node {node} port {topics[index].port_name!r} ({topics[index].name})"
+        self.monitored = [(f"hardware node {node} port {topics[index].port_name!r} ({topics[index].name})", _HELD_RULE)
                           for node, index, role, _ in self._inside if role == "pub"] if monitor else []
+        self.monitor = monitor
+        for index, topic in enumerate(topics):
+            for role, nodes in (("pub", topic.publishers), ("sub", topic.subscribers)):
+                if TCPROS in nodes and topic.name not in self.framing:
+                    raise HardwareError(f"{topic.name} is framed for ROS 1 in hardware, but no program was given")
+                if TCPROS in nodes and monitor:
+                    self.monitored.append((
+                        f"hardware TCPROS of {topic.name} ({'from' if role == 'pub' else 'to'} ROS 1)",
+                        "a message did not fit its type " + ("(or was longer than max_frame: raise it)"
+                                                             if role == "sub" else "")))
         if len(self.monitored) > 64:
             raise HardwareError(f"co-simulation watches at most 64 hardware node outputs, not {len(self.monitored)}")
         self.violations = Signal(max(1, len(self.monitored)), name="hw_violations")
@@ -161,9 +186,15 @@ class FpgaTop(Elaboratable):
                                    topic.fifo_depth)
             m.submodules[f"topic_{topic.port_name}"] = network
             networks.append(network)
+        framing_errors = []
         for name, port in self.ports.items():
             index, role, position = self._where[name]
             stream = getattr(networks[index], f"{role}{position}")
+            topic = self.topics[index]
+            if name.endswith(f"_{TCPROS}") and (topic.publishers if role == "pub" else topic.subscribers)[position] \
+                    == TCPROS:
+                stream, malformed = self._framer(m, topic, role, stream)
+                framing_errors.append(malformed)
             if role == "pub":  # the node drives the network's input
                 m.d.comb += [getattr(stream, f).eq(port[f]) for f in ("tdata", "tkeep", "tlast", "tvalid")]
                 m.d.comb += port["tready"].eq(stream.tready)
@@ -182,8 +213,24 @@ class FpgaTop(Elaboratable):
         if self.monitored:
             bits = [_held_stream_broken(m, getattr(self.hardware_nodes[node], self.topics[index].port_name))
                     for node, index, role, _ in self._inside if role == "pub"]
-            m.d.comb += self.violations.eq(Cat(*bits))
+            m.d.comb += self.violations.eq(Cat(*bits, *framing_errors))
         return m
+
+    def _framer(self, m: Module, topic: HardwareTopic, role: str, stream: Any) -> tuple[Any, Signal]:
+        """Put a TCPROS framer (to ROS 1) or deframer (from it) between ``stream`` and the port; the
+        stream the port now meets, and the unit's ``malformed``."""
+        from ._tcpros import Ros1Deframer, Ros1Framer
+
+        program = self.framing[topic.name]
+        if role == "pub":  # frames from a ROS 1 publisher into the network
+            deframer = Ros1Deframer(program, self.data_width)
+            m.submodules[f"tcpros_in_{topic.port_name}"] = deframer
+            wiring.connect(m, deframer.cdr, stream)
+            return deframer.frame, deframer.malformed
+        framer = Ros1Framer(program, self.data_width, self.max_frame)
+        m.submodules[f"tcpros_out_{topic.port_name}"] = framer
+        wiring.connect(m, stream, framer.cdr)
+        return framer.frame, framer.malformed
 
 
 def _held_stream_broken(m: Module, port: Any) -> Signal:
@@ -216,6 +263,13 @@ def hardware_nodes(plan: Plan, target: str, only: set[str] | None = None) -> dic
     return made
 
 
+def framing_programs(topics: list[HardwareTopic], types: TypeRegistry) -> dict[str, Any]:
+    """The hardware TCPROS program (``_tcpros.Ros1Program``) of each topic with a TCPROS endpoint."""
+    from ._tcpros import ros1_program
+
+    return {t.name: ros1_program(types, t.type) for t in topics if TCPROS in (*t.publishers, *t.subscribers)}
+
+
 def top_name(target: str) -> str:
     return f"hetros_{port_part(target)}"
 
@@ -228,7 +282,7 @@ def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path
                             "subscriber on it, counting its gateway): nothing to generate")
     spec = plan.targets[target]
     components = hardware_nodes(plan, target)
-    top = FpgaTop(topics, spec.data_width, components)
+    top = FpgaTop(topics, spec.data_width, components, framing=framing_programs(topics, types))
     name = top_name(target)
     text = verilog.convert(top, name=name, ports=top.signals())
     out.mkdir(parents=True, exist_ok=True)
@@ -255,7 +309,7 @@ def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRe
     for topic in topics:
         for prefix, nodes, sends in (("s_axis", topic.publishers, True), ("m_axis", topic.subscribers, False)):
             for node in nodes:
-                if plan.nodes[node].hw and plan.in_hardware(node):
+                if node in plan.nodes and plan.nodes[node].hw and plan.in_hardware(node):
                     continue  # wired to the node's hardware inside the top
                 for field, bits in _FIELDS:
                     into_network = (field == "tready") != sends
@@ -278,5 +332,7 @@ def manifest(plan: Plan, target: str, topics: list[HardwareTopic], types: TypeRe
         "topics": [{"name": t.name, "type": t.type, "publishers": list(t.publishers),
                     "subscribers": list(t.subscribers), "fifo_depth": t.fifo_depth,
                     "arbiter": len(t.publishers) > 1, "broadcast": len(t.subscribers) > 1,
+                    "tcpros": ("frames to ROS 1" if TCPROS in t.subscribers else
+                               "frames from ROS 1" if TCPROS in t.publishers else ""),
                     "layout": layout[t.name]} for t in topics],
     }

@@ -46,7 +46,7 @@ def bytes_in(m: Module, source: Any, data_width: int) -> ByteSource:
     with m.If(source.tvalid & source.tready):
         m.d.sync += [held.eq(source.tdata), held_last.eq(source.tlast),
                      count.eq(sum(source.tkeep[i] for i in range(per_beat)))]
-    with m.Elif(take):
+    with m.Elif(take & (count != 0)):
         m.d.sync += [held.eq(held >> 8), count.eq(count - 1)]
     return ByteSource(held[:8], count != 0, held_last & (count == 1), take)
 

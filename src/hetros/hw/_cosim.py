@@ -20,7 +20,7 @@ from .._errors import HardwareError
 from ..msg import TypeRegistry
 from ..plan import Plan, gateway_node
 from ._amaranth_top import AmaranthTop
-from ._build import FpgaTop, HardwareTopic, hardware_nodes, hardware_topics, top_name
+from ._build import TCPROS, FpgaTop, HardwareTopic, framing_programs, hardware_nodes, hardware_topics, top_name
 from ._verilator import StreamPort, VerilatedTop, compile_simulator
 from ._verilog_node import verilog_sources
 
@@ -34,6 +34,7 @@ class GatewayPort:
     index: int
     port: StreamPort
     service: str = ""  # the service whose requests go in, or whose responses come out, here
+    ros1: bool = False  # TCPROS frames (hardware TCPROS), to or from ROS 1's sockets
 
 
 SimulatedTop = VerilatedTop | AmaranthTop
@@ -50,13 +51,20 @@ class TargetSimulation:
         gateway = gateway_node(target)
         topics = hardware_topics(plan, target, only)
         components = hardware_nodes(plan, target, only)
-        top = FpgaTop(topics, spec.data_width, components, monitor=True)
+        top = FpgaTop(topics, spec.data_width, components, monitor=True, framing=framing_programs(topics, types))
         name = top_name(target)
         ports = []
         self.inputs: list[GatewayPort] = []
         self.outputs: list[GatewayPort] = []
         for prefix in top.ports:
             topic, node, feeds = top.endpoint_of(prefix)
+            if node == TCPROS:
+                label = f"hardware TCPROS of {topic.name}, {'from' if feeds else 'to'} ROS 1 (port {prefix})"
+                port = StreamPort(prefix, feeds, label)
+                ports.append(port)
+                into = self.inputs if feeds else self.outputs
+                into.append(GatewayPort(topic.name, topic.type, len(into), port, ros1=True))
+                continue
             if node != gateway:
                 raise HardwareError(f"fpga target {target}: node {node} on {topic.name} has no hw: implementation, so "
                                     "nothing can run it in the simulator; give it one (hw: module:Component) or move "

@@ -201,7 +201,7 @@ def _c_strings(labels: list[str]) -> str:
 
 
 def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: bool,
-                   monitored: list[str] | None = None) -> str:
+                   monitored: list[tuple[str, str]] | None = None) -> str:
     """The C++ of the cycle loop for ``top``'s ports (see the module's docstring)."""
     inputs = [p for p in ports if p.feeds_design]
     outputs = [p for p in ports if not p.feeds_design]
@@ -237,11 +237,11 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
                   f"  what |= watch(s, {j}, t->{port.prefix}_tvalid, t->{port.prefix}_tready, data, keep, "
                   f"t->{port.prefix}_tlast ? 1 : 0);"]
     if monitored:
-        lines += [f"  static const char* WATCHED[] = {_c_strings(monitored)};",
+        lines += [f"  static const char* WATCHED[] = {_c_strings([label for label, _ in monitored])};",
+                  f"  static const char* BROKEN[] = {_c_strings([rule for _, rule in monitored])};",
                   "  uint64_t broken = (uint64_t)t->hw_violations;",
                   f"  for (int k = 0; k < {len(monitored)}; ++k) if (broken >> k & 1) {{",
-                  '    what |= fail(s, WATCHED[k], "TVALID dropped, or TDATA/TKEEP/TLAST changed, before TREADY"); '
-                  "break; }"]
+                  "    what |= fail(s, WATCHED[k], BROKEN[k]); break; }"]
     lines += ["  (void)fired; (void)data; (void)keep; return what;", "}", "", "static void edge(Sim* s) {"]
     lines += ["  s->top->clk = 1; s->top->eval(); s->top->clk = 0; s->top->eval();" if clocked else "  (void)s;"]
     lines += ["}"]
@@ -249,7 +249,7 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
 
 
 def compile_simulator(verilog: str, top: str, ports: list[StreamPort], data_width: int, clocked: bool,
-                      design_key: str, monitored: list[str] | None = None, sources: list[Path] | None = None,
+                      design_key: str, monitored: list[tuple[str, str]] | None = None, sources: list[Path] | None = None,
                       cache: Path | None = None) -> Path:
     """The shared library of ``top`` with its harness, compiled once per design (see the module's docstring).
 

@@ -11,6 +11,11 @@ message. A hardware server takes each request's body and answers in order; the g
 who asked and answers each client on its reply channel. Software nodes cannot tell a
 hardware peer from a software one.
 
+Hardware TCPROS (Sugata et al.): a topic the target's hardware frames for ROS 1 itself
+(``plan.TargetPlan.ros1_export``/``ros1_import``) has a port of TCPROS frames; the gateway is then
+a ROS 1 node of its own (``/<project>_<target>``), does the registration (master, ``requestTopic``,
+connection headers) and moves each frame between the port and the sockets unchanged.
+
 Reliable topics stay lossless across the gateway: it takes from a subscription only while
 the port's queue has room, so a full hardware side fills the subscription's FIFO and then
 blocks the software publisher, as any slow subscriber would; and the hardware's output
@@ -19,6 +24,7 @@ port holds TREADY low while the gateway's publisher is blocked.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections import deque
 from collections.abc import Callable
@@ -31,6 +37,7 @@ from ..hw._verilator import IDLE
 from ..msg import TypeRegistry
 from ..plan import Plan
 from ..runtime import Node, Replies
+from ..transport.tcpros import Ros1Peer, Ros1Type, receive_frames
 
 log = get_logger("hetros.cosim")
 
@@ -107,6 +114,55 @@ class _Output:
         self.replies.send(request_id, client, message)
 
 
+class _FramesFromRos1:
+    """A ROS 1 subscription whose frames wait, as they came, for the hardware's deframer."""
+
+    def __init__(self, node: Node, peer: Ros1Peer, port: GatewayPort, types: TypeRegistry) -> None:
+        self.port = port
+        self.frames: deque[bytes] = deque()
+        # a connection's thread waits while this many frames wait here: TCP then holds the ROS 1 publisher
+        self._room = threading.Semaphore(_QUEUED * 4)
+        self._stop = node.graph.stop
+        self._wake = node.executor.wake
+        peer.subscribe(port.topic, Ros1Type(types, port.type), attach=receive_frames(self._arrived))
+
+    def _arrived(self, frame: bytes) -> None:
+        while not self._room.acquire(timeout=0.2):
+            if self._stop.is_set():
+                return
+        self.frames.append(frame)
+        self._wake()
+
+    def feed(self, top: SimulatedTop) -> None:
+        try:
+            frame = self.frames.popleft()
+        except IndexError:
+            raise LookupError from None
+        self._room.release()
+        top.loan_input(self.port.index, len(frame))[:] = frame
+
+
+class _FramesToRos1:
+    """A ROS 1 publication of the frames the hardware's framer makes, sent as they are."""
+
+    def __init__(self, peer: Ros1Peer, port: GatewayPort, types: TypeRegistry, latch: bool) -> None:
+        self.port = port
+        self.publication = peer.advertise(port.topic, Ros1Type(types, port.type), latch=latch)
+
+    def send(self, frame: memoryview) -> None:
+        self.publication.publish_frame(frame)
+
+
+def _ros1_peer(node: Node, plan: Plan, target: str) -> Ros1Peer | None:
+    spec = plan.targets[target]
+    if not spec.ros1_export and not spec.ros1_import:
+        return None
+    peer = Ros1Peer(f"/{plan.name}_{target}", plan.ros1_master, plan.ros1_host, node.graph.stop)
+    log.info("fpga target %s is the ROS 1 node %s (hardware TCPROS: publishes %s, subscribes %s)", target,
+             peer.name, ", ".join(spec.ros1_export) or "nothing", ", ".join(spec.ros1_import) or "nothing")
+    return peer
+
+
 def gateway(node: Node) -> None:
     """Run the fpga target's hardware in Verilator, its gateway ports fed from and drained to the graph."""
     plan = node.graph.plan
@@ -120,9 +176,16 @@ def gateway(node: Node) -> None:
              len(top.inputs) + len(top.outputs), simulation.compile_seconds)
     # Amaranth's simulator runs thousands of cycles a second, not millions: it idles after fewer
     idle_cycles = _IDLE_CYCLES if simulation.simulator == "verilator" else _QUIET_AFTER_TRAFFIC
-    inputs = [_Input(node, port, types) for port in simulation.inputs]
-    asked = {i.port.service: i.asked for i in inputs if i.port.service}
-    outputs = [_Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
+    peer = _ros1_peer(node, plan, target)
+    inputs: list[_Input | _FramesFromRos1] = [
+        _FramesFromRos1(node, peer, port, types) if peer is not None and port.ros1 else _Input(node, port, types)
+        for port in simulation.inputs]
+    asked = {i.port.service: i.asked for i in inputs if isinstance(i, _Input) and i.port.service}
+    latched = {t for t, q in plan.ros1_qos.items() if q.keeps_history} | {
+        c.name for c in plan.channels.values() if c.qos.keeps_history}
+    outputs: list[_Output | _FramesToRos1] = [
+        _FramesToRos1(peer, port, types, port.topic in latched) if peer is not None and port.ros1
+        else _Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
     stop = node.graph.stop
     wall = 0.0
     node.figures = lambda: _figures(simulation)
@@ -157,6 +220,8 @@ def gateway(node: Node) -> None:
                 node.executor.wait(seen, 0.1)
                 quiet = _QUIET_AFTER_TRAFFIC if node.executor.generation != seen else idle_cycles
     finally:
+        if peer is not None:
+            peer.close()
         _report(simulation, wall)
         for port in simulation.outputs:
             partial = top.partial(port.index)

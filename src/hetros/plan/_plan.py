@@ -62,6 +62,10 @@ class TargetPlan:
     host: str = ""
     # fpga targets under ``hetros launch``: the simulator that runs the hardware
     sim: str = "verilator"
+    # fpga targets: topics whose ROS 1 side the hardware frames itself (hardware TCPROS), published to
+    # ROS 1 subscribers, or subscribed from ROS 1 publishers; the gateway registers them
+    ros1_export: tuple[str, ...] = ()
+    ros1_import: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -245,7 +249,8 @@ class Plan:
             message_paths=tuple(raw["message_paths"]),
             targets={k: TargetPlan(v["name"], v["kind"], tuple(v["cpus"]), v.get("clock_mhz", 100.0),
                                    v.get("data_width", 64), v.get("part", ""), v.get("host", ""),
-                                   v.get("sim", "verilator"))
+                                   v.get("sim", "verilator"), tuple(v.get("ros1_export", ())),
+                                   tuple(v.get("ros1_import", ())))
                      for k, v in raw["targets"].items()},
             nodes={k: NodePlan(**{**v, "args": tuple(v.get("args", ()))}) for k, v in raw["nodes"].items()},
             channels={

@@ -209,14 +209,58 @@ def ros2_bridge(project: LoadedProject) -> NodePlan | None:
                     publish=imports, subscribe=exports, services=import_services, clients=export_services)
 
 
-def ros1_bridge(project: LoadedProject) -> NodePlan | None:
-    """The node that carries exported and imported topics across (in the launcher's process)."""
+def _ros1_shared(project: LoadedProject) -> dict[str, list[str]]:
+    """Everything shared with ROS 1: with its ``kind: ros1`` nodes and through ``external: ros1:``."""
     model = project.model
     spec = model.external.ros1 if model.external is not None else None
     shared = _shared_with_ros1(project)
     if spec is not None:
         for key, listed in spec.listed().items():
             shared[key] = sorted(set(shared.get(key, ())) | set(listed))
+    return shared
+
+
+def hardware_framed(project: LoadedProject) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
+    """Hardware TCPROS: per fpga target, ``(exports, imports)``: the ROS 1 topics its hardware frames.
+
+    An exported topic is framed by the fpga target all of whose hetros publishers are its hardware
+    nodes; an imported one by every fpga target with a hardware node subscribing. The target's gateway
+    then registers with the master and moves the hardware's frames; the bridge carries the rest.
+    """
+    model = project.model
+    shared = _ros1_shared(project)
+    ros1 = ros1_nodes(project)
+
+    def hardware_target(node: str) -> str:
+        spec = model.nodes[node]
+        target = model.targets.get(spec.target)
+        return spec.target if target is not None and target.kind == "fpga" and spec.hw else ""
+
+    framed: dict[str, tuple[list[str], list[str]]] = {}
+    for topic in shared["export"]:
+        publishers = {hardware_target(n) for n, spec in model.nodes.items() if n not in ros1 and topic in spec.publish}
+        if len(publishers) == 1 and (target := publishers.pop()):
+            framed.setdefault(target, ([], []))[0].append(topic)
+    for topic in shared["import"]:
+        for target in sorted({hardware_target(n) for n, spec in model.nodes.items()
+                              if n not in ros1 and topic in spec.subscribe} - {""}):
+            framed.setdefault(target, ([], []))[1].append(topic)
+    return {target: (tuple(exports), tuple(imports)) for target, (exports, imports) in framed.items()}
+
+
+def ros1_bridge(project: LoadedProject) -> NodePlan | None:
+    """The node that carries exported and imported topics across (in the launcher's process), but for
+    what fpga targets frame themselves (``hardware_framed``)."""
+    model = project.model
+    spec = model.external.ros1 if model.external is not None else None
+    shared = _ros1_shared(project)
+    framed = hardware_framed(project)
+    in_hardware = {t for exports, _ in framed.values() for t in exports}
+    shared["export"] = [t for t in shared["export"] if t not in in_hardware]
+    hardware_nodes = {n for n, s in model.nodes.items() if s.hw and model.targets[s.target].kind == "fpga"}
+    ros1 = ros1_nodes(project)
+    shared["import"] = [t for t in shared["import"]
+                        if any(t in s.subscribe for n, s in model.nodes.items() if n not in hardware_nodes | ros1)]
     if not any(shared.values()):
         return None
     exports, imports, export_services, import_services, export_actions, import_actions = _typed(project, shared)

@@ -27,7 +27,7 @@ from ..plan import (
     reply_channel,
     request_channel,
 )
-from ._bridges import ros1_bridge, ros1_master, ros1_nodes, ros2_bridge
+from ._bridges import ROS1_BRIDGE, hardware_framed, ros1_bridge, ros1_master, ros1_nodes, ros2_bridge
 from ._checks import check, project_hash
 from ._model import LoadedProject, load_project
 
@@ -74,7 +74,11 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
             _add(channels, name, f"{srv}_Response", "reply", project, pub=server, service=service)
             _add(channels, name, f"{srv}_Response", "reply", project, sub=nname, service=service)
     fpga_of = {n: s.target for n, s in model.nodes.items() if model.targets[s.target].kind == "fpga"}
-    gateways = _add_gateways(channels, fpga_of)
+    framed = hardware_framed(project)
+    # imported topics an fpga target's hardware receives straight from ROS 1: not again through the bridge
+    received_from_ros1 = {(gateway_node(t), topic) for t, (_, imports) in framed.items() for topic in imports}
+    gateways = _add_gateways(channels, fpga_of, received_from_ros1)
+    gateways |= {gateway_node(t): t for t in framed}  # a target framing ROS 1 topics needs its gateway to run
     for gateway, target in gateways.items():
         process_of[gateway] = target
     clocks = _clock_followers(project, process_of, fpga_of, speaks_ros1) if model.use_sim_time else {}
@@ -87,7 +91,9 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
     host_of = ({n: host_of_target[s.target] for n, s in model.nodes.items()} | {b.name: first_host for b in bridges}
                | {g: host_of_target[t] for g, t in (gateways | clocks).items()})
 
-    def transport(publisher: str, subscriber: str) -> TransportKind | None:
+    def transport(channel: str, publisher: str, subscriber: str) -> TransportKind | None:
+        if publisher == ROS1_BRIDGE and (subscriber, channel) in received_from_ros1:
+            return None
         if publisher in fpga_of or subscriber in fpga_of:
             # inside one target's topic network; a hardware node's software peers are its gateway's
             return "hw" if fpga_of.get(publisher) == fpga_of.get(subscriber) else None
@@ -98,13 +104,13 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         return "inproc" if process_of[publisher] == process_of[subscriber] else "shm"
 
     edges = tuple(EdgePlan(c.name, p, s, kind) for c in channels.values() for p in c.publishers
-                  for s in c.subscribers if (kind := transport(p, s)) is not None)
+                  for s in c.subscribers if (kind := transport(c.name, p, s)) is not None)
     return Plan(
         name=model.name,
         root=str(project.root.resolve()),
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
         targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "",
-                               host_of_target[n], t.sim or "verilator")
+                               host_of_target[n], t.sim or "verilator", *framed.get(n, ((), ())))
                  for n, t in model.targets.items()}
         | {bridge.name: TargetPlan(bridge.name, "thread", host=first_host) for bridge in bridges},
         nodes={
@@ -154,18 +160,21 @@ def _clock_followers(project: LoadedProject, process_of: dict[str, str], fpga_of
 GATEWAY_RUN = "hetros.launch._gateway:gateway"
 
 
-def _add_gateways(channels: dict[str, ChannelPlan], fpga_of: dict[str, str]) -> dict[str, str]:
+def _add_gateways(channels: dict[str, ChannelPlan], fpga_of: dict[str, str],
+                  from_ros1: set[tuple[str, str]]) -> dict[str, str]:
     """Give each fpga target a gateway node on every topic it shares with software; gateway -> target.
 
     The gateway subscribes where a node off the target publishes to one of its hardware nodes,
     and publishes where one off the target subscribes to them (a hardware node of another fpga
-    target counts as off: two targets meet through their gateways).
+    target counts as off: two targets meet through their gateways). What the ROS 1 bridge imports
+    does not count where the target's hardware receives it from ROS 1 itself (``from_ros1``).
     """
     gateways: dict[str, str] = {}
     for channel in list(channels.values()):
         for target in sorted({fpga_of[n] for n in (*channel.publishers, *channel.subscribers) if n in fpga_of}):
             gateway = gateway_node(target)
-            into = any(fpga_of.get(n) != target for n in channel.publishers) and \
+            into = any(fpga_of.get(n) != target and not (n == ROS1_BRIDGE and (gateway, channel.name) in from_ros1)
+                       for n in channel.publishers) and \
                 any(fpga_of.get(n) == target for n in channel.subscribers)
             out_of = any(fpga_of.get(n) != target for n in channel.subscribers) and \
                 any(fpga_of.get(n) == target for n in channel.publishers)

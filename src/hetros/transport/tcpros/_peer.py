@@ -131,8 +131,17 @@ class Ros1Publication:
         """
         parts = self.kind.serialize_parts(message)
         total = sum(len(part) for part in parts)
-        frame = [FRAME.pack(total), *parts]
-        total += FRAME.size
+        self._send([FRAME.pack(total), *parts], total + FRAME.size)
+
+    def publish_frame(self, frame: Payload) -> None:
+        """Send a whole TCPROS frame, its length included, as it is (hardware TCPROS: the fpga target's
+        framer made it); the caller may reuse ``frame`` afterwards."""
+        if len(frame) < FRAME.size or FRAME.unpack(frame[:FRAME.size])[0] != len(frame) - FRAME.size:
+            raise ProtocolError(f"a frame for {self.topic} must start with its length ({len(frame) - FRAME.size}), "
+                                f"not {bytes(frame[:FRAME.size]).hex()}")
+        self._send([frame], len(frame))
+
+    def _send(self, frame: list[Payload], total: int) -> None:
         timeout: PublishTimeoutError | None = None
         with self._lock:
             if self.latch:
@@ -274,6 +283,26 @@ def receive_loop(kind: Ros1Kind, callback: Callable[[Any], None]) -> Attach:
             log.error("%s; disconnected", exc)
         except OSError:
             pass  # the publisher went away or we closed the connection
+        finally:
+            gone()
+            sock.close()
+
+    return attach
+
+
+def receive_frames(callback: Callable[[bytes], None]) -> Attach:
+    """An ``attach`` handing on each frame as it came, its length included (hardware TCPROS: the fpga
+    target's deframer reads it): no message is built in software."""
+
+    def attach(sock: socket.socket, peer: str, gone: Callable[[], None]) -> None:
+        try:
+            while True:
+                prefix = bytes(_receive_exactly(sock, 4))
+                callback(prefix + bytes(_receive_exactly(sock, _frame_length(prefix, peer))))
+        except ProtocolError as exc:
+            log.error("%s; disconnected", exc)
+        except OSError:
+            pass
         finally:
             gone()
             sock.close()

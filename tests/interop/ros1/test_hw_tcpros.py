@@ -1,0 +1,103 @@
+"""Hardware TCPROS: an fpga target (co-simulated) is a ROS 1 node; stock ROS 1 reads and feeds its frames.
+
+``examples/hw_tcpros``: hardware nodes publish /chatter and /points, framed for ROS 1 by the
+target's RTL; a compiled roscpp listener and ``rostopic echo`` hear /chatter; a rospy script
+checks every frame of both topics byte for byte against rospy's own serialization of the message
+it decodes; a stock rospy talker publishes /ros1_chatter, whose frames the hardware reads.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+from tests.support.ros1 import ROS_PYTHON, compile_roscpp, needs_ros1, needs_roscpp, ros1_master, stop
+
+EXAMPLE = Path(__file__).parents[3] / "examples" / "hw_tcpros"
+
+# every frame of a topic as rospy receives it (AnyMsg: the bytes unparsed), against rospy's own bytes
+FRAMES = textwrap.dedent("""
+    import sys, time, rospy
+    from io import BytesIO
+    from std_msgs.msg import String
+    from geometry_msgs.msg import PointStamped
+    rospy.init_node("frame_checker")
+    kinds = {"/chatter": String, "/points": PointStamped}
+    seen = {topic: 0 for topic in kinds}
+    def check(topic):
+        def on_frame(raw):
+            message = kinds[topic]()
+            message.deserialize(raw._buff)
+            again = BytesIO()
+            message.serialize(again)
+            if again.getvalue() != raw._buff:
+                print("MISMATCH", topic, raw._buff.hex(), again.getvalue().hex(), flush=True)
+            else:
+                seen[topic] += 1
+                if seen[topic] <= 2:
+                    print("frame", topic, repr(message).replace(chr(10), " "), flush=True)
+        return on_frame
+    for topic in kinds:
+        rospy.Subscriber(topic, rospy.AnyMsg, check(topic))
+    start = time.time()
+    while min(seen.values()) < 5 and time.time() - start < 90:
+        time.sleep(0.05)
+    print("checked", seen, flush=True)
+""")
+
+TALKER = textwrap.dedent("""
+    import rospy
+    from std_msgs.msg import String
+    rospy.init_node("ros1_talker")
+    pub = rospy.Publisher("/ros1_chatter", String, queue_size=10)
+    rate = rospy.Rate(10)
+    i = 0
+    while not rospy.is_shutdown():
+        pub.publish(String(data="from rospy %d" % i))
+        i += 1
+        rate.sleep()
+""")
+
+
+@needs_ros1
+@needs_roscpp
+def test_the_fpga_is_a_ros1_node_publishing_and_subscribing_in_hardware(tmp_path: Path) -> None:
+    listener = compile_roscpp(Path(__file__).with_name("data") / "listener.cpp", tmp_path / "listener")
+    (tmp_path / "frames.py").write_text(FRAMES)
+    (tmp_path / "talker.py").write_text(TALKER)
+    heard = tmp_path / "out" / "hw_tcpros" / "heard.txt"
+    for master in ros1_master("rosmaster"):
+        _uri, env = master
+        peers = [subprocess.Popen([str(listener), "5"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                  text=True),
+                 subprocess.Popen([ROS_PYTHON, str(tmp_path / "frames.py")], env=env, stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, text=True),
+                 subprocess.Popen([ROS_PYTHON, str(tmp_path / "talker.py")], env=env, stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, text=True)]
+        launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(EXAMPLE / "project.yaml")],
+                                  cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            echoed = subprocess.run(["/usr/bin/rostopic", "echo", "-n", "3", "/chatter"], env=env,
+                                    capture_output=True, text=True, timeout=180, check=False).stdout
+            deadline = time.monotonic() + 120
+            while peers[1].poll() is None or peers[0].poll() is None:
+                assert time.monotonic() < deadline, "the ROS 1 peers did not hear the hardware in time"
+                time.sleep(0.2)
+            while not heard.exists() or heard.read_text().count("from rospy") < 3:
+                assert time.monotonic() < deadline and launch.poll() is None, "the hardware heard no rospy talker"
+                time.sleep(0.2)
+        finally:
+            outputs = [stop(p) for p in peers]
+            logged = stop(launch, grace=30)
+        roscpp, frames, _talker = outputs
+        assert peers[0].returncode == 0, roscpp + logged
+        assert roscpp.count("I heard: [hello world") == 5, roscpp
+        assert 'data: "hello world' in echoed, echoed + logged
+        assert "MISMATCH" not in frames and "checked {'/chatter': 5, '/points': 5}" in frames, frames
+        assert 'frame_id: "frame 1" point:    x: 0.5   y: -1.0   z: 3.25' in frames and "seq: 0" in frames, frames
+        assert "hetros_fpga (hardware TCPROS: publishes /chatter, /points, subscribes /ros1_chatter)" in logged, logged
+        lines = heard.read_text().splitlines()
+        assert lines[0].startswith("heard from rospy"), lines

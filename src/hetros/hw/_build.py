@@ -153,16 +153,15 @@ class FpgaTop(Elaboratable):
         # ``monitored[k]`` breaking it this cycle
         self.monitored = [(f"hardware node {node} port {topics[index].port_name!r} ({topics[index].name})", _HELD_RULE)
                           for node, index, role, _ in self._inside if role == "pub"] if monitor else []
-        self.monitor = monitor
-        for index, topic in enumerate(topics):
+        for topic in topics:
             for role, nodes in (("pub", topic.publishers), ("sub", topic.subscribers)):
                 if TCPROS in nodes and topic.name not in self.framing:
                     raise HardwareError(f"{topic.name} is framed for ROS 1 in hardware, but no program was given")
                 if TCPROS in nodes and monitor:
+                    longer = f" (or was longer than {max_frame} bytes: raise the target's tcpros_frame_bytes)"
                     self.monitored.append((
                         f"hardware TCPROS of {topic.name} ({'from' if role == 'pub' else 'to'} ROS 1)",
-                        "a message did not fit its type " + ("(or was longer than max_frame: raise it)"
-                                                             if role == "sub" else "")))
+                        "a message did not fit its type" + (longer if role == "sub" else "")))
         if len(self.monitored) > 64:
             raise HardwareError(f"co-simulation watches at most 64 hardware node outputs, not {len(self.monitored)}")
         self.violations = Signal(max(1, len(self.monitored)), name="hw_violations")
@@ -282,7 +281,8 @@ def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path
                             "subscriber on it, counting its gateway): nothing to generate")
     spec = plan.targets[target]
     components = hardware_nodes(plan, target)
-    top = FpgaTop(topics, spec.data_width, components, framing=framing_programs(topics, types))
+    top = FpgaTop(topics, spec.data_width, components, framing=framing_programs(topics, types),
+                  max_frame=spec.tcpros_frame_bytes)
     name = top_name(target)
     text = verilog.convert(top, name=name, ports=top.signals())
     out.mkdir(parents=True, exist_ok=True)

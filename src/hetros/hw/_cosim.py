@@ -51,7 +51,8 @@ class TargetSimulation:
         gateway = gateway_node(target)
         topics = hardware_topics(plan, target, only)
         components = hardware_nodes(plan, target, only)
-        top = FpgaTop(topics, spec.data_width, components, monitor=True, framing=framing_programs(topics, types))
+        top = FpgaTop(topics, spec.data_width, components, monitor=True, framing=framing_programs(topics, types),
+                      max_frame=spec.tcpros_frame_bytes)
         name = top_name(target)
         ports = []
         self.inputs: list[GatewayPort] = []

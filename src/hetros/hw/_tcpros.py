@@ -155,7 +155,7 @@ def _ros1_only_size(store: Any, desc: Any, path: str) -> int:
     if kind == Nodetype.SEQUENCE:
         return 4
     sub, count = arg
-    return count * _ros1_only_size(store, sub, path)
+    return int(count) * _ros1_only_size(store, sub, path)
 
 
 def _field(types: TypeRegistry, store: Any, desc: Any, path: str, walk: _Walk) -> None:

@@ -249,8 +249,8 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
 
 
 def compile_simulator(verilog: str, top: str, ports: list[StreamPort], data_width: int, clocked: bool,
-                      design_key: str, monitored: list[tuple[str, str]] | None = None, sources: list[Path] | None = None,
-                      cache: Path | None = None) -> Path:
+                      design_key: str, monitored: list[tuple[str, str]] | None = None,
+                      sources: list[Path] | None = None, cache: Path | None = None) -> Path:
     """The shared library of ``top`` with its harness, compiled once per design (see the module's docstring).
 
     ``design_key`` identifies the design as its sources do (Amaranth's Verilog of one design may

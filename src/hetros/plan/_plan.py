@@ -66,6 +66,10 @@ class TargetPlan:
     # ROS 1 subscribers, or subscribed from ROS 1 publishers; the gateway registers them
     ros1_export: tuple[str, ...] = ()
     ros1_import: tuple[str, ...] = ()
+    tcpros_frame_bytes: int = 4096
+    # fpga targets: the board (zcu104, pynq-z2, ultra96), "" for none: the gateway then goes through the
+    # PYNQ-shaped board surface (``hetros.board``)
+    board: str = ""
 
 
 @dataclass(frozen=True)
@@ -250,7 +254,8 @@ class Plan:
             targets={k: TargetPlan(v["name"], v["kind"], tuple(v["cpus"]), v.get("clock_mhz", 100.0),
                                    v.get("data_width", 64), v.get("part", ""), v.get("host", ""),
                                    v.get("sim", "verilator"), tuple(v.get("ros1_export", ())),
-                                   tuple(v.get("ros1_import", ())))
+                                   tuple(v.get("ros1_import", ())), v.get("tcpros_frame_bytes", 4096),
+                                   v.get("board", ""))
                      for k, v in raw["targets"].items()},
             nodes={k: NodePlan(**{**v, "args": tuple(v.get("args", ()))}) for k, v in raw["nodes"].items()},
             channels={

@@ -68,6 +68,13 @@ class TargetSpec(_Strict):
         "no compiler, thousands of cycles a second, for small designs)")
     host: str | None = Field(default=None, description="the machine it runs on, a name under hosts: (absent: the "
                              "first host, or this machine without hosts:)")
+    tcpros_frame_bytes: int = Field(default=4096, ge=16, le=1 << 26, description="fpga: the longest ROS 1 frame "
+                                    "its hardware TCPROS framer holds (a type of variable size is stored whole "
+                                    "before its length goes out); a longer message is refused loudly")
+    board: Literal["zcu104", "pynq-z2", "ultra96"] | None = Field(
+        default=None, description="fpga: the board; `hetros launch` then drives the target through the board "
+        "gateway (PYNQ's Overlay, allocate and DMA channels; `pip install hetros[board]` on the board, the "
+        "simulator behind the same surface elsewhere), and `hetros hw export` defaults to it")
 
     @field_validator("cpus")
     @classmethod

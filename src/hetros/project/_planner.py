@@ -110,7 +110,8 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         root=str(project.root.resolve()),
         message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
         targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "",
-                               host_of_target[n], t.sim or "verilator", *framed.get(n, ((), ())))
+                               host_of_target[n], t.sim or "verilator", *framed.get(n, ((), ())),
+                               t.tcpros_frame_bytes, t.board or "")
                  for n, t in model.targets.items()}
         | {bridge.name: TargetPlan(bridge.name, "thread", host=first_host) for bridge in bridges},
         nodes={

@@ -98,6 +98,7 @@ def test_the_fpga_is_a_ros1_node_publishing_and_subscribing_in_hardware(tmp_path
         assert 'data: "hello world' in echoed, echoed + logged
         assert "MISMATCH" not in frames and "checked {'/chatter': 5, '/points': 5}" in frames, frames
         assert 'frame_id: "frame 1" point:    x: 0.5   y: -1.0   z: 3.25' in frames and "seq: 0" in frames, frames
-        assert "ROS 1 node /hw_tcpros_fpga (hardware TCPROS: publishes /chatter, /points, subscribes /ros1_chatter)" in logged, logged
+        assert ("ROS 1 node /hw_tcpros_fpga (hardware TCPROS: publishes /chatter, /points, subscribes "
+                "/ros1_chatter)") in logged, logged
         lines = heard.read_text().splitlines()
         assert lines[0].startswith("heard from rospy"), lines

@@ -109,6 +109,22 @@ def cmd_hw_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_hw_export(args: argparse.Namespace) -> int:
+    _hardware_tools()
+    from ..hw._export import export
+
+    plan, targets = _fpga_targets(args)
+    for target in targets:
+        board = args.board or plan.targets[target].board
+        if not board:
+            raise HardwareError(f"fpga target {target} names no board: give --board zcu104|pynq-z2|ultra96 or "
+                                f"board: on the target")
+        out = Path(args.output) / target if len(targets) > 1 else Path(args.output)
+        for path in export(plan, target, board, out, registry()):
+            print(f"wrote {path}")
+    return 0
+
+
 def _fpga_targets(args: argparse.Namespace) -> tuple[Plan, list[str]]:
     from ..project import plan_file
 
@@ -499,6 +515,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="folder for <top>.v and <top>.json")
     p.add_argument("--target", help="the fpga target (default: every one)")
     p.set_defaults(func=cmd_hw_build)
+    p = hw.add_parser("export", help="an fpga target as a Vivado project for a board: Verilog, AXI wrapper, "
+                                     "block-design Tcl, manifest")
+    p.add_argument("project")
+    p.add_argument("--board", choices=["zcu104", "pynq-z2", "ultra96"], help="default: the target's board:")
+    p.add_argument("-o", "--output", required=True, help="the folder (one per target when there are several)")
+    p.add_argument("--target", help="the fpga target (default: every one)")
+    p.set_defaults(func=cmd_hw_export)
     p = hw.add_parser("report", help="simulated transfer time per message size (fpgaDDS Table I sizes)")
     p.add_argument("project")
     p.add_argument("--target", help="the fpga target (default: every one)")

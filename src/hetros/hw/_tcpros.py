@@ -274,7 +274,7 @@ class _Engine:
         steps = len(ops)
         pc = Signal(range(steps + 1), init=steps)  # idle until ``start``
         kind = Signal(range(len(_KINDS)))
-        size = Signal(range(max(op.size for op in ops) + 1))
+        size = Signal(range(max(8, *(op.size for op in ops)) + 1))
         with m.Switch(pc):
             for index, op in enumerate(ops):
                 with m.Case(index):

@@ -28,12 +28,13 @@ def launch(project: Path, cwd: Path, *extra: str) -> subprocess.CompletedProcess
 
 
 @pytest.mark.parametrize(("mappings", "out"), [
-    (("project.yaml", "project_fpga.yaml"), "sobel_hw"),
+    (("project.yaml", "project_fpga.yaml", "project_board.yaml"), "sobel_hw"),
     (("project_chain.yaml", "project_chain_fpga.yaml", "project_chain_sequential.yaml"), "sobel_chain"),
 ])
 def test_filters_on_fpga_targets_give_the_software_mappings_pixels(tmp_path: Path, mappings: tuple[str, ...],
                                                                     out: str) -> None:
-    """Sobel alone, and blur -> Sobel in software, as dataflow (one target) and sequential (two)."""
+    """Sobel alone (in software, co-simulated, and on a board through PYNQ's surface with the simulator
+    behind it), and blur -> Sobel in software, as dataflow (one target) and sequential (two)."""
     results = {}
     for mapping in mappings:
         cwd = tmp_path / mapping
@@ -41,6 +42,8 @@ def test_filters_on_fpga_targets_give_the_software_mappings_pixels(tmp_path: Pat
         result = launch(EXAMPLES / "sobel_hw" / mapping, cwd)
         assert result.returncode == 0, result.stderr
         assert "8 frames, every pixel equal to the software filters" in result.stderr
+        if "board" in mapping:  # each image one DMA transfer in, one out: the path a ZCU104 takes
+            assert "on board zcu104 through SimulatedOverlay (2 DMA channels)" in result.stderr
         results[mapping] = (cwd / "out" / out / "edges.txt").read_text()
     assert len(set(results.values())) == 1
     assert len(results[mappings[0]].splitlines()) == 8

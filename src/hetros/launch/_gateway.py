@@ -28,6 +28,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from .._errors import HardwareError
@@ -78,14 +79,19 @@ class _Input:
         else:
             self.take = node.create_subscription(types.get(port.type), port.topic).try_take
 
-    def feed(self, top: SimulatedTop) -> None:
-        """Take one message and encode it straight into the simulator's input queue (its one copy)."""
+    def next_message(self) -> Any:
+        """The next message to go in (LookupError when none waits); a request's asker is remembered."""
         item = self.take()
         if item is None:
             raise LookupError
         if self.port.service:
             request_id, client, item = item
             self.asked.append((request_id, client))
+        return item
+
+    def feed(self, top: SimulatedTop) -> None:
+        """Take one message and encode it straight into the simulator's input queue (its one copy)."""
+        item = self.next_message()
         self.codec.encode(item, top.loan_input(self.port.index, self.codec.size(item)))
 
 
@@ -171,6 +177,9 @@ def gateway(node: Node) -> None:
     target = str(node.get_parameter("target"))
     types = node.graph.types
     simulation = _PREPARED.pop(node.name, None) or TargetSimulation(plan, target, types)
+    if plan.targets[target].board:
+        _run_board(node, plan, target, simulation, types)
+        return
     top = simulation.top
     log.info("fpga target %s in %s (%d gateway ports; built in %.1f s)", target, simulation.simulator,
              len(top.inputs) + len(top.outputs), simulation.compile_seconds)
@@ -259,3 +268,78 @@ def _report(simulation: TargetSimulation, wall: float) -> None:
                 per = busy / messages
                 log.info("  %s: %d messages, %d beats, %.0f cycles per message (%.2f µs at %g MHz)", port.port.label,
                          messages, beats, per, per / simulation.clock_mhz, simulation.clock_mhz)
+
+
+# what a board's receive channel can take in one message, unless the port's messages are known to be smaller
+_RECEIVE_BYTES = 1 << 22
+
+
+def _run_board(node: Node, plan: Plan, target: str, simulation: TargetSimulation, types: TypeRegistry) -> None:
+    """The gateway as a board runs it: PYNQ's surface (``hetros.board``), one AXI DMA per gateway port, each
+    message a DMA transfer between a buffer the DMA reaches and the hardware's stream."""
+    from ..board import allocate, open_overlay, read_manifest
+    from ..hw._build import top_name
+    from ..hw._export import export
+    from ._registry import session_folder
+
+    board = plan.targets[target].board
+    if any(p.ros1 for p in (*simulation.inputs, *simulation.outputs)):
+        raise HardwareError(f"fpga target {target}: hardware TCPROS runs under co-simulation only; remove board: "
+                            "or leave its ROS 1 topics to the bridge")
+    exported = Path(plan.root) / "hw" / target / f"{top_name(target)}.board.json"  # `hetros hw export -o hw/<t>`
+    manifest = exported
+    if not exported.exists():
+        folder = session_folder(node.graph.session) / "board" / target
+        export(plan, target, board, folder, types)
+        manifest = folder / exported.name
+    overlay = open_overlay(manifest, simulation)
+    ports = {p.port.prefix: p for p in (*simulation.inputs, *simulation.outputs)}
+    inputs = {p.port.prefix: _Input(node, p, types) for p in simulation.inputs}
+    asked = {i.port.service: i.asked for i in inputs.values() if i.port.service}
+    sends: list[tuple[Any, _Input, list[Any]]] = []
+    receives: list[tuple[Any, _Output, Any]] = []
+    for entry in read_manifest(manifest)["dmas"]:
+        dma = getattr(overlay, entry["name"])
+        if entry["channel"] == "sendchannel":
+            sends.append((dma.sendchannel, inputs[entry["interface"]], [allocate(4096)]))
+        else:
+            port = ports[entry["interface"]]
+            out = _Output(node, port, types, asked.get(port.service, deque()))
+            buffer = allocate(_RECEIVE_BYTES)
+            dma.recvchannel.transfer(buffer)
+            receives.append((dma.recvchannel, out, buffer))
+    log.info("fpga target %s on board %s through %s (%d DMA channels)", target, board, type(overlay).__name__,
+             len(sends) + len(receives))
+    stop = node.graph.stop
+    in_flight = 0
+    try:
+        while not stop.is_set():
+            seen = node.executor.generation
+            moved = False
+            for channel, source, held in sends:
+                if not channel.idle:
+                    continue
+                try:
+                    message = source.next_message()
+                except LookupError:
+                    continue
+                size = source.codec.size(message)
+                if size > len(held[0]):
+                    held[0] = allocate(max(size, 2 * len(held[0])))
+                source.codec.encode(message, memoryview(held[0])[:size])
+                held[0].flush()
+                channel.transfer(held[0], 0, size)
+                in_flight += 1
+                moved = True
+            for channel, sink, buffer in receives:
+                if channel.idle:
+                    buffer.invalidate()
+                    sink.send(memoryview(buffer)[:channel.transferred])
+                    channel.transfer(buffer)
+                    in_flight = max(0, in_flight - 1)
+                    moved = True
+            if not moved:
+                node.executor.wait(seen, 0.001 if in_flight else 0.05)
+    finally:
+        log.info("fpga target %s on board %s: %d cycles run", target, board, simulation.top.cycle)
+        simulation.close()

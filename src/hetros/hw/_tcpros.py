@@ -29,7 +29,7 @@ from rosbags.interfaces import Nodetype
 
 from .._errors import HardwareError
 from ..msg import TypeRegistry
-from ._bytes import bytes_in, bytes_out
+from ._bytes import ByteSource, bytes_in, bytes_out
 from ._stream import axi_stream
 
 # what one step of a program does with the CDR side (C) and the ROS 1 side (R)
@@ -408,6 +408,24 @@ class _Engine:
                             m.d.comb += next_step.eq(1)
 
 
+def _one_byte_behind(m: Module, engine: _Engine, sink: Any) -> Any:
+    """The engine's bytes to ``sink`` one byte late, so that the message's last byte, known only once the
+    program has ended (trailing steps may emit nothing), carries TLAST; high as the message is out."""
+    held, held_valid = Signal(8), Signal()
+    m.d.comb += engine.ready.eq(~held_valid | sink.ready)
+    m.d.comb += [sink.valid.eq(held_valid & (engine.valid | ~engine.running)), sink.byte.eq(held),
+                 sink.last.eq(~engine.running)]
+    with m.If(engine.valid & engine.ready):
+        m.d.sync += [held.eq(engine.byte), held_valid.eq(1)]
+    with m.Elif(sink.valid & sink.ready):
+        m.d.sync += held_valid.eq(0)
+    finished = Signal()
+    m.d.comb += finished.eq(~engine.running & (~held_valid | sink.ready))
+    with m.If(finished):
+        m.d.sync += held_valid.eq(0)
+    return finished
+
+
 class Ros1Framer(wiring.Component):
     """CDR bodies in (``cdr``), TCPROS frames out (``frame``): the length, then ROS 1's bytes.
 
@@ -436,7 +454,6 @@ class Ros1Framer(wiring.Component):
         if fixed is not None:
             # the length is known: it leads, then the program's bytes stream through
             prefix = Const(fixed, 32)
-            held, held_valid = Signal(8), Signal()  # one byte behind, so the last can carry TLAST
             with m.Switch(state):
                 with m.Case(0):
                     with m.If(source.valid):
@@ -450,15 +467,8 @@ class Ros1Framer(wiring.Component):
                             m.d.comb += start.eq(1)
                             m.d.sync += state.eq(1)
                 with m.Case(1):
-                    m.d.comb += engine.ready.eq(~held_valid | sink.ready)
-                    m.d.comb += [sink.valid.eq(held_valid & (engine.valid | engine.done | ~engine.running)),
-                                 sink.byte.eq(held), sink.last.eq(~engine.running)]
-                    with m.If(engine.valid & engine.ready):
-                        m.d.sync += [held.eq(engine.byte), held_valid.eq(1)]
-                    with m.Elif(sink.valid & sink.ready):
-                        m.d.sync += held_valid.eq(0)
-                    with m.If(~engine.running & (~held_valid | sink.ready)):
-                        m.d.sync += [state.eq(0), held_valid.eq(0)]
+                    with m.If(_one_byte_behind(m, engine, sink)):
+                        m.d.sync += state.eq(0)
             return m
         store = Memory(shape=unsigned(8), depth=self.max_frame, init=[])
         m.submodules.store = store
@@ -521,11 +531,8 @@ class Ros1Deframer(wiring.Component):
         start = Signal()
         # the length's bytes go past the engine, which starts after them
         gate = Signal()
-        from ._bytes import ByteSource
-
         inner = ByteSource(source.byte, source.valid & (state == 1), source.last, gate)
         engine = _Engine(m, self.program, False, inner, start, ended_before=source.last)
-        held, held_valid = Signal(8), Signal()  # one byte behind, so the last can carry TLAST
         m.d.comb += self.malformed.eq(engine.malformed)
         with m.Switch(state):
             with m.Case(0):
@@ -537,13 +544,6 @@ class Ros1Deframer(wiring.Component):
                         m.d.sync += [state.eq(1), skipped.eq(0)]
             with m.Case(1):
                 m.d.comb += source.take.eq(gate)
-                m.d.comb += engine.ready.eq(~held_valid | sink.ready)
-                m.d.comb += [sink.valid.eq(held_valid & (engine.valid | ~engine.running)), sink.byte.eq(held),
-                             sink.last.eq(~engine.running)]
-                with m.If(engine.valid & engine.ready):
-                    m.d.sync += [held.eq(engine.byte), held_valid.eq(1)]
-                with m.Elif(sink.valid & sink.ready):
-                    m.d.sync += held_valid.eq(0)
-                with m.If(~engine.running & (~held_valid | sink.ready)):
-                    m.d.sync += [state.eq(0), held_valid.eq(0)]
+                with m.If(_one_byte_behind(m, engine, sink)):
+                    m.d.sync += state.eq(0)
         return m

@@ -207,8 +207,31 @@ def table_cosim(quick: bool) -> list[dict[str, Any]]:
     return rows
 
 
+def table_fmax(quick: bool) -> list[dict[str, Any]]:
+    """The open flow (YoWASP Yosys + nextpnr-ecp5): Fmax of the Sobel node (640-pixel lines), the sobel_hw
+    target and a 2 -> 2 topic network with a FIFO; empty, with a message, where the tools are absent."""
+    import tempfile
+
+    from ..hw._bitstream import available, bitstreams, build_bitstream
+    from ..hw._rtl import topic_verilog
+    from ..msg import registry
+
+    if not available():
+        print("[bench] YoWASP's nextpnr-ecp5 or ecppack is not installed (pip install 'hetros[rtl]'): no bitstream, "
+              "no Fmax")
+        return []
+    folder = Path(tempfile.mkdtemp(prefix="hetros-bitstream-"))
+    rows = bitstreams(_sobel_plan(320 if quick else 640, 480), "fpga", folder / "sobel", registry(), "all")
+    text, _top = topic_verilog(2, 2, WIDTH, 512)
+    rows.append(build_bitstream(text, "hetros_topic", folder / "network", CLOCK_MHZ, "topic network 2->2, FIFO 512"))
+    for row in rows:
+        print(f"[bench] {row.design}: Fmax {row.fmax_mhz:.1f} MHz on {row.device} ({row.seconds:.0f} s)")
+    return [{"design": r.design, "device": r.device, "luts": r.luts, "ffs": r.ffs, "fmax_mhz": r.fmax_mhz,
+             "target_mhz": r.target_mhz, "bitstream_bytes": r.bitstream.stat().st_size} for r in rows]
+
+
 def markdown(one: list[dict[str, Any]], two: list[dict[str, Any]], cosim: list[dict[str, Any]],
-             chain: list[dict[str, Any]]) -> str:
+             chain: list[dict[str, Any]], fmax: list[dict[str, Any]] | None = None) -> str:
     lines = [f"### Table I shape: one message through a 1-to-1 hardware topic, {WIDTH}-bit, {CLOCK_MHZ:g} MHz, "
              "simulated", "",
              "| size | cycles | hetros at 100 MHz | fpgaDDS (paper) | CycloneDDS (paper) | "
@@ -244,6 +267,14 @@ def markdown(one: list[dict[str, Any]], two: list[dict[str, Any]], cosim: list[d
               "a cycle (its jitter is the design's, none here); the sequential figure leaves out the CPU transfers "
               "between its two gateways. The paper's chain alpha adds the projection and runs on a ZCU104's "
               "Cortex-A53: a shape to compare, not the same work."]
+    lines += ["", "### Open-flow bitstreams (Lattice ECP5, YoWASP Yosys + nextpnr-ecp5, each design in a pin harness)",
+              ""]
+    if fmax:
+        lines += ["| design | device | LUT4 | FF | Fmax (place and route) | target clock |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['design']} | {r['device']} | {r['luts']:,} | {r['ffs']:,} | {r['fmax_mhz']:.1f} MHz | "
+                  f"{r['target_mhz']:g} MHz |" for r in fmax]
+    else:
+        lines += ["Skipped: YoWASP's nextpnr-ecp5 and ecppack are not installed (`pip install 'hetros[rtl]'`)."]
     fast = [r["cycles_per_s"] for r in cosim if r["simulator"] == "verilator"]
     slow = [r["cycles_per_s"] for r in cosim if r["simulator"] != "verilator"]
     if fast and slow:
@@ -292,10 +323,11 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     one, two, cosim = table_one(args.quick), table_two(args.quick), table_cosim(args.quick)
     chain = table_chain(args.quick)
-    text = markdown(one, two, cosim, chain)
+    fmax = table_fmax(args.quick)
+    text = markdown(one, two, cosim, chain, fmax)
     print("\n" + text)
     (out / "hw.md").write_text(provenance() + "\n\n" + text + "\n")
-    figures = {"table_one": one, "table_two": two, "cosim": cosim, "chain": chain}
+    figures = {"table_one": one, "table_two": two, "cosim": cosim, "chain": chain, "fmax": fmax}
     (out / "hw.json").write_text(json.dumps(figures, indent=1))
     plot(one, cosim, out / "hw.png")
     print(f"\nwrote {out / 'hw.md'}, {out / 'hw.json'}, {out / 'hw.png'}")

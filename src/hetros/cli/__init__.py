@@ -125,6 +125,20 @@ def cmd_hw_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_hw_bitstream(args: argparse.Namespace) -> int:
+    _hardware_tools()
+    from ..hw._bitstream import bitstreams, format_bitstreams
+
+    plan, targets = _fpga_targets(args)
+    rows = []
+    for target in targets:
+        rows += bitstreams(plan, target, Path(args.output) / target, registry(), args.parts)
+    print(format_bitstreams(rows))
+    print("\n(each design inside a pin harness on a Lattice ECP5: YoWASP's Yosys, nextpnr-ecp5 and ecppack; "
+          "Fmax is nextpnr's achieved figure for the worst clock)")
+    return 0
+
+
 def _fpga_targets(args: argparse.Namespace) -> tuple[Plan, list[str]]:
     from ..project import plan_file
 
@@ -522,6 +536,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="the folder (one per target when there are several)")
     p.add_argument("--target", help="the fpga target (default: every one)")
     p.set_defaults(func=cmd_hw_export)
+    p = hw.add_parser("bitstream", help="a real bitstream on the open flow (YoWASP Yosys + nextpnr, Lattice ECP5) "
+                                        "and the Fmax place and route achieved")
+    p.add_argument("project")
+    p.add_argument("-o", "--output", required=True, help="the folder (a subfolder per target and design)")
+    p.add_argument("--target", help="the fpga target (default: every one)")
+    p.add_argument("--parts", choices=["all", "target", "parts"], default="all",
+                   help="target: the whole target; parts: each hardware node and topic network alone")
+    p.set_defaults(func=cmd_hw_bitstream)
     p = hw.add_parser("report", help="simulated transfer time per message size (fpgaDDS Table I sizes)")
     p.add_argument("project")
     p.add_argument("--target", help="the fpga target (default: every one)")

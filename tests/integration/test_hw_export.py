@@ -68,9 +68,9 @@ def test_the_open_flow_makes_an_ecp5_bitstream_and_reports_fmax(tmp_path: Path) 
 
     if not available():
         pytest.skip("YoWASP's nextpnr-ecp5 and ecppack are not installed (pip install 'hetros[rtl]')")
-    done = subprocess.run([sys.executable, "-m", "hetros", "hw", "bitstream", str(EXAMPLES / "hw_topics" / "project.yaml"),
-                           "--parts", "parts", "-o", str(tmp_path)], capture_output=True, text=True, timeout=600,
-                          check=False)
+    project = EXAMPLES / "hw_topics" / "project.yaml"
+    done = subprocess.run([sys.executable, "-m", "hetros", "hw", "bitstream", str(project), "--parts", "parts", "-o",
+                           str(tmp_path)], capture_output=True, text=True, timeout=600, check=False)
     assert done.returncode == 0, done.stderr
     rows = re.findall(r"^\| (topic \S+ \(\d->\d\)) \| (LFE5U-\S+) \| [\d,]+ \| [\d,]+ \| ([\d.]+) MHz \| 100 MHz \| "
                       r"(\S+\.bit)", done.stdout, re.MULTILINE)

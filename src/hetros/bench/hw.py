@@ -270,7 +270,8 @@ def markdown(one: list[dict[str, Any]], two: list[dict[str, Any]], cosim: list[d
     lines += ["", "### Open-flow bitstreams (Lattice ECP5, YoWASP Yosys + nextpnr-ecp5, each design in a pin harness)",
               ""]
     if fmax:
-        lines += ["| design | device | LUT4 | FF | Fmax (place and route) | target clock |", "|---|---|---|---|---|---|"]
+        lines += ["| design | device | LUT4 | FF | Fmax (place and route) | target clock |",
+                  "|---|---|---|---|---|---|"]
         lines += [f"| {r['design']} | {r['device']} | {r['luts']:,} | {r['ffs']:,} | {r['fmax_mhz']:.1f} MHz | "
                   f"{r['target_mhz']:g} MHz |" for r in fmax]
     else:

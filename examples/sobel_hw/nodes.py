@@ -39,8 +39,9 @@ def camera(node: Node) -> None:
     for seq in node.rate(node.get_parameter("hz", 20.0)):
         if seq >= node.get_parameter("frames"):
             return
-        pixels = frame(seq, height, width)
-        msg = Image(height=height, width=width, encoding="mono8", step=width, data=pixels.reshape(-1))
+        msg = pub.loan(data=height * width)  # a large frame is drawn straight into its shared-memory slot
+        msg.data.reshape(height, width)[:] = frame(seq, height, width)
+        msg.height, msg.width, msg.encoding, msg.step = height, width, "mono8", width
         msg.header.frame_id = f"frame{seq}"
         pub.publish(msg)
 

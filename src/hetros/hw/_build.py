@@ -165,6 +165,16 @@ class FpgaTop(Elaboratable):
         if len(self.monitored) > 64:
             raise HardwareError(f"co-simulation watches at most 64 hardware node outputs, not {len(self.monitored)}")
         self.violations = Signal(max(1, len(self.monitored)), name="hw_violations")
+        # hardware nodes reading messages in memory: their AXI4 port ``mem`` as the top's ``m_axi_<node>_*``
+        from ._memory import MEMORY_PORT
+
+        self.memory_ports: dict[str, dict[str, Any]] = {}
+        for node, component in self.hardware_nodes.items():
+            members = dict(component.signature.members.items())
+            if MEMORY_PORT in members:
+                port = getattr(component, MEMORY_PORT)
+                self.memory_ports[node] = {name: Signal(len(getattr(port, name)), name=f"m_axi_{node}_{name}")
+                                           for name in members[MEMORY_PORT].signature.members}
 
     def endpoint_of(self, prefix: str) -> tuple[HardwareTopic, str, bool]:
         """``(topic, node, feeds the network)`` of an external port (``s_axis_...`` or ``m_axis_...``)."""
@@ -175,6 +185,7 @@ class FpgaTop(Elaboratable):
 
     def signals(self) -> list[Any]:
         streams = [signal for port in self.ports.values() for signal in port.values()]
+        streams += [signal for port in self.memory_ports.values() for signal in port.values()]
         return streams + ([self.violations] if self.monitored else [])
 
     def elaborate(self, platform: object) -> Module:
@@ -202,6 +213,16 @@ class FpgaTop(Elaboratable):
                 m.d.comb += stream.tready.eq(port["tready"])
         for node, component in self.hardware_nodes.items():
             m.submodules[f"node_{node}"] = component
+        for node, signals in self.memory_ports.items():
+            from ._memory import MEMORY_PORT
+
+            port = getattr(self.hardware_nodes[node], MEMORY_PORT)
+            flows = dict(self.hardware_nodes[node].signature.members[MEMORY_PORT].signature.members.items())
+            for name, top_signal in signals.items():
+                if flows[name].flow == wiring.Out:  # the node drives it
+                    m.d.comb += top_signal.eq(getattr(port, name))
+                else:
+                    m.d.comb += getattr(port, name).eq(top_signal)
         for node, index, role, position in self._inside:
             stream = getattr(networks[index], f"{role}{position}")
             port = getattr(self.hardware_nodes[node], self.topics[index].port_name)
@@ -255,7 +276,8 @@ def hardware_nodes(plan: Plan, target: str, only: set[str] | None = None) -> dic
         if node.target != target or not node.hw or not plan.in_hardware(name) or not wanted:
             continue
         component = make_hardware_node(node.hw, plan.root, width, node.parameters)
-        problems = port_problems(component, list(node.publish), list(node.subscribe), width, list(node.services))
+        problems = port_problems(component, list(node.publish), list(node.subscribe), width, list(node.services),
+                                 memory=bool(node.memory))
         if problems:
             raise HardwareError(f"node {name}'s hardware ({node.hw}) does not fit its topics: " + "; ".join(problems))
         made[name] = component

@@ -21,7 +21,7 @@ from ..msg import TypeRegistry
 from ..plan import Plan, gateway_node
 from ._amaranth_top import AmaranthTop
 from ._build import TCPROS, FpgaTop, HardwareTopic, framing_programs, hardware_nodes, hardware_topics, top_name
-from ._verilator import StreamPort, VerilatedTop, compile_simulator
+from ._verilator import MemoryPort, StreamPort, VerilatedTop, compile_simulator
 from ._verilog_node import verilog_sources
 
 
@@ -35,6 +35,9 @@ class GatewayPort:
     port: StreamPort
     service: str = ""  # the service whose requests go in, or whose responses come out, here
     ros1: bool = False  # TCPROS frames (hardware TCPROS), to or from ROS 1's sockets
+    # the hardware node reads (an input) or writes (an output) this topic's messages in memory: the port
+    # carries descriptors in and completions out (``_memory``); its node
+    memory_node: str = ""
 
 
 SimulatedTop = VerilatedTop | AmaranthTop
@@ -76,7 +79,11 @@ class TargetSimulation:
             port = StreamPort(prefix, feeds, label)
             ports.append(port)
             into = self.inputs if feeds else self.outputs
-            into.append(GatewayPort(topic.name, topic.type, len(into), port, topic.service))
+            in_memory = [n for n in peers if topic.name in plan.nodes[n].memory]
+            into.append(GatewayPort(topic.name, topic.type, len(into), port, topic.service,
+                                    memory_node=in_memory[0] if in_memory else ""))
+        self.memories = [MemoryPort(f"m_axi_{node}", f"hardware node {node}'s memory port (mem)")
+                         for node in top.memory_ports]
         started = time.perf_counter()
         sources = verilog_sources(components)
         self.top: SimulatedTop
@@ -84,12 +91,16 @@ class TargetSimulation:
             if sources:
                 raise HardwareError(f"fpga target {target}: sim: amaranth cannot run Verilog nodes "
                                     f"({', '.join(s.name for s in sources)}); use sim: verilator")
+            if self.memories:
+                raise HardwareError(f"fpga target {target}: sim: amaranth has no memory model for nodes reading "
+                                    "messages in memory (memory:); use sim: verilator")
             self.top = AmaranthTop(top, ports, spec.data_width, top.monitored)
         else:
             text = verilog.convert(top, name=name, ports=top.signals())
             clocked = re.search(r"\binput\s+clk\b", text) is not None
             library = compile_simulator(text, name, ports, spec.data_width, clocked,
-                                        design_key(plan, target, topics, sources), top.monitored, sources)
+                                        design_key(plan, target, topics, sources), top.monitored, sources,
+                                        memories=self.memories)
             self.top = VerilatedTop(library, ports)
         self.compile_seconds = time.perf_counter() - started
 
@@ -108,7 +119,7 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
     files = sorted(Path(__file__).parent.glob("*.py")) + sorted(Path(plan.root).rglob("*.py")) + sources
     for name, node in sorted(plan.nodes.items()):
         if node.target == target and plan.in_hardware(name):
-            parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}")
+            parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}:{node.memory}")
             module = sys.modules.get(node.hw.partition(":")[0])
             source = getattr(module, "__file__", None)
             if source:

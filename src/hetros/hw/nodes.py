@@ -27,12 +27,14 @@ from amaranth.lib.wiring import In, Out
 from .._errors import HardwareError
 from ._build import port_part, service_ports
 from ._image import Compensation, GaussianBlur, ImageFilter3x3, Sobel
+from ._memory import MemorySobel, axi4_memory
 from ._sort import Sorter
 from ._stream import axi_stream
 from ._verilog_node import VerilogNode, is_verilog, make_verilog_node
 
-__all__ = ["AddTwoInts", "Compensation", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "NodeUnderTest",
-           "Sobel", "Sorter", "VerilogNode", "axi_stream", "make_hardware_node", "port_problems"]
+__all__ = ["AddTwoInts", "Compensation", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "MemorySobel",
+           "NodeUnderTest", "Sobel", "Sorter", "VerilogNode", "axi4_memory", "axi_stream", "make_hardware_node",
+           "port_problems"]
 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:
@@ -61,15 +63,23 @@ def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str
 
 
 def port_problems(component: wiring.Component, publish: list[str], subscribe: list[str],
-                  data_width: int, services: Sequence[str] = ()) -> list[str]:
+                  data_width: int, services: Sequence[str] = (), memory: bool = False) -> list[str]:
     """What keeps ``component`` from serving these topics and services: each missing, extra or mis-shaped
-    port. A service it serves is two ports: ``<service>_request`` in, ``<service>_response`` out."""
+    port. A service it serves is two ports: ``<service>_request`` in, ``<service>_response`` out. A node
+    with ``memory:`` has its AXI4 port ``mem`` too."""
     wanted = {port_part(t): (Out, t) for t in publish} | {port_part(t): (In, t) for t in subscribe}
     for service in services:
         request, response = service_ports(service)
         wanted |= {request: (In, f"{service}'s requests"), response: (Out, f"{service}'s responses")}
     members = dict(component.signature.members.items())
     problems = []
+    if memory:
+        from ._memory import MEMORY_PORT, axi4_memory
+
+        member = members.pop(MEMORY_PORT, None)
+        if member is None or member != Out(axi4_memory(data_width)):
+            problems.append(f"port {MEMORY_PORT!r} must be Out(axi4_memory({data_width})): the node reads and writes "
+                            f"messages in memory (memory:), not {member!r}")
     for name, (flow, topic) in sorted(wanted.items()):
         role = "publishes" if flow is Out else "subscribes"
         if topic.endswith("'s requests"):

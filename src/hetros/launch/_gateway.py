@@ -31,10 +31,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .._errors import HardwareError
 from .._log import get_logger
 from ..hw._cosim import GatewayPort, SimulatedTop, TargetSimulation
-from ..hw._verilator import IDLE
+from ..hw._verilator import IDLE, VerilatedTop
 from ..msg import TypeRegistry
 from ..plan import Plan
 from ..runtime import Node, Replies
@@ -72,6 +74,7 @@ class _Input:
         self.codec = types.codec(port.type)
         # who asked, in the order their requests went into the hardware (a hardware server answers in order)
         self.asked: deque[tuple[int, str]] = deque()
+        self.copied_bytes = 0  # what the CPU copied: each message's body, into the simulator
         self.take: Callable[[], Any]
         if port.service:
             reader = node.graph.open_reader(port.topic, node.name, port.type, node.executor.wake, envelope=True)
@@ -92,7 +95,9 @@ class _Input:
     def feed(self, top: SimulatedTop) -> None:
         """Take one message and encode it straight into the simulator's input queue (its one copy)."""
         item = self.next_message()
-        self.codec.encode(item, top.loan_input(self.port.index, self.codec.size(item)))
+        size = self.codec.size(item)
+        self.codec.encode(item, top.loan_input(self.port.index, size))
+        self.copied_bytes += size
 
 
 class _Output:
@@ -104,11 +109,13 @@ class _Output:
         self.asked = asked
         self.replies = Replies(node, port.service, port.type) if port.service else None
         self.publisher = None if port.service else node.create_publisher(types.get(port.type), port.topic)
+        self.copied_bytes = 0  # what the CPU copied: each message's bytes, out of the simulator into the graph
 
     def send(self, body: memoryview) -> None:
         """Publish a message decoded in place from the simulator's memory: its arrays are views there, and
         the transport's send is their one copy (the gateway's process has no other node to keep them)."""
         message = self.codec.decode(body)
+        self.copied_bytes += len(body)
         if self.replies is None:
             assert self.publisher is not None
             self.publisher.publish(message)
@@ -159,6 +166,80 @@ class _FramesToRos1:
         self.publication.publish_frame(frame)
 
 
+class _InMemory:
+    """A hardware node that reads one topic's messages and writes another's in memory (``hw._memory``): each
+    message in goes as a descriptor of its arrays and of a loaned answer's; the node's completion publishes
+    the answer. The arrays are the shared-memory slots themselves: the CPU copies none of their bytes."""
+
+    def __init__(self, node: Node, read: GatewayPort, write: GatewayPort, types: TypeRegistry,
+                 top: SimulatedTop) -> None:
+        from ..msg import array_fields
+
+        if not isinstance(top, VerilatedTop):
+            raise HardwareError(f"{read.topic}: a hardware node reading messages in memory runs in Verilator only")
+        self.port, self.top = read, top
+        cls = types.get(read.type)
+        self.take = node.create_subscription(cls, read.topic).try_take
+        self.publisher = node.create_publisher(cls, write.topic)
+        self.arrays = [f.path for f in array_fields(types, read.type) if f.length is None]
+        tops = {path[0] for path in self.arrays}
+        self.plain = [name for name in cls.__fieldnames__ if name not in tops]
+        self.pending: deque[tuple[Any, Any, list[int], int]] = deque()
+        self.copied_bytes = 0  # array bytes the CPU copied (a loan too small for a slot is copied once)
+        self.messages = 0
+        self.cycles = 0  # from each descriptor going in to its completion coming out
+        self._started: deque[int] = deque()
+
+    def feed(self, top: SimulatedTop) -> None:
+        from ..msg import copy, get_path
+
+        message = self.take()
+        if message is None:
+            raise LookupError
+        arrays = [np.asarray(get_path(message, path)) for path in self.arrays]
+        answer = self.publisher.loan(**{"__".join(path): len(a) for path, a in zip(self.arrays, arrays, strict=True)})
+        for name in self.plain:
+            value = getattr(message, name)
+            setattr(answer, name, copy(value) if hasattr(value, "__msgtype__") else value)
+        written = [np.asarray(get_path(answer, path)) for path in self.arrays]
+        windows, words = [], []
+        for array, writable in [(a, False) for a in arrays] + [(a, True) for a in written]:
+            address = array.ctypes.data
+            if address % 8:
+                raise HardwareError(f"{self.port.topic}: an array at {address:#x} is not 8-byte aligned; a hardware "
+                                    "node reading it in memory needs aligned arrays")
+            self.top.allow(address, array.nbytes, writable)
+            windows.append(address)
+            words += [address, array.nbytes]
+        descriptor = np.array(words, "<u8").tobytes()
+        top.loan_input(self.port.index, len(descriptor))[:] = descriptor
+        self.pending.append((message, answer, windows, sum(a.nbytes for a in written)))
+        self._started.append(top.cycle)
+
+    def complete(self, _body: memoryview) -> None:
+        if not self.pending:
+            raise HardwareError(f"{self.port.port.label}: the hardware completed a message nobody gave it")
+        message, answer, windows, nbytes = self.pending.popleft()
+        self.cycles += self.top.cycle - self._started.popleft()
+        for address in windows:
+            self.top.forbid(address)
+        if not self.publisher.sends_in_place(answer):
+            self.copied_bytes += nbytes  # a loan below the slot threshold: its arrays are copied into the slot
+        self.publisher.publish(answer)
+        self.messages += 1
+        del message
+
+
+class _Completions:
+    """The output side of an :class:`_InMemory`: each beat out of the port is a finished answer."""
+
+    def __init__(self, port: GatewayPort, pair: _InMemory) -> None:
+        self.port, self.pair = port, pair
+
+    def send(self, body: memoryview) -> None:
+        self.pair.complete(body)
+
+
 def _ros1_peer(node: Node, plan: Plan, target: str) -> Ros1Peer | None:
     spec = plan.targets[target]
     if not spec.ros1_export and not spec.ros1_import:
@@ -186,18 +267,23 @@ def gateway(node: Node) -> None:
     # Amaranth's simulator runs thousands of cycles a second, not millions: it idles after fewer
     idle_cycles = _IDLE_CYCLES if simulation.simulator == "verilator" else _QUIET_AFTER_TRAFFIC
     peer = _ros1_peer(node, plan, target)
-    inputs: list[_Input | _FramesFromRos1] = [
+    answers = {o.memory_node: o for o in simulation.outputs if o.memory_node}
+    in_memory = {p.memory_node: _InMemory(node, p, answers[p.memory_node], types, top)
+                 for p in simulation.inputs if p.memory_node}
+    inputs: list[_Input | _FramesFromRos1 | _InMemory] = [
+        in_memory[port.memory_node] if port.memory_node else
         _FramesFromRos1(node, peer, port, types) if peer is not None and port.ros1 else _Input(node, port, types)
         for port in simulation.inputs]
     asked = {i.port.service: i.asked for i in inputs if isinstance(i, _Input) and i.port.service}
     latched = {t for t, q in plan.ros1_qos.items() if q.keeps_history} | {
         c.name for c in plan.channels.values() if c.qos.keeps_history}
-    outputs: list[_Output | _FramesToRos1] = [
+    outputs: list[_Output | _FramesToRos1 | _Completions] = [
+        _Completions(port, in_memory[port.memory_node]) if port.memory_node else
         _FramesToRos1(peer, port, types, port.topic in latched) if peer is not None and port.ros1
         else _Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
+    node.figures = lambda: _figures(simulation, in_memory)
     stop = node.graph.stop
     wall = 0.0
-    node.figures = lambda: _figures(simulation)
     pushed = popped = last_moved = 0
     quiet = idle_cycles
     try:
@@ -232,6 +318,17 @@ def gateway(node: Node) -> None:
         if peer is not None:
             peer.close()
         _report(simulation, wall)
+        for name, pair in in_memory.items():
+            index = [m.prefix for m in simulation.memories].index(f"m_axi_{name}")
+            reads, writes = top.memory_stats(index) if isinstance(top, VerilatedTop) else (0, 0)
+            log.info("  hardware node %s in memory: %d messages, %.0f cycles per message, %d beats read and %d "
+                     "written over AXI4, %.0f array bytes copied by the CPU per message", name, pair.messages,
+                     pair.cycles / max(1, pair.messages), reads, writes, pair.copied_bytes / max(1, pair.messages))
+        for end in (*inputs, *outputs):
+            if isinstance(end, _Input | _Output) and end.copied_bytes:
+                moved = simulation.top.stats(isinstance(end, _Output), end.port.index)[0]
+                log.info("  %s: %.0f bytes copied by the CPU per message", end.port.port.label,
+                         end.copied_bytes / max(1, moved))
         for port in simulation.outputs:
             partial = top.partial(port.index)
             if partial:
@@ -242,7 +339,7 @@ def gateway(node: Node) -> None:
 gateway.prepare = _prepare  # type: ignore[attr-defined]
 
 
-def _figures(simulation: TargetSimulation) -> dict[str, Any]:
+def _figures(simulation: TargetSimulation, in_memory: dict[str, _InMemory] | None = None) -> dict[str, Any]:
     """What ``hetros top`` shows of a gateway: cycles simulated, and per port messages and cycles per message."""
     top = simulation.top
     ports = {}
@@ -251,7 +348,9 @@ def _figures(simulation: TargetSimulation) -> dict[str, Any]:
             messages, beats, busy = top.stats(output, port.index)
             ports[port.port.label] = {"messages": messages, "beats": beats,
                                       "cycles_per_message": busy / messages if messages else 0.0}
-    return {"cycles": top.cycle, "clock_mhz": simulation.clock_mhz, "ports": ports}
+    memory = {name: {"messages": pair.messages, "copied_bytes_per_message": pair.copied_bytes / max(1, pair.messages)}
+              for name, pair in (in_memory or {}).items()}
+    return {"cycles": top.cycle, "clock_mhz": simulation.clock_mhz, "ports": ports, "memory": memory}
 
 
 def _report(simulation: TargetSimulation, wall: float) -> None:

@@ -109,6 +109,8 @@ class NodePlan:
     env: dict[str, str] = field(default_factory=dict)
     # the folder its run: is found in ("" = the project's)
     root: str = ""
+    # fpga: the topics its hardware reads and writes in memory through its AXI4 port (``memory:``)
+    memory: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -257,7 +259,8 @@ class Plan:
                                    tuple(v.get("ros1_import", ())), v.get("tcpros_frame_bytes", 4096),
                                    v.get("board", ""))
                      for k, v in raw["targets"].items()},
-            nodes={k: NodePlan(**{**v, "args": tuple(v.get("args", ()))}) for k, v in raw["nodes"].items()},
+            nodes={k: NodePlan(**{**v, "args": tuple(v.get("args", ())), "memory": tuple(v.get("memory", ()))})
+                   for k, v in raw["nodes"].items()},
             channels={
                 k: ChannelPlan(
                     name=v["name"], type=v["type"], kind=v["kind"], qos=QoS(**v["qos"]),

@@ -10,7 +10,7 @@ from collections.abc import Iterable
 from .._errors import DefinitionError, MessageError
 from .._net import is_local_address
 from .._qos import QoS
-from ..msg import TypeRegistry, flat_layout, normalize_typename, registry
+from ..msg import TypeRegistry, array_fields, flat_layout, normalize_typename, registry
 from ..plan import (
     ACTION_PREFIX,
     LAUNCHER,
@@ -297,6 +297,8 @@ def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tu
                     report.errors.append(f"{where('nodes', nname, section, name)}: {section} of a node on an fpga "
                                          "target are not carried by hetros's gateways yet (topics and services "
                                          "are); move the node to a thread or process target")
+    for nname, spec in model.nodes.items():
+        _check_memory(project, nname, spec, fpga, publishers, subscribers, types, report)
     for topic in sorted(set(publishers) | set(subscribers)):
         endpoints = publishers.get(topic, []) + subscribers.get(topic, [])
         placed = {n: model.nodes[n].target for n, _ in endpoints if n in model.nodes}
@@ -319,6 +321,42 @@ def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tu
                                  "hardware through a gateway, and hardware keeps no history for late joiners; "
                                  "make it volatile")
 
+
+
+def _check_memory(project: LoadedProject, nname: str, spec: NodeSpec, fpga: set[str],
+                  publishers: dict[str, list[tuple[str, str]]], subscribers: dict[str, list[tuple[str, str]]],
+                  types: TypeRegistry, report: CheckReport) -> None:
+    """``memory:``: a hardware node on an fpga target, one subscribed and one published topic of one type with
+    an array, and no other hardware node on them (they carry descriptors, not messages)."""
+    if not spec.memory:
+        return
+    here = project.where("nodes", nname, "memory")
+    if spec.target not in fpga or not spec.hw:
+        report.errors.append(f"{here}: memory: is for a hardware node (hw:) on an fpga target; node {nname} is not one")
+        return
+    reads = [t for t in spec.memory if t in spec.subscribe]
+    writes = [t for t in spec.memory if t in spec.publish]
+    strays = [t for t in spec.memory if t not in spec.subscribe and t not in spec.publish]
+    if strays:
+        report.errors.append(f"{here}: {', '.join(strays)} must be topics node {nname} subscribes or publishes")
+        return
+    if len(reads) != 1 or len(writes) != 1:
+        report.errors.append(f"{here}: memory: names one topic the node subscribes (read in memory) and one it "
+                             f"publishes (written in memory), not {len(reads)} and {len(writes)}")
+        return
+    read_type, write_type = spec.types("subscribe")[reads[0]], spec.types("publish")[writes[0]]
+    if normalize_typename(read_type) != normalize_typename(write_type):
+        report.errors.append(f"{here}: {reads[0]} ({read_type}) and {writes[0]} ({write_type}) must have one type: "
+                             "the written message has the read one's shape")
+        return
+    if not [f for f in array_fields(types, normalize_typename(read_type)) if f.length is None]:
+        report.errors.append(f"{here}: {read_type} has no array of numbers to read in memory; stream it instead")
+    for topic in (*reads, *writes):
+        others = {n for n, _ in publishers.get(topic, []) + subscribers.get(topic, [])
+                  if n != nname and n in project.model.nodes and project.model.nodes[n].target == spec.target}
+        if others:
+            report.errors.append(f"{here}: {topic} carries descriptors on {spec.target}, so no other node of the "
+                                 f"target may use it ({', '.join(sorted(others))} does)")
 
 
 def _check_actions(project: LoadedProject, nname: str, spec: NodeSpec, types: TypeRegistry,

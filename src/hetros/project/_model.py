@@ -117,6 +117,11 @@ class NodeSpec(_Strict):
     hw: str | None = Field(default=None, description="module:Component or file.v:module: the node's hardware "
                            "implementation, an Amaranth component or a Verilog module whose stream ports are named "
                            "after its topics; on an fpga target it is what runs")
+    memory: list[str] = Field(default_factory=list, description="fpga: the topics whose messages the hardware reads "
+                              "(a subscribed one) and writes (a published one) in memory, by address, through its "
+                              "AXI4 port `mem`, instead of receiving them as a stream: one of each, of one type; the "
+                              "stream ports then carry descriptors and completions (docs/GUIDE.md, Memory-mapped "
+                              "messages)")
     target: str = Field(default="main", description="the target it runs on, a name under targets: (absent: main, "
                         "the default thread target)")
     publish: dict[str, str | EndpointSpec] = Field(

@@ -120,7 +120,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
                         {a: normalize_typename(t, "action") for a, t in s.types("actions").items()},
                         {a: normalize_typename(t, "action") for a, t in s.types("action_clients").items()},
                         s.max_goals(), s.hw or "", tuple(s.args), s.namespace, dict(s.remap), s.name or "",
-                        dict(s.env), project.node_roots.get(n, ""))
+                        dict(s.env), project.node_roots.get(n, ""), tuple(s.memory))
             for n, s in model.nodes.items()
         } | {bridge.name: bridge for bridge in bridges}
         | {g: NodePlan(g, GATEWAY_RUN, t, {"target": t}, publish=_endpoints_of(channels, g, "publish"),

@@ -129,7 +129,8 @@ out = {}
 for job in json.loads(sys.argv[1]):
     try:
         component = make_hardware_node(job["hw"], ".", job["data_width"], job["parameters"])
-        problems = port_problems(component, job["publish"], job["subscribe"], job["data_width"], job["services"])
+        problems = port_problems(component, job["publish"], job["subscribe"], job["data_width"], job["services"],
+                                 memory=bool(job.get("memory")))
     except BaseException as exc:
         problems = [f"making it raised {type(exc).__name__}: {exc}"]
     if problems:
@@ -145,7 +146,8 @@ def hardware_problems(project: LoadedProject) -> dict[str, str]:
     model = project.model
     jobs: list[dict[str, Any]] = [{"node": name, "hw": spec.hw, "data_width": model.targets[spec.target].data_width,
              "parameters": spec.parameters, "publish": list(spec.types("publish")),
-             "subscribe": list(spec.types("subscribe")), "services": list(spec.types("services"))}
+             "subscribe": list(spec.types("subscribe")), "services": list(spec.types("services")),
+             "memory": list(spec.memory)}
             for name, spec in model.nodes.items()
             if spec.hw and spec.target in model.targets and model.targets[spec.target].kind == "fpga"]
     if not jobs:

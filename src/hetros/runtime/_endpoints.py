@@ -96,6 +96,11 @@ class EndpointWriter(Writer):
                                  f"{', '.join(wanted)}")
         return arrays
 
+    def sends_in_place(self, message: Any) -> bool:
+        """Whether writing this loaned message hands its shared-memory slot over as it is, with no copy."""
+        lender = self._lender
+        return lender is not None and lender.owns_loan(message) and all(p is lender for p in self._parts)
+
     def write(self, message: Any) -> None:
         lender = self._lender
         if lender is not None and lender.owns_loan(message):

@@ -130,6 +130,10 @@ class Publisher(Generic[M]):
         self._last_sizes, self._last_make = sizes, make
         return make()
 
+    def sends_in_place(self, message: M) -> bool:
+        """Whether publishing ``message`` (a loan) sends its shared-memory slot as it is: no copy of its arrays."""
+        return self._writer.sends_in_place(message)
+
     def close(self) -> None:
         if self.deadline is not None:
             self.deadline.stop()

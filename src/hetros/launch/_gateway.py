@@ -385,6 +385,9 @@ def _run_board(node: Node, plan: Plan, target: str, simulation: TargetSimulation
     if any(p.ros1 for p in (*simulation.inputs, *simulation.outputs)):
         raise HardwareError(f"fpga target {target}: hardware TCPROS runs under co-simulation only; remove board: "
                             "or leave its ROS 1 topics to the bridge")
+    if any(p.memory_node for p in simulation.inputs):
+        raise HardwareError(f"fpga target {target}: nodes reading messages in memory (memory:) run under "
+                            "co-simulation only; remove board: or stream the topics")
     exported = Path(plan.root) / "hw" / target / f"{top_name(target)}.board.json"  # `hetros hw export -o hw/<t>`
     manifest = exported
     if not exported.exists():

@@ -207,6 +207,52 @@ def table_cosim(quick: bool) -> list[dict[str, Any]]:
     return rows
 
 
+def table_memory(quick: bool) -> list[dict[str, Any]]:
+    """examples/sobel_hw at 640x480 under ``hetros launch``: the streaming Sobel (each frame through the CPU
+    into the hardware's port and out of it) against MemorySobel (``project_mem.yaml``: the hardware reads
+    the camera's slot and writes the display's). Cycles per frame and CPU bytes copied per frame, as the
+    gateway counts and logs them."""
+    import re
+    import subprocess
+    import tempfile
+
+    example = Path(__file__).resolve().parents[3] / "examples" / "sobel_hw"
+    folder = Path(tempfile.mkdtemp(prefix="hetros-bench-mem-"))
+    (folder / "nodes.py").write_text((example / "nodes.py").read_text())
+    memory = (example / "project_mem.yaml").read_text()
+    streaming = memory.replace("hetros.hw.nodes:MemorySobel", "hetros.hw.nodes:Sobel").replace(
+        " memory: [/image_raw, /image_edges],", "")
+    rows = []
+    for version, text in (("streaming (project_fpga.yaml at 640x480)", streaming),
+                          ("in memory (project_mem.yaml)", memory)):
+        project = folder / ("streaming.yaml" if version.startswith("streaming") else "memory.yaml")
+        project.write_text(text)
+        done = subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "300"],
+                              capture_output=True, text=True, timeout=600, check=False, cwd=folder)
+        log = done.stderr
+        if done.returncode != 0 or "every pixel equal" not in log:
+            raise SystemExit(f"[bench] {version} failed:\n{log[-3000:]}")
+        if version.startswith("streaming"):
+            ins = re.search(r"software -> sobel on /image_raw .*?: 4 messages, \d+ beats, (\d+) cycles per message", log)
+            outs = re.search(r"sobel -> software on /image_edges .*?: 4 messages, \d+ beats, (\d+) cycles per message",
+                             log)
+            copied = [float(c) for c in re.findall(r"([\d.]+) bytes copied by the CPU per message", log)]
+            assert ins and outs
+            cycles = max(int(ins.group(1)), int(outs.group(1)))
+            copies, copied_bytes = len(copied), sum(copied)
+        else:
+            line = re.search(r"in memory: 4 messages, (\d+) cycles per message, \d+ beats read and \d+ written over "
+                             r"AXI4, (\d+) array bytes copied by the CPU per message", log)
+            assert line
+            cycles, copied_bytes = int(line.group(1)), float(line.group(2))
+            copies = 0 if copied_bytes == 0 else 1
+        rows.append({"version": version, "cycles_per_frame": cycles, "cpu_copies_per_frame": copies,
+                     "cpu_bytes_copied_per_frame": copied_bytes})
+        print(f"[bench] Sobel 640x480 {version}: {cycles:,} cycles per frame, {copies} CPU copies "
+              f"({copied_bytes:,.0f} bytes) per frame")
+    return rows
+
+
 def table_fmax(quick: bool) -> list[dict[str, Any]]:
     """The open flow (YoWASP Yosys + nextpnr-ecp5): Fmax of the Sobel node (640-pixel lines), the sobel_hw
     target and a 2 -> 2 topic network with a FIFO; empty, with a message, where the tools are absent."""
@@ -231,7 +277,8 @@ def table_fmax(quick: bool) -> list[dict[str, Any]]:
 
 
 def markdown(one: list[dict[str, Any]], two: list[dict[str, Any]], cosim: list[dict[str, Any]],
-             chain: list[dict[str, Any]], fmax: list[dict[str, Any]] | None = None) -> str:
+             chain: list[dict[str, Any]], fmax: list[dict[str, Any]] | None = None,
+             memory: list[dict[str, Any]] | None = None) -> str:
     lines = [f"### Table I shape: one message through a 1-to-1 hardware topic, {WIDTH}-bit, {CLOCK_MHZ:g} MHz, "
              "simulated", "",
              "| size | cycles | hetros at 100 MHz | fpgaDDS (paper) | CycloneDDS (paper) | "
@@ -267,6 +314,13 @@ def markdown(one: list[dict[str, Any]], two: list[dict[str, Any]], cosim: list[d
               "a cycle (its jitter is the design's, none here); the sequential figure leaves out the CPU transfers "
               "between its two gateways. The paper's chain alpha adds the projection and runs on a ZCU104's "
               "Cortex-A53: a shape to compare, not the same work."]
+    if memory:
+        lines += ["", "### The Sobel node streamed or reading in memory (640x480 mono8, 100 MHz, co-simulated)", "",
+                  "| version | cycles per frame | vs streaming | CPU copies per frame | bytes copied per frame |",
+                  "|---|---|---|---|---|"]
+        base = memory[0]["cycles_per_frame"]
+        lines += [f"| {r['version']} | {r['cycles_per_frame']:,} | {r['cycles_per_frame'] / base:.3f}x | "
+                  f"{r['cpu_copies_per_frame']} | {r['cpu_bytes_copied_per_frame']:,.0f} |" for r in memory]
     lines += ["", "### Open-flow bitstreams (Lattice ECP5, YoWASP Yosys + nextpnr-ecp5, each design in a pin harness)",
               ""]
     if fmax:
@@ -325,10 +379,11 @@ def main(argv: list[str] | None = None) -> int:
     one, two, cosim = table_one(args.quick), table_two(args.quick), table_cosim(args.quick)
     chain = table_chain(args.quick)
     fmax = table_fmax(args.quick)
-    text = markdown(one, two, cosim, chain, fmax)
+    memory = table_memory(args.quick)
+    text = markdown(one, two, cosim, chain, fmax, memory)
     print("\n" + text)
     (out / "hw.md").write_text(provenance() + "\n\n" + text + "\n")
-    figures = {"table_one": one, "table_two": two, "cosim": cosim, "chain": chain, "fmax": fmax}
+    figures = {"table_one": one, "table_two": two, "cosim": cosim, "chain": chain, "fmax": fmax, "memory": memory}
     (out / "hw.json").write_text(json.dumps(figures, indent=1))
     plot(one, cosim, out / "hw.png")
     print(f"\nwrote {out / 'hw.md'}, {out / 'hw.json'}, {out / 'hw.png'}")

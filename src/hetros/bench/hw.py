@@ -233,9 +233,9 @@ def table_memory(quick: bool) -> list[dict[str, Any]]:
         if done.returncode != 0 or "every pixel equal" not in log:
             raise SystemExit(f"[bench] {version} failed:\n{log[-3000:]}")
         if version.startswith("streaming"):
-            ins = re.search(r"software -> sobel on /image_raw .*?: 4 messages, \d+ beats, (\d+) cycles per message", log)
-            outs = re.search(r"sobel -> software on /image_edges .*?: 4 messages, \d+ beats, (\d+) cycles per message",
-                             log)
+            busy = r".*?: 4 messages, \d+ beats, (\d+) cycles per message"
+            ins = re.search(r"software -> sobel on /image_raw" + busy, log)
+            outs = re.search(r"sobel -> software on /image_edges" + busy, log)
             copied = [float(c) for c in re.findall(r"([\d.]+) bytes copied by the CPU per message", log)]
             assert ins and outs
             cycles = max(int(ins.group(1)), int(outs.group(1)))

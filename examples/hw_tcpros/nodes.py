@@ -1,7 +1,7 @@
 """The software around a ROS 1 node made of hardware (``project.yaml``).
 
-``echo`` is the Python twin of ``hetros.hw.nodes:Echo``: with the nodes on a process target
-instead of the fpga one, the bridge frames in software and ROS 1 sees the same bytes.
+``repeat``, ``points`` and ``mirror`` are the Python twins of ``hetros.hw.nodes:Echo``: with them on a
+process target instead of the fpga one, the bridge frames in software and ROS 1 sees the same bytes.
 """
 
 from pathlib import Path
@@ -23,13 +23,23 @@ def talker(node: Node) -> None:
         points.publish(point)
 
 
-def echo(node: Node) -> None:
+def _echo(node: Node, kind: type[String] | type[PointStamped], source: str, sink: str) -> None:
     """Republish every message of ``source`` on ``sink`` (what the hardware Echo does)."""
-    source, sink = node.get_parameter("source"), node.get_parameter("sink")
-    pub = node.create_publisher(String if "chatter" in sink or "mirror" in sink else PointStamped, sink)
-    node.create_subscription(String if "chatter" in source or "words" in source else PointStamped, source,
-                             pub.publish)
+    pub = node.create_publisher(kind, sink)
+    node.create_subscription(kind, source, pub.publish)
     node.spin()
+
+
+def repeat(node: Node) -> None:
+    _echo(node, String, "/words", "/chatter")
+
+
+def points(node: Node) -> None:
+    _echo(node, PointStamped, "/points_raw", "/points")
+
+
+def mirror(node: Node) -> None:
+    _echo(node, String, "/ros1_chatter", "/mirrored")
 
 
 def listener(node: Node) -> None:

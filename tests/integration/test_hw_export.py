@@ -28,6 +28,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 @pytest.mark.parametrize(("project", "board", "dma_base"), [
     ("sobel_hw/project_fpga.yaml", "zcu104", 0xA000_0000),
     ("hw_tcpros/project.yaml", "pynq-z2", 0x4040_0000),
+    ("sobel_hw/project_mem.yaml", "ultra96", 0xA000_0000),
 ])
 def test_export_writes_a_vivado_project_the_open_tools_accept(project: str, board: str, dma_base: int,
                                                               tmp_path: Path) -> None:
@@ -41,7 +42,11 @@ def test_export_writes_a_vivado_project_the_open_tools_accept(project: str, boar
     tcl = (tmp_path / "build.tcl").read_text()
     wrapper = (tmp_path / "hetros_fpga_axi.v").read_text()
     interfaces = {p["interface"] for p in manifest["ports"] if p.get("interface")}
-    assert interfaces == {d["interface"] for d in manifest["dmas"]}
+    masters = {m["interface"] for m in manifest["memory_masters"]}
+    assert interfaces == {d["interface"] for d in manifest["dmas"]} | masters
+    for master in masters:  # a memory node's AXI4 master reaches DDR through the processing system
+        assert f"[get_bd_intf_pins hetros/{master}]" in tcl and "S_AXI_HP0_FPD" in tcl
+    assert ("mem" in project) == bool(masters)
     for port in manifest["ports"]:
         assert re.search(rf"\b{port['name']}\b", wrapper), port["name"]
     for dma in manifest["dmas"]:

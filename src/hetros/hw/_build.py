@@ -316,6 +316,15 @@ def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path
     clocked = re.search(r"\binput\s+clk\b", text) is not None  # what the design uses, hardware nodes included
     described = manifest(plan, target, topics, types, clocked)
     described["verilog_sources"] = [source.name for source in verilog_sources(components)]
+    described["memory_masters"] = [{"interface": f"m_axi_{node}", "node": node} for node in top.memory_ports]
+    for node, signals in top.memory_ports.items():  # the AXI4 masters of nodes reading messages in memory
+        from ._memory import MEMORY_PORT
+
+        flows = components[node].signature.members[MEMORY_PORT].signature.members
+        described["ports"] += [{"name": f"m_axi_{node}_{name}", "width": len(signal), "node": node,
+                                "direction": "output" if flows[name].flow == wiring.Out else "input",
+                                "interface": f"m_axi_{node}", "role": "AXI4 master (memory:)"}
+                               for name, signal in signals.items()]
     manifest_path.write_text(json.dumps(described, indent=1))
     return verilog_path, manifest_path
 

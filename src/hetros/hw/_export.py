@@ -12,7 +12,8 @@
   ``<top>.hwh`` (what PYNQ's ``Overlay`` loads) next to the manifest;
 - ``<top>.board.json``: the manifest the host side reads (``hetros.board``): the board, each port
   with its width, and per gateway port its DMA (name, base address, ``sendchannel`` for software
-  -> hardware, ``recvchannel`` back), topic and type.
+  -> hardware, ``recvchannel`` back), topic and type; each memory node's AXI4 master, wired to the
+  processing system's memory port.
 
 The addresses are fixed by the Tcl (``assign_bd_address -offset``), so the manifest holds before
 Vivado runs.
@@ -87,6 +88,8 @@ def export(plan: Plan, target: str, board_name: str, out: Path, types: TypeRegis
                   {"name": "aresetn", "direction": "input", "width": 1, "role": "reset (active low)"}]
         + [p for p in core["ports"] if p.get("interface")],
         "dmas": dmas, "topics": core["topics"],
+        # hardware nodes reading messages in memory: their AXI4 masters reach DDR through the PS's memory port
+        "memory_masters": [dict(m, reaches=board.memory_port) for m in core.get("memory_masters", [])],
         "verilog_sources": [verilog.name, wrapper.name, *core["verilog_sources"]],
     }
     manifest_path = out / f"{top}.board.json"
@@ -100,7 +103,7 @@ def _stream_ports(ports: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """The AXI4-Stream interfaces of the core by name, with their topic, node and data width."""
     interfaces: dict[str, dict[str, Any]] = {}
     for port in ports:
-        if port.get("interface"):
+        if port.get("interface") and port.get("topic"):
             entry = interfaces.setdefault(port["interface"], {"topic": port["topic"], "node": port["node"]})
             if port["name"].endswith("_tdata"):
                 entry["width"] = port["width"]
@@ -184,6 +187,11 @@ def _tcl(board: Board, manifest: dict[str, Any]) -> str:
             f"assign_bd_address -offset {dma['base_address']} -range 64K "
             f"[get_bd_addr_segs {name}/S_AXI_LITE/Reg]",
         ]
+    for master in manifest["memory_masters"]:
+        lines += [f"# {master['interface']}: node {master['node']} reads and writes messages in memory",
+                  "apply_bd_automation -rule xilinx.com:bd_rule:axi4 -config "
+                  f"[list Slave {{/ps/{board.memory_port}}} Clk {{Auto}}] "
+                  f"[get_bd_intf_pins hetros/{master['interface']}]"]
     lines += [
         "validate_bd_design",
         "save_bd_design",

@@ -28,7 +28,7 @@ from amaranth.lib.wiring import In, Out
 from rosbags.interfaces import Nodetype
 
 from .._errors import HardwareError
-from ..msg import TypeRegistry
+from ..msg import TypeRegistry, ros1_store
 from ._bytes import ByteSource, bytes_in, bytes_out
 from ._stream import axi_stream
 
@@ -112,9 +112,9 @@ class _Walk:
 
 def ros1_program(types: TypeRegistry, typename: str) -> Ros1Program:
     """The program of ``typename`` (see the module's docstring); HardwareError for what hardware cannot frame."""
-    from ..transport.tcpros import Ros1Type, ros1_store
-
-    Ros1Type(types, typename)  # the same checks the bridge makes: ROS 1 knows the type, the fields map
+    if typename not in ros1_store().fielddefs:
+        raise HardwareError(f"{typename} has no ROS 1 definition (rosbags' ROS 1 Noetic store lacks it): a topic of "
+                            "this type cannot be framed for ROS 1")
     walk = _Walk(typename)
     _message(types, ros1_store(), typename, typename, walk)
     if not walk.ops:
@@ -128,6 +128,10 @@ def _message(types: TypeRegistry, store: Any, typename: str, where: str, walk: _
     lower = {name.lower(): name for name in ros1}
     common = [name for name, _ in ros2 if name != _PLACEHOLDER]
     matched = [name if name in ros1 else lower.get(name.lower(), "") for name in common]
+    if "" in matched:
+        missing = common[matched.index("")]
+        raise HardwareError(f"{where}: {typename}'s field {missing!r} has no ROS 1 counterpart; it cannot be framed "
+                            "for ROS 1")
     if [n for n in ros1 if n in matched] != matched:
         raise HardwareError(f"{where}: ROS 1 orders the fields of {typename} differently from ROS 2; frame it in "
                             "software (leave the topic to the ROS 1 bridge)")

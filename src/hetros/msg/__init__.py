@@ -14,6 +14,7 @@ from ._registry import (
     registry,
     service_type,
 )
+from ._ros1 import ros1_store
 from ._validate import convert_array, validate
 
 __all__ = [
@@ -42,6 +43,7 @@ __all__ = [
     "normalize_typename",
     "read_package",
     "registry",
+    "ros1_store",
     "service_type",
     "set_path",
     "validate",

@@ -1,12 +1,13 @@
 """ROS 1 interoperability: the master, the slave API, TCPROS connections and the type mapping."""
 
+from ...msg import ros1_store
 from ._actions import Ros1ActionType
 from ._endpoints import ROSRPC_CLIENT, Ros1ServiceCaller, Ros1ServiceServer, Ros1Writer, open_ros1_reader
 from ._master import DEFAULT_PORT, Master, MasterState
 from ._peer import Ros1Peer, Ros1Publication, Ros1Subscription, get_ros1_parameter, receive_frames
 from ._stream import Ros1StreamReader, SocketWaiter
 from ._transport import Ros1Transport
-from ._types import Ros1NativeType, Ros1ServiceType, Ros1Type, ros1_name, ros1_store
+from ._types import Ros1NativeType, Ros1ServiceType, Ros1Type, ros1_name
 
 __all__ = [
     "DEFAULT_PORT",

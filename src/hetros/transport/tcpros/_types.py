@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import hashlib
 import struct
-import threading
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -26,7 +25,7 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from ..._errors import SerializationError, UnknownTypeError
-from ...msg import TypeRegistry, freeze, normalize_typename
+from ...msg import TypeRegistry, freeze, normalize_typename, ros1_store
 
 Convert = Callable[[Any], Any]
 Payload = bytes | memoryview
@@ -39,19 +38,6 @@ _SPLICE_DTYPES = {name: np.dtype(code).newbyteorder("<") for name, code in (
     ("int64", "i8"), ("uint64", "u8"), ("float32", "f4"), ("float64", "f8"))}
 # ROS 2 gives an empty message this field; ROS 1 has none
 _PLACEHOLDER = "structure_needs_at_least_one_member"
-
-_store: Typestore | None = None
-_store_lock = threading.Lock()
-
-
-def ros1_store() -> Typestore:
-    """rosbags' ROS 1 (Noetic) definitions, loaded once per process."""
-    global _store
-    with _store_lock:
-        if _store is None:
-            _store = get_typestore(Stores.ROS1_NOETIC)
-        return _store
-
 
 def ros1_name(typename: str) -> str:
     """``pkg/msg/Name`` -> ``pkg/Name`` (what ROS 1 puts in headers and on the master)."""

@@ -1,0 +1,21 @@
+"""ROS 1's message definitions (rosbags' Noetic store): what the ROS 1 bridge, ``kind: ros1`` nodes and
+hardware TCPROS map hetros's types onto."""
+
+from __future__ import annotations
+
+import threading
+
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+
+_store: Typestore | None = None
+_store_lock = threading.Lock()
+
+
+def ros1_store() -> Typestore:
+    """rosbags' ROS 1 (Noetic) definitions, loaded once per process."""
+    global _store
+    with _store_lock:
+        if _store is None:
+            _store = get_typestore(Stores.ROS1_NOETIC)
+        return _store

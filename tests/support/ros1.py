@@ -104,19 +104,24 @@ def ros1_master(kind: str = "hetros") -> Iterator[tuple[str, dict[str, str]]]:
     stop(proc)
 
 
-TALKER = textwrap.dedent("""
-    import rospy
-    from std_msgs.msg import String
-    rospy.init_node("talker")
-    rospy.set_param("~rate", 20)
-    pub = rospy.Publisher("/chatter", String, queue_size=10)
-    rate = rospy.Rate(20)
-    i = 0
-    while not rospy.is_shutdown():
-        pub.publish(String(data="hello %d" % i))
-        i += 1
-        rate.sleep()
-""")
+def rospy_talker(name: str = "talker", topic: str = "/chatter", text: str = "hello", hz: int = 20) -> str:
+    """A stock rospy talker's script: ``<text> <i>`` on ``topic`` at ``hz``, until shut down."""
+    return textwrap.dedent(f"""
+        import rospy
+        from std_msgs.msg import String
+        rospy.init_node("{name}")
+        rospy.set_param("~rate", {hz})
+        pub = rospy.Publisher("{topic}", String, queue_size=10)
+        rate = rospy.Rate({hz})
+        i = 0
+        while not rospy.is_shutdown():
+            pub.publish(String(data="{text} %d" % i))
+            i += 1
+            rate.sleep()
+    """)
+
+
+TALKER = rospy_talker()
 
 LISTENER = textwrap.dedent("""
     import sys, time, rospy

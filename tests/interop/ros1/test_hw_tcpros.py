@@ -14,7 +14,7 @@ import textwrap
 import time
 from pathlib import Path
 
-from tests.support.ros1 import ROS_PYTHON, compile_roscpp, needs_ros1, needs_roscpp, ros1_master, stop
+from tests.support.ros1 import ROS_PYTHON, compile_roscpp, needs_ros1, needs_roscpp, ros1_master, rospy_talker, stop
 
 EXAMPLE = Path(__file__).parents[3] / "examples" / "hw_tcpros"
 
@@ -48,18 +48,7 @@ FRAMES = textwrap.dedent("""
     print("checked", seen, flush=True)
 """)
 
-TALKER = textwrap.dedent("""
-    import rospy
-    from std_msgs.msg import String
-    rospy.init_node("ros1_talker")
-    pub = rospy.Publisher("/ros1_chatter", String, queue_size=10)
-    rate = rospy.Rate(10)
-    i = 0
-    while not rospy.is_shutdown():
-        pub.publish(String(data="from rospy %d" % i))
-        i += 1
-        rate.sleep()
-""")
+TALKER = rospy_talker("ros1_talker", "/ros1_chatter", "from rospy", 10)
 
 
 @needs_ros1

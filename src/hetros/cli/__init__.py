@@ -7,9 +7,9 @@ import os
 import re
 import shlex
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
@@ -524,26 +524,25 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_commands(sub)
     hw = sub.add_parser("hw", help="fpga targets: topic networks as RTL").add_subparsers(dest="hw", required=True)
-    p = hw.add_parser("build", help="write an fpga target's topic network as Verilog, with a JSON manifest")
-    p.add_argument("project")
-    p.add_argument("-o", "--output", required=True, help="folder for <top>.v and <top>.json")
-    p.add_argument("--target", help="the fpga target (default: every one)")
-    p.set_defaults(func=cmd_hw_build)
-    p = hw.add_parser("export", help="an fpga target as a Vivado project for a board: Verilog, AXI wrapper, "
-                                     "block-design Tcl, manifest")
-    p.add_argument("project")
+
+    def written(name: str, what: str, output: str, func: Callable[[argparse.Namespace], int]) -> Any:
+        """A command writing files for a project's fpga targets: project, -o, --target."""
+        made = hw.add_parser(name, help=what)
+        made.add_argument("project")
+        made.add_argument("-o", "--output", required=True, help=output)
+        made.add_argument("--target", help="the fpga target (default: every one)")
+        made.set_defaults(func=func)
+        return made
+
+    written("build", "write an fpga target's topic network as Verilog, with a JSON manifest",
+            "folder for <top>.v and <top>.json", cmd_hw_build)
+    p = written("export", "an fpga target as a Vivado project for a board: Verilog, AXI wrapper, block-design Tcl, "
+                "manifest", "the folder (one per target when there are several)", cmd_hw_export)
     p.add_argument("--board", choices=["zcu104", "pynq-z2", "ultra96"], help="default: the target's board:")
-    p.add_argument("-o", "--output", required=True, help="the folder (one per target when there are several)")
-    p.add_argument("--target", help="the fpga target (default: every one)")
-    p.set_defaults(func=cmd_hw_export)
-    p = hw.add_parser("bitstream", help="a real bitstream on the open flow (YoWASP Yosys + nextpnr, Lattice ECP5) "
-                                        "and the Fmax place and route achieved")
-    p.add_argument("project")
-    p.add_argument("-o", "--output", required=True, help="the folder (a subfolder per target and design)")
-    p.add_argument("--target", help="the fpga target (default: every one)")
+    p = written("bitstream", "a real bitstream on the open flow (YoWASP Yosys + nextpnr, Lattice ECP5) and the Fmax "
+                "place and route achieved", "the folder (a subfolder per target and design)", cmd_hw_bitstream)
     p.add_argument("--parts", choices=["all", "target", "parts"], default="all",
                    help="target: the whole target; parts: each hardware node and topic network alone")
-    p.set_defaults(func=cmd_hw_bitstream)
     p = hw.add_parser("report", help="simulated transfer time per message size (fpgaDDS Table I sizes)")
     p.add_argument("project")
     p.add_argument("--target", help="the fpga target (default: every one)")

@@ -20,6 +20,7 @@ import argparse
 import contextlib
 import json
 import os
+import shutil
 import socket
 import struct
 import subprocess
@@ -210,6 +211,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if os.geteuid() != 0:
         raise SystemExit("tcpdump needs root")
+    if shutil.which("tcpdump") is None:
+        raise SystemExit("tcpdump is not installed: apt-get install tcpdump (Debian's), then run this again")
     tmp = Path(tempfile.mkdtemp(prefix="hetros-packets-"))
     results = {}
     for kind in PROJECTS:

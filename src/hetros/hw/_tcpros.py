@@ -265,15 +265,15 @@ class _Engine:
 
     ``to_ros1``: the source is a CDR body, the sink gets ROS 1 bytes (no length); else the source
     is ROS 1 bytes after the length and the sink gets a CDR body. ``start`` begins a message;
-    ``done`` is high for one cycle after its last step; ``malformed`` when the source's message
-    ended before the program did, or went on after it (the rest is dropped). ``ended_before``: the
+    ``running`` is high until its last step; ``malformed`` when the source's message ended before
+    the program did, or went on after it (the rest is dropped). ``ended_before``: the
     source's message ended with the byte taken as ``start`` rose (a frame of only its length).
     """
 
     def __init__(self, m: Module, program: Ros1Program, to_ros1: bool, source: Any, start: Any,
                  ended_before: Any = 0) -> None:
         self.valid, self.byte, self.ready = Signal(), Signal(8), Signal()
-        self.done, self.malformed, self.running = Signal(), Signal(), Signal()
+        self.malformed, self.running = Signal(), Signal()
         ops = program.ops
         steps = len(ops)
         pc = Signal(range(steps + 1), init=steps)  # idle until ``start``
@@ -284,10 +284,10 @@ class _Engine:
                 with m.Case(index):
                     m.d.comb += [kind.eq(_KINDS.index(op.kind)), size.eq(op.size)]
         code = {k: kind == _KINDS.index(k) for k in _KINDS}
-        mask = Signal(3)  # alignment - 1 of an align step or a sequence's elements
-        m.d.comb += mask.eq(Mux(size == 8, 7, Mux(size == 4, 3, Mux(size == 2, 1, 0))))
-        shift = Signal(2)
+        shift = Signal(2)  # log2 of an align step's alignment or of a sequence's element size
         m.d.comb += shift.eq(Mux(size == 8, 3, Mux(size == 4, 2, Mux(size == 2, 1, 0))))
+        mask = Signal(3)
+        m.d.comb += mask.eq((Const(1, 4) << shift) - 1)
         loaded = Signal()
         count = Signal(32)
         phase = Signal(2)  # string/sequence: 0 read the length, 1 write it, 2 align, 3 the bytes (and NUL)
@@ -311,11 +311,9 @@ class _Engine:
             m.d.sync += [pc.eq(0), loaded.eq(0), position.eq(0), ended.eq(ended_before), draining.eq(0)]
         with m.If(next_step):
             m.d.sync += [pc.eq(pc + 1), loaded.eq(0)]
-            with m.If(pc == steps - 1):
-                m.d.comb += self.done.eq(1)
-                with m.If(~ended & ~(moved_in & source.last)):
-                    m.d.comb += self.malformed.eq(1)  # the message goes on: drop the rest
-                    m.d.sync += draining.eq(1)
+            with m.If((pc == steps - 1) & ~ended & ~(moved_in & source.last)):
+                m.d.comb += self.malformed.eq(1)  # the message goes on: drop the rest
+                m.d.sync += draining.eq(1)
         with m.If(draining):
             m.d.comb += take.eq(1)
             with m.If(moved_in & source.last):
@@ -452,7 +450,6 @@ class Ros1Framer(wiring.Component):
         state = Signal(2)  # 0 idle, 1 program, 2 length, 3 stored bytes
         start = Signal()
         engine = _Engine(m, self.program, True, source, start)
-        length = Signal(32)
         sent = Signal(range(max(self.max_frame, 4) + 1))
         m.d.comb += self.malformed.eq(engine.malformed)
         if fixed is not None:
@@ -478,7 +475,7 @@ class Ros1Framer(wiring.Component):
         m.submodules.store = store
         write = store.write_port()
         read = store.read_port(domain="sync", transparent_for=(write,))
-        stored = Signal(range(self.max_frame + 1))
+        stored = Signal(32)  # bytes of the frame in the store: its length once the program has ended
         overflow = Signal()
         advance = Signal()
         m.d.comb += [write.addr.eq(stored), write.data.eq(engine.byte)]
@@ -496,24 +493,24 @@ class Ros1Framer(wiring.Component):
                         m.d.sync += stored.eq(stored + 1)
                     with m.Else():
                         m.d.sync += overflow.eq(1)
-                with m.If(~engine.running & ~(engine.valid & (stored == self.max_frame))):
-                    m.d.sync += [state.eq(2), sent.eq(0), length.eq(stored)]
-                    with m.If(overflow | (engine.valid & (stored == self.max_frame))):
+                with m.If(~engine.running):  # (the engine shows bytes only while it runs)
+                    m.d.sync += [state.eq(2), sent.eq(0)]
+                    with m.If(overflow):
                         m.d.comb += self.malformed.eq(1)  # too long for the store: dropped, reported
                         m.d.sync += state.eq(0)
             with m.Case(2):
-                m.d.comb += [sink.valid.eq(1), sink.byte.eq(length.word_select(sent[:2], 8)),
-                             sink.last.eq((sent == 3) & (length == 0))]
+                m.d.comb += [sink.valid.eq(1), sink.byte.eq(stored.word_select(sent[:2], 8)),
+                             sink.last.eq((sent == 3) & (stored == 0))]
                 with m.If(sink.ready):
                     m.d.sync += sent.eq(sent + 1)
                     with m.If(sent == 3):
-                        m.d.sync += [state.eq(Mux(length == 0, 0, 3)), sent.eq(0)]
+                        m.d.sync += [state.eq(Mux(stored == 0, 0, 3)), sent.eq(0)]
             with m.Case(3):
-                m.d.comb += [sink.valid.eq(1), sink.byte.eq(read.data), sink.last.eq(sent == length - 1),
+                m.d.comb += [sink.valid.eq(1), sink.byte.eq(read.data), sink.last.eq(sent == stored - 1),
                              advance.eq(sink.ready)]
                 with m.If(sink.ready):
                     m.d.sync += sent.eq(sent + 1)
-                    with m.If(sent == length - 1):
+                    with m.If(sent == stored - 1):
                         m.d.sync += state.eq(0)
         return m
 

@@ -220,6 +220,13 @@ def _ros1_shared(project: LoadedProject) -> dict[str, list[str]]:
     return shared
 
 
+def _hardware_target(project: LoadedProject, node: str) -> str:
+    """The fpga target whose hardware runs ``node`` (it has ``hw:`` and sits there), else ""."""
+    spec = project.model.nodes[node]
+    target = project.model.targets.get(spec.target)
+    return spec.target if target is not None and target.kind == "fpga" and spec.hw else ""
+
+
 def hardware_framed(project: LoadedProject) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
     """Hardware TCPROS: per fpga target, ``(exports, imports)``: the ROS 1 topics its hardware frames.
 
@@ -230,19 +237,14 @@ def hardware_framed(project: LoadedProject) -> dict[str, tuple[tuple[str, ...], 
     model = project.model
     shared = _ros1_shared(project)
     ros1 = ros1_nodes(project)
-
-    def hardware_target(node: str) -> str:
-        spec = model.nodes[node]
-        target = model.targets.get(spec.target)
-        return spec.target if target is not None and target.kind == "fpga" and spec.hw else ""
-
     framed: dict[str, tuple[list[str], list[str]]] = {}
     for topic in shared["export"]:
-        publishers = {hardware_target(n) for n, spec in model.nodes.items() if n not in ros1 and topic in spec.publish}
+        publishers = {_hardware_target(project, n) for n, spec in model.nodes.items()
+                      if n not in ros1 and topic in spec.publish}
         if len(publishers) == 1 and (target := publishers.pop()):
             framed.setdefault(target, ([], []))[0].append(topic)
     for topic in shared["import"]:
-        for target in sorted({hardware_target(n) for n, spec in model.nodes.items()
+        for target in sorted({_hardware_target(project, n) for n, spec in model.nodes.items()
                               if n not in ros1 and topic in spec.subscribe} - {""}):
             framed.setdefault(target, ([], []))[1].append(topic)
     return {target: (tuple(exports), tuple(imports)) for target, (exports, imports) in framed.items()}
@@ -257,10 +259,9 @@ def ros1_bridge(project: LoadedProject) -> NodePlan | None:
     framed = hardware_framed(project)
     in_hardware = {t for exports, _ in framed.values() for t in exports}
     shared["export"] = [t for t in shared["export"] if t not in in_hardware]
-    hardware_nodes = {n for n, s in model.nodes.items() if s.hw and model.targets[s.target].kind == "fpga"}
     ros1 = ros1_nodes(project)
-    shared["import"] = [t for t in shared["import"]
-                        if any(t in s.subscribe for n, s in model.nodes.items() if n not in hardware_nodes | ros1)]
+    shared["import"] = [t for t in shared["import"] if any(
+        t in s.subscribe for n, s in model.nodes.items() if n not in ros1 and not _hardware_target(project, n))]
     if not any(shared.values()):
         return None
     exports, imports, export_services, import_services, export_actions, import_actions = _typed(project, shared)

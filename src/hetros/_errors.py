@@ -28,6 +28,8 @@ one root and still tell the kinds apart::
     ├── HardwareError          an fpga target's topic network cannot be built as asked
     ├── ShutdownError          a blocking call interrupted by graph shutdown
     ├── LaunchError            starting or supervising the graph
+    ├── MachineError           the machine around a launch: a private folder squatted or foreign,
+    │                          shared memory full (named, with the fix)
     └── InspectError           looking inside a running launch (which one, what, refused)
 """
 
@@ -146,6 +148,12 @@ class ShutdownError(Error):
 
 class LaunchError(Error):
     """The launcher could not start or keep the graph running."""
+
+
+class MachineError(Error):
+    """The machine around a launch cannot be used safely as it is: one of this user's private
+    folders belongs to someone else or is a link, or shared memory has no room; the message
+    names the path and what to do."""
 
 
 class InspectError(Error):

@@ -294,7 +294,8 @@ def test_a_loan_whose_table_was_damaged_in_flight_is_refused(pair: Any, field: i
 
 
 def test_a_gap_in_a_reliable_stream_is_reported_not_skipped(pair: Any) -> None:
-    """Sequence numbers are checked on every take (compiled or not): a missing one raises."""
+    """Sequence numbers are checked on every take (compiled or not): a gap that the publisher's
+    numbering then proves (the next sample goes on from the jump) raises."""
     from hetros import TransportError
 
     writer, reader = pair
@@ -304,10 +305,50 @@ def test_a_gap_in_a_reliable_stream_is_reported_not_skipped(pair: Any) -> None:
     writer._service.next_seq += 2  # as if two samples had gone missing in iceoryx2
     writer._service.credits.publish(3)
     writer.write(Image(width=2))
-    with pytest.raises(TransportError, match=r"2 message\(s\) from target 'pub' \(from #2\) never reached"):
+    assert reader.try_take().width == 2  # a jump alone proves nothing yet
+    writer.write(Image(width=3))
+    with pytest.raises(TransportError, match=r"2 message\(s\) from target 'pub' \(from #2\) never reached.*"
+                                             r"iceoryx2 could not deliver"):
         reader.try_take()
-    writer.write(Image(width=3))  # reported once: the reader goes on
-    assert reader.try_take().width == 3
+    writer.write(Image(width=4))  # reported once: the reader goes on
+    assert reader.try_take().width == 4
+    assert reader.dropped == 0
+
+
+def test_a_forged_sequence_number_within_the_published_is_damage_not_loss(pair: Any,
+                                                                         caplog: pytest.LogCaptureFixture) -> None:
+    """A number rewritten in shared memory to one the publisher did send (so it passes the
+    "beyond published" check) used to stop the graph with "never reached ... file descriptors":
+    what follows shows the numbering did not jump, and the damage is counted and logged."""
+    from hetros.transport.shm._sample import HEADER
+
+    writer, reader = pair
+    service = writer._service
+    Image = registry().get(TYPE)
+    codec = MessageCodec(registry(), TYPE)
+
+    def send_forged(width: int) -> None:
+        body = codec.encode(Image(width=width))
+        sample, memory = service.loan(HEADER.size + len(body))
+        memory[HEADER.size:] = body
+        service.send(sample, memory, 0, 0)
+        HEADER.pack_into(memory, 0, service.next_seq, 0, 0, 0)  # one ahead of its own number
+
+    writer.write(Image(width=1))
+    assert reader.try_take().width == 1
+    send_forged(2)
+    writer.write(Image(width=3))
+    assert [reader.try_take().width, reader.try_take().width] == [2, 3]
+    assert reader.try_take() is None  # the next sample settles it, or the publisher's count
+    assert reader.dropped == 1
+    send_forged(4)  # the last one sent: the publisher's count settles it
+    assert reader.try_take().width == 4
+    assert reader.try_take() is None
+    assert reader.dropped == 2
+    for width in range(5, 5 + 3 * 4):  # three FIFOs' worth: no credit went astray
+        writer.write(Image(width=width))
+        assert reader.try_take().width == width
+    assert "was not the publisher's" in caplog.text and "file descriptors" not in caplog.text
 
 
 @pytest.mark.parametrize("damage", ["size", "sequence"])
@@ -433,3 +474,32 @@ def test_a_slot_that_cannot_be_had_says_why(pair: Any) -> None:
         service.loan(1 << 44)
     assert not [name for name in os.listdir("/dev/shm") if name.startswith("iox2_") and
                 os.stat(f"/dev/shm/{name}").st_size >= 1 << 40], "a failed segment growth left a file"
+
+
+_CREDIT_WORDS = {"published": 0, "waiting": 1, "version": 2, "back_event": 3, "publisher_pid": 4,
+                 "asserted_ns": 5, "taken": 6, "pid": 7, "wake_key": 8, "event_id": 9}
+
+
+@pytest.mark.parametrize("word", sorted(_CREDIT_WORDS))
+@pytest.mark.parametrize("value", [0, 2**64 - 1, 2**63 + 12345, 99_999_999])
+def test_a_flipped_credits_word_never_stops_the_stream(pair: Any, word: str, value: int,
+                                                        caplog: pytest.LogCaptureFixture) -> None:
+    """Any process of the user can write a credits file: a word set to anything (a pid that
+    ``os.kill`` cannot take, an event id iceoryx2 refuses, a count ahead of the publisher) is
+    range-checked where it is read; publishing and taking go on, and what was dropped is counted."""
+    writer, reader = pair
+    Image = registry().get(TYPE)
+    words = writer._service.credits.words
+    sent = taken = 0
+    for round_ in range(3):
+        for _ in range(2):
+            sent += 1
+            writer.write(Image(width=sent))
+        words[_CREDIT_WORDS[word]] = value  # between a send and its take, as a stray writer would
+        while (message := reader.try_take()) is not None:
+            assert message.width > taken
+            taken = message.width
+        assert round_ < 2 or taken == sent
+    # what could not be delivered is counted and logged, never silent
+    assert taken == sent or reader.dropped > 0
+    assert "file descriptors" not in caplog.text

@@ -9,13 +9,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._process import valid_pid
 from ._sample import (
+    MAX_EVENT_ID,
     MAX_SUBSCRIBER_SLOTS,
 )
 
 _SLOT_WORDS = 4
 _WORD = struct.Struct("<Q")
 _SLOT_TABLE = struct.Struct(f"<{_SLOT_WORDS * MAX_SUBSCRIBER_SLOTS}Q")
+_SLOT = struct.Struct(f"<{_SLOT_WORDS}Q")
+_VERSION_MASK = (1 << 63) - 1
 
 
 class Credits:
@@ -58,8 +62,7 @@ class Credits:
     def publish(self, seq: int) -> int:
         """Record ``seq`` as published; returns ``version`` (so the publisher notices joins and leaves)."""
         _WORD.pack_into(self._map, 0, seq)
-        version: int = _WORD.unpack_from(self._map, 16)[0]
-        return version
+        return self.version
 
     @property
     def waiting(self) -> bool:
@@ -71,12 +74,22 @@ class Credits:
 
     @property
     def version(self) -> int:
+        """The count of joins and leaves, kept below 2**63 (the compiled path holds it as a signed
+        word); a damaged value is folded back into range and written so."""
         value: int = _WORD.unpack_from(self._map, 16)[0]
+        if value > _VERSION_MASK:
+            value &= _VERSION_MASK
+            _WORD.pack_into(self._map, 16, value)
         return value
+
+    def _bump_version(self) -> None:
+        self.words[2] = (int(self.words[2]) + 1) & _VERSION_MASK
 
     @property
     def back_event(self) -> int:
-        return int(self.words[3])
+        """The publisher's event id on its back channel; 0 (none) when the word is not a valid id."""
+        event = int(self.words[3])
+        return event if 0 < event <= MAX_EVENT_ID else 0
 
     @back_event.setter
     def back_event(self, event: int) -> None:
@@ -104,11 +117,11 @@ class Credits:
 
     def join(self, index: int, taken: int, wake_key: int, event: int) -> None:
         self.slots[index] = (taken, os.getpid(), wake_key, event)
-        self.words[2] += 1
+        self._bump_version()
 
     def leave(self, index: int) -> None:
         self.slots[index] = (0, 0, 0, 0)
-        self.words[2] += 1
+        self._bump_version()
 
     def set_taken(self, index: int, taken: int) -> bool:
         """Record that subscriber ``index`` took up to ``taken``; returns ``waiting``."""
@@ -116,9 +129,28 @@ class Credits:
         return bool(_WORD.unpack_from(self._map, 8)[0])
 
     def subscribers(self) -> list[tuple[int, int]]:
-        """(wake channel key, event id) of every live subscriber slot."""
+        """(wake channel key, event id) of every live subscriber slot.
+
+        Any process of this user can write the file: a slot whose pid, key or event id is out
+        of range is skipped (its subscriber rewrites it when it next finds nothing to take).
+        """
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
-        return [(words[i + 2], words[i + 3]) for i in range(0, len(words), _SLOT_WORDS) if words[i + 1]]
+        return [(words[i + 2], words[i + 3]) for i in range(0, len(words), _SLOT_WORDS)
+                if words[i + 1] and self.valid_slot(words[i + 1], words[i + 2], words[i + 3])]
+
+    @staticmethod
+    def valid_slot(pid: int, key: int, event: int) -> bool:
+        return valid_pid(pid) and 0 < key < 1 << 63 and 0 < event <= MAX_EVENT_ID
+
+    def holds(self, index: int, wake_key: int, event: int) -> bool:
+        """Whether slot ``index`` still says what this process' subscriber wrote when it joined."""
+        _taken, pid, key, got = _SLOT.unpack_from(self._map, 8 * (self.HEAD + _SLOT_WORDS * index))
+        return bool(pid == os.getpid() and key == wake_key and got == event)
+
+    def rejoin(self, index: int, wake_key: int, event: int) -> None:
+        """Write this subscriber's identity into its slot again, keeping what it has taken."""
+        self.slots[index, 1:] = (os.getpid(), wake_key, event)
+        self._bump_version()
 
     def max_fill(self, published: int) -> int:
         """The fullest live subscriber FIFO, in messages (0 without subscribers)."""

@@ -99,7 +99,10 @@ class ShmDomain:
         return notifier.notify_with_custom_event_id, iox2.EventId.new(event)
 
     def notify_back(self, publisher_target: str, event: int) -> None:
-        """Tell the publishing process of a service that one of its subscribers took or joined."""
+        """Tell the publishing process of a service that one of its subscribers took or joined
+        (``event`` 0: the publisher has no back channel event yet, or its word was damaged)."""
+        if not event:
+            return
         notifier = self._back_notifiers.get(publisher_target)
         if notifier is None:
             service = event_service(self._node, back_channel_name(self.session, publisher_target),

@@ -274,13 +274,15 @@ class ShmWriter(Writer):
 class _Port:
     """One publishing target's service as seen by one reader."""
 
-    __slots__ = ("expected", "service", "subscriber", "suspect_since")
+    __slots__ = ("expected", "jump", "service", "subscriber", "suspect_since")
 
     def __init__(self, service: Service, subscriber: Any, start: int) -> None:
         self.service = service
         self.subscriber = subscriber
         self.expected = start + 1
         self.suspect_since = 0.0
+        # (expected, the number seen) while a forward jump of a reliable topic's numbers is unproven
+        self.jump: tuple[int, int] | None = None
 
 
 bind_slots(_Port, ("subscriber", "service", "expected", "suspect_since"))
@@ -454,22 +456,31 @@ class ShmReader(Reader):
             return self._skip_damaged(port, f"a {size}-byte sample is shorter than hetros' {HEADER.size}-byte "
                                             "header")
         seq, _publisher_slot, layout, sent_ns = HEADER.unpack_from(memory, 0)
-        if service.blocking and seq > port.expected:
+        if port.jump is not None:
+            self._settle_jump(port, seq)
+        if seq > port.expected:
             # sends are serialised and the credits say "published" right after each: a sequence
             # number beyond published+1 was not written by the publisher
             published = service.credits.published
             if seq > published + 1:
                 return self._skip_damaged(port, f"sequence number {seq} at offset 0 is beyond the "
                                                 f"{published} published")
-            missed, port.expected = seq - port.expected, seq + 1
-            self._account(port, seq)
-            self._lost(port, missed, seq - missed)
-        elif seq > port.expected:
-            self.overwritten += seq - port.expected  # keep_last: the publisher's newer ones replaced them
+            if service.blocking:
+                # a gap, or one damaged number: the next sample tells (``_settle_jump``); until then
+                # this one counts as the one expected, and no credit is given for what it skipped
+                port.jump = (port.expected, seq)
+                seq = port.expected
+            else:
+                self.overwritten += seq - port.expected  # keep_last: the publisher's newer ones replaced them
         # one sent before this reader joined may come after the join's mark: never count backwards
         seq = max(seq, port.expected - 1)
         port.expected = seq + 1
-        if port.suspect_since:
+        if port.jump is not None:
+            # suspect until settled: every take and every empty poll comes to this path, not the compiled one
+            if not port.suspect_since:
+                port.suspect_since = time.monotonic()
+                self._channel.suspect(self.event, True)
+        elif port.suspect_since:
             port.suspect_since = 0.0
             self._channel.suspect(self.event, False)
         credits = service.credits
@@ -511,9 +522,31 @@ class ShmReader(Reader):
         port.expected += 1
         return self._take_from(port)
 
+    def _settle_jump(self, port: _Port, seq: int | None) -> None:
+        """Decide an unproven jump by what follows it (``seq``, the next number; None when everything
+        the publisher counts as sent was taken): the publisher's numbering going on from the jump
+        proves messages lost; anything else shows the jump was one damaged number."""
+        before, jumped = port.jump or (0, 0)
+        port.jump = None
+        if seq == jumped + 1:
+            port.expected = seq
+            self._account(port, jumped)
+            self._lost(port, jumped - before, before)
+        after = "every message the publisher counts as sent was taken" if seq is None else f"#{seq} came next"
+        self._count_damaged(port, f"its sequence number {jumped} was not the publisher's (#{before} was due, and "
+                                  f"{after}); it was delivered as #{before}")
+
     def _check_arrival(self, port: _Port) -> None:
         """Nothing to receive: is that true, or did iceoryx2 fail to connect to the publisher?"""
-        published = port.service.credits.published
+        credits = port.service.credits
+        if not credits.holds(self._slot, self._channel.key, self.event):
+            log.error("topic %s: this subscriber's slot %d in the credits of target %r was overwritten (another "
+                      "process of this user wrote into /dev/shm); written again", port.service.topic, self._slot,
+                      port.service.target)
+            credits.rejoin(self._slot, self._channel.key, self.event)
+        published = credits.published
+        if port.jump is not None and published < port.expected:
+            self._settle_jump(port, None)
         if published < port.expected:
             if port.suspect_since:
                 port.suspect_since = 0.0
@@ -526,6 +559,7 @@ class ShmReader(Reader):
         elif now - port.suspect_since > LOSS_GRACE:
             missed, first = published - port.expected + 1, port.expected
             port.expected = published + 1  # reported once: a restarted node goes on from here
+            port.jump = None
             port.suspect_since = 0.0
             self._channel.suspect(self.event, False)
             self._account(port, published)

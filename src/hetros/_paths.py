@@ -64,10 +64,14 @@ def private_folder(path: Path) -> Path:
     return path
 
 
-def user_folder() -> Path:
-    """The base of this user's hetros files (checked; see the module's docstring)."""
+def user_folder(max_length: int | None = None) -> Path:
+    """The base of this user's hetros files (checked; see the module's docstring).
+
+    ``max_length``: a base whose path is longer (a deep ``XDG_RUNTIME_DIR``) gives way to
+    ``/tmp/hetros-<uid>``, for files whose full path must stay short (a Unix socket's, 107 bytes).
+    """
     runtime = os.environ.get("XDG_RUNTIME_DIR")
-    if runtime:
+    if runtime and (max_length is None or len(os.path.join(runtime, "hetros")) <= max_length):
         base = Path(runtime)
         try:
             owner = os.stat(base).st_uid
@@ -81,9 +85,9 @@ def user_folder() -> Path:
     return private_folder(Path("/tmp") / f"hetros-{os.getuid()}")
 
 
-def user_subfolder(*names: str) -> Path:
+def user_subfolder(*names: str, max_length: int | None = None) -> Path:
     """A private folder under :func:`user_folder` (each level checked)."""
-    folder = user_folder()
+    folder = user_folder(max_length)
     for name in names:
         folder = private_folder(folder / name)
     return folder

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import operator
 import os
+import signal
 
 # Linux's largest pid (``/proc/sys/kernel/pid_max`` is at most 2**22): a pid read from shared
 # memory or a record outside 1..PID_MAX was damaged or forged, and names no process
@@ -35,3 +36,26 @@ def pid_alive(pid: int) -> bool:
     except PermissionError:
         return True
     return True
+
+
+# what most often sends each signal to a hetros process, for the line that reports its death
+_LIKELY = {
+    "SIGBUS": "most often shared memory that ran out (a full /dev/shm: `df -h /dev/shm`) or a segment another "
+              "process damaged",
+    "SIGSEGV": "a crash in native code: a damaged shared-memory segment, or a C extension the node uses",
+    "SIGKILL": "killed from outside: the kernel's out-of-memory killer (see `dmesg`) or a kill -9",
+    "SIGABRT": "native code gave up (an assertion in a C extension or the simulator)",
+    "SIGTERM": "stopped from outside (kill, a service manager)",
+}
+
+
+def death_cause(returncode: int) -> str:
+    """How a child process ended, by its return code: the signal's name and its likely cause."""
+    if returncode >= 0:
+        return f"exit code {returncode}"
+    try:
+        name = signal.Signals(-returncode).name
+    except ValueError:
+        return f"killed by signal {-returncode}"
+    likely = _LIKELY.get(name)
+    return f"killed by {name}" + (f" ({likely})" if likely else "")

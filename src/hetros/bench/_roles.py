@@ -143,12 +143,11 @@ class Iceoryx2Endpoint(Endpoint):
     """iceoryx2 publish-subscribe plus an event service: the same blocking wait as hetros."""
 
     def __init__(self, role: str, cfg: dict[str, Any]) -> None:
-        import iceoryx2 as iox2
+        from ..transport.shm._iceoryx import iox2, new_node
 
-        iox2.set_log_level(iox2.LogLevel.Error)
         self.iox2 = iox2
-        name = f"hetros-bench-{os.getpid()}"  # a "hetros-" name: cleanup_stale reclaims it after a crash
-        self.node = iox2.NodeBuilder.new().name(iox2.NodeName.new(name)).create(iox2.ServiceType.Ipc)
+        # under hetros's root, so cleanup_stale reclaims it after a crash (the same settings otherwise)
+        self.node = new_node(f"hetros-bench-{os.getpid()}")
         base = f"bench/{cfg['session']}"
         out_name, in_name = (f"{base}/send", f"{base}/recv") if role == "ping" else (f"{base}/recv", f"{base}/send")
 

@@ -26,6 +26,7 @@ from typing import IO, Any
 from .._errors import Error, LaunchError
 from .._log import get_logger
 from .._net import is_local_address
+from .._process import death_cause
 from ..compat import install as install_ros_names
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
@@ -109,8 +110,8 @@ class Launcher:
 
     def run(self) -> LaunchResult:
         setup_logging()
-        cleanup_stale()
         logged = log_to_file(session_folder(self.session) / f"{LAUNCHER}.log")
+        cleanup_stale()
         self._plan_file = session_folder(self.session) / "plan.json"
         write_private(self._plan_file, self.plan.to_json())
         # SIGHUP: `hetros deploy` stops a remote host by hanging up its ssh terminal
@@ -318,7 +319,7 @@ class Launcher:
                     continue
                 code = event["code"]
                 if code != 0:
-                    cause = f"killed by {signal.Signals(-code).name}" if code < 0 else f"exit code {code}"
+                    cause = death_cause(code)
                     sys.stderr.write(f"[ERROR] [launch]: target {event['target']} (pid {child.proc.pid}) "
                                      f"died: {cause}; shutting the graph down\n")
                     sys.stderr.flush()

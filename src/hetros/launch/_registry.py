@@ -9,15 +9,20 @@ record whose launcher is gone (killed, crashed) is dropped by the next reader.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
+import stat
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from .._errors import LaunchError
-from .._process import pid_alive
+from .._log import get_logger
+from .._paths import check_session, is_session, private_folder, user_subfolder
+from .._process import pid_alive, valid_pid
 from ..plan import Plan
+
+log = get_logger("hetros.launch")
 
 
 @dataclass(frozen=True)
@@ -32,32 +37,19 @@ class LaunchRecord:
 
 
 def registry_folder() -> Path:
-    """The folder of this user's records, created private when missing; refused when someone else owns it."""
-    runtime = os.environ.get("XDG_RUNTIME_DIR")
-    base = Path(runtime) / "hetros" if runtime else Path("/tmp") / f"hetros-{os.getuid()}"
-    folder = base / "launches"
-    folder.mkdir(parents=True, exist_ok=True, mode=0o700)
-    for path in (base, folder):
-        status = path.stat()
-        if status.st_uid != os.getuid():
-            raise LaunchError(f"{path} belongs to user {status.st_uid}, not to you ({os.getuid()}): hetros keeps the "
-                              "list of your launches there; remove it or set XDG_RUNTIME_DIR to a folder of yours")
-        if status.st_mode & 0o077:
-            path.chmod(0o700)
-    return folder
+    """The folder of this user's records (checked private: ``hetros._paths``)."""
+    return user_subfolder("launches")
 
 
 def session_folder(session: str) -> Path:
     """The private folder of one launch: its plan (``plan.json``) and each process' control socket."""
-    folder = registry_folder() / session
-    folder.mkdir(exist_ok=True, mode=0o700)
-    return folder
+    return private_folder(registry_folder() / check_session(session))
 
 
 def write_private(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` readable by this user only, whole or not at all."""
     partial = path.with_name(f".{path.name}.partial")
-    descriptor = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    descriptor = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
     with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
         handle.write(text)
     os.replace(partial, path)
@@ -65,6 +57,7 @@ def write_private(path: Path, text: str) -> None:
 
 def register(session: str, plan: Plan) -> Path:
     """Record this launch (the launcher's pid) until :func:`unregister`."""
+    check_session(session)
     record = LaunchRecord(session, plan.name, plan.root, os.getpid(), time.time(), tuple(plan.hosts),
                           plan.local_host)
     path = registry_folder() / f"{session}.json"
@@ -73,20 +66,66 @@ def register(session: str, plan: Plan) -> Path:
 
 
 def unregister(session: str) -> None:
+    """Remove a launch's record and its folder: only a folder of a session id's shape, directly in
+    the registry, never through a link."""
+    if not is_session(session):
+        log.warning("launch registry: refused to remove anything by the session id %r (not one of ours)", session)
+        return
     folder = registry_folder()
     (folder / f"{session}.json").unlink(missing_ok=True)
-    shutil.rmtree(folder / session, ignore_errors=True)
+    path = folder / session
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return
+    if stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)  # a link or a file where a launch's folder should be: the name only
+
+
+# the largest record a launcher writes is a few hundred bytes
+_RECORD_LIMIT = 1 << 16
+
+
+def _read_record(path: Path) -> LaunchRecord:
+    """One record, every field checked; ValueError names what is wrong."""
+    descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    with os.fdopen(descriptor, "rb") as handle:
+        info = os.fstat(handle.fileno())
+        if not stat.S_ISREG(info.st_mode) or info.st_uid != os.getuid():
+            raise ValueError("not a file of yours")
+        raw = json.loads(handle.read(_RECORD_LIMIT))
+    if not isinstance(raw, dict):
+        raise ValueError("not a JSON object")
+    session, pid, started = raw.get("session"), raw.get("pid"), raw.get("started")
+    if not is_session(session) or f"{session}.json" != path.name:
+        raise ValueError(f"its session {session!r} is not a session id, or not its file's name")
+    if not valid_pid(pid) or not isinstance(pid, int):
+        raise ValueError(f"its pid {pid!r} is not a process id")
+    if isinstance(started, bool) or not isinstance(started, int | float) or not math.isfinite(started) or \
+            not 0 <= started <= time.time() + 86_400:
+        raise ValueError(f"its start time {started!r} is not a time")
+    texts = {key: raw.get(key) for key in ("project", "root", "host")}
+    hosts = raw.get("hosts")
+    if not all(isinstance(value, str) and len(value) <= 4096 for value in texts.values()) or \
+            not isinstance(hosts, list) or not all(isinstance(h, str) and len(h) <= 256 for h in hosts):
+        raise ValueError("its project, root, host or hosts are not text")
+    return LaunchRecord(str(session), str(texts["project"]), str(texts["root"]), pid, float(started), tuple(hosts),
+                        str(texts["host"]))
 
 
 def running() -> list[LaunchRecord]:
-    """This user's running launches, oldest first; records of launchers that are gone are removed."""
+    """This user's running launches, oldest first; records of launchers that are gone are removed,
+    and so are records that are not a launcher's (named, with what was wrong)."""
     found = []
     for path in sorted(registry_folder().glob("*.json")):
         try:
-            raw = json.loads(path.read_text(encoding="utf-8"))
-            record = LaunchRecord(**{**raw, "hosts": tuple(raw["hosts"])})
-        except (OSError, ValueError, TypeError, KeyError):
-            path.unlink(missing_ok=True)  # unreadable: half written by a launcher that died, or not ours
+            record = _read_record(path)
+        except (OSError, ValueError) as exc:
+            # unreadable: half written by a launcher that died, or not ours; only its name goes
+            log.warning("launch registry: dropped %s (%s)", path.name, exc)
+            path.unlink(missing_ok=True)
             continue
         if pid_alive(record.pid):
             found.append(record)

@@ -9,8 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..._errors import TransportError
-from ..._process import pid_alive
+from ..._errors import Error, TransportError
 from ..._qos import QoS
 from .._base import Codec, Wake
 from ._endpoints import ShmReader, ShmWriter
@@ -23,11 +22,10 @@ from ._events import (
     raise_open_file_limit,
     wake_channel_name,
 )
-from ._iceoryx import iox2
+from ._iceoryx import FILE_PREFIX, iox2, new_node
 from ._sample import (
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
-    remove_unfinished_segments,
     segment_prefix,
 )
 from ._service import Service
@@ -55,12 +53,9 @@ class ShmDomain:
         self.process_name = process_name
         self._lock = threading.Lock()
         try:
-            self._node = (
-                iox2.NodeBuilder.new()
-                .name(iox2.NodeName.new(f"hetros-{session}-{process_name}"[:120]))
-                .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
-                .create(iox2.ServiceType.Ipc)
-            )
+            self._node = new_node(f"hetros-{session}-{process_name}")
+        except Error:
+            raise
         except Exception as exc:  # iceoryx2 raises its own exception classes
             raise TransportError(node_failure(exc)) from exc
         self._services: dict[str, Service] = {}
@@ -199,7 +194,8 @@ def node_failure(exc: Exception) -> str:
     """What to do when this process cannot join iceoryx2 (its node)."""
     text = f"{type(exc).__name__}: {exc}"
     if "UniqueNodeId" in text:
-        counters = ", ".join(str(p) for p in SHM_DIR.glob("iox2_*global_mgmt")) or "/dev/shm/iox2_*global_mgmt"
+        counters = (", ".join(str(p) for p in SHM_DIR.glob(f"{FILE_PREFIX}*global_mgmt"))
+                    or f"/dev/shm/{FILE_PREFIX}*global_mgmt")
         return (f"iceoryx2 could not give this process a node id ({text}): its machine-wide node counter "
                 f"({counters}) is damaged, most likely written by another process; stop every hetros and "
                 "iceoryx2 process, then remove that file (its owner or root can); the next launch makes a new one")
@@ -220,30 +216,3 @@ def _unlink(path: Path, removed: list[str]) -> None:
         removed.append(path.name)
     except FileNotFoundError:
         pass
-
-
-def cleanup_stale() -> list[str]:
-    """Remove what crashed launches left: dead iceoryx2 nodes, orphaned credits files and
-    segments a failure left unfinished."""
-    removed: list[str] = remove_unfinished_segments()
-    try:
-        states = iox2.Node.list(iox2.ServiceType.Ipc, iox2.config.global_config())
-    except Exception:
-        states = []
-    for state in states:
-        if type(state).__name__ != "Dead":
-            continue
-        view = state._0
-        details = view.details
-        if details is None or not details.name.as_str().startswith("hetros-"):
-            continue
-        try:
-            view.try_remove_stale_resources()
-            removed.append(details.name.as_str())
-        except Exception:
-            pass
-    for path in SHM_DIR.glob("hetros-*"):
-        owner = path.name.split("-")[1].split("x")[0] if path.name.count("-") >= 2 else ""
-        if owner.isdigit() and not pid_alive(int(owner)):
-            _unlink(path, removed)
-    return removed

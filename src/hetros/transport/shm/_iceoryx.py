@@ -1,13 +1,26 @@
-"""iceoryx2, imported once with its logging quietened (it prints to stderr otherwise)."""
+"""iceoryx2, imported once with its logging quietened (it prints to stderr otherwise), and the
+configuration every hetros process gives it.
+
+iceoryx2's default root (``/tmp/iceoryx2``) is shared by every account and takes the mode of
+whoever made it first, which locked every other account out of shared memory; and one damaged
+leftover there stopped every later launch on the machine. hetros gives it a root in this
+user's private folder (``hetros._paths``) and file names of this user's (``hx<uid>_`` in
+``/dev/shm``), so accounts never meet, and a clean-up only ever looks at this user's files.
+"""
 
 from __future__ import annotations
 
+import functools
 import os
+from pathlib import Path
+from typing import Any
 
 os.environ.setdefault("IOX2_LOG_LEVEL", "Error")
 import iceoryx2 as iox2
 
 from ..._log import get_logger
+from ..._paths import user_subfolder
+from ._sample import FILE_PREFIX
 
 iox2.set_log_level(iox2.LogLevel.Error)
 
@@ -19,4 +32,37 @@ log = get_logger("hetros.transport.shm")
 loan_slice = getattr(iox2.Publisher, "__loan_slice_uninit", iox2.Publisher.loan_slice_uninit)
 assume_init = getattr(iox2.SampleMutUninit, "__assume_init", iox2.SampleMutUninit.assume_init)
 
-__all__ = ["assume_init", "iox2", "loan_slice", "log"]
+# iceoryx2 names its event sockets under the root with some 60 bytes of its own: a Unix socket's
+# path holds 107
+_ROOT_LENGTH = 40
+
+
+def iceoryx_root() -> Path:
+    """iceoryx2's root folder for this user (nodes, services, event sockets), checked private."""
+    return user_subfolder("iceoryx2", max_length=_ROOT_LENGTH)
+
+
+def shm_config() -> Any:
+    """iceoryx2's configuration for the nodes of this user (its root follows ``XDG_RUNTIME_DIR``)."""
+    return _config_at(str(iceoryx_root()))
+
+
+@functools.cache
+def _config_at(root: str) -> Any:
+    config = iox2.config.default()
+    config.global_cfg.root_path = iox2.Path.new(f"{root}/")
+    config.global_cfg.prefix = iox2.FileName.new(FILE_PREFIX)
+    # iceoryx2 would clean dead nodes inside every process that makes or drops a node, where one
+    # damaged segment kills it; the launcher does it in a child process instead (``_stale.py``)
+    config.global_cfg.node.cleanup_dead_nodes_on_creation = False
+    config.global_cfg.node.cleanup_dead_nodes_on_destruction = False
+    return config
+
+
+def new_node(name: str) -> Any:
+    """An iceoryx2 node of this process, signals left to hetros, under this user's root."""
+    return (iox2.NodeBuilder.new().name(iox2.NodeName.new(name[:120])).config(shm_config())
+            .signal_handling_mode(iox2.SignalHandlingMode.Disabled).create(iox2.ServiceType.Ipc))
+
+
+__all__ = ["FILE_PREFIX", "assume_init", "iceoryx_root", "iox2", "loan_slice", "log", "new_node", "shm_config"]

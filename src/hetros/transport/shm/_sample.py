@@ -27,6 +27,8 @@ if not _compiled_wanted():
     _Memory = None
 
 SHM_DIR = Path("/dev/shm")
+# the start of every file name iceoryx2 makes for this user (in /dev/shm and under its root)
+FILE_PREFIX = f"hx{os.getuid()}_"
 # Every sample: sequence number, publisher slot, layout, when it was sent (CLOCK_MONOTONIC ns,
 # one clock for every process of the machine: a lifespan is checked against it), padding; then
 # the message. With the CDR layout the 4-byte encapsulation sits at 28..32 so the CDR body
@@ -152,7 +154,7 @@ def remove_unfinished_segments(larger_than: int | None = None) -> list[str]:
     bytes (a 3.79 GB sparse file was left behind when memory ran out, and never removed)."""
     removed: list[str] = []
     now = time.time()
-    for path in SHM_DIR.glob("iox2_*.data"):
+    for path in SHM_DIR.glob(f"{FILE_PREFIX}*.data"):
         try:
             info = path.stat()
         except OSError:
@@ -195,8 +197,9 @@ class MappedSegments:
             while chunk := os.read(self._maps, 1 << 16):
                 chunks.append(chunk)
         ranges = []
+        marker = f"/dev/shm/{FILE_PREFIX}".encode()
         for line in b"".join(chunks).split(b"\n"):
-            if b"/dev/shm/iox2_" in line:
+            if marker in line:
                 low, _, rest = line.partition(b"-")
                 ranges.append((int(low, 16), int(rest.split(b" ", 1)[0], 16)))
         ranges.sort()

@@ -31,7 +31,7 @@ from ..compat import install as install_ros_names
 from ..plan import LAUNCHER, Plan
 from ..runtime import Host, setup_logging
 from ..runtime._log import log_to_file, stop_logging_to
-from ..transport import cleanup_stale, new_session, remove_session_segments
+from ..transport import check_room, cleanup_stale, new_session, remove_session_segments, reserved_bytes
 from ._control import ControlServer
 from ._hosts import HostLink, local_host
 from ._registry import register, session_folder, unregister, write_private
@@ -419,7 +419,16 @@ def launch(plan: Plan, *, duration: float | None = None, host: str | None = None
     elif host is not None:
         raise LaunchError(f"--as {host}: the project names no hosts (add a hosts: section)")
     _check_hardware(plan)
+    _check_shared_memory(plan)
     return Launcher(plan, duration=duration, record=record).run()
+
+
+def _check_shared_memory(plan: Plan) -> None:
+    """Refuse, before anything starts, a launch whose shared memory /dev/shm has no room for (a
+    full /dev/shm otherwise kills the first publisher that writes with SIGBUS)."""
+    needs = [reserved_bytes(plan.channels[edge.channel].qos, None) for edge in plan.edges if edge.transport == "shm"]
+    if needs:
+        check_room(max(needs), "each shared-memory topic of this launch")
 
 
 def _check_hardware(plan: Plan) -> None:

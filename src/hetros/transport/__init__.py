@@ -22,6 +22,7 @@ if TYPE_CHECKING:
         ShmReader,
         ShmWriter,
         WakeChannel,
+        check_room,
         cleanup_stale,
         has_loan,
         new_session,
@@ -31,7 +32,8 @@ if TYPE_CHECKING:
     )
 
 _FROM_SHM = frozenset({
-    "SESSION_TAG_VARIABLE", "ShmDomain", "ShmReader", "ShmWriter", "WakeChannel", "cleanup_stale", "has_loan",
+    "SESSION_TAG_VARIABLE", "ShmDomain", "ShmReader", "ShmWriter", "WakeChannel", "check_room", "cleanup_stale",
+    "has_loan",
     "new_session", "raise_open_file_limit", "remove_session_segments", "reserved_bytes",
 })
 
@@ -65,6 +67,7 @@ __all__ = [
     "WakeChannel",
     "Writer",
     "carried_message",
+    "check_room",
     "cleanup_stale",
     "has_loan",
     "new_session",

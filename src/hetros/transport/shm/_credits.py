@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._errors import MachineError
 from ..._process import valid_pid
 from ._sample import (
     MAX_EVENT_ID,
@@ -43,10 +44,14 @@ class Credits:
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o600)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
         try:
             if os.fstat(fd).st_size < self.SIZE:
-                os.ftruncate(fd, self.SIZE)
+                try:  # backed now: a page the tmpfs cannot back would be a SIGBUS at the first write
+                    os.posix_fallocate(fd, 0, self.SIZE)
+                except OSError as exc:
+                    raise MachineError(f"cannot reserve the {self.SIZE}-byte credits file {path}: {exc.strerror}; "
+                                       f"free some of {path.parent} (`df -h {path.parent}`)") from exc
             self._map = mmap.mmap(fd, self.SIZE)
         finally:
             os.close(fd)

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..._errors import TransportError
+from ..._errors import MachineError, TransportError
 from ..._qos import QoS
 from ...msg._compiled import wanted as _compiled_wanted
 from .._codec import CDR_LE
@@ -77,6 +77,25 @@ def reserved_bytes(qos: QoS, message_size: int | None) -> int:
     samples = MAX_SUBSCRIBER_SLOTS * (buffer + BORROW_LIMIT) + history + MAX_LOANS
     slot = HEADER.size + (message_size + 4 if message_size is not None else INITIAL_SLOT)
     return samples * slot
+
+
+def check_room(need: int, what: str) -> None:
+    """Refuse, with /dev/shm and its free space named, a segment that /dev/shm has no room for.
+
+    iceoryx2 makes segments sparse: one made in a full /dev/shm succeeds, and the first write
+    to a page the tmpfs cannot back kills the process with SIGBUS, which names nothing.
+    """
+    try:
+        info = os.statvfs(SHM_DIR)
+    except OSError:
+        return
+    free = info.f_bavail * info.f_frsize
+    if free < need:
+        raise MachineError(
+            f"{SHM_DIR} has {free / 2**20:,.1f} MiB free, and {what} needs {need / 2**20:,.1f} MiB of it (its "
+            f"{SHM_DIR} is {info.f_blocks * info.f_frsize / 2**20:,.0f} MiB in all): free some (`df -h {SHM_DIR}`; "
+            "a crashed program's files there), make it larger (a container's --shm-size), lower the topic's "
+            "depth, or map the nodes to threads of one process")
 
 
 def segment_prefix(session: str) -> str:

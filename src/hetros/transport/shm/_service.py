@@ -32,7 +32,9 @@ from ._sample import (
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
     ScratchViews,
+    check_room,
     remove_unfinished_segments,
+    reserved_bytes,
     segment_prefix,
     slot_memory,
 )
@@ -99,6 +101,7 @@ class Service:
     def publisher(self) -> Any:
         with self.lock:
             if self._publisher is None:
+                check_room(reserved_bytes(self.qos, None), f"the shared-memory publisher of {self.topic}")
                 try:
                     self._publisher = (
                         self.data.publisher_builder()

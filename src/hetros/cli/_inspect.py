@@ -19,7 +19,7 @@ from typing import Any
 
 import yaml
 
-from .._errors import InspectError
+from .._errors import Error, InspectError
 from ..launch._inspect import RunningLaunch, TapEvent
 from ..launch._logs import LaunchLogs
 from ..msg import Message, normalize_typename
@@ -646,7 +646,7 @@ def add_commands(sub: Any) -> None:
     p = sub.add_parser("foxglove", help="serve a running launch to Foxglove (its WebSocket protocol)")
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1 only)")
     p.add_argument("--port", type=int, default=8765, help="default %(default)s; 0 picks a free one")
-    p.add_argument("--max-rate", type=float, default=30.0,
+    p.add_argument("--max-rate", type=_rate, default=30.0,
                    help="messages per second per topic at most (default %(default)s); never slows a publisher")
     p.set_defaults(func=cmd_foxglove)
     p = sub.add_parser("record", help="record a running launch's topics into MCAP (ros2 bag record)")
@@ -672,3 +672,14 @@ def add_commands(sub: Any) -> None:
             _which(parser)
     for name in ("top", "log", "foxglove", "record", "play"):
         _which(sub.choices[name])
+
+
+def _rate(text: str) -> float:
+    """``--max-rate``: checked here, so that a NaN or a vanishing rate never reaches a publisher."""
+    from ..runtime._taps import check_rate
+
+    try:
+        return check_rate(float(text), "--max-rate")
+    except (ValueError, Error) as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._errors import InspectError
 from .._log import get_logger
-from ..runtime._taps import TapSink
+from ..runtime._taps import TapSink, check_rate
 from ..transport import MessageCodec
 
 if TYPE_CHECKING:
@@ -150,13 +150,16 @@ class ControlServer:
         with connection:
             try:
                 request, payload = receive_frame(connection)
+            except (OSError, InspectError):
+                return  # the looker hung up, or sent something that is not a control frame
+            try:
                 operation = request.get("op")
                 handler = getattr(self, f"_op_{operation}", None) if isinstance(operation, str) else None
                 if handler is None:
                     send_frame(connection, {"error": f"unknown request {operation!r}"})
                     return
                 handler(connection, request, payload)
-            except (OSError, InspectError):
+            except OSError:
                 return  # the looker hung up
             except Exception as exc:  # a look must never take the graph down: report it to the looker
                 log.warning("a request from hetros' command line failed in %s: %s: %s", self.process,
@@ -201,7 +204,7 @@ class ControlServer:
                                 "topics": topics})
 
     def _op_tap(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        topic = str(request["topic"])
+        topic = _text(request, "topic")
         points = self.graph.taps()
         point = points.get(topic)
         if point is None:
@@ -209,7 +212,7 @@ class ControlServer:
             return
         codec = self._codec(point.typename)
         wants_data = bool(request.get("data", True))
-        sink = TapSink(codec, data=wants_data, max_rate=float(request.get("max_rate", 0.0)))
+        sink = TapSink(codec, data=wants_data, max_rate=check_rate(request.get("max_rate", 0), "max_rate"))
         point.attach(sink)
         send_frame(connection, {"ok": True, "type": point.typename})
         sent_drops = 0
@@ -235,13 +238,16 @@ class ControlServer:
                 if getattr(entity, "topic", None) == topic and hasattr(entity, "inject")]
 
     def _op_pub(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        topic, typename = str(request["topic"]), str(request["type"])
-        message = self._codec(typename).decode(memoryview(payload))
+        topic, typename = _text(request, "topic"), _text(request, "type")
         reached = self._subscriptions(topic)
+        wrong = sorted({s.typename for s in reached if s.typename != typename})
+        if wrong:
+            raise InspectError(f"{topic} carries {', '.join(wrong)}, not {typename}: publish a message of its type")
+        wait = _number(request, "wait", 0.0, 0.0, 3600.0)
+        message = self._codec(typename).decode(memoryview(payload))
         handled = [subscription.stats.count for subscription in reached]
         for subscription in reached:
             subscription.inject(message)
-        wait = float(request.get("wait", 0.0))
         if wait:
             deadline = time.monotonic() + wait
             while any(s.stats.count <= before and s.node.graph is self.graph and s.node.name in self.graph.nodes
@@ -260,19 +266,20 @@ class ControlServer:
         raise InspectError(f"no server of {name} runs in {self.process} (yet)")
 
     def _op_call(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        node, service = self._service(str(request["service"]))
+        node, service = self._service(_text(request, "service"))
+        timeout = _number(request, "timeout", 10.0, 1e-3, 3600.0)
         request_message = self._codec(f"{service.srv_type.name}_Request").decode(memoryview(payload))
-        response = node.call_in_executor(lambda: service.handle(request_message), float(request.get("timeout", 10)))
+        response = node.call_in_executor(lambda: service.handle(request_message), timeout)
         send_frame(connection, {"ok": True}, self._codec(f"{service.srv_type.name}_Response").encode(response))
 
     def _op_send_goal(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        action = str(request["action"])
+        action = _text(request, "action")
+        timeout = _number(request, "timeout", 600.0, 1e-3, 86_400.0)
         node = next((n for n in list(self.graph.nodes.values()) if action in n.action_servers), None)
         if node is None:
             raise InspectError(f"no server of action {action} runs in {self.process} (yet)")
         server = node.action_servers[action]
         goal = self._codec(f"{server.type.name}_Goal").decode(memoryview(payload))
-        timeout = float(request.get("timeout", 600.0))
         handle = node.call_in_executor(lambda: server.submit(goal), 30.0)
         if handle is None:
             send_frame(connection, {"accepted": False})
@@ -293,12 +300,29 @@ class ControlServer:
         return node
 
     def _op_params(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        send_frame(connection, {"ok": True, "parameters": _jsonable(self._node(str(request["node"])).parameters)})
+        send_frame(connection, {"ok": True, "parameters": _jsonable(self._node(_text(request, "node")).parameters)})
 
     def _op_set_param(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        node = self._node(str(request["node"]))
-        node.set_parameter(str(request["name"]), request["value"])
+        node = self._node(_text(request, "node"))
+        node.set_parameter(_text(request, "name"), request.get("value"))
         send_frame(connection, {"ok": True})
+
+
+def _text(request: dict[str, Any], key: str) -> str:
+    """A name field of a control request: refused, to the client, unless it is short text."""
+    value = request.get(key)
+    if not isinstance(value, str) or not 0 < len(value) <= 1024:
+        raise InspectError(f"control request field {key!r} must be a name (text, 1..1024 characters), "
+                           f"not {value!r:.80}")
+    return value
+
+
+def _number(request: dict[str, Any], key: str, default: float, low: float, high: float) -> float:
+    """A numeric field of a control request: finite and within ``low..high``, else refused to the client."""
+    value = request.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not low <= value <= high:
+        raise InspectError(f"control request field {key!r} must be a number in {low:g}..{high:g}, not {value!r:.80}")
+    return float(value)
 
 
 def _jsonable(value: Any) -> Any:

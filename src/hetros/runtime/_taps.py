@@ -22,6 +22,7 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
+from .._errors import InspectError
 from ..transport import MessageCodec
 
 # messages a sink keeps for its sender: meta records are small, encoded messages may be images
@@ -30,10 +31,23 @@ DATA_DEPTH = 64
 DATA_BYTES = 64 << 20
 
 
+# a look's rate cap: 0 (none), else within these (a cap of 1e-320 Hz once overflowed in publish())
+MIN_RATE, MAX_RATE = 1e-3, 1e6
+
+
+def check_rate(rate: object, what: str) -> float:
+    """A look's rate cap, checked before it can reach a publisher."""
+    if isinstance(rate, bool) or not isinstance(rate, int | float) or not (
+            rate == 0 or MIN_RATE <= rate <= MAX_RATE):
+        raise InspectError(f"{what} must be 0 (no cap) or a number of Hz in {MIN_RATE:g}..{MAX_RATE:g}, not {rate!r}")
+    return float(rate)
+
+
 class TapSink:
     """One look at one topic: a bounded queue between the publisher and the sender."""
 
     def __init__(self, codec: MessageCodec, *, data: bool, max_rate: float = 0.0) -> None:
+        check_rate(max_rate, "a look's max_rate")
         self.codec = codec
         self.data = data  # False: times and sizes only
         self.max_rate = max_rate

@@ -1,0 +1,90 @@
+"""The control sockets of a running launch under a flood of malformed requests.
+
+Every request is checked before it reaches a node (finite rates in range, names that are text,
+known topics, the topic's type for ``pub``) and refused with an error to the client: 0 node
+crashes, 0 graph stops, and the graph's own traffic goes on.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import random
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from hetros.launch._control import receive_frame, short_path
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "talker_listener" / "project.yaml"
+_FRAME = struct.Struct("<II")
+_NASTY: list[Any] = [math.nan, math.inf, -math.inf, 1e-320, -1, 0, 2**70, 1e308, "", "x" * 5000, None, True, [],
+                     {}, {"a": 1}, "/chatter", "/nowhere", "std_msgs/msg/Int32", "std_msgs/msg/String", 1.5]
+
+
+def _request(rng: random.Random) -> tuple[bytes, bytes]:
+    op = rng.choice(["tap", "pub", "call", "send_goal", "params", "set_param", "stats", "nope", 7, None])
+    request: dict[str, Any] = {"op": op}
+    for key in rng.sample(["topic", "type", "max_rate", "wait", "timeout", "service", "action", "node", "name",
+                           "value", "data"], rng.randrange(0, 6)):
+        request[key] = rng.choice(_NASTY)
+    if op == "tap" and isinstance(request.get("max_rate"), int | float) and rng.random() < 0.5:
+        request["max_rate"] = rng.choice([math.nan, 1e-320, -5.0, 1e12])
+    if op == "pub":  # the right topic with a wrong type, or garbage bytes for the right one
+        request.setdefault("topic", "/chatter")
+        request.setdefault("type", rng.choice(["std_msgs/msg/Int32", "std_msgs/msg/String"]))
+    header = json.dumps(request).encode()  # NaN and Infinity go out as JSON's extension, as a forger may
+    payload = rng.randbytes(rng.randrange(0, 64))
+    if rng.random() < 0.05:  # a frame that lies about its sizes
+        return _FRAME.pack(rng.randrange(2**32), rng.randrange(2**32)) + header, b""
+    return _FRAME.pack(len(header), len(payload)) + header, payload
+
+
+def test_ten_thousand_malformed_control_requests_stop_nothing(tmp_path: Path) -> None:
+    env = dict(os.environ, XDG_RUNTIME_DIR=str(tmp_path))
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(EXAMPLE), "--duration", "40"],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+    try:
+        sockets = _wait_for_sockets(tmp_path)
+        rng = random.Random(34)
+        answered = errors = 0
+        deadline = time.monotonic() + 30
+        for count in range(10_000):
+            assert time.monotonic() < deadline, f"only {count} requests in 30 s"
+            assert launch.poll() is None, "the launch stopped under the fuzz"
+            frame, payload = _request(rng)
+            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock, short_path(rng.choice(sockets)) as name:
+                sock.settimeout(2.0)
+                sock.connect(name)
+                try:
+                    sock.sendall(frame + payload)
+                    answer, _ = receive_frame(sock)
+                    answered += 1
+                    errors += "error" in answer
+                except (OSError, Exception):  # a frame the server hung up on, or a tap that streams
+                    pass
+        assert answered > 5_000 and errors > 2_000
+    finally:
+        launch.send_signal(signal.SIGINT)  # an orderly stop: the graph must still be whole
+        output, _ = launch.communicate(timeout=120)
+    assert launch.returncode == 0, output
+    assert "Traceback" not in output and "raised" not in output
+    heard = [line for line in output.splitlines() if "I heard" in line]
+    assert len(heard) > 100  # the graph's traffic went on throughout
+
+
+def _wait_for_sockets(folder: Path) -> list[Path]:
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        found = sorted((folder / "hetros" / "launches").glob("*/cluster*.sock"))
+        if len(found) == 2:
+            time.sleep(0.5)
+            return found
+        time.sleep(0.1)
+    raise AssertionError("the launch's control sockets never appeared")

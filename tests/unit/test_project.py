@@ -152,3 +152,18 @@ def test_a_node_module_that_prints_and_exits_at_import_is_named_not_a_traceback(
             assert not report.errors, report.errors
         else:
             assert len(report.errors) == 1 and expected in report.errors[0] and "nodes.a.run" in report.errors[0]
+
+
+def test_check_says_what_launch_refuses_of_a_bare_fpga_node(tmp_path: Path) -> None:
+    """`hetros check` used to say OK where `hetros launch` refused: a node on an fpga target without hw:."""
+    from hetros.project import check, load_project
+
+    project = tmp_path / "project.yaml"
+    project.write_text("name: bare\n"
+                       "targets: {fpga0: {kind: fpga, clock_mhz: 100}, main: {kind: thread}}\n"
+                       "nodes:\n"
+                       "  a: {run: json:dumps, target: fpga0, publish: {/x: std_msgs/msg/String}}\n"
+                       "  b: {run: json:dumps, target: main, subscribe: {/x: std_msgs/msg/String}}\n")
+    report = check(load_project(project))
+    assert any("node a sits on fpga target fpga0 without a hardware implementation" in w and
+               "hetros launch` will refuse" in w for w in report.warnings), report.warnings

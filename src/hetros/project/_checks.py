@@ -291,6 +291,11 @@ def _check_hardware_topics(project: LoadedProject, publishers: dict[str, list[tu
     where = project.where
     fpga = {t for t, spec in model.targets.items() if spec.kind == "fpga"}
     for nname, spec in model.nodes.items():
+        if spec.target in fpga and not spec.hw:  # the rule `hetros launch` applies before it starts
+            report.warnings.append(f"{where('nodes', nname, 'target')}: node {nname} sits on fpga target "
+                                   f"{spec.target} without a hardware implementation, so `hetros launch` will refuse "
+                                   "the project (`hetros hw build` makes its topic network all the same): give it a "
+                                   "hw: (module:Component, see hetros.hw.nodes) or move it to a process target")
         if spec.target in fpga:
             for section in ("clients", "actions", "action_clients"):
                 for name in getattr(spec, section):

@@ -439,10 +439,9 @@ def test_broadcast_to_three_subscribers_each_with_own_fifo(make: Callable[[QoS],
     writer = h.writer()
     for seq in range(10):
         writer.write(image(0, seq))
-    first = drain(readers[0])
-    assert [m.width for m in first] == list(range(10))
-    for reader in readers[1:]:
-        assert [m.width for m in drain(reader)] == list(range(10))
+    for reader in readers:  # within a few seconds: a loaded machine delays DDS's delivery to later readers
+        assert [m.width for m in take_within(reader, 10, 5.0)] == list(range(10))
+        assert drain(reader) == []
 
 
 def test_backpressure_blocks_then_times_out(make: Callable[[QoS], Harness]) -> None:

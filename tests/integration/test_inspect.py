@@ -430,3 +430,89 @@ def test_top_counts_a_slow_subscribers_stalls_and_drops(tmp_path: Path, env: dic
     assert topics["/steady"]["stalls"] > 0 and topics["/steady"]["dropped"] == 0, topics
     assert topics["/lossy"]["dropped"] > 0 and topics["/lossy"]["stalls"] == 0, topics
     assert topics["/steady"]["rate_hz"] < 100 < topics["/lossy"]["rate_hz"]  # held to the subscriber's pace, or not
+
+
+CAMERA_NODES = """
+import numpy as np
+
+from hetros import Node
+from hetros.interfaces.sensor_msgs.msg import Image
+
+
+def camera(node: Node) -> None:
+    pub = node.create_publisher(Image, "/image")
+    pixels = np.zeros(640 * 480 * 3, dtype=np.uint8)
+    for i in node.rate(20.0):
+        pixels[:8] = i % 256
+        pub.publish(Image(height=480, width=640, encoding="rgb8", step=640 * 3, data=pixels))
+
+
+def sink(node: Node) -> None:
+    node.create_subscription(Image, "/image", lambda message: None)
+"""
+
+CAMERA_PROJECT = """
+name: camera
+targets: {a: {kind: process}, b: {kind: process}}
+nodes:
+  camera: {run: nodes:camera, target: a, publish: {/image: sensor_msgs/msg/Image}}
+  sink: {run: nodes:sink, target: b, subscribe: {/image: sensor_msgs/msg/Image}}
+topics:
+  /image: {reliability: best_effort, history: keep_last, depth: 2}
+"""
+
+
+def _rss_mb(pid: int) -> float:
+    status = Path(f"/proc/{pid}/status").read_text()
+    return int(re.search(r"VmRSS:\s+(\d+) kB", status)[1]) / 1024  # type: ignore[index]
+
+
+def test_foxglove_clients_that_never_read_stay_bounded_and_slow_nobody(tmp_path: Path, env: dict[str, str]) -> None:
+    """Five Foxglove clients subscribe to 1 MB images at 20 Hz and never read: the server's memory grows by
+    at most 64 MB and the camera keeps its rate within 10 % (60 s with HETROS_SOAK=1, else 20 s)."""
+    pytest.importorskip("foxglove")
+    sync_client = pytest.importorskip("websockets.sync.client")
+    (tmp_path / "nodes.py").write_text(CAMERA_NODES)
+    project = tmp_path / "camera.yaml"
+    project.write_text(CAMERA_PROJECT)
+    soak = 60.0 if os.environ.get("HETROS_SOAK") else 20.0
+    with running(project, env, tmp_path / "launch.log", duration=soak + 60), \
+            subprocess.Popen([sys.executable, "-m", "hetros", "foxglove", "--port", "0"], env=env, text=True,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE) as server:
+        try:
+            assert server.stdout is not None
+            url = re.search(r"ws://[\d.]+:\d+", server.stdout.readline())
+            assert url, server.stderr.read() if server.stderr else ""
+            clients = []
+            for _ in range(5):
+                client = sync_client.connect(url[0], subprotocols=["foxglove.sdk.v1"], open_timeout=20,
+                                             max_size=None)
+                channel = None
+                while channel is None:
+                    answer = json.loads(text) if isinstance(text := client.recv(timeout=20), str) else {}
+                    if answer.get("op") == "advertise":
+                        channel = next((c for c in answer["channels"] if c["topic"] == "/image"), None)
+                client.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 1, "channelId": channel["id"]}]}))
+                clients.append(client)  # and never read again
+            time.sleep(3.0)
+            before = _rss_mb(server.pid)
+            rate = _last_figures(hetros(env, "topic", "hz", "/image", "--duration", str(soak / 2)).stdout,
+                                 r"average rate: ([\d.]+)")[0]
+            time.sleep(soak / 2)
+            after = _rss_mb(server.pid)
+            assert server.poll() is None
+            assert after - before <= 64, f"the server grew from {before:.0f} MB to {after:.0f} MB"
+            assert rate == pytest.approx(20.0, rel=0.10)
+            for client in clients:
+                client.close()
+        finally:
+            server.terminate()
+            server.wait(30)
+
+
+def test_foxglove_refuses_an_interface_the_project_does_not_allow(tmp_path: Path, env: dict[str, str]) -> None:
+    pytest.importorskip("foxglove")
+    with running(EXAMPLES / "talker_listener" / "project.yaml", env, tmp_path / "launch.log"):
+        done = hetros(env, "foxglove", "--host", "0.0.0.0", "--port", "0", check=False, timeout=30)
+    assert done.returncode == 1
+    assert "listens on 127.0.0.1 only, unless the project file lists the interface (foxglove_hosts" in done.stderr

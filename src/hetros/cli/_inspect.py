@@ -530,7 +530,7 @@ def cmd_foxglove(args: argparse.Namespace) -> int:
     from ..launch._foxglove import FoxgloveView
 
     launch = _launch(args)
-    view = FoxgloveView(launch, host=args.host, port=args.port, max_rate=args.max_rate)
+    view = FoxgloveView(launch, host=args.host, port=args.port, max_rate=args.max_rate, backlog=args.backlog)
     print(f"serving launch {launch.record.session} ({launch.record.project}) to Foxglove at "
           f"ws://{args.host}:{view.port}; Ctrl-C stops", flush=True)
     try:
@@ -648,6 +648,8 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--port", type=int, default=8765, help="default %(default)s; 0 picks a free one")
     p.add_argument("--max-rate", type=_rate, default=30.0,
                    help="messages per second per topic at most (default %(default)s); never slows a publisher")
+    p.add_argument("--backlog", type=int, default=8,
+                   help="messages kept per client that does not read (default %(default)s; the oldest goes first)")
     p.set_defaults(func=cmd_foxglove)
     p = sub.add_parser("record", help="record a running launch's topics into MCAP (ros2 bag record)")
     p.add_argument("-t", "--topics", nargs="+", help="the topics to record")

@@ -157,6 +157,8 @@ class Plan:
     dds_domain: int | None = None
     # of the project file and its message definitions: hosts running different ones refuse each other
     project_hash: str = ""
+    # interfaces `hetros foxglove` may listen on besides loopback (the project file's foxglove_hosts)
+    foxglove_hosts: tuple[str, ...] = ()
     # every process' clock follows /clock (see CLOCK_PREFIX) instead of the wall
     use_sim_time: bool = False
 
@@ -279,6 +281,7 @@ class Plan:
             use_sim_time=raw.get("use_sim_time", False),
             dds_domain=raw.get("dds_domain"),
             project_hash=raw.get("project_hash", ""),
+            foxglove_hosts=tuple(raw.get("foxglove_hosts", ())),
         )
 
 

@@ -375,6 +375,9 @@ class Project(_Strict):
     include: dict[str, IncludeSpec] = Field(default_factory=dict, description="name -> another project file "
                                             "whose nodes join this graph (named <name>_<node>) under a "
                                             "namespace")
+    foxglove_hosts: list[str] = Field(default_factory=list, description="interfaces `hetros foxglove` may listen "
+                                      "on besides 127.0.0.1 (its protocol has no authentication: whoever reaches "
+                                      "the port sees every topic)")
     use_sim_time: bool = Field(default=False, description="every node's clock (get_clock, create_timer, rate) "
                                "follows /clock (rosgraph_msgs/msg/Clock, published by a simulator node or "
                                "`hetros play --clock`) instead of the wall")

@@ -138,6 +138,7 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         dds_domain=model.dds_domain,
         project_hash=project_hash(project),
         use_sim_time=model.use_sim_time,
+        foxglove_hosts=tuple(model.foxglove_hosts),
     )
 
 

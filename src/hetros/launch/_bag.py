@@ -17,13 +17,15 @@ import shutil
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from .._errors import InspectError
 from ..plan import CLOCK_TOPIC, CLOCK_TYPE
 from ._inspect import RunningLaunch
+from ._mcap import check, mcap_files, seal, whole_messages
 
 # how often --clock publishes the recording's time between messages (ros2 bag play's default)
 CLOCK_HZ = 40.0
@@ -90,6 +92,8 @@ def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: flo
             print(f"the launch ended: {exc}", file=sys.stderr)
     finally:
         writer.close()
+        for written in mcap_files(folder):
+            seal(written)  # chunk, data and summary CRCs: `hetros play` then names damage instead of playing it
         if single:
             (folder / f"{folder.name}.mcap").replace(out)
             shutil.rmtree(folder, ignore_errors=True)
@@ -101,8 +105,6 @@ def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: flo
 def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = False, clock: bool = False,
          lockstep: bool = False, topics: list[str] | None = None) -> dict[str, int]:
     """Deliver a recording's messages into a running launch; the count per topic."""
-    from rosbags.rosbag2 import Reader
-
     if not rate > 0:
         raise InspectError(f"--rate must be positive, not {rate!r}")
     if (clock or lockstep) and CLOCK_TOPIC not in launch.plan.channels:
@@ -112,23 +114,23 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
         clock = False
     elif lockstep:
         clock = True  # lockstep replays in the recording's time
-    with Reader(path) as reader:
+    recording = Recording(path)
+    with recording:
         wanted = []
-        for connection in reader.connections:
-            if topics and connection.topic not in topics:
+        for topic, msgtype in recording.topics.items():
+            if topics and topic not in topics:
                 continue
-            channel = launch.plan.channels.get(connection.topic)
+            channel = launch.plan.channels.get(topic)
             if channel is None or channel.kind != "topic":
-                print(f"skipping {connection.topic}: launch {launch.record.session} has no such topic",
-                      file=sys.stderr)
+                print(f"skipping {topic}: launch {launch.record.session} has no such topic", file=sys.stderr)
                 continue
-            if channel.type != connection.msgtype:
-                raise InspectError(f"{path}: {connection.topic} was recorded as {connection.msgtype}, but the "
-                                   f"launch carries {channel.type} on it")
-            wanted.append(connection)
+            if channel.type != msgtype:
+                raise InspectError(f"{path}: {topic} was recorded as {msgtype}, but the launch carries "
+                                   f"{channel.type} on it")
+            wanted.append(topic)
         if not wanted:
             raise InspectError(f"{path}: none of its topics is a topic of launch {launch.record.session}")
-        counts = {c.topic: 0 for c in wanted}
+        counts = {topic: 0 for topic in wanted}
         clock_codec = launch.codec(CLOCK_TYPE)
         wait = LOCKSTEP_PATIENCE if lockstep else 0.0
 
@@ -141,7 +143,7 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
             start_wall = time.monotonic()
             first: int | None = None
             last_clock = 0.0
-            for connection, timestamp, data in reader.messages(connections=wanted):
+            for topic, timestamp, data in recording.messages(set(wanted)):
                 first = timestamp if first is None else first
                 if not lockstep:
                     due = start_wall + (timestamp - first) / 1e9 / rate
@@ -153,12 +155,12 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
                 if clock:
                     tell_time(timestamp)
                     last_clock = time.monotonic()
-                reached = launch.publish_bytes(connection.topic, bytes(data), wait=wait)
+                reached = launch.publish_bytes(topic, bytes(data), wait=wait)
                 patience = time.monotonic() + LOCKSTEP_PATIENCE
                 while lockstep and not reached and time.monotonic() < patience:
                     time.sleep(0.05)  # lockstep loses nothing: wait for the consumers to subscribe
-                    reached = launch.publish_bytes(connection.topic, bytes(data), wait=wait)
-                counts[connection.topic] += 1
+                    reached = launch.publish_bytes(topic, bytes(data), wait=wait)
+                counts[topic] += 1
             if not loop:
                 return counts
 
@@ -169,10 +171,65 @@ def describe_played(counts: dict[str, int]) -> str:
 
 def recorded_topics(path: Path) -> dict[str, str]:
     """Topic -> type of what ``path`` holds."""
-    from rosbags.rosbag2 import Reader
+    with Recording(path) as recording:
+        return recording.topics
 
-    with Reader(path) as reader:
-        return {c.topic: c.msgtype for c in reader.connections}
+
+class Recording:
+    """A recording to play: read by rosbags when every file is whole, else its whole chunks only,
+    with what is damaged or missing named on stderr (never a traceback, nothing skipped uncounted)."""
+
+    def __init__(self, path: Path) -> None:
+        from rosbags.rosbag2 import Reader
+
+        self.path = path
+        if not path.exists():
+            raise InspectError(f"{path} does not exist")
+        files = mcap_files(path)
+        self.checks = [check(file) for file in files if file.suffix == ".mcap"]
+        self._reader: Any = None
+        self.topics: dict[str, str] = {}
+        if all(found.whole for found in self.checks):
+            try:
+                self._reader = Reader(path)
+                self._reader.open()
+                self.topics = {c.topic: c.msgtype for c in self._reader.connections}
+                return
+            except Exception as exc:  # rosbags raises its own errors for what it cannot read
+                self._reader = None
+                print(f"{path}: rosbags cannot read it ({type(exc).__name__}: {exc}); playing its whole chunks",
+                      file=sys.stderr)
+        if not self.checks:
+            raise InspectError(f"{path}: no MCAP file to play (hetros plays MCAP recordings)")
+        for found in self.checks:
+            for line in found.lines():
+                print(line, file=sys.stderr)
+        skipped = sum(d.messages or 0 for found in self.checks for d in found.damaged)
+        whole = sum(found.messages for found in self.checks)
+        print(f"{path}: playing the {whole} messages of its whole chunks; {skipped} messages of damaged chunks "
+              "skipped", file=sys.stderr)
+        for file in files:
+            for topic, msgtype, _time, _data in whole_messages(file):
+                self.topics.setdefault(topic, msgtype)
+
+    def messages(self, topics: set[str]) -> Iterator[tuple[str, int, bytes]]:
+        """(topic, log time, CDR bytes) of the messages of ``topics``, in order."""
+        if self._reader is not None:
+            wanted = [c for c in self._reader.connections if c.topic in topics]
+            for connection, timestamp, data in self._reader.messages(connections=wanted):
+                yield connection.topic, timestamp, bytes(data)
+            return
+        for file in mcap_files(self.path):
+            for topic, _msgtype, timestamp, data in whole_messages(file):
+                if topic in topics:
+                    yield topic, timestamp, data
+
+    def __enter__(self) -> Recording:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        if self._reader is not None:
+            self._reader.close()
 
 
 def play_launching(path: Path, project_file: Path, *, rate: float = 1.0, clock: bool = False, lockstep: bool = False,

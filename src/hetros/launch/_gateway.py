@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import HardwareError
+from .._errors import HardwareError, SerializationError
 from .._log import get_logger
 from ..hw._cosim import GatewayPort, SimulatedTop, TargetSimulation
 from ..hw._verilator import IDLE, VerilatedTop
@@ -137,9 +137,21 @@ class _FramesFromRos1:
         self._room = threading.Semaphore(_QUEUED * 4)
         self._stop = node.graph.stop
         self._wake = node.executor.wake
-        peer.subscribe(port.topic, Ros1Type(types, port.type), attach=receive_frames(self._arrived))
+        self._kind = Ros1Type(types, port.type)
+        self.refused = 0
+        peer.subscribe(port.topic, self._kind, attach=receive_frames(self._arrived))
 
     def _arrived(self, frame: bytes) -> None:
+        """A frame from a ROS 1 publisher, checked before the RTL sees it: one message of the topic's type,
+        exactly (a malformed one made the deframer fail, and with it the whole target)."""
+        try:
+            self._kind.check_frame(memoryview(frame)[4:])
+        except SerializationError as exc:
+            self.refused += 1
+            if self.refused <= 10 or self.refused % 100 == 0:
+                log.error("hardware TCPROS of %s: dropped a malformed frame from ROS 1 (%d so far): %s",
+                          self.port.topic, self.refused, exc)
+            return
         while not self._room.acquire(timeout=0.2):
             if self._stop.is_set():
                 return

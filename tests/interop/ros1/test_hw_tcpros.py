@@ -8,6 +8,8 @@ it decodes; a stock rospy talker publishes /ros1_chatter, whose frames the hardw
 
 from __future__ import annotations
 
+import random
+import struct
 import subprocess
 import sys
 import textwrap
@@ -91,3 +93,53 @@ def test_the_fpga_is_a_ros1_node_publishing_and_subscribing_in_hardware(tmp_path
                 "/ros1_chatter)") in logged, logged
         lines = heard.read_text().splitlines()
         assert lines[0].startswith("heard from rospy"), lines
+
+
+def _malformed(rng: random.Random) -> bytes:
+    """One TCPROS frame whose length prefix is right but whose std_msgs/String is not."""
+    kind = rng.randrange(3)
+    if kind == 0:  # a string length running past the frame (a 28-byte frame claiming a huge string)
+        body = struct.pack("<I", rng.randrange(25, 2**32)) + rng.randbytes(24)
+    elif kind == 1:  # bytes left over after the string
+        text = rng.randbytes(rng.randrange(0, 20))
+        body = struct.pack("<I", len(text)) + text + rng.randbytes(rng.randrange(1, 9))
+    else:  # shorter than the length field itself
+        body = rng.randbytes(rng.randrange(0, 4))
+    return struct.pack("<I", len(body)) + body
+
+
+def test_the_hardware_subscriber_survives_a_thousand_malformed_frames(tmp_path: Path) -> None:
+    """A ROS 1 publisher of /ros1_chatter sends 1,000 malformed frames, then good ones: each bad one is
+    refused before the target's deframer sees it (logged, counted), and the good ones still reach the
+    hardware and come out of it (one such frame used to stop the launch)."""
+    from hetros.msg import registry
+    from hetros.transport.tcpros import Ros1Peer, Ros1Type
+
+    heard = tmp_path / "out" / "hw_tcpros" / "heard.txt"
+    for master in ros1_master("hetros"):
+        uri, env = master
+        rogue = Ros1Peer("/rogue", uri)
+        kind = Ros1Type(registry(), "std_msgs/msg/String")
+        publication = rogue.advertise("/ros1_chatter", kind)
+        launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(EXAMPLE / "project.yaml")],
+                                  cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            deadline = time.monotonic() + 120
+            while not publication.subscribers:
+                assert time.monotonic() < deadline and launch.poll() is None, "the hardware never subscribed"
+                time.sleep(0.1)
+            rng = random.Random(9)
+            for _ in range(1000):
+                publication.publish_frame(_malformed(rng))
+            String = registry().get("std_msgs/msg/String")
+            while not heard.exists() or "after the junk" not in heard.read_text():
+                assert time.monotonic() < deadline and launch.poll() is None, "good frames stopped reaching hardware"
+                payload = kind.serialize(String(data="after the junk"))
+                publication.publish_frame(struct.pack("<I", len(payload)) + bytes(payload))
+                time.sleep(0.2)
+            assert launch.poll() is None
+        finally:
+            rogue.close()
+            logged = stop(launch, grace=30)
+        assert "dropped a malformed frame from ROS 1 (1000 so far)" in logged, logged
+        assert "HardwareError" not in logged and "Traceback" not in logged, logged

@@ -292,7 +292,8 @@ def receive_loop(kind: Ros1Kind, callback: Callable[[Any], None]) -> Attach:
 
 def receive_frames(callback: Callable[[bytes], None]) -> Attach:
     """An ``attach`` handing on each frame as it came, its length included (hardware TCPROS: the fpga
-    target's deframer reads it): no message is built in software."""
+    target's deframer reads it): no message is built in software. A frame announcing more than
+    ``MAX_FRAME`` bytes closes the connection, with a logged error."""
 
     def attach(sock: socket.socket, peer: str, gone: Callable[[], None]) -> None:
         try:

@@ -181,6 +181,21 @@ class Ros1Type:
         return freeze(decoded if self.direct else self._incoming(decoded))
 
 
+    def check_frame(self, payload: bytes | memoryview) -> None:
+        """Raise SerializationError unless ``payload`` is exactly one message of this type in ROS 1 bytes.
+
+        For frames that go on as they are (hardware TCPROS: the target's deframer reads them): a
+        length inside them that runs past the frame, or bytes left over, would reach the RTL.
+        """
+        message = self.deserialize(payload)
+        ros1 = message if self.direct else self._outgoing(message)
+        generated = self._generated
+        size = generated.size(ros1) if generated is not None else len(self._codec.serialize_ros1(ros1, self.typename))
+        if size != len(payload):
+            raise SerializationError(f"{len(payload)} bytes hold one ROS 1 {self.name} of {size} bytes and "
+                                     f"{len(payload) - size} bytes more")
+
+
 class _Replaced:
     """``message`` as rosbags' serializer sees it, with one attribute standing in for another value."""
 

@@ -2,6 +2,11 @@
 processes pinned to cores, hardware or other machines, with a statically planned
 data distribution service underneath."""
 
+from ._signals import honour_stop_signals, is_command_line
+
+if is_command_line():  # before the imports below: they take most of a second
+    honour_stop_signals()
+
 from ._errors import (
     ActionError,
     ActionTimeoutError,

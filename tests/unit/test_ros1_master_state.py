@@ -84,3 +84,49 @@ def test_calls_with_wrong_arguments_are_refused_before_they_reach_the_state() ->
         assert api.getSystemState("/n") == [1, "current system state", [[], [], []]]
     finally:
         master.close()
+
+
+@pytest.mark.parametrize(("value", "refused"), [
+    ("deep", "nests deeper than 64 levels"),
+    ("wide", "holds more than 1,000,000 values"),
+    ("big", "holds more than 64 MiB"),
+])
+def test_a_parameter_beyond_the_bounds_is_refused_and_the_tree_stays_readable(state: Any, value: str,
+                                                                              refused: str) -> None:
+    master, _calls = state
+    master.setParam("/a", "/keep", 1)
+    nested: Any = 1
+    if value == "deep":
+        for _ in range(100_000):
+            nested = [nested]
+    elif value == "wide":
+        nested = list(range(1_000_001))
+    else:
+        nested = "x" * (65 << 20)
+    code, message, _ = master.setParam("/a", "/evil", nested)
+    assert code == -1 and refused in message
+    assert master.getParam("/b", "/")[2] == {"keep": 1}
+    assert master.setParam("/a", "/ok", [[[1]]])[0] == 1
+
+
+def test_a_deep_parameter_sent_over_xmlrpc_breaks_nothing_for_others() -> None:
+    """As an attacker sends it: 100,000 nested arrays in one XML-RPC request to `hetros master`."""
+    import http.client
+    import xmlrpc.client
+
+    from tests.support.ros1 import ros1_master
+
+    for uri, _env in ros1_master("hetros"):
+        body = ("<?xml version='1.0'?><methodCall><methodName>setParam</methodName><params>"
+                "<param><value><string>/evil</string></value></param>"
+                "<param><value><string>/deep</string></value></param><param>"
+                + "<value><array><data>" * 100_000 + "<value><int>1</int></value>"
+                + "</data></array></value>" * 100_000 + "</param></params></methodCall>")
+        host = uri.split("//")[1].rstrip("/")
+        connection = http.client.HTTPConnection(host, timeout=60)
+        connection.request("POST", "/RPC2", body.encode(), {"Content-Type": "text/xml"})
+        connection.getresponse().read()
+        master = xmlrpc.client.ServerProxy(uri)
+        assert master.setParam("/good", "/fine", 7)[0] == 1
+        code, _, tree = master.getParam("/other", "/")
+        assert code == 1 and tree.get("fine") == 7 and "deep" not in tree

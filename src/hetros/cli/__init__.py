@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from .._errors import CheckError, Error, HardwareError, ProjectError
+from .._signals import interruptible
 from ..msg import _compiled as compiled_codecs
 from ..msg import registry
 from ..plan import Plan
@@ -587,6 +588,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if args.func is not cmd_launch:  # the launcher installs its own handlers (see hetros._signals)
+        interruptible()
     try:
         code: int = args.func(args)
         return code

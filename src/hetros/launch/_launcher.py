@@ -9,6 +9,7 @@ reverse: stop every node, wait, then remove the shared memory of the session.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import queue
@@ -109,17 +110,27 @@ class Launcher:
                          "restarting": restarting})
 
     def run(self) -> LaunchResult:
-        setup_logging()
-        logged = log_to_file(session_folder(self.session) / f"{LAUNCHER}.log")
-        cleanup_stale()
-        self._plan_file = session_folder(self.session) / "plan.json"
-        write_private(self._plan_file, self.plan.to_json())
-        # SIGHUP: `hetros deploy` stops a remote host by hanging up its ssh terminal
+        # first: a stop from here on is an event the supervisor handles in order (before, the command's
+        # own handler ended the process at once, when nothing had been made yet). SIGHUP: `hetros deploy`
+        # stops a remote host by hanging up its ssh terminal
         previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
         in_main = threading.current_thread() is threading.main_thread()
         if in_main:
             for sig in previous:
                 signal.signal(sig, lambda *_: self.events.put({"event": "signal"}))
+        try:
+            setup_logging()
+            logged = log_to_file(session_folder(self.session) / f"{LAUNCHER}.log")
+            cleanup_stale()
+            self._plan_file = session_folder(self.session) / "plan.json"
+            write_private(self._plan_file, self.plan.to_json())
+        except BaseException:
+            if in_main:
+                for sig, handler in previous.items():
+                    signal.signal(sig, handler)
+            with contextlib.suppress(Error):
+                unregister(self.session)
+            raise
         result = LaunchResult(130, [], "interrupted during start-up")
         try:
             register(self.session, self.plan)

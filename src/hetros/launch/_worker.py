@@ -40,6 +40,11 @@ def main(argv: list[str] | None = None) -> int:
     from ..runtime._log import log_to_file
     from ._registry import session_folder
 
+    try:
+        plan = Plan.from_json(Path(args.plan).read_text(encoding="utf-8"))
+    except OSError:  # the launcher stopped (an early Ctrl-C) and took its plan file along: an orderly end
+        sys.stderr.write(f"[INFO] [{args.target}]: the launch stopped before this target started\n")
+        return 0
     log_to_file(session_folder(args.session) / f"{args.target}.log")
     status = os.fdopen(args.status_fd, "w", buffering=1)
     lock = threading.Lock()
@@ -51,12 +56,6 @@ def main(argv: list[str] | None = None) -> int:
             except (BrokenPipeError, ValueError):
                 pass  # the launcher is gone; what matters now is stopping cleanly
 
-    try:
-        plan = Plan.from_json(Path(args.plan).read_text(encoding="utf-8"))
-    except OSError as exc:  # the launcher is gone and took its plan file along
-        sys.stderr.write(f"[ERROR] [{args.target}]: cannot read the launch's plan ({exc}); the launcher ended "
-                         "before this target started\n")
-        return 2
     cpus = plan.targets[args.target].cpus
     if cpus:
         os.sched_setaffinity(0, cpus)

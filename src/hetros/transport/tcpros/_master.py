@@ -43,6 +43,44 @@ def _canonical(key: str) -> str:
     return key if key != "/" else "/"
 
 
+# a parameter server every node reads: one value may not make it unusable for the others (a 100,000-deep
+# one was accepted, and `getParam /` then failed for everyone)
+MAX_PARAM_DEPTH = 64
+MAX_PARAM_ITEMS = 1_000_000
+MAX_PARAM_BYTES = 64 << 20
+
+
+def check_parameter(key: str, value: Any) -> None:
+    """Refuse a value whose nesting (with its key's), item count or text size exceeds the server's bounds.
+
+    Walked with a stack of its own: the value may be deeper than Python's recursion allows.
+    """
+    base = len([p for p in key.split("/") if p])
+    items = size = 0
+    stack: list[tuple[Any, int]] = [(value, base)]
+    while stack:
+        node, depth = stack.pop()
+        items += 1
+        if depth > MAX_PARAM_DEPTH:
+            raise ValueError(f"parameter {key} nests deeper than {MAX_PARAM_DEPTH} levels (namespaces included): "
+                             "flatten it")
+        if items > MAX_PARAM_ITEMS:
+            raise ValueError(f"parameter {key} holds more than {MAX_PARAM_ITEMS:,} values: keep large data out of "
+                             "the parameter server")
+        if isinstance(node, dict):
+            size += sum(len(str(k)) for k in node)
+            stack.extend((child, depth + 1) for child in node.values())
+        elif isinstance(node, list | tuple):
+            stack.extend((child, depth + 1) for child in node)
+        elif isinstance(node, str | bytes | bytearray):
+            size += len(node)
+        elif hasattr(node, "data") and isinstance(node.data, bytes):  # xmlrpc.client.Binary
+            size += len(node.data)
+        if size > MAX_PARAM_BYTES:
+            raise ValueError(f"parameter {key} holds more than {MAX_PARAM_BYTES >> 20} MiB: keep large data out of "
+                             "the parameter server")
+
+
 class _Parameters:
     """The parameter tree: a nested dict; a dict value sets a namespace."""
 
@@ -65,6 +103,7 @@ class _Parameters:
         return True
 
     def set(self, key: str, value: Any) -> None:
+        check_parameter(key, value)
         parts = [p for p in key.split("/") if p]
         if not parts:
             if not isinstance(value, dict):

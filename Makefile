@@ -23,7 +23,7 @@ define install_peer_debs
 endef
 
 
-.PHONY: install install-rtl install-examples install-test install-bench run test lint bench bench-quick clean
+.PHONY: install install-rtl install-examples install-test install-bench run test fast lint bench bench-quick clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -79,6 +79,12 @@ lint: install-test
 	$(VENV)/bin/hetros msg stubs examples/*/msg -o out/typings > /dev/null
 	for example in examples/*/; do \
 		MYPYPATH=out/typings:examples/inverse_kinematics $(VENV)/bin/mypy --strict $$example || exit 1; done
+
+# the fast loop of CONTRIBUTING.md: lint, types, the unit and conformance suites (no launch, no simulator)
+fast: install-test
+	$(VENV)/bin/ruff check src tests examples benchmarks
+	$(VENV)/bin/mypy --strict src
+	$(VENV)/bin/pytest -q -p no:cacheprovider tests/unit tests/conformance
 
 # the conformance suite once more on the pure-Python path (what runs where no C compiler is)
 test: lint

@@ -122,11 +122,21 @@ def find_lane(bev: np.ndarray) -> tuple[bool, float, float, float]:
 
 
 def light_pixels(img: np.ndarray, colour: str) -> int:
-    """Pixels of the traffic-light colour in the upper part of the frame, thresholded in HSV."""
-    rgb = img[:HORIZON].astype(np.float32) / 255.0
-    maxc, minc = rgb.max(axis=2), rgb.min(axis=2)
+    """Pixels of the traffic-light colour in the upper part of the frame, thresholded in HSV.
+
+    Only a pixel whose brightest channel exceeds half (8 bits: 128 or more) and whose spread is
+    well over half of it can be vivid, and those are few: the HSV arithmetic (float32, as before)
+    runs on them alone. The integer test is looser than the float one, so no vivid pixel is lost.
+    """
+    upper = img[:HORIZON]
+    red, green, blue = upper[..., 0], upper[..., 1], upper[..., 2]
+    brightest = np.maximum(np.maximum(red, green), blue).astype(np.int16)
+    spread = brightest - np.minimum(np.minimum(red, green), blue)
+    candidates = upper[(brightest >= 128) & (5 * spread >= 3 * brightest - 5)]
+    rgb = candidates.astype(np.float32) / 255.0
+    maxc, minc = rgb.max(axis=1), rgb.min(axis=1)
     delta = np.where(maxc > minc, maxc - minc, 1.0)
-    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    r, g, b = rgb[:, 0], rgb[:, 1], rgb[:, 2]
     hue = np.where(maxc == r, ((g - b) / delta) % 6, np.where(maxc == g, (b - r) / delta + 2, (r - g) / delta + 4)) * 60
     saturation = np.where(maxc > 0, (maxc - minc) / np.maximum(maxc, 1e-6), 0)
     vivid = (saturation > 0.6) & (maxc > 0.5)

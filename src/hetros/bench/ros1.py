@@ -54,6 +54,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .._errors import Error
 from ._provenance import provenance
 from ._ros1_protocol import measured, reply_topic
 from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt, log_axes, parse_sizes
@@ -227,7 +228,7 @@ def _last_words(proc: subprocess.Popen[str]) -> str:
     return (err or "").strip()[-400:] or f"exit code {proc.returncode}"
 
 
-class BenchError(Exception):
+class BenchError(Error):
     """A benchmark run that gave no samples (its text goes into the report, the run goes on)."""
 
 

@@ -14,7 +14,6 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from .._errors import HardwareError
 from ..msg import TypeRegistry
@@ -129,14 +128,3 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
         if ".venv" not in path.parts and path.is_file():
             digest.update(str(path).encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()
-
-
-def gateway_statistics(simulation: TargetSimulation) -> list[dict[str, Any]]:
-    """Per gateway port: topic, direction, messages, beats and busy cycles (for reports and benchmarks)."""
-    rows = []
-    for output, ports in ((False, simulation.inputs), (True, simulation.outputs)):
-        for port in ports:
-            messages, beats, busy = simulation.top.stats(output, port.index)
-            rows.append({"topic": port.topic, "direction": "hardware -> software" if output else
-                         "software -> hardware", "messages": messages, "beats": beats, "busy_cycles": busy})
-    return rows

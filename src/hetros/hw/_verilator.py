@@ -61,11 +61,6 @@ def verilator_command() -> str:
     return found
 
 
-def _storage(bits: int) -> str:
-    return "CData" if bits <= 8 else "SData" if bits <= 16 else "IData" if bits <= 32 else "QData" \
-        if bits <= 64 else f"VlWide<{(bits + 31) // 32}>"
-
-
 # The cycle loop's fixed part: ports are indices here; the generated part reads and drives the signals.
 _HARNESS = r"""
 static const size_t MAX_MESSAGE = size_t(1) << 30;

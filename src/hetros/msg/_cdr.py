@@ -487,13 +487,6 @@ def build_ros1_codec(types: TypeRegistry, typename: str) -> Ros1Codec | None:
     return codec
 
 
-def generated_source(types: TypeRegistry, typename: str, mode: str, lean: bool = False) -> str:
-    """The generated source of one function kind (for `hetros msg codec` and debugging)."""
-    gen = _Generator(types, mode, lean, _namespace())
-    gen.function(typename, item=False)
-    return "\n\n".join(gen.functions.values())
-
-
 def build_codec(types: TypeRegistry, typename: str) -> CdrCodec:
     """The fastest codec for ``typename``: generated, or rosbags' where the generator has no code."""
     if sys.byteorder == "little":

@@ -26,7 +26,8 @@ TRANSPORT_ORDER: tuple[str, ...] = ("inproc", "shm", "dds", "hw", "tcpros")
 SERVICE_QOS = QoS(depth=64, publish_timeout=30.0)
 # The process that runs ``hetros launch``: thread targets live in it.
 LAUNCHER = "launcher"
-# the node (and thread target) the planner adds when the project shares endpoints with ROS 2
+# the nodes (and thread targets) the planner adds when the project shares endpoints with ROS 1 or ROS 2
+ROS1_BRIDGE = "hetros_ros1_bridge"
 ROS2_BRIDGE = "hetros_ros2_bridge"
 # the node the planner adds to each fpga target whose topics cross to software: it runs the target's
 # simulator and is the software end of every gateway (see ``gateway_node``)
@@ -101,7 +102,7 @@ class NodePlan:
     hw: str = ""
     # a script's command-line arguments (``run:`` a script's path)
     args: tuple[str, ...] = ()
-    # how its code's names resolve (``_expand.resolve_name``): namespace, remaps, its ROS name ("" = its own)
+    # how its code's names resolve (``plan.resolve_name``): namespace, remaps, its ROS name ("" = its own)
     namespace: str = ""
     remap: dict[str, str] = field(default_factory=dict)
     ros_name: str = ""

@@ -10,6 +10,7 @@ from .._errors import MessageError
 from .._qos import QoS
 from ..msg import TypeRegistry, normalize_typename
 from ..plan import (
+    ROS1_BRIDGE,
     ROS2_BRIDGE,
     NodePlan,
     action_endpoints,
@@ -17,8 +18,6 @@ from ..plan import (
 )
 from ._model import Bridged, LoadedProject
 from ._report import CheckReport
-
-ROS1_BRIDGE = "hetros_ros1_bridge"
 
 
 def ros1_nodes(project: LoadedProject) -> set[str]:

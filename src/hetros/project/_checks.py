@@ -14,13 +14,13 @@ from ..msg import TypeRegistry, array_fields, flat_layout, normalize_typename, r
 from ..plan import (
     ACTION_PREFIX,
     LAUNCHER,
+    ROS1_BRIDGE,
     ROS2_BRIDGE,
     process_name,
     resolve_name,
 )
 from ..transport import reserved_bytes
 from ._bridges import (
-    ROS1_BRIDGE,
     bridged,
     check_bridged,
     check_ros1_nodes,

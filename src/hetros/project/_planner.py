@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from .._errors import CheckError
@@ -13,6 +12,7 @@ from ..plan import (
     CLOCK_TOPIC,
     CLOCK_TYPE,
     LAUNCHER,
+    ROS1_BRIDGE,
     SERVICE_QOS,
     ChannelPlan,
     EdgePlan,
@@ -27,7 +27,7 @@ from ..plan import (
     reply_channel,
     request_channel,
 )
-from ._bridges import ROS1_BRIDGE, hardware_framed, ros1_bridge, ros1_master, ros1_nodes, ros2_bridge
+from ._bridges import hardware_framed, ros1_bridge, ros1_master, ros1_nodes, ros2_bridge
 from ._checks import check, project_hash
 from ._model import LoadedProject, load_project
 
@@ -218,9 +218,3 @@ def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, 
 
 def plan_file(path: str | Path, types: TypeRegistry | None = None) -> Plan:
     return plan(load_project(path), types)
-
-
-def ensure_importable(plan_: Plan) -> None:
-    """Node modules resolve next to the project file first, then in the environment."""
-    if plan_.root not in sys.path:
-        sys.path.insert(0, plan_.root)

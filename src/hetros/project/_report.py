@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 
 
 @dataclass
-@dataclass
 class CheckReport:
     errors: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)

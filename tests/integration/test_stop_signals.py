@@ -14,15 +14,15 @@ import pytest
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "talker_listener" / "project.yaml"
 
 
-@pytest.mark.parametrize("inherited", ["ignored", "default"])
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize(("inherited", "signum"), [("ignored", signal.SIGINT), ("ignored", signal.SIGTERM),
+                                                   ("default", signal.SIGINT)])
 def test_an_early_stop_signal_is_honoured_and_quiet(inherited: str, signum: int) -> None:
     def start() -> None:
         if inherited == "ignored":
             signal.signal(signal.SIGINT, signal.SIG_IGN)
             signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
-    for after in (0.05, 0.4, 1.0, 1.8, 2.6):
+    for after in (0.05, 0.5, 1.2, 2.2):
         began = time.monotonic()
         proc = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(EXAMPLE), "--duration", "20"],
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, preexec_fn=start)

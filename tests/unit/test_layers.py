@@ -95,6 +95,22 @@ def test_layers_import_downward_only(package: str) -> None:
     assert not offending, f"{package}/ imports a layer above it:\n" + "\n".join(sorted(set(offending)))
 
 
+def test_no_package_reaches_into_another_packages_private_modules() -> None:
+    """What a package shares it exports (``hetros.<package>.<name>``, loaded lazily where a worker must not
+    pay for it); ``hetros.<package>._module`` is that package's own business."""
+    offending = set()
+    for path in sorted(SRC.rglob("*.py")):
+        relative = path.relative_to(SRC)
+        own = relative.parts[0] if len(relative.parts) > 1 else ""
+        for module, line, _ in _imports(path):
+            parts = module.split(".")
+            private = [part for part in parts[2:] if part.startswith("_") and not part.startswith("__")]
+            if len(parts) > 2 and parts[1] != own and not parts[1].startswith("_") and private:
+                offending.add(f"{relative}:{line}: hetros.{parts[1]}...{private[0]}")
+    assert not offending, "imports of another package's private modules or names (export them instead):\n" + \
+        "\n".join(sorted(offending))
+
+
 def test_msg_has_no_import_circle() -> None:
     """Module-level imports between msg's modules form no cycle, and none is hidden in a function."""
     graph: dict[str, set[str]] = {}

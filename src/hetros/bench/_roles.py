@@ -143,7 +143,7 @@ class Iceoryx2Endpoint(Endpoint):
     """iceoryx2 publish-subscribe plus an event service: the same blocking wait as hetros."""
 
     def __init__(self, role: str, cfg: dict[str, Any]) -> None:
-        from ..transport.shm._iceoryx import iox2, new_node
+        from ..transport.shm import iox2, new_node
 
         self.iox2 = iox2
         # under hetros's root, so cleanup_stale reclaims it after a crash (the same settings otherwise)
@@ -165,7 +165,7 @@ class Iceoryx2Endpoint(Endpoint):
         self.notifier = event(out_name).notifier_builder().create()
         self.listener = event(in_name).listener_builder().create()
         self.ports: list[Any] = [self.pub, self.sub, self.notifier, self.listener]
-        from hetros.runtime._executor import AdaptiveSpin
+        from ..runtime import AdaptiveSpin
 
         self.spin = AdaptiveSpin()  # the wait strategy of hetros' take: a like-for-like baseline
 
@@ -445,7 +445,8 @@ def ros_echo(cfg: dict[str, Any], flavour: str) -> dict[str, Any]:
     from hetros import Node
     from hetros.compat import install
     from hetros.runtime import Graph
-    from hetros.runtime._ros_main import ros_main
+
+    from ..runtime import ros_main
 
     graph = Graph(_hetros_plan(16), "p1", cfg["session"])
     graph.prepare(["echo"])

@@ -108,8 +108,7 @@ class _Endpoint:
         self._box: list[Any] = []
         if system.startswith("hetros"):
             from ..msg import registry
-            from ..transport import QoS
-            from ..transport._codec import MessageCodec
+            from ..transport import MessageCodec, QoS
             from ..transport.dds import DdsDomain, DdsEdgeReader, DdsEdgeWriter, DdsTopicReader, DdsTopicWriter
 
             types = registry()

@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..hw._report import TABLE_I_PAPER_MS, TABLE_I_SIZES, Resources, format_resources, synthesize, transfer_cycles
+from ..hw import TABLE_I_PAPER_MS, TABLE_I_SIZES, Resources, format_resources, synthesize, transfer_cycles
 from ._provenance import provenance
 
 # fpgaDDS Table I, CycloneDDS column (ms), and Table II (whole design on the XCZU7EV), for context
@@ -104,7 +104,7 @@ def table_chain(quick: bool) -> list[dict[str, Any]]:
     import sys
     import time
 
-    from ..hw._models import execution_models
+    from ..hw import execution_models
     from ..hw.reference import Compensation, gaussian_blur
     from ..msg import registry
     from ..project import load_project, plan
@@ -150,8 +150,7 @@ def table_cosim(quick: bool) -> list[dict[str, Any]]:
 
     import numpy as np
 
-    from ..hw._cosim import TargetSimulation
-    from ..hw._sim import simulate
+    from ..hw import TargetSimulation, simulate
     from ..hw.nodes import NodeUnderTest, Sobel
     from ..hw.reference import sobel
     from ..msg import registry
@@ -258,8 +257,7 @@ def table_fmax(quick: bool) -> list[dict[str, Any]]:
     target and a 2 -> 2 topic network with a FIFO; empty, with a message, where the tools are absent."""
     import tempfile
 
-    from ..hw._bitstream import available, bitstreams, build_bitstream
-    from ..hw._rtl import topic_verilog
+    from ..hw import available, bitstreams, build_bitstream, topic_verilog
     from ..msg import registry
 
     if not available():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import faulthandler
 import os
 import re
 import shlex
@@ -15,8 +16,8 @@ import yaml
 
 from .._errors import CheckError, Error, HardwareError, ProjectError
 from .._signals import interruptible
-from ..msg import _compiled as compiled_codecs
 from ..msg import registry
+from ..msg import wanted as compiled_wanted
 from ..plan import Plan
 
 if TYPE_CHECKING:
@@ -71,8 +72,7 @@ def resolved_graph(project: LoadedProject) -> str:
 
 
 def cmd_graph(args: argparse.Namespace) -> int:
-    from ..project import plan_file
-    from ..project._graph import describe, write_graph
+    from ..project import describe, plan_file, write_graph
 
     rates = None
     if args.live:
@@ -112,7 +112,7 @@ def cmd_hw_build(args: argparse.Namespace) -> int:
 
 def cmd_hw_export(args: argparse.Namespace) -> int:
     _hardware_tools()
-    from ..hw._export import export
+    from ..hw import export
 
     plan, targets = _fpga_targets(args)
     for target in targets:
@@ -128,7 +128,7 @@ def cmd_hw_export(args: argparse.Namespace) -> int:
 
 def cmd_hw_bitstream(args: argparse.Namespace) -> int:
     _hardware_tools()
-    from ..hw._bitstream import bitstreams, format_bitstreams
+    from ..hw import bitstreams, format_bitstreams
 
     plan, targets = _fpga_targets(args)
     rows = []
@@ -153,7 +153,7 @@ def _fpga_targets(args: argparse.Namespace) -> tuple[Plan, list[str]]:
 
 def cmd_hw_report(args: argparse.Namespace) -> int:
     _hardware_tools()
-    from ..hw._report import format_transfers, transfer_report
+    from ..hw import format_transfers, transfer_report
 
     plan, targets = _fpga_targets(args)
     if args.models:
@@ -167,8 +167,7 @@ def cmd_hw_report(args: argparse.Namespace) -> int:
 
 def _execution_models(args: argparse.Namespace, plan: Plan, targets: list[str]) -> int:
     """``hw report --models``: each target's hardware nodes as a dataflow chain and as a sequential one."""
-    from ..hw._build import hardware_topics
-    from ..hw._models import execution_models, format_models, sample_message
+    from ..hw import execution_models, format_models, hardware_topics, sample_message
     from ..plan import gateway_node
 
     width, _, height = args.image.partition("x")
@@ -193,7 +192,7 @@ def _execution_models(args: argparse.Namespace, plan: Plan, targets: list[str]) 
 
 def cmd_hw_synth(args: argparse.Namespace) -> int:
     _hardware_tools()
-    from ..hw._report import format_synth, part_of, synth_report
+    from ..hw import format_synth, part_of, synth_report
 
     plan, targets = _fpga_targets(args)
     for target in targets:
@@ -210,7 +209,7 @@ def cmd_ps(args: argparse.Namespace) -> int:
     import json
     from dataclasses import asdict
 
-    from ..launch._registry import format_launches, running
+    from ..launch import format_launches, running
 
     records = running()
     print(json.dumps([asdict(r) for r in records], indent=1) if args.json else format_launches(records))
@@ -335,7 +334,7 @@ def cmd_msg_layout(args: argparse.Namespace) -> int:
     if codec.compiled:
         how = "compiled (hetros.msg._ccdr)"
     elif codec.generated:
-        why = "HETROS_PURE_PYTHON is set" if not compiled_codecs.wanted() else "the C extension is not built"
+        why = "HETROS_PURE_PYTHON is set" if not compiled_wanted() else "the C extension is not built"
         how = f"generated Python ({why})"
     else:
         how = "rosbags (a field the generator does not cover)"
@@ -344,7 +343,7 @@ def cmd_msg_layout(args: argparse.Namespace) -> int:
 
 
 def cmd_msg_build(args: argparse.Namespace) -> int:
-    from ..msg._codegen import build_package_modules
+    from ..msg import build_package_modules
 
     for path in build_package_modules(Path(args.folder), Path(args.output)):
         print(f"wrote {path}")
@@ -352,7 +351,7 @@ def cmd_msg_build(args: argparse.Namespace) -> int:
 
 
 def cmd_msg_stubs(args: argparse.Namespace) -> int:
-    from ..msg._stubs import shipped_stubs, user_stubs
+    from ..msg import shipped_stubs, user_stubs
     from ..project import load_project
 
     if args.shipped:
@@ -378,7 +377,7 @@ def cmd_msg_stubs(args: argparse.Namespace) -> int:
 
 
 def cmd_reference(args: argparse.Namespace) -> int:
-    from ..project._reference import reference_markdown
+    from ..project import reference_markdown
 
     print(reference_markdown(), end="")
     return 0
@@ -587,6 +586,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    faulthandler.enable()  # a crash in native code names itself (and where) instead of a bare exit status
     args = build_parser().parse_args(argv)
     if args.func is not cmd_launch:  # the launcher installs its own handlers (see hetros._signals)
         interruptible()

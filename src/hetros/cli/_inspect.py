@@ -20,10 +20,8 @@ from typing import Any
 import yaml
 
 from .._errors import Error, InspectError
-from ..launch._inspect import RunningLaunch, TapEvent
-from ..launch._logs import LaunchLogs
-from ..msg import Message, normalize_typename
-from ..msg._convert import DEFAULT_TRUNCATE_LENGTH, from_plain, to_plain
+from ..launch import LaunchLogs, RunningLaunch, TapEvent
+from ..msg import DEFAULT_TRUNCATE_LENGTH, Message, from_plain, normalize_typename, to_plain
 from ..plan import ACTION_PREFIX, Plan
 
 # ros2 topic hz's default window (messages)
@@ -495,7 +493,7 @@ def cmd_log(args: argparse.Namespace) -> int:
 
 
 def cmd_record(args: argparse.Namespace) -> int:
-    from ..launch._bag import record, recordable
+    from ..launch import record, recordable
 
     launch = _launch(args)
     if not args.all and not args.topics:
@@ -510,10 +508,10 @@ def cmd_record(args: argparse.Namespace) -> int:
 
 
 def cmd_play(args: argparse.Namespace) -> int:
-    from ..launch._bag import describe_played, play
+    from ..launch import describe_played, play
 
     if args.launch:
-        from ..launch._bag import play_launching
+        from ..launch import play_launching
 
         return play_launching(Path(args.bag), Path(args.launch), rate=args.rate, clock=args.clock,
                               lockstep=args.lockstep, topics=args.topics)
@@ -527,7 +525,7 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 
 def cmd_foxglove(args: argparse.Namespace) -> int:
-    from ..launch._foxglove import FoxgloveView
+    from ..launch import FoxgloveView
 
     launch = _launch(args)
     view = FoxgloveView(launch, host=args.host, port=args.port, max_rate=args.max_rate, backlog=args.backlog)
@@ -678,7 +676,7 @@ def add_commands(sub: Any) -> None:
 
 def _rate(text: str) -> float:
     """``--max-rate``: checked here, so that a NaN or a vanishing rate never reaches a publisher."""
-    from ..runtime._taps import check_rate
+    from ..runtime import check_rate
 
     try:
         return check_rate(float(text), "--max-rate")

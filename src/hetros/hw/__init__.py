@@ -6,6 +6,7 @@ generated from the plan. Amaranth is imported only when a network is built.
 """
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ..msg import TypeRegistry
 from ..plan import Plan
@@ -18,6 +19,106 @@ def build_target(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tup
 
     return build(plan, target, out, types)
 
+if TYPE_CHECKING:
+    from ._bitstream import available, bitstreams, build_bitstream, format_bitstreams
+    from ._build import hardware_topics, top_name
+    from ._cosim import GatewayPort, SimulatedTop, TargetSimulation
+    from ._export import export
+    from ._models import execution_models, format_models, sample_message
+    from ._report import (
+        TABLE_I_PAPER_MS,
+        TABLE_I_SIZES,
+        Resources,
+        format_resources,
+        format_synth,
+        format_transfers,
+        part_of,
+        synth_report,
+        synthesize,
+        transfer_cycles,
+        transfer_report,
+    )
+    from ._rtl import topic_verilog
+    from ._sim import simulate
+    from ._verilator import IDLE, VerilatedTop
 
-__all__ = ["BeatCodec", "Beats", "amaranth_layout", "build_target", "field_name", "from_beats",
-           "to_beats"]
+
+# shared with other packages, loaded on first use (a worker must not pay for what it does not run)
+_LAZY = {
+    "GatewayPort": "._cosim",
+    "IDLE": "._verilator",
+    "Resources": "._report",
+    "SimulatedTop": "._cosim",
+    "TABLE_I_PAPER_MS": "._report",
+    "TABLE_I_SIZES": "._report",
+    "TargetSimulation": "._cosim",
+    "VerilatedTop": "._verilator",
+    "available": "._bitstream",
+    "bitstreams": "._bitstream",
+    "build_bitstream": "._bitstream",
+    "execution_models": "._models",
+    "export": "._export",
+    "format_bitstreams": "._bitstream",
+    "format_models": "._models",
+    "format_resources": "._report",
+    "format_synth": "._report",
+    "format_transfers": "._report",
+    "hardware_topics": "._build",
+    "part_of": "._report",
+    "sample_message": "._models",
+    "simulate": "._sim",
+    "synth_report": "._report",
+    "synthesize": "._report",
+    "top_name": "._build",
+    "topic_verilog": "._rtl",
+    "transfer_cycles": "._report",
+    "transfer_report": "._report",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(module, __name__), name)
+
+
+__all__ = [
+    "IDLE",
+    "TABLE_I_PAPER_MS",
+    "TABLE_I_SIZES",
+    "BeatCodec",
+    "Beats",
+    "GatewayPort",
+    "Resources",
+    "SimulatedTop",
+    "TargetSimulation",
+    "VerilatedTop",
+    "amaranth_layout",
+    "available",
+    "bitstreams",
+    "build_bitstream",
+    "build_target",
+    "execution_models",
+    "export",
+    "field_name",
+    "format_bitstreams",
+    "format_models",
+    "format_resources",
+    "format_synth",
+    "format_transfers",
+    "from_beats",
+    "hardware_topics",
+    "part_of",
+    "sample_message",
+    "simulate",
+    "synth_report",
+    "synthesize",
+    "to_beats",
+    "top_name",
+    "topic_verilog",
+    "transfer_cycles",
+    "transfer_report",
+]

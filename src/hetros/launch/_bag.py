@@ -237,7 +237,7 @@ def play_launching(path: Path, project_file: Path, *, rate: float = 1.0, clock: 
     """``hetros play --launch``: launch ``project_file`` without the nodes the recording stands in for (those
     that publish only recorded topics), play the recording into it, and stop it; the launch's exit code."""
     from ..project import load_project
-    from ..project._planner import plan as make_plan
+    from ..project import plan as make_plan
     from ._launcher import Launcher
 
     fed = set(topics or recorded_topics(path))

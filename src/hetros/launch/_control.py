@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._errors import InspectError
 from .._log import get_logger
-from ..runtime._taps import TapSink, check_rate
+from ..runtime import TapSink, check_rate
 from ..transport import MessageCodec
 
 if TYPE_CHECKING:

@@ -35,8 +35,7 @@ import numpy as np
 
 from .._errors import HardwareError, SerializationError
 from .._log import get_logger
-from ..hw._cosim import GatewayPort, SimulatedTop, TargetSimulation
-from ..hw._verilator import IDLE, VerilatedTop
+from ..hw import IDLE, GatewayPort, SimulatedTop, TargetSimulation, VerilatedTop
 from ..msg import TypeRegistry
 from ..plan import Plan
 from ..runtime import Node, Replies
@@ -389,8 +388,7 @@ def _run_board(node: Node, plan: Plan, target: str, simulation: TargetSimulation
     """The gateway as a board runs it: PYNQ's surface (``hetros.board``), one AXI DMA per gateway port, each
     message a DMA transfer between a buffer the DMA reaches and the hardware's stream."""
     from ..board import allocate, open_overlay, read_manifest
-    from ..hw._build import top_name
-    from ..hw._export import export
+    from ..hw import export, top_name
     from ._registry import session_folder
 
     board = plan.targets[target].board

@@ -30,8 +30,7 @@ from .._net import is_local_address
 from .._process import death_cause
 from ..compat import install as install_ros_names
 from ..plan import LAUNCHER, Plan
-from ..runtime import Host, setup_logging
-from ..runtime._log import log_to_file, stop_logging_to
+from ..runtime import Host, log_to_file, setup_logging, stop_logging_to
 from ..transport import check_room, cleanup_stale, new_session, remove_session_segments, reserved_bytes
 from ._control import ControlServer
 from ._hosts import HostLink, local_host

@@ -20,8 +20,7 @@ from .._errors import Error
 from .._log import get_logger
 from ..msg import ActionType
 from ..runtime import ClientGoalHandle, GoalStatus, Node, ServerGoalHandle
-from ..transport.tcpros import Ros1Peer
-from ..transport.tcpros._actions import (
+from ..transport.tcpros import (
     ABORTED,
     ACTIVE,
     PENDING,
@@ -32,6 +31,7 @@ from ..transport.tcpros._actions import (
     SUCCEEDED,
     TERMINAL,
     Ros1ActionType,
+    Ros1Peer,
 )
 
 log = get_logger("hetros.ros1.actions")

@@ -8,6 +8,7 @@ reads JSON status lines from a pipe.
 from __future__ import annotations
 
 import argparse
+import faulthandler
 import json
 import os
 import signal
@@ -36,8 +37,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--session", required=True)
     parser.add_argument("--status-fd", type=int, required=True)
     args = parser.parse_args(argv)
+    faulthandler.enable()  # a crash in native code (a damaged segment, an extension) names itself on stderr
     setup_logging()
-    from ..runtime._log import log_to_file
+    from ..runtime import log_to_file
     from ._registry import session_folder
 
     try:

@@ -14,6 +14,7 @@ The extension is built by ``pip install`` when a C compiler is there. Without it
 
 from __future__ import annotations
 
+import importlib
 import os
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -26,8 +27,8 @@ from ._message import FrozenList, LoanBuffer, Message, _seal_array
 if TYPE_CHECKING:
     from ._registry import TypeRegistry
 
-try:
-    from . import _ccdr  # type: ignore[attr-defined]
+try:  # by name: the package's lazy ``__getattr__`` would otherwise answer for it
+    _ccdr: Any = importlib.import_module(f"{__package__}._ccdr")
 except ImportError:  # built by pip where a C compiler is; the generated Python codecs serve otherwise
     _ccdr = None
     ARRAY_HEAD_READ = False

@@ -38,6 +38,16 @@ CLOCK_TOPIC = "/clock"
 CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
 
 
+# What the system nodes the planner adds run: "module:function", resolved by the process that runs
+# them (the plan names code, it imports none). tests/unit/test_layers.py resolves every entry.
+SYSTEM_NODES: dict[str, str] = {
+    "gateway": "hetros.launch._gateway:gateway",
+    "clock_follower": "hetros.runtime._clock:follow_clock",
+    "ros1_bridge": "hetros.launch._ros1_bridge:bridge",
+    "ros2_bridge": "hetros.launch._ros2_bridge:bridge",
+}
+
+
 def gateway_node(target: str) -> str:
     """The gateway node of fpga target ``target``: in the target's own process, it subscribes to what
     software publishes to the target's hardware nodes and publishes what they publish to software."""

@@ -1,5 +1,7 @@
 """Project layer: the YAML project file, its checks, the static planner, importers."""
 
+from typing import TYPE_CHECKING, Any
+
 from ._checks import check
 from ._importers import import_reconros, import_roslite
 from ._launch_import import import_launch
@@ -10,19 +12,44 @@ from ._ros_scan import ros_template, writes_ros
 from ._scan import scan_file
 from ._template import template_from_sources
 
+if TYPE_CHECKING:
+    from ._graph import describe, write_graph
+    from ._reference import reference_markdown
+
+
+# shared with other packages, loaded on first use (a worker must not pay for what it does not run)
+_LAZY = {
+    "describe": "._graph",
+    "reference_markdown": "._reference",
+    "write_graph": "._graph",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(module, __name__), name)
+
+
 __all__ = [
     "CheckReport",
     "LoadedProject",
     "Project",
     "check",
+    "describe",
     "import_launch",
     "import_reconros",
     "import_roslite",
     "load_project",
     "plan",
     "plan_file",
+    "reference_markdown",
     "ros_template",
     "scan_file",
     "template_from_sources",
+    "write_graph",
     "writes_ros",
 ]

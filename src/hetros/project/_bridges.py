@@ -12,6 +12,7 @@ from ..msg import TypeRegistry, normalize_typename
 from ..plan import (
     ROS1_BRIDGE,
     ROS2_BRIDGE,
+    SYSTEM_NODES,
     NodePlan,
     action_endpoints,
     action_topic_qos,
@@ -204,7 +205,7 @@ def ros2_bridge(project: LoadedProject) -> NodePlan | None:
                   "owners": {"export": owners("publish", exports), "import": owners("subscribe", imports),
                              "export_services": owners("services", export_services),
                              "import_services": owners("clients", import_services)}}
-    return NodePlan(ROS2_BRIDGE, "hetros.launch._ros2_bridge:bridge", ROS2_BRIDGE, parameters,
+    return NodePlan(ROS2_BRIDGE, SYSTEM_NODES["ros2_bridge"], ROS2_BRIDGE, parameters,
                     publish=imports, subscribe=exports, services=import_services, clients=export_services)
 
 
@@ -279,7 +280,7 @@ def ros1_bridge(project: LoadedProject) -> NodePlan | None:
                   "latch": latched, "ros1_name": f"/{model.name}_hetros",
                   "export_services": export_services, "import_services": import_services,
                   "export_actions": export_actions, "import_actions": import_actions}
-    return NodePlan(ROS1_BRIDGE, "hetros.launch._ros1_bridge:bridge", ROS1_BRIDGE, parameters,
+    return NodePlan(ROS1_BRIDGE, SYSTEM_NODES["ros1_bridge"], ROS1_BRIDGE, parameters,
                     publish=publish, subscribe=subscribe, services=services, clients=clients,
                     actions=import_actions, action_clients=export_actions,
                     max_goals=dict.fromkeys(import_actions, 64))

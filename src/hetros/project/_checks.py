@@ -5,7 +5,8 @@ from __future__ import annotations
 import difflib
 import hashlib
 import os
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 
 from .._errors import DefinitionError, MessageError
 from .._net import is_local_address
@@ -28,7 +29,7 @@ from ._bridges import (
     ros1_nodes,
     ros2_carries,
 )
-from ._model import LoadedProject, NodeSpec
+from ._model import Bridged, LoadedProject, NodeSpec
 from ._names import node_name_problem, topic_name_problem
 from ._probe import hardware_problems, module_findable, runnable_problems
 from ._report import CheckReport
@@ -76,154 +77,237 @@ def _check_env(project: LoadedProject, report: CheckReport) -> None:
                     "put the nodes on targets of their own")
 
 
+Endpoints = dict[str, list[tuple[str, str]]]
+
+
+@dataclass
+class CheckContext:
+    """What the rules of ``check`` share: the project, and its endpoints gathered once (name ->
+    [(node, type)]) by :func:`gather_endpoints`."""
+
+    project: LoadedProject
+    types: TypeRegistry
+    report: CheckReport
+    publishers: Endpoints = field(default_factory=dict)
+    subscribers: Endpoints = field(default_factory=dict)
+    servers: Endpoints = field(default_factory=dict)
+    clients: Endpoints = field(default_factory=dict)
+    runnable: dict[str, list[str]] = field(default_factory=dict)  # run: -> the nodes it runs
+    derived: set[str] = field(default_factory=set)  # the services and topics of actions: checked as actions
+    speaks_ros1: set[str] = field(default_factory=set)  # the nodes of kind: ros1 targets
+    external: dict[str, Bridged] = field(default_factory=dict)
+
+    def error(self, message: str) -> None:
+        self.report.errors.append(message)
+
+    def hetros_side(self, table: Endpoints) -> Endpoints:
+        """``table`` without the endpoints of ROS 1 nodes (they are not hetros channels)."""
+        return {k: kept for k, v in table.items() if (kept := [e for e in v if e[0] not in self.speaks_ros1])}
+
+
 def check(project: LoadedProject, types: TypeRegistry | None = None) -> CheckReport:
-    """Every check ``hetros check`` promises; errors name file:line and the YAML path."""
+    """Every check ``hetros check`` promises (``RULES``, in order); errors name file:line and the YAML path.
+
+    `hetros launch` plans only what this accepts, so a rule here is one it applies too.
+    """
     types = types or registry()
     report = CheckReport()
-    model = project.model
     load_messages(project, types, report)
-    where = project.where
     if _check_placeholders(project, report):
         return report  # the project is not finished: everything else would follow from the placeholders
+    context = CheckContext(project, types, report, speaks_ros1=ros1_nodes(project), external=bridged(project))
+    for rule in RULES:
+        rule(context)
+    return report
 
-    for tname, target in model.targets.items():
+
+def cpus_exist(c: CheckContext) -> None:
+    """A target's cpus are this machine's."""
+    count = os.cpu_count() or 1
+    for tname, target in c.project.model.targets.items():
         for index, cpu in enumerate(target.cpus):
-            if cpu >= (os.cpu_count() or 1):
-                report.errors.append(
-                    f"{where('targets', tname, 'cpus', index)}: cpu {cpu} does not exist on this "
-                    f"machine ({os.cpu_count()} CPUs: 0..{(os.cpu_count() or 1) - 1})"
-                )
-    _check_hosts(project, report)
-    _check_env(project, report)
-    speaks_ros1 = ros1_nodes(project)
+            if cpu >= count:
+                c.error(f"{c.project.where('targets', tname, 'cpus', index)}: cpu {cpu} does not exist on this "
+                        f"machine ({count} CPUs: 0..{count - 1})")
+
+
+def hosts_and_env(c: CheckContext) -> None:
+    _check_hosts(c.project, c.report)
+    _check_env(c.project, c.report)
+
+
+def bridge_names_reserved(c: CheckContext) -> None:
+    """The bridges' names are the planner's."""
+    model = c.project.model
     for reserved, graph in ((ROS1_BRIDGE, "ROS 1"), (ROS2_BRIDGE, "ROS 2")):
         if reserved in model.nodes or reserved in model.targets:
-            report.errors.append(f"{where('nodes', reserved)}: {reserved!r} is reserved for the {graph} bridge; "
-                                 "rename the node or target")
-    publishers: dict[str, list[tuple[str, str]]] = {}
-    subscribers: dict[str, list[tuple[str, str]]] = {}
-    servers: dict[str, list[tuple[str, str]]] = {}
-    clients: dict[str, list[tuple[str, str]]] = {}
-    runnable: dict[str, list[str]] = {}
-    derived: set[str] = set()  # the services and topics of actions: checked as actions
+            c.error(f"{c.project.where('nodes', reserved)}: {reserved!r} is reserved for the {graph} bridge; "
+                    "rename the node or target")
+
+
+def nodes_are_well_formed(c: CheckContext) -> None:
+    """Each node's target exists, its names are ROS names, its run: can be found."""
+    model, where = c.project.model, c.project.where
     for nname, spec in model.nodes.items():
         if spec.target not in model.targets:
-            report.errors.append(
-                f"{where('nodes', nname, 'target')}: unknown target {spec.target!r}; "
-                f"define it under targets (known: {', '.join(model.targets) or 'none'})"
-            )
+            c.error(f"{where('nodes', nname, 'target')}: unknown target {spec.target!r}; "
+                    f"define it under targets (known: {', '.join(model.targets) or 'none'})")
         problem = node_name_problem(nname) or (node_name_problem(spec.name) if spec.name else None)
         if problem:
-            report.errors.append(f"{where('nodes', nname)}: {problem}")
+            c.error(f"{where('nodes', nname)}: {problem}")
         if spec.namespace and (problem := topic_name_problem(spec.namespace)):
-            report.errors.append(f"{where('nodes', nname, 'namespace')}: namespace {spec.namespace!r}: {problem}")
+            c.error(f"{where('nodes', nname, 'namespace')}: namespace {spec.namespace!r}: {problem}")
         module = spec.run.partition(":")[0]
         if ":" not in spec.run:
-            if not (project.root / spec.run).is_file():
-                report.errors.append(f"{where('nodes', nname, 'run')}: script {spec.run!r} is not a file (looked "
-                                     f"for {project.root / spec.run}); write module:function for a node function, "
-                                     "or a script's path relative to the project file")
-        elif not module_findable(project, module):
-            report.errors.append(
-                f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the "
-                "project file nor in the environment"
-            )
+            if not (c.project.root / spec.run).is_file():
+                c.error(f"{where('nodes', nname, 'run')}: script {spec.run!r} is not a file (looked for "
+                        f"{c.project.root / spec.run}); write module:function for a node function, or a script's "
+                        "path relative to the project file")
+        elif not module_findable(c.project, module):
+            c.error(f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the project file "
+                    "nor in the environment")
         else:
-            runnable.setdefault(spec.run, []).append(nname)
-        _check_actions(project, nname, spec, types, report)
-        for section, table, kind in (("publish", publishers, "msg"), ("subscribe", subscribers, "msg"),
-                                     ("services", servers, "srv"), ("clients", clients, "srv")):
+            c.runnable.setdefault(spec.run, []).append(nname)
+        _check_actions(c.project, nname, spec, c.types, c.report)
+
+
+def gather_endpoints(c: CheckContext) -> None:
+    """Every node's topics and services into the context's tables, each name and type checked."""
+    where = c.project.where
+    for nname, spec in c.project.model.nodes.items():
+        for section, table, kind in (("publish", c.publishers, "msg"), ("subscribe", c.subscribers, "msg"),
+                                     ("services", c.servers, "srv"), ("clients", c.clients, "srv")):
             for endpoint, typename in spec.types(section).items():
                 if spec.action_of(section, endpoint) is not None:
-                    derived.add(endpoint)
+                    c.derived.add(endpoint)
                     table.setdefault(endpoint, []).append((nname, normalize_typename(typename, kind)))
                     continue
-                problem = topic_name_problem(endpoint)
-                if problem:
-                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: {endpoint!r} {problem}")
+                if problem := topic_name_problem(endpoint):
+                    c.error(f"{where('nodes', nname, section, endpoint)}: {endpoint!r} {problem}")
                 try:
                     full = normalize_typename(typename, kind)
                     if kind == "msg":
-                        types.get(full)
+                        c.types.get(full)
                     else:
-                        types.get_service(full)
+                        c.types.get_service(full)
                 except MessageError as exc:
-                    report.errors.append(f"{where('nodes', nname, section, endpoint)}: {exc}")
+                    c.error(f"{where('nodes', nname, section, endpoint)}: {exc}")
                     full = typename
                 table.setdefault(endpoint, []).append((nname, full))
 
-    for run, problem in runnable_problems(project, list(runnable)).items():
-        for nname in runnable.get(run, []):
-            report.errors.append(f"{where('nodes', nname, 'run')}: {problem}")
-    for nname, problem in hardware_problems(project).items():
+
+def code_runs(c: CheckContext) -> None:
+    """Each run: imports and names a function (in a probe process); hardware tools are there."""
+    where = c.project.where
+    for run, problem in runnable_problems(c.project, list(c.runnable)).items():
+        for nname in c.runnable.get(run, []):
+            c.error(f"{where('nodes', nname, 'run')}: {problem}")
+    for nname, problem in hardware_problems(c.project).items():
         if nname:
-            report.errors.append(f"{where('nodes', nname, 'hw')}: {problem}")
+            c.error(f"{where('nodes', nname, 'hw')}: {problem}")
         else:
-            report.warnings.append(f"{where('nodes')}: {problem}; `make install-rtl` brings the tools")
-    external = bridged(project)
-    imported = {t for spec in external.values() for t in spec.import_} | project.replayed
-    _check_action_pairs(project, {a for spec in external.values() for a in spec.import_actions}, report)
-    for topic, subscribed in subscribers.items():
-        if topic in derived:
+            c.report.warnings.append(f"{where('nodes')}: {problem}; `make install-rtl` brings the tools")
+
+
+def actions_pair(c: CheckContext) -> None:
+    _check_action_pairs(c.project, {a for spec in c.external.values() for a in spec.import_actions}, c.report)
+
+
+def subscriptions_have_publishers(c: CheckContext) -> None:
+    """A subscribed topic has a publisher here, in an import, or in a recording."""
+    imported = {t for spec in c.external.values() for t in spec.import_} | c.project.replayed
+    for topic, subscribed in c.subscribers.items():
+        if topic in c.derived or topic in c.publishers or topic in imported:
             continue
-        if topic not in publishers and topic not in imported:
-            for nname, _ in subscribed:
-                if nname in speaks_ros1:
-                    continue  # a ROS 1 node's topic may come from any ROS 1 publisher
-                report.errors.append(
-                    f"{where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}"
-                    f"{_nearest(topic, publishers)}; add a publisher under some node's 'publish', import it "
-                    "from ROS 1 or ROS 2 (external: ros1: / ros2: import:) or remove this subscription"
-                )
-    for topic in (set(publishers) | set(subscribers)) - derived:
-        declared = {t for _, t in publishers.get(topic, []) + subscribers.get(topic, [])}
-        if len(declared) > 1:
-            users = ", ".join(f"{n}: {t}" for n, t in publishers.get(topic, []) + subscribers.get(topic, []))
-            report.errors.append(f"{where('nodes')}: topic {topic} is declared with different types "
-                                 f"({users}); one topic carries one type")
-    imported_services = {v for spec in external.values() for v in spec.import_services}
-    for service, calling in clients.items():
-        if service in derived:
+        for nname, _ in subscribed:
+            if nname in c.speaks_ros1:
+                continue  # a ROS 1 node's topic may come from any ROS 1 publisher
+            c.error(f"{c.project.where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}"
+                    f"{_nearest(topic, c.publishers)}; add a publisher under some node's 'publish', import it from "
+                    "ROS 1 or ROS 2 (external: ros1: / ros2: import:) or remove this subscription")
+
+
+def one_type_per_topic(c: CheckContext) -> None:
+    for topic in (set(c.publishers) | set(c.subscribers)) - c.derived:
+        endpoints = c.publishers.get(topic, []) + c.subscribers.get(topic, [])
+        if len({t for _, t in endpoints}) > 1:
+            users = ", ".join(f"{n}: {t}" for n, t in endpoints)
+            c.error(f"{c.project.where('nodes')}: topic {topic} is declared with different types ({users}); one "
+                    "topic carries one type")
+
+
+def clients_have_servers(c: CheckContext) -> None:
+    imported = {v for spec in c.external.values() for v in spec.import_services}
+    for service, calling in c.clients.items():
+        if service in c.derived or service in c.servers or service in imported:
             continue
-        if service not in servers and service not in imported_services:
-            for nname, _ in calling:
-                if nname in speaks_ros1:
-                    continue  # a ROS 1 node may call any ROS 1 service
-                report.errors.append(f"{where('nodes', nname, 'clients', service)}: no node serves "
-                                     f"{service}{_nearest(service, servers)}; add it under some node's 'services'")
-    for service, serving in servers.items():
-        if service in derived:
+        for nname, _ in calling:
+            if nname in c.speaks_ros1:
+                continue  # a ROS 1 node may call any ROS 1 service
+            c.error(f"{c.project.where('nodes', nname, 'clients', service)}: no node serves "
+                    f"{service}{_nearest(service, c.servers)}; add it under some node's 'services'")
+
+
+def one_server_one_type_per_service(c: CheckContext) -> None:
+    where = c.project.where
+    for service, serving in c.servers.items():
+        if service in c.derived:
             continue
         if len(serving) > 1:
-            report.errors.append(f"{where('nodes', serving[1][0], 'services', service)}: {service} is "
-                                 f"already served by {serving[0][0]}; a service has one server")
-        declared = {t for _, t in serving + clients.get(service, [])}
-        if len(declared) > 1:
-            report.errors.append(f"{where('nodes')}: service {service} is declared with different types")
-    for topic, topic_spec in model.topics.items():
-        problem = topic_name_problem(topic)
-        if problem:
-            report.errors.append(f"{where('topics', topic)}: {topic!r} {problem}")
-        if topic not in publishers and topic not in subscribers:
-            report.errors.append(f"{where('topics', topic)}: no node publishes or subscribes {topic}")
+            c.error(f"{where('nodes', serving[1][0], 'services', service)}: {service} is already served by "
+                    f"{serving[0][0]}; a service has one server")
+        if len({t for _, t in serving + c.clients.get(service, [])}) > 1:
+            c.error(f"{where('nodes')}: service {service} is declared with different types")
+
+
+def topic_entries_are_used(c: CheckContext) -> None:
+    """Each topics: entry names a topic of the graph, with a QoS that means what it says."""
+    where = c.project.where
+    for topic, topic_spec in c.project.model.topics.items():
+        if problem := topic_name_problem(topic):
+            c.error(f"{where('topics', topic)}: {topic!r} {problem}")
+        if topic not in c.publishers and topic not in c.subscribers:
+            c.error(f"{where('topics', topic)}: no node publishes or subscribes {topic}")
         if topic_spec.reliability == "best_effort" and topic_spec.history == "keep_all":
-            report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all "
-                                   "behaves like keep_last with this depth")
-    _check_qos_compatibility(project, publishers, subscribers, report)
-    _check_hardware_topics(project, publishers, subscribers, types, report)
+            c.report.warnings.append(f"{where('topics', topic)}: best_effort never blocks, so keep_all behaves like "
+                                     "keep_last with this depth")
 
-    def hetros_side(table: dict[str, list[tuple[str, str]]]) -> dict[str, list[tuple[str, str]]]:
-        return {k: kept for k, v in table.items() if (kept := [e for e in v if e[0] not in speaks_ros1])}
 
-    _check_shm_budget(project, types, hetros_side(publishers), hetros_side(subscribers), report)
-    if speaks_ros1:
-        check_ros1_nodes(project, speaks_ros1, types, report)
-    _check_sources(project, report)
-    tables = (publishers, subscribers, servers, clients)
-    for graph, bridged_spec in external.items():
-        check_bridged(project, graph, bridged_spec, tables, ros1_carries if graph == "ros1" else ros2_carries,
-                       types, report)
-    return report
+def qos_compatible(c: CheckContext) -> None:
+    _check_qos_compatibility(c.project, c.publishers, c.subscribers, c.report)
+
+
+def hardware_topics(c: CheckContext) -> None:
+    _check_hardware_topics(c.project, c.publishers, c.subscribers, c.types, c.report)
+
+
+def shm_within_budget(c: CheckContext) -> None:
+    _check_shm_budget(c.project, c.types, c.hetros_side(c.publishers), c.hetros_side(c.subscribers), c.report)
+
+
+def ros1_nodes_fit(c: CheckContext) -> None:
+    if c.speaks_ros1:
+        check_ros1_nodes(c.project, c.speaks_ros1, c.types, c.report)
+
+
+def sources_exist(c: CheckContext) -> None:
+    _check_sources(c.project, c.report)
+
+
+def bridged_endpoints_fit(c: CheckContext) -> None:
+    tables = (c.publishers, c.subscribers, c.servers, c.clients)
+    for graph, bridged_spec in c.external.items():
+        check_bridged(c.project, graph, bridged_spec, tables, ros1_carries if graph == "ros1" else ros2_carries,
+                      c.types, c.report)
+
+
+# the order matters where a rule reads what an earlier one gathered (gather_endpoints, nodes_are_well_formed)
+RULES: tuple[Callable[[CheckContext], None], ...] = (
+    cpus_exist, hosts_and_env, bridge_names_reserved, nodes_are_well_formed, gather_endpoints, code_runs,
+    actions_pair, subscriptions_have_publishers, one_type_per_topic, clients_have_servers,
+    one_server_one_type_per_service, topic_entries_are_used, qos_compatible, hardware_topics, shm_within_budget,
+    ros1_nodes_fit, sources_exist, bridged_endpoints_fit,
+)
 
 
 def _check_hosts(project: LoadedProject, report: CheckReport) -> None:

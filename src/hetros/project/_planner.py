@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .._errors import CheckError
@@ -14,6 +15,7 @@ from ..plan import (
     LAUNCHER,
     ROS1_BRIDGE,
     SERVICE_QOS,
+    SYSTEM_NODES,
     ChannelPlan,
     EdgePlan,
     HostPlan,
@@ -29,28 +31,86 @@ from ..plan import (
 )
 from ._bridges import hardware_framed, ros1_bridge, ros1_master, ros1_nodes, ros2_bridge
 from ._checks import check, project_hash
-from ._model import LoadedProject, load_project
+from ._model import LoadedProject, NodeSpec, TargetSpec, load_project
 
 
 def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
-    """Check, then compute the architecture graph. Raises CheckError with every problem."""
+    """Check, then compute the architecture graph. Raises CheckError with every problem.
+
+    In steps: the channels of every endpoint (topics, service requests and replies), the system
+    nodes (bridges, gateways, clock followers), where each node runs (process and host), one
+    transport per edge (:func:`edge_transport`), and the plan's tables.
+    """
     types = types or registry()
     report = check(project, types)
     if report.errors:
         raise CheckError(report.errors)
     model = project.model
-    process_of = {
-        n: process_name(s.target, model.targets[s.target].kind) for n, s in model.nodes.items()
-    }
     bridges = [b for b in (ros1_bridge(project), ros2_bridge(project)) if b is not None]
     speaks_ros1 = ros1_nodes(project)
-    # every hetros node's endpoints, the ROS 1 bridge's too (ROS 1 nodes' endpoints are ROS 1's):
-    # (name, publish, subscribe, services, clients)
-    endpoints = [(n, spec.types("publish"), spec.types("subscribe"), spec.types("services"), spec.types("clients"))
-                 for n, spec in model.nodes.items() if n not in speaks_ros1]
-    for bridge in bridges:
-        process_of[bridge.name] = LAUNCHER
-        endpoints.append((bridge.name, bridge.publish, bridge.subscribe, bridge.services, bridge.clients))
+    channels = _channels(project, _endpoints(project, bridges, speaks_ros1))
+    process_of = {n: process_name(s.target, model.targets[s.target].kind) for n, s in model.nodes.items()}
+    process_of |= {bridge.name: LAUNCHER for bridge in bridges}
+    fpga_of = {n: s.target for n, s in model.nodes.items() if model.targets[s.target].kind == "fpga"}
+    framed = hardware_framed(project)
+    # imported topics an fpga target's hardware receives straight from ROS 1: not again through the bridge
+    received_from_ros1 = {(gateway_node(t), topic) for t, (_, imports) in framed.items() for topic in imports}
+    gateways = _add_gateways(channels, fpga_of, received_from_ros1)
+    gateways |= {gateway_node(t): t for t in framed}  # a target framing ROS 1 topics needs its gateway to run
+    process_of |= gateways
+    clocks = _clock_followers(project, process_of, fpga_of, speaks_ros1) if model.use_sim_time else {}
+    for follower, target in clocks.items():
+        process_of[follower] = process_name(target, model.targets[target].kind)
+        _add(channels, CLOCK_TOPIC, CLOCK_TYPE, "topic", project, sub=follower)
+    # every target on a host: its own, else the first one named (bridges run in the first host's launcher)
+    first_host = next(iter(model.hosts), "")
+    host_of_target = {t: spec.host or first_host for t, spec in model.targets.items()}
+    placement = Placement(
+        process_of=process_of, fpga_of=fpga_of, gateways=gateways, received_from_ros1=received_from_ros1,
+        host_of={n: host_of_target[s.target] for n, s in model.nodes.items()} | {b.name: first_host for b in bridges}
+        | {g: host_of_target[t] for g, t in (gateways | clocks).items()})
+    edges = tuple(EdgePlan(c.name, p, s, kind) for c in channels.values() for p in c.publishers
+                  for s in c.subscribers if (kind := edge_transport(c.name, p, s, placement)) is not None)
+    external = model.external
+    return Plan(
+        name=model.name,
+        root=str(project.root.resolve()),
+        message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
+        targets={n: _target_plan(n, t, host_of_target[n], framed.get(n, ((), ()))) for n, t in model.targets.items()}
+        | {bridge.name: TargetPlan(bridge.name, "thread", host=first_host) for bridge in bridges},
+        nodes={n: _node_plan(project, n, s) for n, s in model.nodes.items()}
+        | {bridge.name: bridge for bridge in bridges}
+        | {g: _gateway_plan(channels, g, t) for g, t in gateways.items()}
+        | {c: NodePlan(name=c, run=SYSTEM_NODES["clock_follower"], target=t, subscribe={CLOCK_TOPIC: CLOCK_TYPE})
+           for c, t in clocks.items()},
+        channels=channels,
+        edges=edges,
+        ros1_master=ros1_master(project),
+        ros1_host=external.ros1.host if external is not None and external.ros1 else "127.0.0.1",
+        ros1_qos={t: q for t, q in model.topics.items()
+                  if any(t in model.nodes[n].publish or t in model.nodes[n].subscribe for n in speaks_ros1)},
+        hosts={n: HostPlan(n, h.address, h.ssh or "") for n, h in model.hosts.items()},
+        on_peer_lost=model.on_peer_lost,
+        dds_domain=model.dds_domain,
+        project_hash=project_hash(project),
+        use_sim_time=model.use_sim_time,
+        foxglove_hosts=tuple(model.foxglove_hosts),
+    )
+
+
+# a node's endpoints as the planner reads them: (name, publish, subscribe, services, clients)
+_Endpoints = tuple[str, dict[str, str], dict[str, str], dict[str, str], dict[str, str]]
+
+
+def _endpoints(project: LoadedProject, bridges: list[NodePlan], speaks_ros1: set[str]) -> list[_Endpoints]:
+    """Every hetros node's endpoints, the bridges' too (ROS 1 nodes' endpoints are ROS 1's, not channels)."""
+    found = [(n, spec.types("publish"), spec.types("subscribe"), spec.types("services"), spec.types("clients"))
+             for n, spec in project.model.nodes.items() if n not in speaks_ros1]
+    return found + [(b.name, b.publish, b.subscribe, b.services, b.clients) for b in bridges]
+
+
+def _channels(project: LoadedProject, endpoints: list[_Endpoints]) -> dict[str, ChannelPlan]:
+    """The channels of the graph: its topics, one request channel per service, one reply channel per client."""
     channels: dict[str, ChannelPlan] = {}
     for nname, publish, subscribe, _services, _clients in endpoints:
         for topic, typename in publish.items():
@@ -73,77 +133,66 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
             name = reply_channel(service, nname)
             _add(channels, name, f"{srv}_Response", "reply", project, pub=server, service=service)
             _add(channels, name, f"{srv}_Response", "reply", project, sub=nname, service=service)
-    fpga_of = {n: s.target for n, s in model.nodes.items() if model.targets[s.target].kind == "fpga"}
-    framed = hardware_framed(project)
-    # imported topics an fpga target's hardware receives straight from ROS 1: not again through the bridge
-    received_from_ros1 = {(gateway_node(t), topic) for t, (_, imports) in framed.items() for topic in imports}
-    gateways = _add_gateways(channels, fpga_of, received_from_ros1)
-    gateways |= {gateway_node(t): t for t in framed}  # a target framing ROS 1 topics needs its gateway to run
-    for gateway, target in gateways.items():
-        process_of[gateway] = target
-    clocks = _clock_followers(project, process_of, fpga_of, speaks_ros1) if model.use_sim_time else {}
-    for follower, target in clocks.items():
-        process_of[follower] = process_name(target, model.targets[target].kind)
-        _add(channels, CLOCK_TOPIC, CLOCK_TYPE, "topic", project, sub=follower)
-    # every target on a host: its own, else the first one named (bridges run in the first host's launcher)
-    first_host = next(iter(model.hosts), "")
-    host_of_target = {t: spec.host or first_host for t, spec in model.targets.items()}
-    host_of = ({n: host_of_target[s.target] for n, s in model.nodes.items()} | {b.name: first_host for b in bridges}
-               | {g: host_of_target[t] for g, t in (gateways | clocks).items()})
-
-    def transport(channel: str, publisher: str, subscriber: str) -> TransportKind | None:
-        if publisher == ROS1_BRIDGE and (subscriber, channel) in received_from_ros1:
-            return None
-        if publisher in fpga_of or subscriber in fpga_of:
-            # inside one target's topic network; a hardware node's software peers are its gateway's
-            return "hw" if fpga_of.get(publisher) == fpga_of.get(subscriber) else None
-        if publisher in gateways and publisher == subscriber:
-            return None  # what a gateway publishes came out of the hardware it feeds
-        if host_of[publisher] != host_of[subscriber]:
-            return "dds"
-        return "inproc" if process_of[publisher] == process_of[subscriber] else "shm"
-
-    edges = tuple(EdgePlan(c.name, p, s, kind) for c in channels.values() for p in c.publishers
-                  for s in c.subscribers if (kind := transport(c.name, p, s)) is not None)
-    return Plan(
-        name=model.name,
-        root=str(project.root.resolve()),
-        message_paths=tuple(str((project.root / m).resolve()) for m in model.messages),
-        targets={n: TargetPlan(n, t.kind, tuple(t.cpus), t.clock_mhz or 100.0, t.data_width, t.part or "",
-                               host_of_target[n], t.sim or "verilator", *framed.get(n, ((), ())),
-                               t.tcpros_frame_bytes, t.board or "")
-                 for n, t in model.targets.items()}
-        | {bridge.name: TargetPlan(bridge.name, "thread", host=first_host) for bridge in bridges},
-        nodes={
-            n: NodePlan(n, s.run, s.target, dict(s.parameters), s.restart, s.max_restarts, s.required,
-                        s.types("publish"), s.types("subscribe"), s.types("services"), s.types("clients"),
-                        {a: normalize_typename(t, "action") for a, t in s.types("actions").items()},
-                        {a: normalize_typename(t, "action") for a, t in s.types("action_clients").items()},
-                        s.max_goals(), s.hw or "", tuple(s.args), s.namespace, dict(s.remap), s.name or "",
-                        dict(s.env), project.node_roots.get(n, ""), tuple(s.memory))
-            for n, s in model.nodes.items()
-        } | {bridge.name: bridge for bridge in bridges}
-        | {g: NodePlan(g, GATEWAY_RUN, t, {"target": t}, publish=_endpoints_of(channels, g, "publish"),
-                       subscribe=_endpoints_of(channels, g, "subscribe"), services=_services_of(channels, g))
-           for g, t in gateways.items()}
-        | {c: NodePlan(c, CLOCK_RUN, t, subscribe={CLOCK_TOPIC: CLOCK_TYPE}) for c, t in clocks.items()},
-        channels=channels,
-        edges=edges,
-        ros1_master=ros1_master(project),
-        ros1_host=external.ros1.host if (external := model.external) is not None and external.ros1 else "127.0.0.1",
-        ros1_qos={t: q for t, q in model.topics.items()
-                  if any(t in model.nodes[n].publish or t in model.nodes[n].subscribe for n in speaks_ros1)},
-        hosts={n: HostPlan(n, h.address, h.ssh or "") for n, h in model.hosts.items()},
-        on_peer_lost=model.on_peer_lost,
-        dds_domain=model.dds_domain,
-        project_hash=project_hash(project),
-        use_sim_time=model.use_sim_time,
-        foxglove_hosts=tuple(model.foxglove_hosts),
-    )
+    return channels
 
 
-# what a clock follower runs: a subscription to /clock that sets its process' clock
-CLOCK_RUN = "hetros.runtime._clock:follow_clock"
+@dataclass(frozen=True)
+class Placement:
+    """Where each node of the plan runs, as the transport rule needs it."""
+
+    process_of: dict[str, str]  # node -> its process (a target's, or the launcher's)
+    host_of: dict[str, str]  # node -> its host ("" on one machine)
+    fpga_of: dict[str, str]  # hardware node -> its fpga target
+    gateways: dict[str, str] = field(default_factory=dict)  # gateway node -> its fpga target
+    # (gateway, topic): topics an fpga target's hardware takes from ROS 1 itself, not through the bridge
+    received_from_ros1: set[tuple[str, str]] = field(default_factory=set)
+
+
+def edge_transport(channel: str, publisher: str, subscriber: str, placement: Placement) -> TransportKind | None:
+    """The one transport of one edge (None: no edge), the cheapest the mapping allows.
+
+    Inside one fpga target: its topic network (``hw``); a hardware node's software peers reach it
+    through its gateway, so no edge of theirs touches it; between hosts: DDS; between processes:
+    shared memory; within one process: in-process.
+    """
+    fpga_of = placement.fpga_of
+    if publisher == ROS1_BRIDGE and (subscriber, channel) in placement.received_from_ros1:
+        return None
+    if publisher in fpga_of or subscriber in fpga_of:
+        return "hw" if fpga_of.get(publisher) == fpga_of.get(subscriber) else None
+    if publisher in placement.gateways and publisher == subscriber:
+        return None  # what a gateway publishes came out of the hardware it feeds
+    if placement.host_of[publisher] != placement.host_of[subscriber]:
+        return "dds"
+    return "inproc" if placement.process_of[publisher] == placement.process_of[subscriber] else "shm"
+
+
+def _target_plan(name: str, target: TargetSpec, host: str, framed: tuple[tuple[str, ...], tuple[str, ...]]
+                 ) -> TargetPlan:
+    exports, imports = framed
+    return TargetPlan(name=name, kind=target.kind, cpus=tuple(target.cpus), clock_mhz=target.clock_mhz or 100.0,
+                      data_width=target.data_width, part=target.part or "", host=host, sim=target.sim or "verilator",
+                      ros1_export=tuple(exports), ros1_import=tuple(imports),
+                      tcpros_frame_bytes=target.tcpros_frame_bytes, board=target.board or "")
+
+
+def _node_plan(project: LoadedProject, name: str, spec: NodeSpec) -> NodePlan:
+    return NodePlan(
+        name=name, run=spec.run, target=spec.target, parameters=dict(spec.parameters), restart=spec.restart,
+        max_restarts=spec.max_restarts, required=spec.required, publish=spec.types("publish"),
+        subscribe=spec.types("subscribe"), services=spec.types("services"), clients=spec.types("clients"),
+        actions={a: normalize_typename(t, "action") for a, t in spec.types("actions").items()},
+        action_clients={a: normalize_typename(t, "action") for a, t in spec.types("action_clients").items()},
+        max_goals=spec.max_goals(), hw=spec.hw or "", args=tuple(spec.args), namespace=spec.namespace,
+        remap=dict(spec.remap), ros_name=spec.name or "", env=dict(spec.env), root=project.node_roots.get(name, ""),
+        memory=tuple(spec.memory))
+
+
+def _gateway_plan(channels: dict[str, ChannelPlan], gateway: str, target: str) -> NodePlan:
+    return NodePlan(name=gateway, run=SYSTEM_NODES["gateway"], target=target, parameters={"target": target},
+                    publish=_endpoints_of(channels, gateway, "publish"),
+                    subscribe=_endpoints_of(channels, gateway, "subscribe"),
+                    services=_services_of(channels, gateway))
 
 
 def _clock_followers(project: LoadedProject, process_of: dict[str, str], fpga_of: dict[str, str],
@@ -156,10 +205,6 @@ def _clock_followers(project: LoadedProject, process_of: dict[str, str], fpga_of
         name = CLOCK_PREFIX + process_of[node]
         followers.setdefault(name, spec.target)
     return followers
-
-
-# what a gateway node runs: the fpga target's simulator, fed from and draining to software
-GATEWAY_RUN = "hetros.launch._gateway:gateway"
 
 
 def _add_gateways(channels: dict[str, ChannelPlan], fpga_of: dict[str, str],

@@ -1,5 +1,7 @@
 """Runtime: node API, per-node executor, per-process graph, the host of a process' nodes."""
 
+from typing import TYPE_CHECKING, Any
+
 from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle
 from ._clock import Clock, Duration, SimulatedClock, Time
 from ._entities import Client, Publisher, Replies, Service, Subscription, Timer
@@ -9,10 +11,46 @@ from ._log import setup_logging
 from ._node import NODE_TIMES_VARIABLE, Node
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus
 
+if TYPE_CHECKING:
+    from ._action import uuid_message
+    from ._clock import Ticker
+    from ._executor import AdaptiveSpin
+    from ._log import log_to_file, node_logger, stop_logging_to
+    from ._ros_main import bound_node, mark_shut_down, ros_main, shut_down
+    from ._taps import TapSink, check_rate
+
+
+# shared with other packages, loaded on first use (a worker must not pay for what it does not run)
+_LAZY = {
+    "AdaptiveSpin": "._executor",
+    "TapSink": "._taps",
+    "Ticker": "._clock",
+    "bound_node": "._ros_main",
+    "mark_shut_down": "._ros_main",
+    "shut_down": "._ros_main",
+    "check_rate": "._taps",
+    "log_to_file": "._log",
+    "node_logger": "._log",
+    "ros_main": "._ros_main",
+    "stop_logging_to": "._log",
+    "uuid_message": "._action",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(module, __name__), name)
+
+
 __all__ = [
     "NODE_TIMES_VARIABLE",
     "ActionClient",
     "ActionServer",
+    "AdaptiveSpin",
     "Client",
     "ClientGoalHandle",
     "Clock",
@@ -29,8 +67,19 @@ __all__ = [
     "Service",
     "SimulatedClock",
     "Subscription",
+    "TapSink",
+    "Ticker",
     "Time",
     "Timer",
+    "bound_node",
+    "check_rate",
+    "log_to_file",
+    "mark_shut_down",
+    "node_logger",
     "resolve",
+    "ros_main",
     "setup_logging",
+    "shut_down",
+    "stop_logging_to",
+    "uuid_message",
 ]

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from ...runtime import _ros_main as _context
+from ...runtime import bound_node as _bound_node
+from ...runtime import mark_shut_down as _mark_shut_down
+from ...runtime import shut_down as _shut_down
 from .executors import (
     ExternalShutdownException,
     SingleThreadedExecutor,
@@ -35,14 +37,14 @@ def init(*, args: list[str] | None = None, context: Any = None, domain_id: int |
          signal_handler_options: Any = None) -> _InitContext:
     """The node's context starts with its thread: nothing to set up; ``args`` are accepted and ignored (the
     project file holds parameters and names)."""
-    _context.bound_node()
-    _context.mark_shut_down(False)
+    _bound_node()
+    _mark_shut_down(False)
     return _InitContext()
 
 
 def shutdown(*, context: Any = None, uninstall_handlers: bool | None = None) -> None:
     """This node's context ends (``rclpy.ok()`` turns False, ``spin`` returns); the graph goes on."""
-    _context.mark_shut_down(True)
+    _mark_shut_down(True)
 
 
 def try_shutdown(*, context: Any = None, uninstall_handlers: bool | None = None) -> None:
@@ -50,7 +52,7 @@ def try_shutdown(*, context: Any = None, uninstall_handlers: bool | None = None)
 
 
 def ok(*, context: Any = None) -> bool:
-    return not _context.shut_down() and not _context.bound_node().graph.stop.is_set()
+    return not _shut_down() and not _bound_node().graph.stop.is_set()
 
 
 def create_node(node_name: str, *, context: Any = None, cli_args: list[str] | None = None,

@@ -10,7 +10,8 @@ from typing import Any
 
 from ..._errors import ShutdownError
 from ...runtime import Node as HetrosNode
-from ...runtime import _ros_main as _context
+from ...runtime import bound_node as _bound_node
+from ...runtime import shut_down as _shut_down
 from .task import Future
 
 
@@ -20,7 +21,7 @@ class ExternalShutdownException(ShutdownError):
 
 
 def _running(hetros: HetrosNode) -> bool:
-    return not hetros.graph.stop.is_set() and not _context.shut_down()
+    return not hetros.graph.stop.is_set() and not _shut_down()
 
 
 def spin_node(hetros: HetrosNode, timeout_sec: float | None = None) -> None:
@@ -84,7 +85,7 @@ class Executor:
         return list(self._nodes)
 
     def _hetros(self) -> HetrosNode:
-        return self._nodes[0]._hetros if self._nodes else _context.bound_node()
+        return self._nodes[0]._hetros if self._nodes else _bound_node()
 
     def spin(self) -> None:
         """Spin the node's executor; an executor class that overrides ``spin_once`` (a custom executor) has

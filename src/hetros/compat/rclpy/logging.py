@@ -8,7 +8,7 @@ import logging as _logging
 import time
 from typing import Any
 
-from ...runtime._log import node_logger
+from ...runtime import node_logger
 
 
 class LoggingSeverity(enum.IntEnum):

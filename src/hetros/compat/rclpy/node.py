@@ -17,10 +17,8 @@ from typing import Any
 from ..._errors import ParameterError
 from ...msg import copy as copy_message
 from ...plan import join_namespace
-from ...runtime import Clock
+from ...runtime import Clock, Ticker, bound_node
 from ...runtime import Node as HetrosNode
-from ...runtime._clock import Ticker
-from ...runtime._ros_main import bound_node
 from .._flavour import received
 from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger

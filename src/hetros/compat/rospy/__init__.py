@@ -19,9 +19,9 @@ from ..._errors import Error, MissingFieldError, ParameterError, ShutdownError
 from ...msg import Message, registry
 from ...msg import copy as copy_message
 from ...runtime import Node as HetrosNode
-from ...runtime import _ros_main
-from ...runtime._clock import Ticker
-from ...runtime._log import node_logger
+from ...runtime import Ticker, node_logger
+from ...runtime import bound_node as _bound_node
+from ...runtime import ros_main as _ros_main
 
 __all__ = [
     "Duration",
@@ -92,7 +92,7 @@ class _State:
             hetros.spun = True
 
             def run() -> None:
-                with _ros_main.ros_main(hetros):  # callbacks call rospy too: this thread runs as the node
+                with _ros_main(hetros):  # callbacks call rospy too: this thread runs as the node
                     try:
                         while not hetros.graph.stop.is_set() and not self.shutdown_reason and self.failure is None:
                             hetros.executor.spin_once(0.1)
@@ -107,7 +107,7 @@ _states_lock = threading.Lock()
 
 
 def _state() -> _State:
-    hetros = _ros_main.bound_node()
+    hetros = _bound_node()
     with _states_lock:
         state = _states.get(id(hetros))
         if state is None or state.hetros is not hetros:

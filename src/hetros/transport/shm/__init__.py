@@ -36,6 +36,7 @@ reserved); the message follows in the codec's format (CDR for messages).
 from ._domain import ShmDomain, Unacknowledged, remove_session_segments
 from ._endpoints import ShmReader, ShmWriter, has_loan
 from ._events import WakeChannel, raise_open_file_limit
+from ._iceoryx import iox2, new_node
 from ._sample import SESSION_TAG_VARIABLE, check_room, new_session, reserved_bytes
 from ._stale import cleanup_stale
 from ._transport import ShmTransport
@@ -51,6 +52,8 @@ __all__ = [
     "check_room",
     "cleanup_stale",
     "has_loan",
+    "iox2",
+    "new_node",
     "new_session",
     "raise_open_file_limit",
     "remove_session_segments",

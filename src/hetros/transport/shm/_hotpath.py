@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..._errors import TransportError
-from ...msg._compiled import wanted
+from ...msg import wanted
 from ._credits import Credits
 from ._iceoryx import assume_init, loan_slice
 from ._sample import BORROW_LIMIT, CDR_BODY_AT, HEADER, MAPPED, MAX_SUBSCRIBER_SLOTS

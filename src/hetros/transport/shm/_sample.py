@@ -16,7 +16,7 @@ from typing import Any
 
 from ..._errors import MachineError, TransportError
 from ..._qos import QoS
-from ...msg._compiled import wanted as _compiled_wanted
+from ...msg import wanted as _compiled_wanted
 from .._codec import CDR_LE
 
 try:  # the compiled slot buffer (built by pip where a C compiler is); ctypes serves otherwise

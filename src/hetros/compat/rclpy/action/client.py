@@ -10,8 +10,8 @@ from typing import Any
 
 from ....msg import copy as copy_message
 from ....runtime import ActionClient as HetrosActionClient
-from ....runtime._action import ClientGoalHandle as HetrosGoalHandle
-from ....runtime._action import uuid_message
+from ....runtime import ClientGoalHandle as HetrosGoalHandle
+from ....runtime import uuid_message
 from ..._flavour import flavoured_action, received
 from ..executors import spin_until_done
 from ..task import Future

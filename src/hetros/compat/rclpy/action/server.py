@@ -12,8 +12,8 @@ from typing import Any
 from ...._log import get_logger
 from ....msg import copy as copy_message
 from ....runtime import ActionServer as HetrosActionServer
-from ....runtime._action import ServerGoalHandle as HetrosGoalHandle
-from ....runtime._action import uuid_message
+from ....runtime import ServerGoalHandle as HetrosGoalHandle
+from ....runtime import uuid_message
 from ..._flavour import received
 from ..task import run_to_end
 

@@ -84,7 +84,7 @@ lint: install-test
 fast: install-test
 	$(VENV)/bin/ruff check src tests examples benchmarks
 	$(VENV)/bin/mypy --strict src
-	$(VENV)/bin/pytest -q -p no:cacheprovider tests/unit tests/conformance
+	$(VENV)/bin/pytest -q -p no:cacheprovider -m "not rtl and not slow" tests/unit tests/conformance
 
 # the conformance suite once more on the pure-Python path (what runs where no C compiler is)
 test: lint

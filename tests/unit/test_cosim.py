@@ -338,6 +338,7 @@ def test_the_execution_models_of_a_chain_time_dataflow_against_sequential() -> N
     ("hetros.hw.nodes:GaussianBlur", gaussian_blur),
     ("hetros.hw.nodes:Compensation", None),
 ])
+@pytest.mark.slow
 def test_rgb_filters_and_the_stateful_compensation_match_their_twins_frame_after_frame(
         tmp_path: Path, component: str, twin: Any) -> None:
     """rgb8 (a window per channel) over a stream of frames: the compensation stretches each frame with the

@@ -35,6 +35,7 @@ def project(tmp_path: Path, text: str) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_examples_check_clean() -> None:
     for path in EXAMPLES.glob("*/project*.yaml"):
         report = check(load_project(path))

@@ -69,6 +69,7 @@ def _dawdle(address: tuple[str, int], count: int, stop: threading.Event, start: 
     return socks
 
 
+@pytest.mark.slow
 def test_seventy_slow_writers_do_not_keep_good_calls_from_the_master_or_a_service(
         caplog: pytest.LogCaptureFixture) -> None:
     """Slowloris against `hetros master` and a node's service port: each slow connection has a

@@ -8,6 +8,8 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 from hetros.msg._stubs import shipped_stubs, user_stubs
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -53,11 +55,13 @@ def _mypy(tmp_path: Path, source: str) -> subprocess.CompletedProcess[str]:
                           env=env, capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow
 def test_mypy_strict_reads_shipped_and_user_built_types(tmp_path: Path) -> None:
     done = _mypy(tmp_path, USER_FILE)
     assert done.returncode == 0, done.stdout + done.stderr
 
 
+@pytest.mark.slow
 def test_mypy_catches_a_field_that_does_not_exist_and_a_wrong_field_type(tmp_path: Path) -> None:
     done = _mypy(tmp_path, USER_FILE + '''
 

@@ -72,6 +72,7 @@ def test_plain_publish_and_callback_delivery(graphs: tuple[Graph, Graph]) -> Non
     assert seen == [(1000, True), (2000, True), (3000, True)]
 
 
+@pytest.mark.slow
 def test_an_abandoned_loan_returns_its_slot(graphs: tuple[Graph, Graph]) -> None:
     """Loans live on their message: dropping one gives the slot back (no dict keeps it)."""
     import gc

@@ -43,8 +43,8 @@ install-rtl: | $(PY)
 install-examples: | $(PY)
 	$(PIP) install --quiet -e '.[examples]'
 
-$(TSTAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/shm/_cslot.c Makefile | $(PY)
-	$(PIP) install --quiet -e '.[test]'
+$(TSTAMP): pyproject.toml benchmarks/pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/shm/_cslot.c Makefile | $(PY)
+	$(PIP) install --quiet -e '.[test]' -e benchmarks
 	$(install_peer_debs)
 	touch $(STAMP) $@
 
@@ -52,8 +52,8 @@ install-test: $(TSTAMP)
 
 # The benchmark's peers: pip extras, Debian's rospy + rosmaster, and Cyclone's native ddsperf
 # (cyclonedds-tools) when we may install them.
-$(BSTAMP): pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/shm/_cslot.c Makefile | $(PY)
-	$(PIP) install --quiet -e '.[bench]'
+$(BSTAMP): pyproject.toml benchmarks/pyproject.toml setup.py src/hetros/msg/_ccdr.c src/hetros/transport/shm/_cslot.c Makefile | $(PY)
+	$(PIP) install --quiet -e '.[bench]' -e benchmarks
 	$(install_peer_debs)
 	@if ! command -v ddsperf > /dev/null && [ "$$(id -u)" = 0 ]; then \
 		DEBIAN_FRONTEND=noninteractive apt-get install -y -qq cyclonedds-tools > /dev/null; fi
@@ -75,7 +75,7 @@ run: install
 # (`hetros msg stubs`), each folder on its own (every example has a nodes.py)
 lint: install-test
 	$(VENV)/bin/ruff check src tests examples benchmarks
-	$(VENV)/bin/mypy --strict src
+	$(VENV)/bin/mypy --strict src benchmarks/hetros_bench
 	$(VENV)/bin/hetros msg stubs examples/*/msg -o out/typings > /dev/null
 	for example in examples/*/; do \
 		MYPYPATH=out/typings:examples/inverse_kinematics $(VENV)/bin/mypy --strict $$example || exit 1; done
@@ -83,7 +83,7 @@ lint: install-test
 # the fast loop of CONTRIBUTING.md: lint, types, the unit and conformance suites (no launch, no simulator)
 fast: install-test
 	$(VENV)/bin/ruff check src tests examples benchmarks
-	$(VENV)/bin/mypy --strict src
+	$(VENV)/bin/mypy --strict src benchmarks/hetros_bench
 	$(VENV)/bin/pytest -q -p no:cacheprovider -m "not rtl and not slow" tests/unit tests/conformance
 
 # the conformance suite once more on the pure-Python path (what runs where no C compiler is)

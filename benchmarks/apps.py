@@ -18,7 +18,7 @@ import sys
 import time
 from pathlib import Path
 
-from hetros.bench._provenance import provenance
+from hetros_bench._provenance import provenance
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 MAPPINGS = {"processes": "project.yaml", "threads": "project_threads.yaml"}

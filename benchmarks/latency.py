@@ -1,8 +1,8 @@
 """Latency benchmark: hetros inproc and shm against CycloneDDS, iceoryx2, zenoh, dora-rs, rospy,
-multiprocessing.Pipe and a plain numpy copy, in one run. See hetros/bench/latency.py."""
+multiprocessing.Pipe and a plain numpy copy, in one run. See benchmarks/hetros_bench/latency.py."""
 
 import sys
 
-from hetros.bench.latency import main
+from hetros_bench.latency import main
 
 sys.exit(main())

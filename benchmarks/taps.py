@@ -20,12 +20,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from hetros.bench._provenance import provenance
 from hetros.interfaces.sensor_msgs.msg import Image
 from hetros.interfaces.std_msgs.msg import String
 from hetros.runtime import Node
 from hetros.runtime._taps import TapSink
 from hetros.transport import MessageCodec
+from hetros_bench._provenance import provenance
 
 
 def _publish_ns(make: Any, typename: str, mode: str, count: int) -> float:

@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/worker_footprint.py [--runs 5] [--out out/bench]
 
 A worker loads only the transports its plan's edges use (``hetros.transport._seam``). For each
-kind, a fresh interpreter does what ``python -m hetros.launch._worker`` does up to "ready":
+kind, a fresh interpreter does what ``python -m hetros.launch.launcher._worker`` does up to "ready":
 imports the worker, reads the plan, opens every endpoint of its target. It reports its RSS
 (VmRSS) and its import time (``-X importtime``, every top-level import summed), beside bare
 interpreters that load what the transport stands on (numpy + iceoryx2 with one node;
@@ -23,9 +23,9 @@ import tempfile
 import textwrap
 from pathlib import Path
 
-from hetros.bench._provenance import provenance
 from hetros.project import load_project, plan
 from hetros.transport import remove_session_segments
+from hetros_bench._provenance import provenance
 
 _TALKER = textwrap.dedent('''
     from hetros import Node
@@ -59,7 +59,7 @@ _PROJECTS = {
 _WORKER = textwrap.dedent('''
     import json, sys, threading, time
     start = time.perf_counter()
-    import hetros.launch._worker
+    import hetros.launch.launcher._worker
     from hetros.plan import Plan
     from hetros.runtime import Host
     plan = Plan.from_json(open(sys.argv[1]).read())

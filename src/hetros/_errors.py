@@ -31,7 +31,7 @@ one root and still tell the kinds apart::
     ├── MachineError           the machine around a launch: a private folder squatted or foreign,
     │                          shared memory full (named, with the fix)
     ├── InspectError           looking inside a running launch (which one, what, refused)
-    └── BenchError             a benchmark run gave no samples (hetros.bench; its text goes in the report)
+    └── BenchError             a benchmark run gave no samples (hetros_bench; its text goes in the report)
 """
 
 from __future__ import annotations

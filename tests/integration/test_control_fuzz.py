@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from hetros.launch._control import receive_frame, short_path
+from hetros.launch.observe._control import receive_frame, short_path
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "talker_listener" / "project.yaml"
 _FRAME = struct.Struct("<II")

@@ -39,7 +39,7 @@ def test_the_hardware_benchmark_runs_without_pytest() -> None:
     done = _python("""
         import sys
         sys.modules["pytest"] = None  # `make install` brings no test tools
-        from hetros.bench.hw import run_rtl_tests
+        from hetros_bench.hw import run_rtl_tests
         print(run_rtl_tests())
     """)
     assert done.returncode == 0, done.stderr
@@ -51,7 +51,9 @@ def test_every_core_dependency_is_used_and_graph_can_write_svg() -> None:
     dependencies = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["dependencies"]
     names = [re.split(r"[<>=\[ ]", dep, maxsplit=1)[0] for dep in dependencies]
     assert "graphviz-pure" in names, "`hetros graph --out x.svg` must work after `make install`"
-    sources = "\n".join(p.read_text(encoding="utf-8") for p in (ROOT / "src" / "hetros").rglob("*.py"))
+    # the library, and the example `make run` launches after `make install` alone
+    files = [*(ROOT / "src" / "hetros").rglob("*.py"), *(ROOT / "examples" / "lane_following").glob("*.py")]
+    sources = "\n".join(p.read_text(encoding="utf-8") for p in files)
     for name in names:
         module = _IMPORT_NAMES.get(name, name.replace("-", "_").lower())
         if module is None:

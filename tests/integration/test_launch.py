@@ -275,7 +275,7 @@ def _workers_of(launcher: int) -> list[int]:
                 cmdline = (entry / "cmdline").read_bytes()
             except OSError:
                 continue
-            if b"hetros.launch._worker" in cmdline and f"{launcher}x".encode() in cmdline:
+            if b"hetros.launch.launcher._worker" in cmdline and f"{launcher}x".encode() in cmdline:
                 found.append(int(entry.name))
     return found
 

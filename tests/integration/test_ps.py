@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from hetros.launch._registry import registry_folder, running
+from hetros.launch.launcher._registry import registry_folder, running
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from hetros.bench.latency import SIZES, Result, Run, parse_sizes, pooled, render, round_ratio
+from hetros_bench.latency import SIZES, Result, Run, parse_sizes, pooled, render, round_ratio
 
 
 def _result(system: str, rtt_us: list[float], size: int = 4) -> Result:
@@ -49,12 +49,12 @@ def test_sizes_are_chosen_by_label_or_bytes_in_the_benchmarks_order_and_an_unkno
 
 @pytest.mark.parametrize("bench", ["latency", "ros1"])
 def test_the_cli_forwards_sizes_to_the_benchmark(bench: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    import hetros.bench.latency
-    import hetros.bench.ros1
+    import hetros_bench.latency
+    import hetros_bench.ros1
     from hetros.cli import build_parser
 
     seen: list[list[str]] = []
-    module = hetros.bench.latency if bench == "latency" else hetros.bench.ros1
+    module = hetros_bench.latency if bench == "latency" else hetros_bench.ros1
     monkeypatch.setattr(module, "main", lambda argv: seen.append(argv) or 0)
     args = build_parser().parse_args(["bench", bench, "--sizes", "4B,196kB"])
     assert args.func(args) == 0

@@ -143,7 +143,7 @@ def test_msg_has_no_import_circle() -> None:
 
 _WORKER = textwrap.dedent('''
     import json, sys, threading
-    import hetros.launch._worker
+    import hetros.launch.launcher._worker
     from hetros.plan import Plan
     from hetros.runtime import Host
     plan = Plan.from_json(open(sys.argv[1]).read())

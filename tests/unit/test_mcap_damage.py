@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from hetros.launch._bag import Recording
-from hetros.launch._mcap import check, seal, whole_messages
+from hetros.launch.observe._bag import Recording
+from hetros.launch.observe._mcap import check, seal, whole_messages
 from hetros.msg import registry
 from hetros.transport import MessageCodec
 

@@ -400,16 +400,23 @@ def cmd_master(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    # the benchmarks' roles and peers are a package of their own (benchmarks/hetros_bench), not the library's
+    try:
+        import hetros_bench  # noqa: F401
+    except ImportError as exc:
+        print(f"the benchmarks are not installed ({exc}): run `make install-bench` in a hetros checkout "
+              "(pip install -e '.[bench]' -e benchmarks)", file=sys.stderr)
+        return EXIT_ERROR
     if args.bench == "hw":
         _hardware_tools()
-        from ..bench.hw import main as hardware
+        from hetros_bench.hw import main as hardware
 
         return hardware((["--quick"] if args.quick else []) + (["--out", args.out] if args.out else []))
     try:
-        from ..bench.latency import main as latency
-        from ..bench.ros1 import main as ros1
+        from hetros_bench.latency import main as latency
+        from hetros_bench.ros1 import main as ros1
     except ImportError as exc:
-        print(f"the benchmark needs the bench extra: pip install -e '.[bench]' ({exc})", file=sys.stderr)
+        print(f"the benchmark needs the bench extra: run `make install-bench` ({exc})", file=sys.stderr)
         return EXIT_ERROR
     forwarded = ["--quick"] if args.quick else []
     if args.out:
@@ -421,7 +428,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         return ros1([*forwarded, *rounds, "--gap-ms", str(args.gap_ms), "--settle-us", str(args.settle_us),
                      *(["--steady-malloc"] if args.steady_malloc else [])])
     if args.bench == "dds":
-        from ..bench.dds import main as dds
+        from hetros_bench.dds import main as dds
 
         return dds(forwarded)
     if args.systems:

@@ -1,7 +1,7 @@
 """Co-simulation: an fpga target's top module (its hardware nodes and topic networks, ``_build``)
 compiled by Verilator (``_verilator``), with a port for each end of its gateway.
 
-The gateway node that drives it in a launch is ``hetros.launch._gateway``; benchmarks and
+The gateway node that drives it in a launch is ``hetros.launch.system._gateway``; benchmarks and
 tests drive it directly.
 """
 

@@ -10,7 +10,7 @@
   (the processing system, one AXI DMA per gateway port, its control on the PS's general purpose
   port, its memory side on a high performance port), the bitstream, and copies ``<top>.bit`` and
   ``<top>.hwh`` (what PYNQ's ``Overlay`` loads) next to the manifest;
-- ``<top>.board.json``: the manifest the host side reads (``hetros.board``): the board, each port
+- ``<top>.board.json``: the manifest the host side reads (``hetros.launch.system.board``): the board, each port
   with its width, and per gateway port its DMA (name, base address, ``sendchannel`` for software
   -> hardware, ``recvchannel`` back), topic and type; each memory node's AXI4 master, wired to the
   processing system's memory port.

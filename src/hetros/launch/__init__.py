@@ -1,7 +1,11 @@
 """Launch: start a plan's process targets, supervise them, shut the graph down in order; with hosts,
 meet the other hosts and deploy to them.
 
-The names below are loaded on first use: a worker process (``python -m hetros.launch._worker``)
+Three rooms: ``launcher/`` (the launcher, its workers, hosts and the record of running launches),
+``system/`` (the nodes the planner adds: gateways and the board surface, the ROS 1 and ROS 2 bridges)
+and ``observe/`` (control sockets and taps, inspection, recording and play, Foxglove, logs).
+
+The names below are loaded on first use: a worker process (``python -m hetros.launch.launcher._worker``)
 imports this package first and must not pay for the launcher, the project model or transports
 its plan does not use.
 """
@@ -9,20 +13,23 @@ its plan does not use.
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ._bag import describe_played, play, play_launching, record, recordable
-    from ._deploy import deploy, deploy_commands
-    from ._foxglove import FoxgloveView
-    from ._hosts import local_host
-    from ._inspect import RunningLaunch, TapEvent
-    from ._launcher import Launcher, LaunchResult, launch
-    from ._logs import LaunchLogs
-    from ._registry import format_launches, running
+    from .launcher._deploy import deploy, deploy_commands
+    from .launcher._hosts import local_host
+    from .launcher._launcher import Launcher, LaunchResult, launch
+    from .launcher._registry import format_launches, running
+    from .observe._bag import describe_played, play, play_launching, record, recordable
+    from .observe._foxglove import FoxgloveView
+    from .observe._inspect import RunningLaunch, TapEvent
+    from .observe._logs import LaunchLogs
 
-_WHERE = {"deploy": "_deploy", "deploy_commands": "_deploy", "local_host": "_hosts", "Launcher": "_launcher",
-          "LaunchResult": "_launcher", "launch": "_launcher", "describe_played": "_bag", "play": "_bag",
-          "play_launching": "_bag", "record": "_bag", "recordable": "_bag", "FoxgloveView": "_foxglove",
-          "RunningLaunch": "_inspect", "TapEvent": "_inspect", "LaunchLogs": "_logs", "format_launches": "_registry",
-          "running": "_registry"}
+_WHERE = {
+    "Launcher": "launcher._launcher", "LaunchResult": "launcher._launcher", "launch": "launcher._launcher",
+    "deploy": "launcher._deploy", "deploy_commands": "launcher._deploy", "local_host": "launcher._hosts",
+    "format_launches": "launcher._registry", "running": "launcher._registry",
+    "describe_played": "observe._bag", "play": "observe._bag", "play_launching": "observe._bag",
+    "record": "observe._bag", "recordable": "observe._bag", "FoxgloveView": "observe._foxglove",
+    "RunningLaunch": "observe._inspect", "TapEvent": "observe._inspect", "LaunchLogs": "observe._logs",
+}
 
 
 def __getattr__(name: str) -> Any:

@@ -41,10 +41,10 @@ CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
 # What the system nodes the planner adds run: "module:function", resolved by the process that runs
 # them (the plan names code, it imports none). tests/unit/test_layers.py resolves every entry.
 SYSTEM_NODES: dict[str, str] = {
-    "gateway": "hetros.launch._gateway:gateway",
+    "gateway": "hetros.launch.system._gateway:gateway",
     "clock_follower": "hetros.runtime._clock:follow_clock",
-    "ros1_bridge": "hetros.launch._ros1_bridge:bridge",
-    "ros2_bridge": "hetros.launch._ros2_bridge:bridge",
+    "ros1_bridge": "hetros.launch.system._ros1_bridge:bridge",
+    "ros2_bridge": "hetros.launch.system._ros2_bridge:bridge",
 }
 
 
@@ -79,7 +79,7 @@ class TargetPlan:
     ros1_import: tuple[str, ...] = ()
     tcpros_frame_bytes: int = 4096
     # fpga targets: the board (zcu104, pynq-z2, ultra96), "" for none: the gateway then goes through the
-    # PYNQ-shaped board surface (``hetros.board``)
+    # PYNQ-shaped board surface (``hetros.launch.system.board``)
     board: str = ""
 
 

@@ -24,15 +24,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
-from .._errors import Error, LaunchError
-from .._log import get_logger
-from .._net import is_local_address
-from .._process import death_cause
-from ..compat import install as install_ros_names
-from ..plan import LAUNCHER, Plan
-from ..runtime import Host, log_to_file, setup_logging, stop_logging_to
-from ..transport import check_room, cleanup_stale, new_session, remove_session_segments, reserved_bytes
-from ._control import ControlServer
+from ..._errors import Error, LaunchError
+from ..._log import get_logger
+from ..._net import is_local_address
+from ..._process import death_cause
+from ...compat import install as install_ros_names
+from ...plan import LAUNCHER, Plan
+from ...runtime import Host, log_to_file, setup_logging, stop_logging_to
+from ...transport import check_room, cleanup_stale, new_session, remove_session_segments, reserved_bytes
+from ..observe._control import ControlServer
 from ._hosts import HostLink, local_host
 from ._registry import register, session_folder, unregister, write_private
 
@@ -77,7 +77,7 @@ class Launcher:
     def _spawn(self, target: str) -> _Child:
         assert self._plan_file is not None
         read_fd, write_fd = os.pipe()
-        cmd = [sys.executable, "-m", "hetros.launch._worker", "--plan", str(self._plan_file),
+        cmd = [sys.executable, "-m", "hetros.launch.launcher._worker", "--plan", str(self._plan_file),
                "--target", target, "--session", self.session, "--status-fd", str(write_fd)]
         env = dict(os.environ) | self.plan.env_of(target)
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [self.plan.root, env.get("PYTHONPATH", "")]))
@@ -219,8 +219,8 @@ class Launcher:
     def _start_recording(self, out: Path) -> None:
         """``launch --record``: every topic of this machine into ``out`` through taps, as ``hetros record``
         would from another terminal, until the launch stops."""
-        from ._bag import record, recordable
-        from ._inspect import RunningLaunch
+        from ..observe._bag import record, recordable
+        from ..observe._inspect import RunningLaunch
 
         looking = RunningLaunch.find(session=self.session)
         attached = threading.Event()

@@ -27,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from ..transport import cleanup_stale, new_session, remove_session_segments
+from hetros.transport import cleanup_stale, new_session, remove_session_segments
+
 from ._provenance import provenance
 
 SIZES = [4, 3 * 1024, 12 * 1024, 48 * 1024, 192 * 1024, 768 * 1024, 3 * 1024 * 1024, 6 * 1024 * 1024]
@@ -184,7 +185,7 @@ class Bench:
     def run_pair(self, system: str, size: int) -> Result:
         cfg, path = self.config(system, size)
         role_system, env = self.variant(system)
-        roles = [sys.executable, "-m", "hetros.bench._roles", role_system]
+        roles = [sys.executable, "-m", "hetros_bench._roles", role_system]
         pass_fds = pipe_fds(cfg) if system == "mp-pipe" else ()
         path.write_text(json.dumps(cfg))
         timeout = 600
@@ -319,7 +320,7 @@ class Bench:
         pass_fds = pipe_fds(cfg) if system == "mp-pipe" else ()
         path.write_text(json.dumps(cfg))
         role_system, env = self.variant(system)
-        cmd = [sys.executable, "-m", "hetros.bench._throughput", role_system]
+        cmd = [sys.executable, "-m", "hetros_bench._throughput", role_system]
         sub, pub = self.spawn_pair([*cmd, "sub", str(path)], [*cmd, "pub", str(path)], pass_fds, env=env)
         _, pub_err = pub.communicate(timeout=120)
         _, sub_err = sub.communicate(timeout=60)
@@ -334,7 +335,7 @@ class Bench:
                  ("timer node publishing + take-loop subscriber, 100 Hz", "cpu-receiving", 100.0),
                  ("timer node publishing + take-loop subscriber, 1 kHz", "cpu-receiving", 1000.0)]
         for label, mode, value in cases:
-            proc = subprocess.run([sys.executable, "-m", "hetros.bench._throughput", mode, str(value),
+            proc = subprocess.run([sys.executable, "-m", "hetros_bench._throughput", mode, str(value),
                                    str(seconds)], capture_output=True, text=True, env=self.env, check=False,
                                   timeout=seconds + 60)
             if proc.returncode:

@@ -15,8 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from ..msg import registry
-from ..runtime import Node
+from hetros.msg import registry
+from hetros.runtime import Node
+
 from ._ros1_protocol import COUNT, PREFIX, PROBE, STOP, TAG_SHIFT, measured, open_turns, reply_topic, write_result
 
 UInt8MultiArray = registry().get("std_msgs/msg/UInt8MultiArray")

@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .._errors import InspectError
-from ..plan import CLOCK_TOPIC, CLOCK_TYPE
+from ..._errors import InspectError
+from ...plan import CLOCK_TOPIC, CLOCK_TYPE
 from ._inspect import RunningLaunch
 from ._mcap import check, mcap_files, seal, whole_messages
 
@@ -236,9 +236,9 @@ def play_launching(path: Path, project_file: Path, *, rate: float = 1.0, clock: 
                    topics: list[str] | None = None) -> int:
     """``hetros play --launch``: launch ``project_file`` without the nodes the recording stands in for (those
     that publish only recorded topics), play the recording into it, and stop it; the launch's exit code."""
-    from ..project import load_project
-    from ..project import plan as make_plan
-    from ._launcher import Launcher
+    from ...project import load_project
+    from ...project import plan as make_plan
+    from ..launcher._launcher import Launcher
 
     fed = set(topics or recorded_topics(path))
     project = load_project(project_file)

@@ -16,11 +16,11 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from .._errors import Error
-from .._log import get_logger
-from ..msg import ActionType
-from ..runtime import ClientGoalHandle, GoalStatus, Node, ServerGoalHandle
-from ..transport.tcpros import (
+from ..._errors import Error
+from ..._log import get_logger
+from ...msg import ActionType
+from ...runtime import ClientGoalHandle, GoalStatus, Node, ServerGoalHandle
+from ...transport.tcpros import (
     ABORTED,
     ACTIVE,
     PENDING,

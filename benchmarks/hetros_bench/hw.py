@@ -25,7 +25,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..hw import TABLE_I_PAPER_MS, TABLE_I_SIZES, Resources, format_resources, synthesize, transfer_cycles
+from hetros.hw import TABLE_I_PAPER_MS, TABLE_I_SIZES, Resources, format_resources, synthesize, transfer_cycles
+
 from ._provenance import provenance
 
 # fpgaDDS Table I, CycloneDDS column (ms), and Table II (whole design on the XCZU7EV), for context
@@ -36,7 +37,7 @@ WIDTH, CLOCK_MHZ = 64, 100.0
 
 
 def run_rtl_tests() -> bool:
-    root = Path(__file__).resolve().parents[3]
+    root = Path(__file__).resolve().parents[2]
     tests = root / "tests" / "unit" / "test_hw.py"
     if not tests.exists():
         print("[bench] the rtl tests are not beside this installation; skipped")
@@ -80,9 +81,9 @@ def _sobel_plan(width: int, height: int, project: str = "project_fpga.yaml") -> 
     """An examples/sobel_hw fpga mapping with line buffers for ``width``-pixel lines."""
     import tempfile
 
-    from ..project import load_project, plan
+    from hetros.project import load_project, plan
 
-    example = Path(__file__).resolve().parents[3] / "examples" / "sobel_hw"
+    example = Path(__file__).resolve().parents[2] / "examples" / "sobel_hw"
     text = (example / project).read_text()
     text = text.replace("height: 48, width: 64", f"height: {height}, width: {width}").replace("width: 64}",
                                                                                             f"width: {width}}}")
@@ -104,12 +105,12 @@ def table_chain(quick: bool) -> list[dict[str, Any]]:
     import sys
     import time
 
-    from ..hw import execution_models
-    from ..hw.reference import Compensation, gaussian_blur
-    from ..msg import registry
-    from ..project import load_project, plan
+    from hetros.hw import execution_models
+    from hetros.hw.reference import Compensation, gaussian_blur
+    from hetros.msg import registry
+    from hetros.project import load_project, plan
 
-    example = Path(__file__).resolve().parents[3] / "examples" / "lane_following"
+    example = Path(__file__).resolve().parents[2] / "examples" / "lane_following"
     sys.path.insert(0, str(example))
     vision: Any = importlib.import_module("vision")  # the vehicle's renderer: the frames the camera publishes
 
@@ -150,10 +151,10 @@ def table_cosim(quick: bool) -> list[dict[str, Any]]:
 
     import numpy as np
 
-    from ..hw import TargetSimulation, simulate
-    from ..hw.nodes import NodeUnderTest, Sobel
-    from ..hw.reference import sobel
-    from ..msg import registry
+    from hetros.hw import TargetSimulation, simulate
+    from hetros.hw.nodes import NodeUnderTest, Sobel
+    from hetros.hw.reference import sobel
+    from hetros.msg import registry
 
     types = registry()
     codec = types.codec("sensor_msgs/msg/Image")
@@ -215,7 +216,7 @@ def table_memory(quick: bool) -> list[dict[str, Any]]:
     import subprocess
     import tempfile
 
-    example = Path(__file__).resolve().parents[3] / "examples" / "sobel_hw"
+    example = Path(__file__).resolve().parents[2] / "examples" / "sobel_hw"
     folder = Path(tempfile.mkdtemp(prefix="hetros-bench-mem-"))
     (folder / "nodes.py").write_text((example / "nodes.py").read_text())
     memory = (example / "project_mem.yaml").read_text()
@@ -257,8 +258,8 @@ def table_fmax(quick: bool) -> list[dict[str, Any]]:
     target and a 2 -> 2 topic network with a FIFO; empty, with a message, where the tools are absent."""
     import tempfile
 
-    from ..hw import available, bitstreams, build_bitstream, topic_verilog
-    from ..msg import registry
+    from hetros.hw import available, bitstreams, build_bitstream, topic_verilog
+    from hetros.msg import registry
 
     if not available():
         print("[bench] YoWASP's nextpnr-ecp5 or ecppack is not installed (pip install 'hetros[rtl]'): no bitstream, "

@@ -12,12 +12,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from ..msg import registry
-from ..runtime import Node
-from ..transport.tcpros import Ros1ActionType, Ros1NativeType, Ros1Peer, Ros1ServiceType, Ros1Type, ros1_store
+from ...msg import registry
+from ...runtime import Node
+from ...transport.tcpros import Ros1ActionType, Ros1NativeType, Ros1Peer, Ros1ServiceType, Ros1Type, ros1_store
+from ..launcher._registry import session_folder
+from ..observe._logs import LaunchLogs
 from ._bridging import Imported
-from ._logs import LaunchLogs
-from ._registry import session_folder
 from ._ros1_actions import ExportedAction, ImportedAction
 
 

@@ -15,12 +15,12 @@ import time
 from concurrent.futures import Future
 from typing import Any
 
-from .._errors import Error
-from ..msg import TypeRegistry, registry
-from ..plan import request_channel
-from ..runtime import Client, Node, Replies
-from ..transport import QoS
-from ..transport.dds import (
+from ..._errors import Error
+from ...msg import TypeRegistry, registry
+from ...plan import request_channel
+from ...runtime import Client, Node, Replies
+from ...transport import QoS
+from ...transport.dds import (
     DdsDomain,
     DdsServiceClient,
     DdsServiceServer,
@@ -28,9 +28,9 @@ from ..transport.dds import (
     DdsTopicWriter,
     DiscoveryInfo,
 )
+from ..launcher._registry import session_folder
+from ..observe._logs import LaunchLogs
 from ._bridging import Imported
-from ._logs import LaunchLogs
-from ._registry import session_folder
 
 # how long a call from the graph waits for a ROS 2 server to be discovered before it is refused
 _DISCOVERY_WAIT = 5.0

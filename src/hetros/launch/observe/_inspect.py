@@ -16,12 +16,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._errors import InspectError, LaunchError
-from ..msg import Message, TypeRegistry, registry
-from ..plan import Plan
-from ..transport import MessageCodec
+from ..._errors import InspectError, LaunchError
+from ...msg import Message, TypeRegistry, registry
+from ...plan import Plan
+from ...transport import MessageCodec
+from ..launcher._registry import LaunchRecord, registry_folder, running
 from ._control import receive_frame, send_frame, short_path
-from ._registry import LaunchRecord, registry_folder, running
 
 
 @dataclass(frozen=True)

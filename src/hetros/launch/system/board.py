@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import HardwareError
+from ..._errors import HardwareError
 
 __all__ = ["SimulatedOverlay", "allocate", "open_overlay", "read_manifest"]
 

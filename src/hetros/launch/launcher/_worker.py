@@ -1,4 +1,4 @@
-"""Entry point of a process target: ``python -m hetros.launch._worker``.
+"""Entry point of a process target: ``python -m hetros.launch.launcher._worker``.
 
 The launcher passes the plan as a JSON file (never pickle), talks over stdin
 ("go", "stop"; end of input means the launcher died, so the worker stops) and
@@ -17,15 +17,15 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from ..compat import install as install_ros_names
-from ..plan import Plan
-from ..runtime import Host, setup_logging
+from ...compat import install as install_ros_names
+from ...plan import Plan
+from ...runtime import Host, setup_logging
 
 
 def _remove_session_segments(session: str) -> None:
     """The launcher died: remove the session's shared memory (loaded here, on that path only, so a
     worker whose edges use no shared memory never loads iceoryx2)."""
-    from ..transport import remove_session_segments
+    from ...transport import remove_session_segments
 
     remove_session_segments(session)
 
@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     faulthandler.enable()  # a crash in native code (a damaged segment, an extension) names itself on stderr
     setup_logging()
-    from ..runtime import log_to_file
+    from ...runtime import log_to_file
     from ._registry import session_folder
 
     try:
@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
             _remove_session_segments(args.session)
         return 2
     hosts.append(host)
-    from ._control import ControlServer
+    from ..observe._control import ControlServer
 
     looks = ControlServer(host, session_folder(args.session), args.target)
     host.graph.stop_reason = stop_reason[0]

@@ -15,8 +15,8 @@ import sys
 import threading
 from pathlib import Path
 
-from .._errors import LaunchError
-from ..plan import Plan
+from ..._errors import LaunchError
+from ...plan import Plan
 from ._hosts import local_host
 
 

@@ -33,13 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import HardwareError, SerializationError
-from .._log import get_logger
-from ..hw import IDLE, GatewayPort, SimulatedTop, TargetSimulation, VerilatedTop
-from ..msg import TypeRegistry
-from ..plan import Plan
-from ..runtime import Node, Replies
-from ..transport.tcpros import Ros1Peer, Ros1Type, receive_frames
+from ..._errors import HardwareError, SerializationError
+from ..._log import get_logger
+from ...hw import IDLE, GatewayPort, SimulatedTop, TargetSimulation, VerilatedTop
+from ...msg import TypeRegistry
+from ...plan import Plan
+from ...runtime import Node, Replies
+from ...transport.tcpros import Ros1Peer, Ros1Type, receive_frames
 
 log = get_logger("hetros.cosim")
 
@@ -184,7 +184,7 @@ class _InMemory:
 
     def __init__(self, node: Node, read: GatewayPort, write: GatewayPort, types: TypeRegistry,
                  top: SimulatedTop) -> None:
-        from ..msg import array_fields
+        from ...msg import array_fields
 
         if not isinstance(top, VerilatedTop):
             raise HardwareError(f"{read.topic}: a hardware node reading messages in memory runs in Verilator only")
@@ -202,7 +202,7 @@ class _InMemory:
         self._started: deque[int] = deque()
 
     def feed(self, top: SimulatedTop) -> None:
-        from ..msg import copy, get_path
+        from ...msg import copy, get_path
 
         message = self.take()
         if message is None:
@@ -385,11 +385,11 @@ _RECEIVE_BYTES = 1 << 22
 
 
 def _run_board(node: Node, plan: Plan, target: str, simulation: TargetSimulation, types: TypeRegistry) -> None:
-    """The gateway as a board runs it: PYNQ's surface (``hetros.board``), one AXI DMA per gateway port, each
-    message a DMA transfer between a buffer the DMA reaches and the hardware's stream."""
-    from ..board import allocate, open_overlay, read_manifest
-    from ..hw import export, top_name
-    from ._registry import session_folder
+    """The gateway as a board runs it: PYNQ's surface (``board.py`` beside this module), one AXI DMA per
+    gateway port, each message a DMA transfer between a buffer the DMA reaches and the hardware's stream."""
+    from ...hw import export, top_name
+    from ..launcher._registry import session_folder
+    from .board import allocate, open_overlay, read_manifest
 
     board = plan.targets[target].board
     if any(p.ros1 for p in (*simulation.inputs, *simulation.outputs)):

@@ -54,7 +54,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .._errors import Error
+from hetros import Error
+
 from ._provenance import provenance
 from ._ros1_protocol import measured, reply_topic
 from .latency import SIZE_LABELS, Bench, Result, Stats, _table, fmt, log_axes, parse_sizes
@@ -251,7 +252,7 @@ def _project(role: str, cpus: list[int], parameters: dict[str, Any]) -> str:
     out, into = (["/bench_send"], replies) if role == "ping" else (replies, ["/bench_send"])
     typed = ", ".join
     lines = [f"name: bench_ros1_{role}", "targets:", f"  {role}: {{kind: ros1, cpus: {cpus}}}", "nodes:",
-             f"  {role}:", f"    run: hetros.bench._ros1_nodes:{role}", f"    target: {role}",
+             f"  {role}:", f"    run: hetros_bench._ros1_nodes:{role}", f"    target: {role}",
              "    required: true", f"    publish: {{{typed(f'{t}: std_msgs/msg/UInt8MultiArray' for t in out)}}}",
              f"    subscribe: {{{typed(f'{t}: std_msgs/msg/UInt8MultiArray' for t in into)}}}",
              f"    parameters: {json.dumps(parameters)}", "topics:"]

@@ -23,13 +23,13 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .._errors import InspectError
-from .._log import get_logger
-from ..runtime import TapSink, check_rate
-from ..transport import MessageCodec
+from ..._errors import InspectError
+from ..._log import get_logger
+from ...runtime import TapSink, check_rate
+from ...transport import MessageCodec
 
 if TYPE_CHECKING:
-    from ..runtime import Host, Node
+    from ...runtime import Host, Node
 
 log = get_logger("hetros.launch")
 _FRAME = struct.Struct("<II")

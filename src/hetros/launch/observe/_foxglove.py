@@ -19,8 +19,8 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-from .._errors import InspectError
-from .._log import get_logger
+from ..._errors import InspectError
+from ..._log import get_logger
 from ._bag import recordable
 from ._inspect import RunningLaunch
 

@@ -1,4 +1,4 @@
-"""Ping and echo roles of every benchmarked system, run as ``python -m hetros.bench._roles``.
+"""Ping and echo roles of every benchmarked system, run as ``python -m hetros_bench._roles``.
 
 Every system moves the same thing: a payload of N bytes plus a send timestamp and a
 sequence number. The ping role stamps ``time.monotonic_ns()`` (one clock for every
@@ -143,7 +143,7 @@ class Iceoryx2Endpoint(Endpoint):
     """iceoryx2 publish-subscribe plus an event service: the same blocking wait as hetros."""
 
     def __init__(self, role: str, cfg: dict[str, Any]) -> None:
-        from ..transport.shm import iox2, new_node
+        from hetros.transport.shm import iox2, new_node
 
         self.iox2 = iox2
         # under hetros's root, so cleanup_stale reclaims it after a crash (the same settings otherwise)
@@ -165,7 +165,7 @@ class Iceoryx2Endpoint(Endpoint):
         self.notifier = event(out_name).notifier_builder().create()
         self.listener = event(in_name).listener_builder().create()
         self.ports: list[Any] = [self.pub, self.sub, self.notifier, self.listener]
-        from ..runtime import AdaptiveSpin
+        from hetros.runtime import AdaptiveSpin
 
         self.spin = AdaptiveSpin()  # the wait strategy of hetros' take: a like-for-like baseline
 
@@ -444,9 +444,7 @@ def ros_echo(cfg: dict[str, Any], flavour: str) -> dict[str, Any]:
     callback that fills a new message from the received one and publishes it, through hetros's shims."""
     from hetros import Node
     from hetros.compat import install
-    from hetros.runtime import Graph
-
-    from ..runtime import ros_main
+    from hetros.runtime import Graph, ros_main
 
     graph = Graph(_hetros_plan(16), "p1", cfg["session"])
     graph.prepare(["echo"])

@@ -59,10 +59,10 @@ class _NodeEndpoint:
     def __init__(self, size: int, domain: int, role: str) -> None:
         import numpy as np
 
-        from ..msg import registry
-        from ..plan import LAUNCHER, ChannelPlan, EdgePlan, HostPlan, NodePlan, Plan, TargetPlan
-        from ..runtime import Graph, Node
-        from ..transport import QoS
+        from hetros.msg import registry
+        from hetros.plan import LAUNCHER, ChannelPlan, EdgePlan, HostPlan, NodePlan, Plan, TargetPlan
+        from hetros.runtime import Graph, Node
+        from hetros.transport import QoS
 
         typename = "std_msgs/msg/UInt8MultiArray"
         qos = QoS(reliability="reliable", history="keep_last", depth=4)
@@ -107,9 +107,9 @@ class _Endpoint:
         out, into = ("ping", "pong") if role == "ping" else ("pong", "ping")
         self._box: list[Any] = []
         if system.startswith("hetros"):
-            from ..msg import registry
-            from ..transport import MessageCodec, QoS
-            from ..transport.dds import DdsDomain, DdsEdgeReader, DdsEdgeWriter, DdsTopicReader, DdsTopicWriter
+            from hetros.msg import registry
+            from hetros.transport import MessageCodec, QoS
+            from hetros.transport.dds import DdsDomain, DdsEdgeReader, DdsEdgeWriter, DdsTopicReader, DdsTopicWriter
 
             types = registry()
             cls = types.get("std_msgs/msg/UInt8MultiArray")
@@ -243,7 +243,7 @@ def measure(system: str, size: int, quick: bool, out: Path) -> dict[str, Any]:
     warmup, reps = _reps(system, size, quick)
     domain = 2 + os.getpid() % 100  # Cyclone's ports from domain 102 up are ephemeral ones
     result_file = out / f"dds-{system}-{size}.json"
-    procs = [subprocess.Popen([sys.executable, "-m", "hetros.bench.dds", "--role", role, "--system", system,
+    procs = [subprocess.Popen([sys.executable, "-m", "hetros_bench.dds", "--role", role, "--system", system,
                                "--size", str(size), "--domain", str(domain), "--warmup", str(warmup),
                                "--reps", str(reps), "--result", str(result_file), "--cpu", str(cpu)],
                               stderr=subprocess.PIPE, text=True)

@@ -1,4 +1,4 @@
-"""Throughput and idle-CPU roles of the benchmark (``python -m hetros.bench._throughput``)."""
+"""Throughput and idle-CPU roles of the benchmark (``python -m hetros_bench._throughput``)."""
 
 from __future__ import annotations
 

@@ -25,11 +25,11 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.util import duration
 
-from .._errors import LaunchError
-from .._log import get_logger
-from .._net import is_local_address
-from ..plan import Plan
-from ..transport.dds import HOST_LEASE, DdsDomain
+from ..._errors import LaunchError
+from ..._log import get_logger
+from ..._net import is_local_address
+from ...plan import Plan
+from ...transport.dds import HOST_LEASE, DdsDomain
 
 log = get_logger("hetros.hosts")
 

@@ -17,10 +17,10 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from .._log import get_logger
-from .._paths import check_session, is_session, private_folder, user_subfolder
-from .._process import pid_alive, valid_pid
-from ..plan import Plan
+from ..._log import get_logger
+from ..._paths import check_session, is_session, private_folder, user_subfolder
+from ..._process import pid_alive, valid_pid
+from ...plan import Plan
 
 log = get_logger("hetros.launch")
 

@@ -1,1 +1,0 @@
-"""Benchmarks of hetros against its peers (``hetros bench latency``); needs ``hetros[bench]``."""

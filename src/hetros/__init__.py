@@ -2,6 +2,8 @@
 processes pinned to cores, hardware or other machines, with a statically planned
 data distribution service underneath."""
 
+from typing import TYPE_CHECKING, Any
+
 from ._signals import honour_stop_signals, is_command_line
 
 if is_command_line():  # before the imports below: they take most of a second
@@ -39,23 +41,33 @@ from ._errors import (
 from ._qos import QoS
 from .msg import Message
 from .runtime import (
-    ActionClient,
-    ActionServer,
     Client,
-    ClientGoalHandle,
     Clock,
     DeadlineMissedStatus,
     Duration,
-    GoalStatus,
     LivelinessChangedStatus,
     Node,
     Publisher,
-    ServerGoalHandle,
     Service,
     Subscription,
     Time,
     Timer,
 )
+
+if TYPE_CHECKING:
+    from .runtime import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle
+
+# actions are loaded on first use: a worker whose nodes have none does not pay for them
+_ACTIONS = frozenset({"ActionClient", "ActionServer", "ClientGoalHandle", "GoalStatus", "ServerGoalHandle"})
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _ACTIONS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from . import runtime
+
+    return getattr(runtime, name)
+
 
 __version__ = "0.1.0"
 

@@ -112,20 +112,18 @@ def test_no_package_reaches_into_another_packages_private_modules() -> None:
 
 
 def test_msg_has_no_import_circle() -> None:
-    """Module-level imports between msg's modules form no cycle, and none is hidden in a function."""
+    """Imports between msg's modules form no cycle, counting those inside functions (loaded on first use, so
+    that a worker does not pay for the .msg parser or rosbags' type system): lazy is for cost, never a way
+    around a circle."""
     graph: dict[str, set[str]] = {}
-    hidden = []
     for path in _files("msg"):
         me = path.stem
         graph[me] = set()
-        for module, line, where in _imports(path):
+        for module, _line, where in _imports(path):
             parts = module.split(".")
             if parts[:2] == ["hetros", "msg"] and len(parts) > 2 and (SRC / "msg" / f"{parts[2]}.py").exists():
-                if where == "module":
+                if where in ("module", "function"):
                     graph[me].add(parts[2])
-                elif where == "function":
-                    hidden.append(f"msg/{path.name}:{line}: {module}")
-    assert not hidden, "an import inside a function hides a circle:\n" + "\n".join(hidden)
     done: set[str] = set()
 
     def visit(module: str, trail: list[str]) -> None:

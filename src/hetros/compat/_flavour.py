@@ -57,7 +57,7 @@ class SequenceView(np.ndarray):
 def _sequences(typename: str) -> dict[str, str]:
     """The numeric sequence fields of ``typename`` and their type codes."""
     found = {}
-    for name, desc in registry().store.fielddefs[typename][1]:
+    for name, desc in registry().fielddefs[typename][1]:
         if desc[0] == Nodetype.SEQUENCE and desc[1][0][0] == Nodetype.BASE and desc[1][0][1][0] in _TYPECODES:
             found[name] = _TYPECODES[desc[1][0][1][0]]
     return found
@@ -66,7 +66,7 @@ def _sequences(typename: str) -> dict[str, str]:
 def _nested(typename: str) -> dict[str, tuple[str, bool]]:
     """The message-typed fields of ``typename``: name -> (type, whether a list of them)."""
     found = {}
-    for name, desc in registry().store.fielddefs[typename][1]:
+    for name, desc in registry().fielddefs[typename][1]:
         if desc[0] == Nodetype.NAME:
             found[name] = (str(desc[1]), False)
         elif desc[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE) and desc[1][0][0] == Nodetype.NAME:

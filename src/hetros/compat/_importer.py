@@ -4,12 +4,12 @@
 from __future__ import annotations
 
 import importlib
-import importlib.abc
 import importlib.machinery
 import sys
 import threading
 import types
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from ..msg import registry
 from . import _flavour
@@ -19,7 +19,16 @@ _SHIMS = ("rclpy", "rospy")
 _KINDS = ("msg", "srv", "action")
 
 
-class _Alias(importlib.abc.Loader):
+# The loaders and the finder follow importlib's protocols without subclassing ``importlib.abc``: in
+# Python 3.11 that module imports importlib.resources, and with it tempfile, shutil, zipfile, bz2 and lzma,
+# about 1 MB in every worker.
+if TYPE_CHECKING:
+    from importlib.abc import Loader as _Loader
+else:
+    _Loader = object
+
+
+class _Alias(_Loader):
     """Loads a module that already exists under another name (the shim, or a hetros interface module)."""
 
     def __init__(self, target: str) -> None:
@@ -32,7 +41,7 @@ class _Alias(importlib.abc.Loader):
         return None
 
 
-class _RosNames(importlib.abc.MetaPathFinder):
+class _RosNames:
     def __init__(self) -> None:
         self._busy = threading.local()
 
@@ -64,7 +73,7 @@ class _RosNames(importlib.abc.MetaPathFinder):
         return spec
 
 
-class _Interfaces(importlib.abc.Loader):
+class _Interfaces(_Loader):
     """``std_msgs.msg`` (or ``.srv``, ``.action``) with every type of the package in it, so that ``from
     rospy_tutorials.srv import *`` works too; a service's request and response also under ROS 1's names
     (``AddTwoIntsRequest``), an action's parts under actionlib's (``FibonacciGoal``). Types come in
@@ -98,9 +107,9 @@ def _packages() -> frozenset[str]:
     again only when the registry grew, since every import in the process asks."""
     global _known
     types_ = registry()
-    key = (len(types_.store.fielddefs), len(types_.services), len(types_.actions))
+    key = (len(types_.fielddefs), len(types_.services), len(types_.actions))
     if key != _known[0]:
-        names = {name.split("/", 1)[0] for name in types_.store.fielddefs}
+        names = {name.split("/", 1)[0] for name in types_.fielddefs}
         names |= {name.split("/", 1)[0] for name in types_.services}
         names |= {name.split("/", 1)[0] for name in types_.actions}
         _known = (key, frozenset(names))

@@ -123,7 +123,7 @@ def ros1_program(types: TypeRegistry, typename: str) -> Ros1Program:
 
 
 def _message(types: TypeRegistry, store: Any, typename: str, where: str, walk: _Walk) -> None:
-    ros2 = list(types.store.fielddefs[typename][1])
+    ros2 = list(types.fielddefs[typename][1])
     ros1 = {name: desc for name, desc in store.fielddefs[typename][1] if name != _PLACEHOLDER}
     lower = {name.lower(): name for name in ros1}
     common = [name for name, _ in ros2 if name != _PLACEHOLDER]

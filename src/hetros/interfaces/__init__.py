@@ -11,11 +11,11 @@ so nothing is generated ahead of time for running; what a type checker reads are
 
 from __future__ import annotations
 
-import importlib.abc
 import importlib.machinery
 import sys
 import types
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from ..msg import registry
 
@@ -41,7 +41,7 @@ class _InterfaceModule(types.ModuleType):
             value = reg.services[full]
         elif self._kind == "action" and full in reg.actions:
             value = reg.actions[full]
-        elif full in reg.store.fielddefs:
+        elif full in reg.fielddefs:
             value = reg.get(full)
         else:
             raise AttributeError(
@@ -54,7 +54,7 @@ class _InterfaceModule(types.ModuleType):
     def __dir__(self) -> list[str]:
         prefix = f"{self._package}/{self._kind}/"
         reg = registry()
-        names = {n[len(prefix):] for n in reg.store.fielddefs if n.startswith(prefix)}
+        names = {n[len(prefix):] for n in reg.fielddefs if n.startswith(prefix)}
         if self._kind == "srv":
             names = {n[len(prefix):] for n in reg.services if n.startswith(prefix)}
         if self._kind == "action":
@@ -62,7 +62,15 @@ class _InterfaceModule(types.ModuleType):
         return sorted(names)
 
 
-class _Finder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+# importlib's protocols without subclassing ``importlib.abc`` at run time: in Python 3.11 that module
+# imports importlib.resources, and with it tempfile, shutil, zipfile, bz2 and lzma (about 1 MB a worker)
+if TYPE_CHECKING:
+    from importlib.abc import Loader as _Loader
+else:
+    _Loader = object
+
+
+class _Finder(_Loader):
     def find_spec(
         self, fullname: str, path: Sequence[str] | None, target: types.ModuleType | None = None
     ) -> importlib.machinery.ModuleSpec | None:
@@ -72,7 +80,7 @@ class _Finder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         if len(parts) > 2 or (len(parts) == 2 and parts[1] not in ("msg", "srv", "action")):
             return None
         package = parts[0]
-        if not any(n.startswith(package + "/") for n in registry().store.fielddefs):
+        if not any(n.startswith(package + "/") for n in registry().fielddefs):
             return None
         return importlib.machinery.ModuleSpec(fullname, self, is_package=True)
 

@@ -2,7 +2,6 @@
 
 from typing import TYPE_CHECKING, Any
 
-from ._definitions import find_packages, read_package
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
 from ._message import FrozenMessage, LoanBuffer, Message, copy, default_maker, freeze, hand_over, loaned_array
 from ._registry import (
@@ -23,6 +22,7 @@ if TYPE_CHECKING:
     from ._codegen import build_package_modules
     from ._compiled import wanted
     from ._convert import DEFAULT_TRUNCATE_LENGTH, from_plain, to_plain
+    from ._definitions import find_packages, read_package
     from ._stubs import shipped_stubs, user_stubs
 
 
@@ -30,6 +30,8 @@ if TYPE_CHECKING:
 _LAZY = {
     "DEFAULT_TRUNCATE_LENGTH": "._convert",
     "build_package_modules": "._codegen",
+    "find_packages": "._definitions",
+    "read_package": "._definitions",
     "from_plain": "._convert",
     "shipped_stubs": "._stubs",
     "to_plain": "._convert",

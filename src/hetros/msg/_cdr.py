@@ -262,7 +262,7 @@ class _Body:
 
     def walk(self, typename: str, obj: str, where: str) -> None:
         cls = self.gen.types.get(typename)
-        _consts, fields = self.gen.types.store.fielddefs[typename]
+        _consts, fields = self.gen.types.fielddefs[typename]
         for attr, (_name, desc) in zip(cls.__fieldnames__, fields, strict=True):
             self.field(desc, f"{obj}.{attr}", f"{where}.{attr}")
 

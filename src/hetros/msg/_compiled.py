@@ -76,7 +76,7 @@ def _slot(cls: type, attr: str) -> Any:
 def program(types: TypeRegistry, typename: str) -> tuple[Any, ...]:
     """The interpreter's program for ``typename`` (nested types inlined)."""
     cls = types.get(typename)
-    fields: Any = types.store.fielddefs[typename][1]  # rosbags' (kind, argument) pairs, walked as _cdr does
+    fields: Any = types.fielddefs[typename][1]  # rosbags' (kind, argument) pairs, walked as _cdr does
     ops: list[tuple[Any, ...]] = []
     bounded_strings = False
     for attr, (_name, (kind, arg)) in zip(cls.__fieldnames__, fields, strict=True):

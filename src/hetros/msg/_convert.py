@@ -24,7 +24,7 @@ DEFAULT_TRUNCATE_LENGTH = 128
 
 
 def _field_types(types: TypeRegistry, typename: str) -> dict[str, Any]:
-    return dict(types.store.fielddefs[typename][1])
+    return dict(types.fielddefs[typename][1])
 
 
 def _describe_array(desc: Any, value: Any) -> str:

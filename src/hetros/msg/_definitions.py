@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 from rosbags.interfaces import Nodetype
-from rosbags.typesys import TypesysError, get_types_from_msg
 
 from .._errors import DefinitionError
 from ._validate import INT_RANGES
@@ -225,6 +224,8 @@ def parse_section(lines: list[str], name: str, path: str, first_line: int) -> Pa
     text = "\n".join(lines)
     # rosbags resolves relative names against a msg/ type, so parse as one and rename.
     parse_name = f"{package}/msg/{name.rsplit('/', 1)[-1]}"
+    from rosbags.typesys import TypesysError, get_types_from_msg  # the parser: on first use only
+
     try:
         (consts, fields), = get_types_from_msg(text, parse_name).values()
     except TypesysError as exc:

@@ -119,7 +119,7 @@ def _align(pos: int, size: int) -> int:
 
 def _flatten(types: TypeRegistry, typename: str, prefix: str, cursor: list[int | None],
              out: list[LayoutField]) -> None:
-    fields: Any = types.store.fielddefs[typename][1]
+    fields: Any = types.fielddefs[typename][1]
     for name, desc in fields:
         path = prefix + name
         kind, arg = desc
@@ -175,7 +175,7 @@ def array_fields(types: TypeRegistry, typename: str) -> list[ArrayField]:
 
 def _arrays(types: TypeRegistry, typename: str, prefix: tuple[str, ...], out: list[ArrayField]) -> None:
     cls = types.get(typename)
-    fields: Any = types.store.fielddefs[typename][1]
+    fields: Any = types.fielddefs[typename][1]
     for attr, (_name, desc) in zip(cls.__fieldnames__, fields, strict=True):
         kind, arg = desc
         if kind == Nodetype.NAME:

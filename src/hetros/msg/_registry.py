@@ -1,9 +1,11 @@
-"""The type registry: rosbags' typestore plus hetros' own message classes.
+"""The type registry: field definitions, hetros' own message classes, and rosbags' typestore behind them.
 
-rosbags supplies the standard ROS 2 definitions and the CDR / ROS 1 codecs.
-hetros generates the classes users construct (with defaults, so ``String()``
-works) and registers them in the typestore, so rosbags' deserializers build
-hetros classes directly.
+The standard ROS 2 definitions and hetros' shipped packages are known from a rendered module
+(``_standard_types.py``) without parsing; rosbags' typestore, the slow reference codecs and the
+definition renderer, is built on first use (``store``) with every registered type and generated
+class, so a worker that only moves messages never pays for it. hetros generates the classes users
+construct (with defaults, so ``String()`` works) and registers them in the typestore, so rosbags'
+deserializers build hetros classes directly.
 """
 
 from __future__ import annotations
@@ -13,22 +15,25 @@ import keyword
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from rosbags.interfaces import Nodetype
 from rosbags.serde import SerdeError
-from rosbags.typesys import Stores, TypesysError, get_typestore
-from rosbags.typesys.store import Typestore
 
 from .._errors import DefinitionError, SerializationError, TopicTypeError, UnknownTypeError
 from . import _compiled as compiled_codecs
 from ._cdr import CdrCodec, Ros1Codec, build_codec, build_ros1_codec
-from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict, find_packages, read_package
 from ._message import FrozenMessage, Message, _copy_reference, build_sealer
+from ._standard import PACKAGES as SHIPPED_PACKAGES
+from ._standard import load as load_standard_types
 from ._validate import NUMPY_DTYPES, Validator, build_validator, convert_array
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
+
+    from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict
 
 _SCALAR_DEFAULTS = {"bool": "False", "string": "''", "float32": "0.0", "float64": "0.0"}
 
@@ -103,27 +108,53 @@ class TypeRegistry:
         built and ``HETROS_PURE_PYTHON`` is not set), else the generated Python ones."""
         self.compiled = compiled_codecs.available() if compiled is None else compiled and compiled_codecs.available()
         self._lock = threading.RLock()
-        self.store: Typestore = get_typestore(Stores.ROS2_JAZZY)
-        self.store.types = dict(self.store.types)
-        self.store.fielddefs = dict(self.store.fielddefs)
+        standard = load_standard_types()
+        self.fielddefs: Typesdict = {**standard.standard, **standard.shipped}
+        self._store: Typestore | None = None
+        # registered after rosbags' own types when the store is built: the shipped and loaded packages' types
+        self._registered: list[Typesdict] = [dict(standard.shipped)]
         self._classes: dict[str, type[Message]] = {}
         self._codecs: dict[str, CdrCodec] = {}
         self._ros1_codecs: dict[str, Ros1Codec | None] = {}
         self.services: dict[str, ServiceType] = {}
         self.actions: dict[str, ActionType] = {}
-        self.sources: dict[str, str] = {}
+        self.sources: dict[str, str] = dict.fromkeys(standard.standard, "rosbags ROS 2 jazzy store")
         self._loaded_folders: set[Path] = set()
-        self._defaults: dict[str, dict[str, Any]] = {}
-        for name in list(self.store.fielddefs):
-            self.sources[name] = "rosbags ROS 2 jazzy store"
-        shipped = resources.files("hetros.msg") / "packages"
-        with resources.as_file(shipped) as folder:
-            self.load_folder(Path(folder))
+        self._defaults: dict[str, dict[str, Any]] = {name: dict(d) for name, d in standard.shipped_defaults.items()}
+        for name, where in standard.shipped_sources.items():
+            self.sources[name] = str(SHIPPED_PACKAGES / where)
+        self._loaded_folders.update(package.resolve() for package in SHIPPED_PACKAGES.iterdir() if package.is_dir())
+        self._register_interfaces(standard.shipped_services, standard.shipped_actions)
+
+    @property
+    def store(self) -> Typestore:
+        """rosbags' typestore with every registered type and generated class (built on first use: the
+        reference codecs, ROS 1 mapping and definition rendering need it, moving messages does not)."""
+        store = self._store
+        if store is None:
+            with self._lock:
+                store = self._store
+                if store is None:
+                    from rosbags.typesys import Stores, TypesysError, get_typestore
+
+                    store = get_typestore(Stores.ROS2_JAZZY)
+                    store.types = dict(store.types)
+                    store.fielddefs = dict(store.fielddefs)
+                    for typedefs in self._registered:
+                        try:
+                            store.register(typedefs)
+                        except TypesysError as exc:
+                            raise DefinitionError(", ".join(sorted(typedefs)), 0, str(exc)) from exc
+                    store.types.update(self._classes)
+                    self._store = store
+        return store
 
     # -- loading ---------------------------------------------------------------------------
 
     def load_folder(self, folder: Path) -> list[str]:
         """Load one package folder, or every package folder inside ``folder``."""
+        from ._definitions import find_packages, read_package  # the parser: only where a project brings packages
+
         loaded: list[str] = []
         for package in find_packages(Path(folder)):
             resolved = package.resolve()
@@ -143,7 +174,7 @@ class TypeRegistry:
                 uses.extend(parsed.uses)
                 if parsed.uses:
                     self.sources[parsed.name] = parsed.uses[0].path
-            known = set(self.store.fielddefs) | set(typedefs)
+            known = set(self.fielddefs) | set(typedefs)
             _refuse_recursion(pkg.messages)
             for use in uses:
                 if use.typename not in known:
@@ -153,41 +184,59 @@ class TypeRegistry:
                         f"unknown field type {use.typename!r}: define it in a loaded package "
                         "or fix the name (e.g. 'std_msgs/Header', 'geometry_msgs/Point')",
                     )
-            try:
-                self.store.register(typedefs)
-            except TypesysError as exc:
-                raise DefinitionError(pkg.package, 0, str(exc)) from exc
+            self._add_definitions(pkg.package, typedefs)
             for parsed in pkg.messages:
                 if parsed.defaults:
                     self._defaults[parsed.name] = dict(parsed.defaults)
-            for service in pkg.services:
-                self.services[service] = ServiceType(
-                    service, self.get(f"{service}_Request"), self.get(f"{service}_Response")
-                )
-            for action in pkg.actions:
-                send_goal, get_result = (
-                    ServiceType(f"{action}_{part}", self.get(f"{action}_{part}_Request"),
-                                self.get(f"{action}_{part}_Response"))
-                    for part in ("SendGoal", "GetResult")
-                )
-                # an action's endpoints are services and topics (``hetros.plan.action_endpoints``)
-                self.services[send_goal.name] = send_goal
-                self.services[get_result.name] = get_result
-                self.actions[action] = ActionType(
-                    action,
-                    self.get(f"{action}_Goal"),
-                    self.get(f"{action}_Result"),
-                    self.get(f"{action}_Feedback"),
-                    send_goal,
-                    get_result,
-                    self.get(f"{action}_FeedbackMessage"),
-                )
+            self._register_interfaces(pkg.services, pkg.actions)
+
+    def _add_definitions(self, where: str, typedefs: Typesdict) -> None:
+        """rosbags' rule for a type registered twice: the same fields (names compared without case), or
+        an error naming the type."""
+        for name, (_, fields) in typedefs.items():
+            have = self.fielddefs.get(name)
+            if have is not None and [(f[0].lower(), f[1]) for f in have[1]] != [(f[0].lower(), f[1]) for f in fields]:
+                raise DefinitionError(where, 0, f"Type {name!r} is already present with different definition.")
+        self._registered.append(typedefs)
+        for name in typedefs.keys() - self.fielddefs.keys():
+            self.fielddefs[name] = typedefs[name]
+        if self._store is not None:
+            from rosbags.typesys import TypesysError
+
+            try:
+                self._store.register(typedefs)
+            except TypesysError as exc:
+                raise DefinitionError(where, 0, str(exc)) from exc
+
+    def _register_interfaces(self, services: tuple[str, ...], actions: tuple[str, ...]) -> None:
+        for service in services:
+            self.services[service] = ServiceType(
+                service, self.get(f"{service}_Request"), self.get(f"{service}_Response")
+            )
+        for action in actions:
+            send_goal, get_result = (
+                ServiceType(f"{action}_{part}", self.get(f"{action}_{part}_Request"),
+                            self.get(f"{action}_{part}_Response"))
+                for part in ("SendGoal", "GetResult")
+            )
+            # an action's endpoints are services and topics (``hetros.plan.action_endpoints``)
+            self.services[send_goal.name] = send_goal
+            self.services[get_result.name] = get_result
+            self.actions[action] = ActionType(
+                action,
+                self.get(f"{action}_Goal"),
+                self.get(f"{action}_Result"),
+                self.get(f"{action}_Feedback"),
+                send_goal,
+                get_result,
+                self.get(f"{action}_FeedbackMessage"),
+            )
 
     # -- lookup ----------------------------------------------------------------------------
 
     def has(self, name: str) -> bool:
         try:
-            return normalize_typename(name) in self.store.fielddefs
+            return normalize_typename(name) in self.fielddefs
         except UnknownTypeError:
             return False
 
@@ -198,7 +247,7 @@ class TypeRegistry:
         if cls is not None:
             return cls
         with self._lock:
-            if full not in self.store.fielddefs:
+            if full not in self.fielddefs:
                 raise UnknownTypeError(
                     f"unknown message type {name!r}: add the package folder that defines it to "
                     "'messages:' in the project file (see `hetros msg show` for known types)"
@@ -245,7 +294,7 @@ class TypeRegistry:
         return self._ros1_codecs[full]
 
     def names(self) -> list[str]:
-        return sorted(self.store.fielddefs)
+        return sorted(self.fielddefs)
 
     # -- codecs ----------------------------------------------------------------------------
 
@@ -257,8 +306,11 @@ class TypeRegistry:
             raise SerializationError(f"cannot serialize {message.__msgtype__}: {exc}") from exc
 
     def deserialize(self, data: bytes | memoryview, typename: str) -> Message:
+        store = self.store
+        from rosbags.typesys import TypesysError
+
         try:
-            message = self.store.deserialize_cdr(data, typename)
+            message = store.deserialize_cdr(data, typename)
         except (SerdeError, IndexError, ValueError, TypesysError) as exc:
             raise SerializationError(
                 f"{len(data)} bytes do not decode as {typename}: {exc}"
@@ -270,8 +322,11 @@ class TypeRegistry:
         """The full definition with nested types, as `hetros msg show` prints it."""
         full = normalize_typename(name)
         self.get(full)
+        store = self.store
+        from rosbags.typesys import TypesysError
+
         try:
-            text, _ = self.store.generate_msgdef(full, ros_version=2)
+            text, _ = store.generate_msgdef(full, ros_version=2)
         except (AssertionError, TypesysError, KeyError):
             # rosbags renders only msg/ types nested; service and action parts are listed here
             return self._render(full)
@@ -283,7 +338,7 @@ class TypeRegistry:
         pending, seen = [full], {full}
         while pending:
             name = pending.pop(0)
-            consts, fields = self.store.fielddefs[name]
+            consts, fields = self.fielddefs[name]
             lines = [f"{ctype} {cname}={cvalue}" for cname, ctype, cvalue in consts]
             for fname, desc in fields:
                 text, nested = _field_type(desc)
@@ -301,7 +356,7 @@ class TypeRegistry:
     def _generate(self, full: str) -> type[Message]:
         if full in self._classes:
             return self._classes[full]
-        consts, fields = self.store.fielddefs[full]
+        consts, fields = self.fielddefs[full]
         # Generated code names its helpers with a leading underscore: rosidl field names cannot
         # start with one, so no field (``self``, ``np``, ``copy``...) shadows them.
         namespace: dict[str, Any] = {"_np": np, "_Message": Message, "_FrozenMessage": FrozenMessage,
@@ -354,8 +409,9 @@ class TypeRegistry:
             cls._hetros_seal = frozen._hetros_seal = staticmethod(self._lazy_sealer(full, cls))
             cls._hetros_copy = frozen._hetros_copy = staticmethod(self._lazy_copier(full, cls))
         self._classes[full] = cls
-        self.store.types[full] = cls
-        self.store.cache.pop(full, None)
+        if self._store is not None:
+            self._store.types[full] = cls
+            self._store.cache.pop(full, None)
         return cls
 
     def _lazy_sealer(self, full: str, cls: type[Message]) -> Callable[[Message, int], Message]:

@@ -4,9 +4,10 @@ hardware TCPROS map hetros's types onto."""
 from __future__ import annotations
 
 import threading
+from typing import TYPE_CHECKING
 
-from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 _store: Typestore | None = None
 _store_lock = threading.Lock()
@@ -17,5 +18,7 @@ def ros1_store() -> Typestore:
     global _store
     with _store_lock:
         if _store is None:
+            from rosbags.typesys import Stores, get_typestore
+
             _store = get_typestore(Stores.ROS1_NOETIC)
         return _store

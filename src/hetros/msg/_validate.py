@@ -143,7 +143,7 @@ def build_validator(types: TypeRegistry, typename: str) -> Validator:
 def _message_lines(types: TypeRegistry, typename: str, obj: str, path: str, indent: str, lines: list[str],
                    namespace: dict[str, Any], counter: list[int]) -> None:
     """Append the checks of every field of ``obj`` (a ``typename`` message at ``path``)."""
-    _, fields = types.store.fielddefs[typename]
+    _, fields = types.fielddefs[typename]
     cls = types.get(typename)
     for (_name, desc), attr in zip(fields, cls.__fieldnames__, strict=True):
         counter[0] += 1

@@ -2,7 +2,6 @@
 
 from typing import TYPE_CHECKING, Any
 
-from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle
 from ._clock import Clock, Duration, SimulatedClock, Time
 from ._entities import Client, Publisher, Replies, Service, Subscription, Timer
 from ._graph import Graph
@@ -12,7 +11,7 @@ from ._node import NODE_TIMES_VARIABLE, Node
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus
 
 if TYPE_CHECKING:
-    from ._action import uuid_message
+    from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle, uuid_message
     from ._clock import Ticker
     from ._executor import AdaptiveSpin
     from ._log import log_to_file, node_logger, stop_logging_to
@@ -22,6 +21,11 @@ if TYPE_CHECKING:
 
 # shared with other packages, loaded on first use (a worker must not pay for what it does not run)
 _LAZY = {
+    "ActionClient": "._action",
+    "ActionServer": "._action",
+    "ClientGoalHandle": "._action",
+    "GoalStatus": "._action",
+    "ServerGoalHandle": "._action",
     "AdaptiveSpin": "._executor",
     "TapSink": "._taps",
     "Ticker": "._clock",

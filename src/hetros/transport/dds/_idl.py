@@ -47,9 +47,9 @@ def idl_type(types: TypeRegistry, typename: str, request_header: bool = False) -
 
 
 def _build(types: TypeRegistry, typename: str, request_header: bool) -> Any:
-    if typename not in types.store.fielddefs:
+    if typename not in types.fielddefs:
         raise UnknownTypeError(f"unknown message type {typename!r}: ship its package under 'messages:'")
-    _consts, fields = types.store.fielddefs[typename]
+    _consts, fields = types.fielddefs[typename]
     members: dict[str, Any] = dict(REQUEST_HEADER_FIELDS) if request_header else {}
     members |= {name: _field(types, desc, f"{typename}.{name}") for name, desc in fields}
     name = typename.replace("/", "_") + ("_with_request_header" if request_header else "")

@@ -38,8 +38,15 @@ from ._endpoints import ShmReader, ShmWriter, has_loan
 from ._events import WakeChannel, raise_open_file_limit
 from ._iceoryx import iox2, new_node
 from ._sample import SESSION_TAG_VARIABLE, check_room, new_session, reserved_bytes
-from ._stale import cleanup_stale
 from ._transport import ShmTransport
+
+
+def cleanup_stale() -> list[str]:
+    """Clean up after crashed launches (``_stale.py``): the launcher's part, loaded there only."""
+    from ._stale import cleanup_stale as clean
+
+    return clean()
+
 
 __all__ = [
     "SESSION_TAG_VARIABLE",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import os
 import resource
@@ -12,7 +11,7 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from ..._errors import TransportError
 from .._base import Wake
-from ._iceoryx import iox2, log
+from ._iceoryx import iox2, log, sha1
 from ._sample import (
     INTERRUPT_EVENT,
     LOSS_GRACE,
@@ -26,7 +25,7 @@ if TYPE_CHECKING:
 
 def channel_key(session: str, owner: str) -> int:
     """A wake channel's key: 63 bits, never 0 (0 marks an empty slot)."""
-    digest = hashlib.sha1(f"{session}/{owner}".encode()).digest()
+    digest = sha1(f"{session}/{owner}".encode()).digest()
     return (int.from_bytes(digest[:8], "little") >> 1) or 1
 
 
@@ -188,7 +187,7 @@ def wake_channel_name(session: str, key: int) -> str:
 
 
 def back_channel_name(session: str, process: str) -> str:
-    digest = hashlib.sha1(process.encode()).hexdigest()[:20]
+    digest = sha1(process.encode()).hexdigest()[:20]
     return f"hetros/{session}/back/{digest}"
 
 

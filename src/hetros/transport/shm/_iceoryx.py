@@ -11,6 +11,7 @@ user's private folder (``hetros._paths``) and file names of this user's (``hx<ui
 from __future__ import annotations
 
 import functools
+import importlib
 import os
 from pathlib import Path
 from typing import Any
@@ -25,6 +26,15 @@ from ._sample import FILE_PREFIX
 iox2.set_log_level(iox2.LogLevel.Error)
 
 log = get_logger("hetros.transport.shm")
+try:  # CPython's own SHA-1: hashlib would map OpenSSL (3 MB in every worker) to name a service
+    _sha1: Any = importlib.import_module("_sha1").sha1
+except ImportError:  # an interpreter built without it
+    _sha1 = importlib.import_module("hashlib").sha1
+
+
+def sha1(data: bytes) -> Any:
+    """SHA-1 of a name's parts (services and events are named by digests of session, topic and target)."""
+    return _sha1(data)
 
 # The binding's Python wrappers recheck the payload type on every call (~0.3 µs each). Every
 # hetros service carries byte slices, so the hot path calls the methods they wrap, when this

@@ -6,7 +6,6 @@ import bisect
 import ctypes
 import os
 import re
-import secrets
 import stat
 import struct
 import threading
@@ -114,7 +113,7 @@ def new_session() -> str:
     if tag and not re.fullmatch(r"[a-wyz0-9]{1,16}", tag):
         raise TransportError(f"{SESSION_TAG_VARIABLE} must be at most 16 lowercase letters (but 'x') and "
                              f"digits, not {tag!r}")
-    return f"{os.getpid()}x{tag}{secrets.token_hex(3)}"
+    return f"{os.getpid()}x{tag}{os.urandom(3).hex()}"
 
 
 _BLOB_TABLES: dict[int, struct.Struct] = {}

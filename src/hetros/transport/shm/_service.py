@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import ctypes
-import hashlib
 import os
 import threading
 import time
@@ -20,7 +19,7 @@ from ._events import (
     fd_hint,
 )
 from ._hotpath import SENT_STALE_WAKES, bind_slots, send_cdr, send_slot
-from ._iceoryx import assume_init, iox2, loan_slice, log
+from ._iceoryx import assume_init, iox2, loan_slice, log, sha1
 from ._sample import (
     BORROW_LIMIT,
     CDR_BODY_AT,
@@ -59,7 +58,7 @@ class Service:
         self.topic = topic
         self.target = target
         self.qos = qos
-        digest = hashlib.sha1(f"{topic}@{target}".encode()).hexdigest()[:20]
+        digest = sha1(f"{topic}@{target}".encode()).hexdigest()[:20]
         base = f"hetros/{domain.session}/{digest}"
         # keep_last: iceoryx2's own overflow keeps exactly the newest `depth`; keep_all: the
         # credits bound the fill at `depth`, the slack absorbs a subscriber's join race.

@@ -15,7 +15,6 @@ import os
 import re
 import shutil
 import signal
-import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -161,6 +160,8 @@ def remove_orphaned_services(root: Path, older_than: float = _ORPHAN_AGE) -> lis
 def _clean_with_iceoryx(root: Path, dead: dict[str, NodeRecord]) -> list[str]:
     """Let iceoryx2 clean ``dead`` nodes in child processes; remove by path each one it crashes on
     (or that it leaves); returns what was cleaned, one line each."""
+    import subprocess  # the launcher's part: a worker, which imports this module, never starts a child
+
     cleaned: list[str] = []
     left = dict(dead)
     for _attempt in range(len(dead) + 1):

@@ -66,7 +66,7 @@ class Ros1ActionType:
         ros1 = {part: f"{package}/msg/{short}{part}" for part in PARTS}
         definitions: dict[str, Any] = {}
         for part in PARTS:
-            inner = store.fielddefs.get(ros1[part]) or types.store.fielddefs[f"{action.name}_{part}"]
+            inner = store.fielddefs.get(ros1[part]) or types.fielddefs[f"{action.name}_{part}"]
             definitions.setdefault(ros1[part], inner)
             # under hetros' name too, so the field-by-name converters of Ros1Type apply unchanged
             definitions[f"{action.name}_{part}"] = inner

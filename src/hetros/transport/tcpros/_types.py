@@ -213,7 +213,7 @@ class _Replaced:
 def _same_names(types: TypeRegistry, typename: str) -> bool:
     """Whether every field of ``typename``, nested ones too, has its definition's name as attribute
     and no ``byte``/``char`` (signed in ROS 1, an octet in ROS 2: the same md5, other values)."""
-    fields = types.store.fielddefs[typename][1]
+    fields = types.fielddefs[typename][1]
     names = tuple(name for name, _ in fields)
     if names != tuple(types.get(typename).__fieldnames__) or _PLACEHOLDER in names:
         return False
@@ -229,7 +229,7 @@ def _same_names(types: TypeRegistry, typename: str) -> bool:
 def _converter(types: TypeRegistry, store: Typestore, typename: str, outgoing: bool) -> Convert:
     """A function turning one side's message of ``typename`` into the other side's."""
     ros1_fields = dict(store.fielddefs[typename][1])
-    ros2_defs = dict(types.store.fielddefs[typename][1])
+    ros2_defs = dict(types.fielddefs[typename][1])
     ros2_cls = types.get(typename)
     ros1_cls = store.types[typename]
     by_lower = {name.lower(): name for name in ros1_fields}
@@ -372,8 +372,8 @@ class Ros1ServiceType:
         service = types.get_service(name)
         self.typename = service.name
         self.name = ros1_name(normalize_typename(service.name, "srv"))
-        parts = {f"{self.typename}_Request": types.store.fielddefs[f"{self.typename}_Request"],
-                 f"{self.typename}_Response": types.store.fielddefs[f"{self.typename}_Response"]}
+        parts = {f"{self.typename}_Request": types.fielddefs[f"{self.typename}_Request"],
+                 f"{self.typename}_Response": types.fielddefs[f"{self.typename}_Response"]}
         extended = get_typestore(Stores.ROS1_NOETIC)
         try:
             extended.register({part: fielddefs for part, fielddefs in parts.items()})

@@ -87,9 +87,12 @@ fast: install-test
 	$(VENV)/bin/pytest -q -p no:cacheprovider -m "not rtl and not slow" tests/unit tests/conformance
 
 # the conformance suite once more on the pure-Python path (what runs where no C compiler is)
+# the coverage figure counts the lines run in pytest's own process (unit, conformance, the in-process parts of
+# the rest); the workers a launch starts are not traced (that would slow every integration test)
 test: lint
 	HETROS_PURE_PYTHON=1 $(VENV)/bin/pytest -q -p no:cacheprovider tests/conformance
-	$(VENV)/bin/pytest -q
+	$(VENV)/bin/pytest -q --cov=hetros --cov-report=
+	@$(VENV)/bin/coverage report --format=total | xargs printf "coverage: %s%% of src/hetros's lines ran in the test process\n"
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache

@@ -98,6 +98,9 @@ class Freezing(Writer):
     def counters(self) -> dict[str, int]:
         return self.inner.counters()
 
+    def has_room(self) -> bool:
+        return self.inner.has_room()
+
     def close(self) -> None:
         self.inner.close()
 
@@ -351,6 +354,8 @@ KNOWN_DEVIATIONS = {
     ("seam-dds", "test_keep_last_drops_are_counted"):
         "Cyclone DDS keeps no count hetros can read of a keep_last reader's overwritten samples: hetros "
         "top shows none for edges between hosts",
+    ("seam-dds", "test_has_room_says_whether_a_write_would_wait"):
+        "a DDS writer cannot see a remote reader's FIFO: has_room stays True and the write itself waits",
     ("seam-dds", "test_reliable_stalls_are_counted"):
         "hetros does not count a DDS writer's waits for room: hetros top shows none for edges between hosts",
 }
@@ -468,6 +473,25 @@ def test_backpressure_blocks_then_times_out(make: Callable[[QoS], Harness]) -> N
     assert done.wait(2.0), "publisher must resume once the subscriber takes"
     thread.join()
     assert [m.width for m in drain(reader)] == [1, 2, 3]
+
+
+def test_has_room_says_whether_a_write_would_wait(make: Callable[[QoS], Harness]) -> None:
+    """What a sender serving several streams asks before it writes (an fpga target's gateway): False while
+    a reliable keep_all subscriber's FIFO is full, True again once it takes."""
+    h = make(QoS(depth=2, publish_timeout=5.0))
+    reader = h.reader()
+    writer = h.writer()
+    assert writer.has_room()
+    for seq in range(2):
+        writer.write(image(0, seq))
+    assert not writer.has_room()
+    assert take_within(reader, 1, 5.0)[0].width == 0
+    deadline = time.monotonic() + 5.0
+    while not writer.has_room() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert writer.has_room()
+    writer.write(image(0, 2))
+    assert [m.width for m in take_within(reader, 2, 5.0)] == [1, 2]
 
 
 def _ten_into_keep_last_three(make: Callable[[QoS], Harness]) -> Reader:

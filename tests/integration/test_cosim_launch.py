@@ -246,3 +246,136 @@ def test_the_simulator_process_dying_is_reported_like_any_target(tmp_path: Path)
         code = proc.wait(60)
     assert code != 0
     assert re.search(r"target fpga died", rest), rest
+
+
+TWO_PORTS = '''
+import numpy as np
+
+from hetros import Node
+from hetros.hw.reference import sobel
+from hetros.interfaces.sensor_msgs.msg import Image
+from hetros.interfaces.std_msgs.msg import UInt8MultiArray
+
+
+def small_source(node: Node) -> None:
+    """As fast as the graph takes them: the small messages run far ahead of the images."""
+    small = node.create_publisher(UInt8MultiArray, "/a")
+    for seq in range(node.get_parameter("pairs")):
+        small.publish(UInt8MultiArray(data=bytes([seq]) * 8))
+
+
+def image_source(node: Node) -> None:
+    images = node.create_publisher(Image, "/b")
+    for seq in range(node.get_parameter("pairs")):
+        pixels = ((np.arange(48 * 64) * (seq + 3)) % 251).astype(np.uint8)
+        images.publish(Image(height=48, width=64, encoding="mono8", step=64, data=pixels))
+
+
+def sink(node: Node) -> None:
+    """Takes one of each per pair, /a_out first: a full /a_out waits for /b_out, as a software node would."""
+    small, images = node.create_subscription(UInt8MultiArray, "/a_out"), node.create_subscription(Image, "/b_out")
+    for seq in range(node.get_parameter("pairs")):
+        echoed, edges = small.take(timeout=60), images.take(timeout=60)
+        pixels = ((np.arange(48 * 64) * (seq + 3)) % 251).astype(np.uint8).reshape(48, 64)
+        if bytes(echoed.data) != bytes([seq]) * 8 or not np.array_equal(edges.data.reshape(48, 64), sobel(pixels)):
+            raise ValueError(f"pair {seq} came back wrong")
+    node.log.info("%d pairs through two ports of one target", node.get_parameter("pairs"))
+
+
+def echo(node: Node) -> None:
+    out = node.create_publisher(UInt8MultiArray, "/a_out")
+    node.create_subscription(UInt8MultiArray, "/a", out.publish)
+
+
+def edges(node: Node) -> None:
+    out = node.create_publisher(Image, "/b_out")
+
+    def filtered(image: Image) -> None:
+        pixels = sobel(np.asarray(image.data).reshape(image.height, image.width))
+        out.publish(Image(height=image.height, width=image.width, encoding="mono8", step=image.width,
+                          data=pixels.reshape(-1)))
+
+    node.create_subscription(Image, "/b", filtered)
+'''
+
+
+@pytest.mark.parametrize("mapping", ["process", "fpga"])
+def test_a_full_subscriber_holds_back_only_its_own_port(tmp_path: Path, mapping: str) -> None:
+    """Echo on /a -> /a_out and Sobel on /b -> /b_out on one target; the sink takes /a_out, then /b_out, 30
+    times. /a_out's subscriber is full long before the first image is through: on a board TREADY goes low
+    at that output and the Sobel runs on, so the fpga mapping completes as the process mapping does."""
+    (tmp_path / "nodes.py").write_text(TWO_PORTS)
+    hardware = "{kind: fpga, data_width: 64}" if mapping == "fpga" else "{kind: process}"
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""\
+        name: two_ports
+        targets:
+          io: {{kind: process}}
+          hw: {hardware}
+        nodes:
+          small:  {{run: nodes:small_source, target: io, parameters: {{pairs: 30}},
+                   publish: {{/a: std_msgs/msg/UInt8MultiArray}}}}
+          images: {{run: nodes:image_source, target: io, parameters: {{pairs: 30}},
+                   publish: {{/b: sensor_msgs/msg/Image}}}}
+          echo:   {{run: nodes:echo, hw: "hetros.hw.nodes:Echo", target: hw,
+                   parameters: {{source: /a, sink: /a_out}},
+                   subscribe: {{/a: std_msgs/msg/UInt8MultiArray}}, publish: {{/a_out: std_msgs/msg/UInt8MultiArray}}}}
+          sobel:  {{run: nodes:edges, hw: "hetros.hw.nodes:Sobel", target: hw,
+                   parameters: {{source: /b, sink: /b_out, width: 64}},
+                   subscribe: {{/b: sensor_msgs/msg/Image}}, publish: {{/b_out: sensor_msgs/msg/Image}}}}
+          sink:   {{run: nodes:sink, target: io, required: true, parameters: {{pairs: 30}},
+                   subscribe: {{/a_out: std_msgs/msg/UInt8MultiArray, /b_out: sensor_msgs/msg/Image}}}}
+        topics:
+          /a: {{depth: 2}}
+          /a_out: {{depth: 2}}
+          /b: {{depth: 2}}
+          /b_out: {{depth: 2}}
+        """))
+    result = launch(tmp_path / "project.yaml", tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "30 pairs through two ports of one target" in result.stderr
+
+
+IGNORES_TREADY = """\
+// An echo that takes a beat every cycle and overwrites its output whether or not it was taken: it
+// ignores b_TREADY, which a gateway port whose subscriber is full takes low.
+module careless_echo (
+    input  wire        ap_clk,
+    input  wire        ap_rst_n,
+    input  wire [63:0] a_TDATA,
+    input  wire [7:0]  a_TKEEP,
+    input  wire        a_TLAST,
+    input  wire        a_TVALID,
+    output wire        a_TREADY,
+    output reg  [63:0] b_TDATA,
+    output reg  [7:0]  b_TKEEP,
+    output reg         b_TLAST,
+    output reg         b_TVALID,
+    input  wire        b_TREADY
+);
+    assign a_TREADY = 1'b1;
+    always @(posedge ap_clk) begin
+        if (!ap_rst_n) begin
+            b_TVALID <= 1'b0;
+        end else begin
+            b_TVALID <= a_TVALID;
+            b_TDATA <= a_TDATA;
+            b_TKEEP <= a_TKEEP;
+            b_TLAST <= a_TLAST;
+        end
+    end
+endmodule
+"""
+
+
+def test_a_verilog_node_that_ignores_tready_is_caught_at_its_gateway_port(tmp_path: Path) -> None:
+    """A slow subscriber behind the gateway takes TREADY low at the node's output: a node that overwrites a
+    beat nobody took breaks AXI4-Stream, and the launch names the port and the rule instead of losing data."""
+    (tmp_path / "rtl").mkdir()
+    (tmp_path / "rtl" / "careless_echo.v").write_text(IGNORES_TREADY)
+    project = _echo_project(tmp_path, sink=", pause: 0.02")
+    text = project.read_text().replace('hw: "hetros.hw.nodes:Echo"', "hw: rtl/careless_echo.v:careless_echo")
+    text = text.replace("parameters: {source: /a, sink: /b},", "").replace("data_width: 32", "data_width: 64")
+    project.write_text(text)
+    result = launch(project, tmp_path)
+    assert result.returncode != 0
+    assert re.search(r"hardware node echo port 'b' \(/b\): .*before TREADY at cycle \d+", result.stderr), result.stderr

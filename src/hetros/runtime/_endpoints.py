@@ -119,6 +119,9 @@ class EndpointWriter(Writer):
     def counters(self) -> dict[str, int]:
         return merge_counters(part.counters() for part in self._parts)
 
+    def has_room(self) -> bool:
+        return all(part.has_room() for part in self._parts)
+
     def assert_liveliness(self) -> None:
         for part in self._parts:
             part.assert_liveliness()

@@ -101,6 +101,12 @@ class Publisher(Generic[M]):
         if self.manual_liveliness:
             self._writer.assert_liveliness()
 
+    def has_room(self) -> bool:
+        """Whether ``publish`` now would go through without waiting for a reliable subscriber's room (a
+        keep_all subscriber whose FIFO is full). For a node that serves several streams at once and must
+        not let one full subscriber stop the others: ask, and publish later what has no room yet."""
+        return self._writer.has_room()
+
     def counters(self) -> dict[str, int]:
         """``stalls``: the sends that waited for a reliable subscriber's room (``hetros top``)."""
         return self._writer.counters()

@@ -62,6 +62,12 @@ class Writer(ABC, Generic[T]):
         """Whether ``message`` came from ``slot_loan_maker`` and has not been published yet."""
         return False
 
+    def has_room(self) -> bool:
+        """Whether a write now would go through without waiting for a reliable subscriber's room. One
+        sender that serves several streams (an fpga target's gateway) asks before it writes, so that a
+        full subscriber holds back only its own stream; a transport whose writes never wait says True."""
+        return True
+
     def counters(self) -> dict[str, int]:
         """What ``hetros top`` shows of this writer: ``stalls``, the sends that waited for a reliable
         subscriber's room, and ``bytes`` serialized (where it serializes); empty where it does not count."""

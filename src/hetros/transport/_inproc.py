@@ -85,6 +85,9 @@ class Mailbox(Reader):
     def pending(self) -> bool:
         return bool(self._items)
 
+    def has_room(self) -> bool:
+        return not self.qos.blocks_publisher or self._closed or len(self._items) < self.qos.depth
+
     def liveliness(self) -> tuple[int, int] | None:
         return None if self.source is None else self.source.liveliness()
 
@@ -146,6 +149,10 @@ class InprocTopic:
         with self._lock:
             return sum(mailbox.stalls for mailbox in self._mailboxes)
 
+    def has_room(self) -> bool:
+        with self._lock:
+            return all(mailbox.has_room() for mailbox in self._mailboxes)
+
     def deliver(self, item: Any) -> None:
         now = time.monotonic()
         deadline = now + self.qos.publish_timeout
@@ -164,6 +171,9 @@ class InprocWriter(Writer):
 
     def write(self, message: Any) -> None:
         self._topic.deliver(message)
+
+    def has_room(self) -> bool:
+        return self._topic.has_room()
 
     def counters(self) -> dict[str, int]:
         return {"stalls": self._topic.stalls()}

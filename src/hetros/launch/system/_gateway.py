@@ -16,10 +16,13 @@ Hardware TCPROS (Sugata et al.): a topic the target's hardware frames for ROS 1 
 a ROS 1 node of its own (``/<project>_<target>``), does the registration (master, ``requestTopic``,
 connection headers) and moves each frame between the port and the sockets unchanged.
 
-Reliable topics stay lossless across the gateway: it takes from a subscription only while
-the port's queue has room, so a full hardware side fills the subscription's FIFO and then
-blocks the software publisher, as any slow subscriber would; and the hardware's output
-port holds TREADY low while the gateway's publisher is blocked.
+Each port moves on its own, as on a board. Reliable topics stay lossless across the gateway: it
+takes from a subscription only while the port's queue has room, so a full hardware side fills the
+subscription's FIFO and then blocks the software publisher, as any slow subscriber would. At an
+output it publishes only what a subscriber has room for (``Publisher.has_room``): a full one
+leaves its messages in the simulator, whose output then takes TREADY low at that port alone (the
+AXI4-Stream monitor checks the node under it), and the rest of the design runs on. The gateway's
+one thread never waits on a subscriber, so one slow reader cannot stop the target's clock.
 """
 
 from __future__ import annotations
@@ -43,6 +46,8 @@ from ...transport.tcpros import Ros1Peer, Ros1Type, receive_frames
 
 log = get_logger("hetros.cosim")
 
+# seconds between looks at an output whose subscriber was full (taking does not wake the gateway)
+_HELD_POLL = 0.002
 # messages a gateway keeps queued at an input port: enough that the hardware never waits for Python
 # between two messages, few enough that back-pressure reaches the publisher early
 _QUEUED = 2
@@ -110,6 +115,11 @@ class _Output:
         self.publisher = None if port.service else node.create_publisher(types.get(port.type), port.topic)
         self.copied_bytes = 0  # what the CPU copied: each message's bytes, out of the simulator into the graph
 
+    def ready(self) -> bool:
+        """Whether a message can go out now without waiting: a full subscriber holds back this port only (its
+        messages stay in the simulator, whose output takes TREADY low), never the whole target."""
+        return self.publisher is None or self.publisher.has_room()
+
     def send(self, body: memoryview) -> None:
         """Publish a message decoded in place from the simulator's memory: its arrays are views there, and
         the transport's send is their one copy (the gateway's process has no other node to keep them)."""
@@ -172,6 +182,9 @@ class _FramesToRos1:
     def __init__(self, peer: Ros1Peer, port: GatewayPort, types: TypeRegistry, latch: bool) -> None:
         self.port = port
         self.publication = peer.advertise(port.topic, Ros1Type(types, port.type), latch=latch)
+
+    def ready(self) -> bool:
+        return True
 
     def send(self, frame: memoryview) -> None:
         self.publication.publish_frame(frame)
@@ -247,6 +260,9 @@ class _Completions:
     def __init__(self, port: GatewayPort, pair: _InMemory) -> None:
         self.port, self.pair = port, pair
 
+    def ready(self) -> bool:
+        return self.pair.publisher.has_room()
+
     def send(self, body: memoryview) -> None:
         self.pair.complete(body)
 
@@ -312,8 +328,13 @@ def gateway(node: Node) -> None:
             started = time.perf_counter()
             events = top.run(_CHUNK, _CHUNK if working else quiet)
             wall += time.perf_counter() - started
+            held = False  # an output whose subscriber is full: its messages wait in the simulator
             for out in outputs:
                 while (produced := top.front(out.port.index)) is not None:
+                    if not out.ready():
+                        del produced
+                        held = True
+                        break
                     try:
                         out.send(produced)
                     finally:
@@ -323,8 +344,11 @@ def gateway(node: Node) -> None:
                     last_moved = top.cycle
             waiting = any(top.queued(i.port.index) for i in inputs)
             if events & IDLE and not waiting:
-                node.executor.wait(seen, 0.1)
+                # a subscriber that takes does not wake this node: with an output held, look again soon
+                node.executor.wait(seen, _HELD_POLL if held else 0.1)
                 quiet = _QUIET_AFTER_TRAFFIC if node.executor.generation != seen else idle_cycles
+            elif held and events & IDLE:
+                time.sleep(_HELD_POLL)  # inputs wait on a held output: nothing moves until its subscriber takes
     finally:
         if peer is not None:
             peer.close()

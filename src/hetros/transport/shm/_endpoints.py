@@ -135,6 +135,9 @@ class ShmWriter(Writer):
     def counters(self) -> dict[str, int]:
         return {"stalls": self._service.stalls, "bytes": self.sent_bytes}
 
+    def has_room(self) -> bool:
+        return self._service.has_room()
+
     def write(self, message: Any) -> None:
         cdr = self._cdr
         if cdr is None:  # a service envelope: one contiguous sample

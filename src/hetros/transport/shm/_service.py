@@ -145,6 +145,24 @@ class Service:
             self.room = 0
             self.space.notify_all()
 
+    def has_room(self) -> bool:
+        """Whether a send now would not wait: every live blocking subscriber has room (a dead one is
+        removed by the send, which then goes on)."""
+        if not self.blocking:
+            return True
+        with self.lock:
+            if self.room > 0:
+                return True
+            published = self.next_seq - 1
+            credits = self.credits
+            blocked = credits.full_slots(published, self.qos.depth)
+            if any(not pid_alive(credits.slot(index)[1]) for index in blocked):
+                return True
+            if blocked:
+                return False
+            self.room = self.qos.depth - credits.max_fill(published)
+            return True
+
     def wait_for_space(self, deadline: float) -> None:
         """Block (with ``self.lock`` held) until every live blocking subscriber has room.
 

@@ -12,7 +12,10 @@ PID_MAX = 1 << 22
 
 
 def valid_pid(pid: object) -> bool:
-    """Whether ``pid`` could name one process (0 and negatives name groups to ``kill``)."""
+    """Whether ``pid`` could name one process (0 and negatives name groups to ``kill``; a JSON ``true``
+    is no pid 1)."""
+    if isinstance(pid, bool):
+        return False
     try:
         value = operator.index(pid)  # type: ignore[arg-type]
     except TypeError:
@@ -25,7 +28,9 @@ def pid_alive(pid: int) -> bool:
 
     A value that cannot be a pid is not alive: it came from shared memory or a file that
     anyone of this user may write, and ``os.kill`` would act on a whole group (0, negatives)
-    or raise (too large).
+    or raise (too large). A zombie is not alive either: a worker whose launcher was killed
+    has ended, but stays in the table until init reaps it (which some containers' init does
+    late); its leftovers are a dead process's.
     """
     if not valid_pid(pid):
         return False
@@ -35,7 +40,16 @@ def pid_alive(pid: int) -> bool:
         return False
     except PermissionError:
         return True
-    return True
+    return not _zombie(pid)
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            state = stat.read(512).rpartition(b")")[2].split(maxsplit=1)[:1]
+    except OSError:
+        return False  # no /proc (or gone meanwhile): os.kill's word stands
+    return state in ([b"Z"], [b"X"])
 
 
 # what most often sends each signal to a hetros process, for the line that reports its death

@@ -19,9 +19,10 @@ from pathlib import Path
 
 import pytest
 
+from hetros._process import pid_alive
 from hetros.transport.shm._iceoryx import iceoryx_root
 from hetros.transport.shm._sample import FILE_PREFIX, SHM_DIR
-from hetros.transport.shm._stale import cleanup_stale, remove_orphaned_services
+from hetros.transport.shm._stale import _dead, cleanup_stale, recorded_nodes, remove_orphaned_services
 
 NODES = textwrap.dedent('''
     from hetros import Node
@@ -109,13 +110,18 @@ def _descendants(pid: int) -> list[int]:
 
 
 def _kill_group(proc: subprocess.Popen[str]) -> None:
-    """SIGKILL the launcher and every process under it (workers run in sessions of their own)."""
-    for pid in [proc.pid, *_descendants(proc.pid)]:
+    """SIGKILL the launcher and every process under it (workers run in sessions of their own), and wait
+    until each has ended (a killed process takes a moment to leave; a zombie has ended)."""
+    killed = [proc.pid, *_descendants(proc.pid)]
+    for pid in killed:
         try:
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
     proc.communicate(timeout=30)
+    deadline = time.monotonic() + 10
+    while any(pid_alive(pid) for pid in killed) and time.monotonic() < deadline:
+        time.sleep(0.01)
 
 
 def _crash(projects: Path, scenario: str, rng: random.Random) -> None:
@@ -172,7 +178,10 @@ def _run_matrix(projects: Path, runs: int) -> None:
     assert cleaned_damage > 0
     cleanup_stale()
     remove_orphaned_services(iceoryx_root(), older_than=0.0)  # the last crash's, younger than the usual age
-    assert not [p for p in (iceoryx_root() / "nodes").iterdir() if p.is_dir()]
+    # every node of a dead process is gone (another launch of this user may be running meanwhile: its live
+    # nodes stay, as they must)
+    root = iceoryx_root()
+    assert not [node.describe() for node in recorded_nodes(root) if _dead(root, node)]
     assert not list((iceoryx_root() / "services").iterdir())
 
 

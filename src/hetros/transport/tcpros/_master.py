@@ -395,8 +395,16 @@ class Master:
                 log.debug("%s on %s failed: %s", method, api, exc)
 
     def close(self) -> None:
+        """Stop serving; updates not yet sent to nodes are dropped (a master that goes away owes nobody a
+        ``publisherUpdate``), and one under way is left to its daemon thread, so SIGTERM ends the master
+        within a second even while a node it calls no longer answers."""
         self._server.shutdown()
         self._server.server_close()
+        while True:
+            try:
+                self._calls.get_nowait()
+            except queue.Empty:
+                break
         self._calls.put(None)
         for thread in self._threads:
-            thread.join(timeout=_CALL_TIMEOUT + 1)
+            thread.join(timeout=0.5)

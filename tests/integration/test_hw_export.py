@@ -9,10 +9,12 @@ Amaranth truncates explicitly, and CASEINCOMPLETE, as its cases follow a default
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -84,3 +86,36 @@ def test_the_open_flow_makes_an_ecp5_bitstream_and_reports_fmax(tmp_path: Path) 
         assert float(fmax) > 10
         bitstream = next(tmp_path.rglob(name)).read_bytes()
         assert b"\xff\xff\xbd\xb3" in bitstream[:4096], "no ECP5 preamble: not a bitstream"
+
+
+def test_a_design_that_misses_its_clock_fails_the_bitstream_and_slows_its_figures(tmp_path: Path) -> None:
+    """Timing is a check: at 400 MHz the topic networks of examples/hw_topics miss their clock on an ECP5;
+    `hw bitstream` exits 1 naming the critical path, and the target's figures then use the Fmax achieved."""
+    from hetros.hw._bitstream import available
+
+    if not available():
+        pytest.skip("YoWASP's nextpnr-ecp5 and ecppack are not installed (pip install 'hetros[rtl]')")
+    example = EXAMPLES / "hw_topics"
+    shutil.copytree(example, tmp_path / "hw_topics")
+    project = tmp_path / "hw_topics" / "project.yaml"
+    project.write_text(project.read_text().replace("clock_mhz: 100", "clock_mhz: 400"))
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "cache"))
+    done = subprocess.run([sys.executable, "-m", "hetros", "hw", "bitstream", str(project), "--parts", "target", "-o",
+                           str(tmp_path / "out")], capture_output=True, text=True, timeout=600, check=False, env=env)
+    assert done.returncode == 1, done.stdout + done.stderr
+    achieved = re.search(r"^\| fpga0 \| \S+ \| [\d,]+ \| [\d,]+ \| ([\d.]+) MHz \(misses the clock\) \| 400 MHz \|",
+                         done.stdout, re.MULTILINE)
+    assert achieved is not None, done.stdout
+    assert re.search(r"error: fpga0 misses its clock: place and route achieved [\d.]+ MHz on LFE5U-\S+, clock_mhz is "
+                     r"400 MHz; its critical path, in \S+: \S+ -> \S+: [\d.]+ ns over \d+ logic levels", done.stderr), \
+        done.stderr
+    clock = subprocess.run([sys.executable, "-c", textwrap.dedent(f"""
+        from hetros.hw import target_clock
+        from hetros.project import load_project, plan
+        clock = target_clock(plan(load_project({str(project)!r})), "fpga0")
+        print(clock.mhz, clock.source)
+    """)], capture_output=True, text=True, timeout=300, check=False, env=env)
+    assert clock.returncode == 0, clock.stderr
+    mhz, _, source = clock.stdout.strip().partition(" ")
+    assert abs(float(mhz) - float(achieved.group(1))) < 0.1
+    assert source.startswith("the Fmax place and route achieved on LFE5U")

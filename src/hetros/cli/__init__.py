@@ -137,7 +137,10 @@ def cmd_hw_bitstream(args: argparse.Namespace) -> int:
     print(format_bitstreams(rows))
     print("\n(each design inside a pin harness on a Lattice ECP5: YoWASP's Yosys, nextpnr-ecp5 and ecppack; "
           "Fmax is nextpnr's achieved figure for the worst clock)")
-    return 0
+    missed = [row for row in rows if not row.meets_clock]
+    for row in missed:  # timing is a check: a design that misses its clock fails the command
+        print(f"error: {row.timing_failure()}", file=sys.stderr)
+    return EXIT_ERROR if missed else 0
 
 
 def _fpga_targets(args: argparse.Namespace) -> tuple[Plan, list[str]]:
@@ -162,7 +165,16 @@ def cmd_hw_report(args: argparse.Namespace) -> int:
         print(f"fpga target {target}: one message from the first publisher to every subscriber, simulated "
               "(cycles from the first beat offered to the last TLAST taken)\n")
         print(format_transfers(transfer_report(plan, target, simulator=args.simulator)))
+        print(_clock_line(plan, target))
     return 0
+
+
+def _clock_line(plan: Plan, target: str) -> str:
+    """Which clock a target's figures use: its clock_mhz, or the Fmax place and route achieved if lower."""
+    from ..hw import target_clock
+
+    clock = target_clock(plan, target)
+    return f"\n(times at {clock.mhz:g} MHz: {clock.source})\n"
 
 
 def _execution_models(args: argparse.Namespace, plan: Plan, targets: list[str]) -> int:
@@ -186,7 +198,8 @@ def _execution_models(args: argparse.Namespace, plan: Plan, targets: list[str]) 
                    for name, typename in inputs.items()}
         print(f"fpga target {target}: one message into {', '.join(inputs)} ({args.image} for images, {args.size} "
               "elements for arrays), co-simulated in Verilator\n")
-        print(format_models(target, execution_models(plan, target, types, samples)) + "\n")
+        print(format_models(target, execution_models(plan, target, types, samples)))
+        print(_clock_line(plan, target))
     return 0
 
 

@@ -22,6 +22,7 @@ def build_target(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tup
 if TYPE_CHECKING:
     from ._bitstream import available, bitstreams, build_bitstream, format_bitstreams
     from ._build import hardware_topics, top_name
+    from ._clock import TargetClock, target_clock
     from ._cosim import GatewayPort, SimulatedTop, TargetSimulation
     from ._export import export
     from ._models import execution_models, format_models, sample_message
@@ -51,6 +52,7 @@ _LAZY = {
     "SimulatedTop": "._cosim",
     "TABLE_I_PAPER_MS": "._report",
     "TABLE_I_SIZES": "._report",
+    "TargetClock": "._clock",
     "TargetSimulation": "._cosim",
     "VerilatedTop": "._verilator",
     "available": "._bitstream",
@@ -69,6 +71,7 @@ _LAZY = {
     "simulate": "._sim",
     "synth_report": "._report",
     "synthesize": "._report",
+    "target_clock": "._clock",
     "top_name": "._build",
     "topic_verilog": "._rtl",
     "transfer_cycles": "._report",
@@ -94,6 +97,7 @@ __all__ = [
     "GatewayPort",
     "Resources",
     "SimulatedTop",
+    "TargetClock",
     "TargetSimulation",
     "VerilatedTop",
     "amaranth_layout",
@@ -116,6 +120,7 @@ __all__ = [
     "simulate",
     "synth_report",
     "synthesize",
+    "target_clock",
     "to_beats",
     "top_name",
     "topic_verilog",

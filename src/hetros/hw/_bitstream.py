@@ -31,6 +31,55 @@ HARNESS_TOP = "hetros_fmax"
 
 
 @dataclass(frozen=True)
+class CriticalPath:
+    """The slowest register-to-register path nextpnr reported: where a design misses its clock."""
+
+    start: str
+    end: str
+    logic_ns: float
+    routing_ns: float
+    levels: int  # logic cells along the path
+    sources: tuple[str, ...]  # the HDL lines its nets come from (Amaranth's or the Verilog's), as nextpnr names them
+
+    @property
+    def part(self) -> str:
+        """The node or topic network instance the path starts in (its first name under the harness)."""
+        names = self.start.split(".")
+        return names[1] if len(names) > 2 and names[0] == "design" else names[0]
+
+    def describe(self) -> str:
+        where = f"; from {', '.join(self.sources[:3])}" if self.sources else ""
+        return (f"{_short(self.start)} -> {_short(self.end)}: {self.logic_ns + self.routing_ns:.1f} ns over "
+                f"{self.levels} logic levels ({self.logic_ns:.1f} ns logic, {self.routing_ns:.1f} ns routing){where}")
+
+
+def _short(cell: str) -> str:
+    return cell.removeprefix("design.")
+
+
+def critical_path(report: dict[str, object]) -> CriticalPath | None:
+    """The longest of nextpnr's ``critical_paths`` (``--report`` JSON), or None where it lists none."""
+    paths = report.get("critical_paths")
+    if not isinstance(paths, list):
+        return None
+    best: CriticalPath | None = None
+    for entry in paths:
+        segments = entry.get("path") if isinstance(entry, dict) else None
+        if not isinstance(segments, list) or not segments:
+            continue
+        logic = sum(float(s.get("delay", 0)) for s in segments if s.get("type") in ("logic", "clk-to-q", "setup"))
+        routing = sum(float(s.get("delay", 0)) for s in segments if s.get("type") == "routing")
+        sources = tuple(dict.fromkeys(str(src).rsplit("site-packages/", 1)[-1] for s in segments
+                                      for src in s.get("sources", ()) or ()))
+        found = CriticalPath(str(segments[0].get("from", {}).get("cell", "?")),
+                             str(segments[-1].get("to", {}).get("cell", "?")), logic, routing,
+                             sum(s.get("type") == "logic" for s in segments), sources)
+        if best is None or found.logic_ns + found.routing_ns > best.logic_ns + best.routing_ns:
+            best = found
+    return best
+
+
+@dataclass(frozen=True)
 class Bitstream:
     """What one run of the open flow gave."""
 
@@ -42,6 +91,19 @@ class Bitstream:
     luts: int
     ffs: int
     seconds: float
+    critical: CriticalPath | None = None
+
+    @property
+    def meets_clock(self) -> bool:
+        return self.fmax_mhz >= self.target_mhz
+
+    def timing_failure(self) -> str:
+        """The error line of a design that misses its target's clock: by how much, and the path to pipeline."""
+        path = self.critical
+        where = (f"; its critical path, in {path.part}: {path.describe()}" if path is not None else "")
+        return (f"{self.design} misses its clock: place and route achieved {self.fmax_mhz:.1f} MHz on {self.device}, "
+                f"clock_mhz is {self.target_mhz:g} MHz{where}; pipeline that path (a register stage), or lower "
+                "the target's clock_mhz to what it achieves")
 
 
 def tool(name: str) -> str:
@@ -138,7 +200,7 @@ def build_bitstream(verilog: str, top: str, out: Path, clock_mhz: float, design:
         raise HardwareError(f"nextpnr reported no clock for {design}: the design has no clocked logic")
     fmax = min(float(c["achieved"]) for c in clocks.values())
     return Bitstream(design, f"LFE5U{flag.replace('--', '-').upper()}F-{package}", bitstream, fmax, clock_mhz,
-                     luts, ffs, time.perf_counter() - started)
+                     luts, ffs, time.perf_counter() - started, critical_path(report))
 
 
 def _run(command: list[str], cwd: Path, what: str) -> None:
@@ -156,6 +218,7 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
     from ..msg import TypeRegistry
     from ..plan import Plan
     from ._build import build, hardware_nodes, hardware_topics, top_name
+    from ._clock import record_fmax, target_key
     from ._rtl import topic_verilog
     from ._verilog_node import verilog_sources
 
@@ -165,8 +228,12 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
     if parts in ("target", "all"):
         path, _manifest = build(plan, target, out / "target", types)
         sources = [out / "target" / s.name for s in verilog_sources(hardware_nodes(plan, target))]
-        made.append(build_bitstream(path.read_text(), top_name(target), out / "target", spec.clock_mhz,
-                                    f"{target}", sources))
+        whole = build_bitstream(path.read_text(), top_name(target), out / "target", spec.clock_mhz, f"{target}",
+                                sources)
+        # what the launch's and `hw report`'s figures then use, where it is below clock_mhz
+        record_fmax(target_key(plan, target), whole.fmax_mhz, whole.device,
+                    whole.critical.describe() if whole.critical else "")
+        made.append(whole)
     if parts in ("parts", "all"):
         for name, component in hardware_nodes(plan, target).items():
             text = amaranth_verilog.convert(component, name="hetros_node")
@@ -185,6 +252,7 @@ def format_bitstreams(rows: list[Bitstream]) -> str:
     lines = ["| design | device | LUT4 | FF | Fmax (place and route) | target clock | bitstream |",
              "|---|---|---|---|---|---|---|"]
     for row in rows:
-        lines.append(f"| {row.design} | {row.device} | {row.luts:,} | {row.ffs:,} | {row.fmax_mhz:.1f} MHz | "
+        missed = "" if row.meets_clock else " (misses the clock)"
+        lines.append(f"| {row.design} | {row.device} | {row.luts:,} | {row.ffs:,} | {row.fmax_mhz:.1f} MHz{missed} | "
                      f"{row.target_mhz:g} MHz | {row.bitstream.name} ({row.bitstream.stat().st_size // 1024} KiB) |")
     return "\n".join(lines)

@@ -7,19 +7,16 @@ tests drive it directly.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import re
-import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 from .._errors import HardwareError
 from ..msg import TypeRegistry
 from ..plan import Plan, gateway_node
 from ._amaranth_top import AmaranthTop
-from ._build import TCPROS, FpgaTop, HardwareTopic, framing_programs, hardware_nodes, hardware_topics, top_name
+from ._build import TCPROS, FpgaTop, framing_programs, hardware_nodes, hardware_topics, top_name
+from ._clock import design_key, target_clock
 from ._verilator import MemoryPort, StreamPort, VerilatedTop, compile_simulator
 from ._verilog_node import verilog_sources
 
@@ -49,7 +46,7 @@ class TargetSimulation:
         from amaranth.back import verilog
 
         spec = plan.targets[target]
-        self.target, self.clock_mhz, self.simulator = target, spec.clock_mhz, spec.sim
+        self.target, self.simulator = target, spec.sim
         gateway = gateway_node(target)
         topics = hardware_topics(plan, target, only)
         components = hardware_nodes(plan, target, only)
@@ -85,6 +82,11 @@ class TargetSimulation:
                          for node in top.memory_ports]
         started = time.perf_counter()
         sources = verilog_sources(components)
+        key = design_key(plan, target, topics, sources)
+        # the clock the simulated-time figures use: clock_mhz, or the Fmax place and route achieved if lower
+        # (measured for the whole target: a part of it, ``only``, is looked up as the whole)
+        self.clock = target_clock(plan, target, key if only is None else None)
+        self.clock_mhz = self.clock.mhz
         self.top: SimulatedTop
         if spec.sim == "amaranth":
             if sources:
@@ -97,34 +99,10 @@ class TargetSimulation:
         else:
             text = verilog.convert(top, name=name, ports=top.signals())
             clocked = re.search(r"\binput\s+clk\b", text) is not None
-            library = compile_simulator(text, name, ports, spec.data_width, clocked,
-                                        design_key(plan, target, topics, sources), top.monitored, sources,
+            library = compile_simulator(text, name, ports, spec.data_width, clocked, key, top.monitored, sources,
                                         memories=self.memories)
             self.top = VerilatedTop(library, ports)
         self.compile_seconds = time.perf_counter() - started
 
     def close(self) -> None:
         self.top.close()
-
-
-def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: list[Path]) -> str:
-    """What the target's hardware is made of, as sources: its nodes' ``hw:`` and parameters, its topics,
-    the target's stream width, Amaranth's version, and the text of hetros's hardware modules, of every
-    Python file of the project folder, of each hardware node's module and of its Verilog sources."""
-    import amaranth
-
-    spec = plan.targets[target]
-    parts = [amaranth.__version__, str(spec.data_width), repr(topics)]
-    files = sorted(Path(__file__).parent.glob("*.py")) + sorted(Path(plan.root).rglob("*.py")) + sources
-    for name, node in sorted(plan.nodes.items()):
-        if node.target == target and plan.in_hardware(name):
-            parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}:{node.memory}")
-            module = sys.modules.get(node.hw.partition(":")[0])
-            source = getattr(module, "__file__", None)
-            if source:
-                files.append(Path(source))
-    digest = hashlib.sha256("\0".join(parts).encode())
-    for path in files:
-        if ".venv" not in path.parts and path.is_file():
-            digest.update(str(path).encode() + b"\0" + path.read_bytes())
-    return digest.hexdigest()

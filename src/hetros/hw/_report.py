@@ -21,6 +21,7 @@ from typing import Any
 from .._errors import HardwareError
 from ..plan import Plan
 from ._build import hardware_topics
+from ._clock import target_clock
 from ._rtl import icarus_available, simulate_verilog, topic_verilog
 from ._sim import simulate
 from ._stream import TopicNetwork
@@ -70,13 +71,14 @@ def transfer_cycles(publishers: int, subscribers: int, data_width: int, fifo_dep
 def transfer_report(plan: Plan, target: str, sizes: dict[str, int] | None = None,
                     simulator: str = "auto") -> list[TransferRow]:
     spec = plan.targets[target]
+    clock = target_clock(plan, target).mhz  # clock_mhz, or the Fmax place and route achieved where lower
     rows = []
     for topic in hardware_topics(plan, target):
         for name, size in (sizes or TABLE_I_SIZES).items():
             cycles, used = transfer_cycles(len(topic.publishers), len(topic.subscribers), spec.data_width,
                                            topic.fifo_depth, size, simulator)
             rows.append(TransferRow(topic.name, name, size, -(-size // (spec.data_width // 8)), cycles,
-                                    spec.clock_mhz, used))
+                                    clock, used))
     return rows
 
 

@@ -393,8 +393,9 @@ def _report(simulation: TargetSimulation, wall: float) -> None:
     top = simulation.top
     cycles = top.cycle
     rate = cycles / wall if wall > 0 else 0.0
-    log.info("fpga target %s: %d cycles simulated (%.3f ms at %g MHz) in %.3f s of simulation (%.2f M cycles/s)",
-             simulation.target, cycles, cycles / simulation.clock_mhz / 1000, simulation.clock_mhz, wall, rate / 1e6)
+    log.info("fpga target %s: %d cycles simulated (%.3f ms at %g MHz, %s) in %.3f s of simulation (%.2f M cycles/s)",
+             simulation.target, cycles, cycles / simulation.clock_mhz / 1000, simulation.clock_mhz,
+             simulation.clock.source, wall, rate / 1e6)
     for output, ports in ((False, simulation.inputs), (True, simulation.outputs)):
         for port in ports:
             messages, beats, busy = top.stats(output, port.index)

@@ -1,0 +1,80 @@
+"""Timing is a check: nextpnr's critical path named, a missed clock an error, and the figures of a design
+that misses its clock given at the Fmax it achieves (``hetros.hw._bitstream``, ``hetros.hw._clock``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from hetros.hw._bitstream import Bitstream, critical_path
+from hetros.hw._clock import record_fmax, target_clock
+from hetros.plan import Plan, TargetPlan
+
+pytest.importorskip("amaranth")
+
+
+def _segment(kind: str, start: str, end: str, delay: float, source: str = "") -> dict[str, object]:
+    found: dict[str, object] = {"type": kind, "delay": delay, "from": {"cell": start, "port": "Q"},
+                                "to": {"cell": end, "port": "D"}}
+    if source:
+        found["sources"] = [f"/venv/lib/python3.11/site-packages/{source}"]
+    return found
+
+
+# the shape of nextpnr-ecp5's --report JSON: two paths, the second the longer
+REPORT = {
+    "fmax": {"clk": {"achieved": 48.2, "constraint": 100}},
+    "critical_paths": [
+        {"from": "posedge clk", "to": "posedge clk", "path": [
+            _segment("clk-to-q", "design.echo.r", "design.echo.r", 0.5),
+            _segment("routing", "design.echo.r", "design.echo.q", 1.0, "amaranth/lib/fifo.py:279"),
+            _segment("setup", "design.echo.q", "design.echo.q", 0.1)]},
+        {"from": "posedge clk", "to": "posedge clk", "path": [
+            _segment("clk-to-q", "design.sobel.line_older_FF", "design.sobel.line_older_FF", 0.5),
+            _segment("routing", "design.sobel.line_older_FF", "design.sobel.sum_LUT4", 6.0, "hetros/hw/_image.py:120"),
+            _segment("logic", "design.sobel.sum_LUT4", "design.sobel.sum_LUT4", 0.4),
+            _segment("routing", "design.sobel.sum_LUT4", "design.sobel.out_LUT4", 3.0, "hetros/hw/_image.py:131"),
+            _segment("logic", "design.sobel.out_LUT4", "design.sobel.out_LUT4", 0.4),
+            _segment("routing", "design.sobel.out_LUT4", "design.sobel.out_FF", 10.0),
+            _segment("setup", "design.sobel.out_FF", "design.sobel.out_FF", 0.45)]},
+    ],
+}
+
+
+def test_the_longest_critical_path_is_named_with_its_node_and_source_lines() -> None:
+    path = critical_path(REPORT)
+    assert path is not None
+    assert (path.start, path.end, path.part, path.levels) == ("design.sobel.line_older_FF", "design.sobel.out_FF",
+                                                              "sobel", 2)
+    assert path.logic_ns == pytest.approx(0.5 + 0.4 + 0.4 + 0.45)
+    assert path.routing_ns == pytest.approx(19.0)
+    assert path.describe() == ("sobel.line_older_FF -> sobel.out_FF: 20.8 ns over 2 logic levels (1.8 ns logic, "
+                               "19.0 ns routing); from hetros/hw/_image.py:120, hetros/hw/_image.py:131")
+    assert critical_path({"fmax": {}}) is None
+
+
+def test_a_design_that_misses_its_clock_says_by_how_much_and_where() -> None:
+    row = Bitstream("fpga", "LFE5U-25KF-CABGA381", Path("fpga.bit"), 48.2, 100.0, 900, 800, 3.0, critical_path(REPORT))
+    assert not row.meets_clock
+    assert row.timing_failure().startswith("fpga misses its clock: place and route achieved 48.2 MHz on "
+                                           "LFE5U-25KF-CABGA381, clock_mhz is 100 MHz; its critical path, in sobel: "
+                                           "sobel.line_older_FF -> sobel.out_FF")
+    assert Bitstream("fpga", "x", Path("x.bit"), 100.0, 100.0, 1, 1, 1.0).meets_clock
+
+
+def test_figures_use_the_achieved_clock_where_it_is_below_clock_mhz(tmp_path: Path,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    plan = Plan(name="p", root=str(tmp_path), message_paths=(), nodes={}, channels={}, edges=(),
+                targets={"fpga": TargetPlan(name="fpga", kind="fpga", clock_mhz=100.0)})
+    assert target_clock(plan, "fpga", "k1").mhz == 100.0
+    assert "no `hetros hw bitstream` of this design yet" in target_clock(plan, "fpga", "k1").source
+    record_fmax("k1", 48.2, "LFE5U-25KF-CABGA381", "a -> b")
+    slow = target_clock(plan, "fpga", "k1")
+    assert slow.mhz == 48.2 and slow.source.startswith("the Fmax place and route achieved on LFE5U-25KF-CABGA381")
+    record_fmax("k2", 187.0, "LFE5U-25KF-CABGA381", "")
+    fast = target_clock(plan, "fpga", "k2")
+    assert fast.mhz == 100.0 and "which place and route met" in fast.source and "187.0 MHz" in fast.source
+    (tmp_path / "hetros" / "fmax" / "k3.json").write_text("{not json")
+    assert target_clock(plan, "fpga", "k3").mhz == 100.0  # a damaged record is no figure

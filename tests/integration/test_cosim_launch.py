@@ -380,3 +380,93 @@ def test_a_verilog_node_that_ignores_tready_is_caught_at_its_gateway_port(tmp_pa
     result = launch(project, tmp_path)
     assert result.returncode != 0
     assert re.search(r"hardware node echo port 'b' \(/b\): .*before TREADY at cycle \d+", result.stderr), result.stderr
+
+
+def _verilog_echo(tmp_path: Path, body: str, sink: str = "") -> Path:
+    """examples/ping_pong's HLS-shaped echo with its body replaced, on /a -> /b of the echo project."""
+    (tmp_path / "rtl").mkdir(exist_ok=True)
+    text = (EXAMPLES / "ping_pong" / "rtl" / "echo_hls.v").read_text().replace("send_", "a_").replace("recv_", "b_")
+    head = text[:text.index("    assign a_TREADY")]
+    (tmp_path / "rtl" / "echo.v").write_text(head + body + "endmodule\n")
+    project = _echo_project(tmp_path, sink=sink)
+    text = project.read_text().replace('hw: "hetros.hw.nodes:Echo"', "hw: rtl/echo.v:echo_hls")
+    text = text.replace("parameters: {source: /a, sink: /b},", "")
+    project.write_text(text.replace("data_width: 32", "data_width: 64"))
+    return project
+
+
+def test_a_hardware_message_longer_than_its_type_is_refused_at_the_gateway(tmp_path: Path) -> None:
+    """A node that ends its messages with a whole beat (TKEEP all ones) sends bytes beyond the message: the
+    gateway names the port and the sizes instead of publishing something else than the node meant."""
+    project = _verilog_echo(tmp_path, """\
+    assign a_TREADY = !b_TVALID || b_TREADY;
+    always @(posedge ap_clk) begin
+        if (!ap_rst_n) b_TVALID <= 1'b0;
+        else if (a_TREADY) begin
+            b_TVALID <= a_TVALID; b_TDATA <= a_TDATA; b_TLAST <= a_TLAST;
+            b_TKEEP <= a_TLAST ? 8'hFF : a_TKEEP;
+        end
+    end
+""")
+    result = launch(project, tmp_path)
+    assert result.returncode != 0
+    assert re.search(r"echo -> software on /b .*: the hardware sent \d+ bytes, but a std_msgs/msg/UInt8MultiArray "
+                     r"with the fields it holds is \d+ bytes", result.stderr), result.stderr
+
+
+def test_a_node_that_never_takes_its_input_is_named(tmp_path: Path) -> None:
+    project = _verilog_echo(tmp_path, """\
+    assign a_TREADY = 1'b0;
+    always @(posedge ap_clk) b_TVALID <= 1'b0;
+""")
+    result = launch(project, tmp_path)
+    assert result.returncode != 0
+    assert re.search(r"software -> echo on /a .*: hardware node echo has taken no beat for \d+ cycles while a message "
+                     r"waits \(TREADY low at its input\)", result.stderr), result.stderr
+
+
+SIZES = '''
+import numpy as np
+
+from hetros import Node
+from hetros.interfaces.sensor_msgs.msg import Image
+
+
+def camera(node: Node) -> None:
+    """Three images the Sobel's line buffers cannot take (too wide, a header that lies, pixels of the wrong
+    size), then one it can."""
+    pub = node.create_publisher(Image, "/image_raw")
+    pub.publish(Image(height=8, width=80, encoding="mono8", step=80, data=np.zeros(640, np.uint8)))
+    pub.publish(Image(height=9, width=64, encoding="mono8", step=64, data=np.zeros(512, np.uint8)))
+    pub.publish(Image(height=8, width=64, encoding="rgb8", step=64, data=np.zeros(512, np.uint8)))
+    pub.publish(Image(height=8, width=64, encoding="mono8", step=64, data=np.full(512, 7, np.uint8)))
+
+
+def sobel(node: Node) -> None:
+    """The software mapping's filter (unused here: the fpga mapping runs the hardware)."""
+    out = node.create_publisher(Image, "/image_edges")
+    node.create_subscription(Image, "/image_raw", out.publish)
+
+
+def display(node: Node) -> None:
+    edges = node.create_subscription(Image, "/image_edges").take(timeout=60)
+    node.log.info("one image through, %dx%d", edges.width, edges.height)
+'''
+
+
+def test_images_a_filter_cannot_take_are_refused_naming_node_port_and_fix(tmp_path: Path) -> None:
+    (tmp_path / "nodes.py").write_text(SIZES)
+    project = (EXAMPLES / "sobel_hw" / "project_fpga.yaml").read_text()
+    project = project.replace("parameters: {frames: 8, height: 48, width: 64},", "")
+    project = project.replace("parameters: {frames: 8, height: 48, width: 64, out: out/sobel_hw},", "")
+    (tmp_path / "project.yaml").write_text(project)
+    result = launch(tmp_path / "project.yaml", tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "one image through, 64x8" in result.stderr
+    refused = re.findall(r"hardware node sobel on /image_raw refused a message \(\d so far; it never went in\): (.*)",
+                         result.stderr)
+    assert len(refused) == 3, result.stderr
+    assert "wider than the node's line buffers (64 pixels of 1 bytes): set the node's width parameter to at " \
+           "least 80" in refused[0]
+    assert "header says 9 rows of 64 bytes (576 bytes) carries 512 bytes" in refused[1]
+    assert "a rgb8 image has 3-byte pixels, but this node takes 1-byte pixels" in refused[2]

@@ -34,6 +34,8 @@ class GatewayPort:
     # the hardware node reads (an input) or writes (an output) this topic's messages in memory: the port
     # carries descriptors in and completions out (``_memory``); its node
     memory_node: str = ""
+    # an input's hardware nodes: each may check a message before it goes in (``check_message``)
+    readers: tuple[str, ...] = ()
 
 
 SimulatedTop = VerilatedTop | AmaranthTop
@@ -77,7 +79,9 @@ class TargetSimulation:
             into = self.inputs if feeds else self.outputs
             in_memory = [n for n in peers if topic.name in plan.nodes[n].memory]
             into.append(GatewayPort(topic.name, topic.type, len(into), port, topic.service,
-                                    memory_node=in_memory[0] if in_memory else ""))
+                                    memory_node=in_memory[0] if in_memory else "",
+                                    readers=tuple(peers) if feeds else ()))
+        self.components = components
         self.memories = [MemoryPort(f"m_axi_{node}", f"hardware node {node}'s memory port (mem)")
                          for node in top.memory_ports]
         started = time.perf_counter()

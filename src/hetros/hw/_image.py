@@ -13,6 +13,8 @@ in ``hetros.hw.reference``, the bit-exact specification the tests hold the hardw
 
 from __future__ import annotations
 
+from typing import Any
+
 from amaranth import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.hdl import Value
 from amaranth.lib import wiring
@@ -24,6 +26,9 @@ from ._build import port_part
 from ._bytes import bytes_in, bytes_out
 from ._stream import axi_stream
 
+# bytes per pixel of the encodings whose pixels are bytes (sensor_msgs/image_encodings)
+_BYTES_PER_PIXEL = {"mono8": 1, "8UC1": 1, "8SC1": 1, "rgb8": 3, "bgr8": 3, "8UC3": 3, "rgba8": 4, "bgra8": 4,
+                    "8UC4": 4, "mono16": 2, "16UC1": 2}
 # the byte walk over sensor_msgs/msg/Image's CDR body
 _STAMP, _FRAME_LEN, _FRAME, _PAD1, _HEIGHT, _WIDTH, _ENC_LEN, _ENC, _BIGEND, _PAD2, _STEP, _DATA_LEN, _DATA = \
     range(13)
@@ -45,6 +50,34 @@ class ImageFilter3x3(wiring.Component):
         self._source, self._sink = port_part(source), port_part(sink)
         self.data_width, self.width, self.channels = data_width, width, channels
         super().__init__({self._source: In(axi_stream(data_width)), self._sink: Out(axi_stream(data_width))})
+
+    def check_message(self, topic: str, message: Any) -> None:
+        """The images this node can filter, checked in software before one goes in (the gateway refuses
+        the others, naming why): a line wider than the line buffers would wrap them and give wrong pixels,
+        and a frame whose pixels do not match its header would be walked wrong."""
+        height, width, step = int(message.height), int(message.width), int(message.step)
+        size = len(message.data)
+        encoding = str(message.encoding)
+        pixel = _BYTES_PER_PIXEL.get(encoding)
+        if pixel is not None and pixel != self.channels:
+            raise HardwareError(f"a {encoding} image has {pixel}-byte pixels, but this node takes {self.channels}-byte "
+                                "pixels (its channels parameter): set channels to match, or send "
+                                f"{'mono8' if self.channels == 1 else 'rgb8'} images")
+        if size != height * step:
+            raise HardwareError(f"an image whose header says {height} rows of {step} bytes ({height * step} bytes) "
+                                f"carries {size} bytes of pixels: fix the publisher (height, step and data must "
+                                "agree)")
+        if step < width * self.channels:
+            raise HardwareError(f"an image {width} pixels wide has a step of {step} bytes, less than {width} x "
+                                f"{self.channels} bytes a pixel: this node takes {self.channels}-byte pixels "
+                                "(its channels parameter); fix the step or the node's channels")
+        if step > self.width * self.channels:
+            raise HardwareError(f"an image line of {step} bytes ({width} pixels) is wider than the node's line "
+                                f"buffers ({self.width} pixels of {self.channels} bytes): set the node's width "
+                                f"parameter to at least {-(-step // self.channels)}, or send narrower images")
+        if height < 3 or width < 3:
+            raise HardwareError(f"an image of {width}x{height} pixels is too small for a 3x3 window: send images of "
+                                "at least 3x3")
 
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         """The output pixel of a window (rows top to bottom, each column left to right), 8 bits."""

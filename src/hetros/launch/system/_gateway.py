@@ -46,6 +46,9 @@ from ...transport.tcpros import Ros1Peer, Ros1Type, receive_frames
 
 log = get_logger("hetros.cosim")
 
+# cycles an input may hold a waiting message without its hardware taking a beat before the gateway names the
+# node (0.1 s at 100 MHz: a node streams its input; one that never raises TREADY stops its publishers)
+_STUCK_CYCLES = 10_000_000
 # seconds between looks at an output whose subscriber was full (taking does not wake the gateway)
 _HELD_POLL = 0.002
 # messages a gateway keeps queued at an input port: enough that the hardware never waits for Python
@@ -73,9 +76,16 @@ def _prepare(plan: Plan, name: str, types: TypeRegistry) -> None:
 class _Input:
     """Where one input port's messages come from: a subscription, or a service's request channel."""
 
-    def __init__(self, node: Node, port: GatewayPort, types: TypeRegistry) -> None:
+    def __init__(self, node: Node, port: GatewayPort, types: TypeRegistry,
+                 components: dict[str, Any] | None = None) -> None:
         self.port = port
         self.codec = types.codec(port.type)
+        # what the port's hardware nodes can take, checked before a message goes in (a wider image than a
+        # node's line buffers would give wrong pixels with no word); requests are not refused (the asker waits)
+        self.checks = [] if port.service else [
+            (name, check) for name in port.readers
+            if (check := getattr((components or {}).get(name), "check_message", None)) is not None]
+        self.refused = 0
         # who asked, in the order their requests went into the hardware (a hardware server answers in order)
         self.asked: deque[tuple[int, str]] = deque()
         self.copied_bytes = 0  # what the CPU copied: each message's body, into the simulator
@@ -99,9 +109,24 @@ class _Input:
     def feed(self, top: SimulatedTop) -> None:
         """Take one message and encode it straight into the simulator's input queue (its one copy)."""
         item = self.next_message()
+        while not self._fits(item):
+            item = self.next_message()
         size = self.codec.size(item)
         self.codec.encode(item, top.loan_input(self.port.index, size))
         self.copied_bytes += size
+
+
+    def _fits(self, item: Any) -> bool:
+        for name, check in self.checks:
+            try:
+                check(self.port.topic, item)
+            except HardwareError as exc:
+                self.refused += 1
+                if self.refused <= 10 or self.refused % 100 == 0:
+                    log.error("hardware node %s on %s refused a message (%d so far; it never went in): %s", name,
+                              self.port.topic, self.refused, exc)
+                return False
+        return True
 
 
 class _Output:
@@ -123,7 +148,16 @@ class _Output:
     def send(self, body: memoryview) -> None:
         """Publish a message decoded in place from the simulator's memory: its arrays are views there, and
         the transport's send is their one copy (the gateway's process has no other node to keep them)."""
-        message = self.codec.decode(body)
+        try:
+            message = self.codec.decode(body)
+        except SerializationError as exc:
+            raise HardwareError(f"{self.port.port.label}: what the hardware sent is not a {self.port.type}: {exc}; "
+                                "the node must send one whole message per TLAST") from None
+        expected = self.codec.size(message)
+        if expected != len(body):
+            raise HardwareError(f"{self.port.port.label}: the hardware sent {len(body)} bytes, but a {self.port.type} "
+                                f"with the fields it holds is {expected} bytes: the node must send one whole message "
+                                "per TLAST (check the lengths it writes and where it ends the message)")
         self.copied_bytes += len(body)
         if self.replies is None:
             assert self.publisher is not None
@@ -267,6 +301,31 @@ class _Completions:
         self.pair.complete(body)
 
 
+class _StuckInputs:
+    """Names a hardware node that holds a waiting message at its input without taking a beat for
+    ``_STUCK_CYCLES``: its publishers then stop with a timeout that blames the gateway's process, and this
+    line says which node, at which port, keeps TREADY low."""
+
+    def __init__(self, top: SimulatedTop, ports: list[GatewayPort]) -> None:
+        self.top, self.ports = top, [p for p in ports if not p.memory_node]
+        self.beats = [-1] * len(self.ports)
+        self.since = [0] * len(self.ports)
+        self.named: set[int] = set()
+
+    def look(self) -> None:
+        top = self.top
+        for slot, port in enumerate(self.ports):
+            beats = top.stats(False, port.index)[1]
+            if beats != self.beats[slot] or not top.queued(port.index):
+                self.beats[slot], self.since[slot] = beats, top.cycle
+            elif top.cycle - self.since[slot] > _STUCK_CYCLES and slot not in self.named:
+                self.named.add(slot)
+                nodes = ", ".join(port.readers) or "the hardware"
+                log.error("%s: hardware node %s has taken no beat for %d cycles while a message waits (TREADY low "
+                          "at its input): a node that never raises TREADY stops its publishers; check its TREADY "
+                          "logic", port.port.label, nodes, top.cycle - self.since[slot])
+
+
 def _ros1_peer(node: Node, plan: Plan, target: str) -> Ros1Peer | None:
     spec = plan.targets[target]
     if not spec.ros1_export and not spec.ros1_import:
@@ -299,8 +358,8 @@ def gateway(node: Node) -> None:
                  for p in simulation.inputs if p.memory_node}
     inputs: list[_Input | _FramesFromRos1 | _InMemory] = [
         in_memory[port.memory_node] if port.memory_node else
-        _FramesFromRos1(node, peer, port, types) if peer is not None and port.ros1 else _Input(node, port, types)
-        for port in simulation.inputs]
+        _FramesFromRos1(node, peer, port, types) if peer is not None and port.ros1
+        else _Input(node, port, types, simulation.components) for port in simulation.inputs]
     asked = {i.port.service: i.asked for i in inputs if isinstance(i, _Input) and i.port.service}
     latched = {t for t, q in plan.ros1_qos.items() if q.keeps_history} | {
         c.name for c in plan.channels.values() if c.qos.keeps_history}
@@ -313,6 +372,7 @@ def gateway(node: Node) -> None:
     wall = 0.0
     pushed = popped = last_moved = 0
     quiet = idle_cycles
+    stuck = _StuckInputs(top, simulation.inputs)
     try:
         while not stop.is_set():
             seen = node.executor.generation
@@ -328,6 +388,7 @@ def gateway(node: Node) -> None:
             started = time.perf_counter()
             events = top.run(_CHUNK, _CHUNK if working else quiet)
             wall += time.perf_counter() - started
+            stuck.look()
             held = False  # an output whose subscriber is full: its messages wait in the simulator
             for out in outputs:
                 while (produced := top.front(out.port.index)) is not None:

@@ -314,8 +314,60 @@ def test_a_verilog_node_names_what_its_module_lacks(tmp_path: Path) -> None:
                                          r"tdata, tkeep, tlast, tvalid and tready\)"):
         plan(load_project(tmp_path / "project.yaml"))
     (tmp_path / "echo.v").write_text(source.replace("[63:0] recv_TDATA", "[31:0] recv_TDATA"))
-    with pytest.raises(CheckError, match=r"recv_tdata must be 64 bits for the target's data_width 64, not 32"):
+    with pytest.raises(CheckError, match=r"recv_TDATA is 32 bits \(\[31:0\]\), but must be 64 for the target's "
+                                         r"data_width 64"):
         plan(load_project(tmp_path / "project.yaml"))
+
+
+@pytest.mark.parametrize(("parameters", "error"), [
+    ("", r"send_TDATA is 32 bits \(\[W-1:0\] with W = 32\), but must be 64 for the target's data_width 64: set "
+         r"the module's parameters in the node's parameters"),
+    ("parameters: {W: 64}", None),
+    ("parameters: {W: 16}", r"send_TDATA is 16 bits \(\[W-1:0\] with W = 16\)"),
+])
+def test_a_verilog_nodes_port_widths_are_elaborated_with_its_parameters(tmp_path: Path, parameters: str,
+                                                                       error: str | None) -> None:
+    """``[W-1:0]`` is checked as the node elaborates it: the module's default, or the node's parameter."""
+    from hetros import CheckError
+
+    source = (Path(__file__).resolve().parents[2] / "examples" / "ping_pong" / "rtl" / "echo_hls.v").read_text()
+    source = source.replace("#(parameter STAGES = 1)", "#(parameter STAGES = 1, parameter W = 32)")
+    for port in ("send", "recv"):
+        source = source.replace(f"[63:0] {port}_TDATA", f"[W-1:0] {port}_TDATA").replace(
+            f"[7:0]  {port}_TKEEP", f"[W/8-1:0] {port}_TKEEP")
+    (tmp_path / "echo.v").write_text(source)
+    (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""\
+        name: widths
+        targets: {{io: {{kind: process}}, fpga: {{kind: fpga}}}}
+        nodes:
+          ping: {{run: json:dumps, target: io, publish: {{/send: std_msgs/msg/String}},
+                 subscribe: {{/recv: std_msgs/msg/String}}}}
+          copy: {{run: json:dumps, hw: "echo.v:echo_hls", target: fpga, {parameters + "," if parameters else ""}
+                 subscribe: {{/send: std_msgs/msg/String}}, publish: {{/recv: std_msgs/msg/String}}}}
+        """))
+    if error is None:
+        plan(load_project(tmp_path / "project.yaml"))
+    else:
+        with pytest.raises(CheckError, match=error):
+            plan(load_project(tmp_path / "project.yaml"))
+
+
+@pytest.mark.parametrize(("text", "value"), [("W-1", 63), ("W/8-1", 7), ("$clog2(W)", 6), ("8'd16 * 2", 32),
+                                             ("(W << 1) - 1", 127), ("-1 + W % 5", 3), ("8'hFF", 255)])
+def test_verilog_constant_expressions_evaluate_as_elaboration_would(text: str, value: int) -> None:
+    from hetros.hw._verilog_node import constant
+
+    assert constant(text, {"W": 64}) == value
+
+
+def test_a_range_hetros_cannot_evaluate_is_named() -> None:
+    from hetros import HardwareError
+    from hetros.hw._verilog_node import constant
+
+    with pytest.raises(HardwareError, match="uses DEPTH, which hetros cannot evaluate"):
+        constant("DEPTH-1", {"W": 64})
+    with pytest.raises(HardwareError, match="cannot be evaluated"):
+        constant("W / 0", {"W": 64})
 
 
 def test_the_execution_models_of_a_chain_time_dataflow_against_sequential() -> None:

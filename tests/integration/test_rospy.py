@@ -56,6 +56,30 @@ def test_the_talker_and_listener(tmp_path: Path) -> None:
     assert "Traceback" not in done.stderr
 
 
+def test_three_subscriptions_to_one_topic_in_one_node_each_hear_every_message(tmp_path: Path) -> None:
+    """003_listener_with_user_data, unchanged: three rospy.Subscribers on "chatter" in one node (userdata 1,
+    2 and a tuple) and one on "chatter2", which nobody publishes (ROS lets it wait), beside 001's talker."""
+    import shutil
+
+    folder = tmp_path / "scripts"
+    folder.mkdir()
+    shutil.copy(f"{RUN}/003_listener_with_user_data/listener_with_user_data.py", folder)
+    shutil.copy(f"{RUN}/001_talker_listener/talker.py", folder)
+    made = subprocess.run([sys.executable, "-m", "hetros", "init", str(folder), "-o", str(tmp_path / "project.yaml"),
+                           "--name", "user_data"], capture_output=True, text=True, timeout=60, check=False)
+    assert made.returncode == 0, made.stderr
+    project = yaml.safe_load((tmp_path / "project.yaml").read_text())
+    done = launch(tmp_path, project, 3.0)
+    assert done.returncode == 0, done.stderr
+    output = done.stdout + done.stderr
+    first = re.findall(r"#1: I heard \[(hello world [\d.]+)\]", output)
+    second = re.findall(r"#2: I heard \[(hello world [\d.]+)\]", output)
+    third = re.findall(r"I heard \[(hello world [\d.]+)\] with userdata \[\('chatter1', 4\)\]", output)
+    # the first subscription may hear a message or two before the script makes the others (as in ROS)
+    assert len(second) >= 10 and second[:10] == third[:10], output
+    assert second[0] in first and first[first.index(second[0]):][:10] == second[:10], output
+
+
 def test_the_add_two_ints_server_and_client(tmp_path: Path) -> None:
     project = init(tmp_path, "005_add_two_ints")
     assert project["nodes"]["add_two_ints_server"]["services"] == {"add_two_ints": "rospy_tutorials/srv/AddTwoInts"}

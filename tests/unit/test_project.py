@@ -42,7 +42,22 @@ def test_examples_check_clean() -> None:
         assert report.errors == [], path
 
 
-@pytest.mark.parametrize("case", sorted(p.stem for p in CASES.glob("*.yaml")))
+@pytest.mark.parametrize("case", sorted(p.stem for p in CASES.glob("warn_*.yaml")))
+def test_doubtful_projects_plan_with_a_warning_naming_yaml_path_and_fix(case: str) -> None:
+    """What ROS allows but is often a mistake (a subscriber nobody publishes to: waiting for `topic pub`,
+    or a typo) plans, with a warning that says where and offers the fix."""
+    path = CASES / f"{case}.yaml"
+    expected = [line.removeprefix("# warn: ").strip()
+                for line in path.read_text().splitlines() if line.startswith("# warn: ")]
+    assert expected, f"case {case} states no expected warning"
+    report = check(load_project(path))
+    assert report.errors == []
+    for fragment in expected:
+        assert any(fragment in warning for warning in report.warnings), (fragment, report.warnings)
+    plan(load_project(path))
+
+
+@pytest.mark.parametrize("case", sorted(p.stem for p in CASES.glob("*.yaml") if not p.stem.startswith("warn_")))
 def test_invalid_projects_report_yaml_path_and_fix(case: str) -> None:
     path = CASES / f"{case}.yaml"
     expected = [line.removeprefix("# expect: ").strip()

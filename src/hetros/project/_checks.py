@@ -214,7 +214,9 @@ def actions_pair(c: CheckContext) -> None:
 
 
 def subscriptions_have_publishers(c: CheckContext) -> None:
-    """A subscribed topic has a publisher here, in an import, or in a recording."""
+    """A subscribed topic with no publisher here, in an import or in a recording is a warning, not an error:
+    ROS lets a subscriber wait (for `hetros topic pub`, a recording played later, a peer), but a typo in
+    a topic name looks the same, so the nearest published name is offered."""
     imported = {t for spec in c.external.values() for t in spec.import_} | c.project.replayed
     for topic, subscribed in c.subscribers.items():
         if topic in c.derived or topic in c.publishers or topic in imported:
@@ -222,9 +224,10 @@ def subscriptions_have_publishers(c: CheckContext) -> None:
         for nname, _ in subscribed:
             if nname in c.speaks_ros1:
                 continue  # a ROS 1 node's topic may come from any ROS 1 publisher
-            c.error(f"{c.project.where('nodes', nname, 'subscribe', topic)}: nobody publishes {topic}"
-                    f"{_nearest(topic, c.publishers)}; add a publisher under some node's 'publish', import it from "
-                    "ROS 1 or ROS 2 (external: ros1: / ros2: import:) or remove this subscription")
+            c.report.warnings.append(
+                f"{c.project.where('nodes', nname, 'subscribe', topic)}: nobody in the project publishes {topic}"
+                f"{_nearest(topic, c.publishers)}; the subscription waits (for `hetros topic pub`, a recording or "
+                "a peer); to hear a ROS 1 or ROS 2 publisher, import the topic (external: ros1: / ros2: import:)")
 
 
 def one_type_per_topic(c: CheckContext) -> None:

@@ -8,12 +8,15 @@ message whose arrays live in a transport's memory (a loan) leaves with that tran
 
 from __future__ import annotations
 
+import threading
+from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
 
 from .._errors import TransportError
+from .._qos import QoS
 from ..msg import (
     LoanBuffer,
     Message,
@@ -221,3 +224,135 @@ class RetainedReader(Reader):
     def close(self) -> None:
         self.relay.target = None
         self._release(self)
+
+
+class TopicReaders:
+    """One node's transport reader of a topic, shared by every subscription the node makes to it.
+
+    ROS delivers each message to each subscription, and two subscriptions of one node to one topic are
+    common (rospy_tutorials' "with userdata", a callback and a ``take`` loop side by side). The plan
+    has one endpoint per node and topic, so the node opens the topic once; a second subscription turns
+    the reader into branches, one FIFO per subscription, each with its subscription's depth. A reliable
+    keep_all branch that is full stops the reader from taking more, so the FIFO behind it fills and
+    the publisher waits, as for a slow subscriber; a keep_last branch drops its oldest.
+    """
+
+    def __init__(self, inner: Reader, relay: Relay, forget: Callable[[], None]) -> None:
+        self.inner = inner
+        self.relay = relay
+        self._forget = forget
+        self._lock = threading.Lock()
+        self._branches: list[_Branch] = []
+        self.closed = False
+
+    def sole(self) -> Reader:
+        """The reader of the first subscription (the relay wakes it): the transport's own, until a second
+        one comes."""
+        return _Sole(self)
+
+    def branch(self, wake: Wake, qos: QoS) -> Reader:
+        """One subscription's own FIFO of the topic (the first subscription's too, once there are two)."""
+        branch = _Branch(self, wake, qos)
+        with self._lock:
+            self._branches.append(branch)
+        self.relay.target = self._wake_all
+        wake()  # what the transport already holds is this branch's too
+        return branch
+
+    def _wake_all(self) -> None:
+        for branch in list(self._branches):
+            branch.wake()
+
+    def fill(self, taker: _Branch) -> None:
+        """Move what the transport holds into every branch, while each that must not lose has room."""
+        woken: list[_Branch] = []
+        with self._lock:
+            branches = self._branches
+            while not any(b.blocking and len(b.items) >= b.depth for b in branches):
+                item = self.inner.try_take()
+                if item is None:
+                    break
+                for branch in branches:
+                    if len(branch.items) >= branch.depth:
+                        branch.items.popleft()
+                        branch.dropped += 1
+                    branch.items.append(item)
+                    if branch is not taker and branch not in woken:
+                        woken.append(branch)
+        for branch in woken:
+            branch.wake()
+
+    def remove(self, branch: _Branch) -> None:
+        with self._lock:
+            if branch in self._branches:
+                self._branches.remove(branch)
+            last = not self._branches
+        if last:
+            self.close()
+
+    def close(self) -> None:
+        if not self.closed:
+            self.closed = True
+            self._forget()
+            self.inner.close()
+
+
+class _Sole(Reader):
+    """A node's only subscription to a topic: the transport's reader as it is (its fast take included)."""
+
+    def __init__(self, shared: TopicReaders) -> None:
+        self.shared = shared
+
+    def try_take(self) -> Any | None:
+        return self.shared.inner.try_take()
+
+    def taker(self) -> Callable[[], Any | None]:
+        return self.shared.inner.taker()
+
+    def pending(self) -> bool:
+        return self.shared.inner.pending()
+
+    def liveliness(self) -> tuple[int, int] | None:
+        return self.shared.inner.liveliness()
+
+    def counters(self) -> dict[str, int]:
+        return self.shared.inner.counters()
+
+    def close(self) -> None:
+        self.shared.close()
+
+
+class _Branch(Reader):
+    def __init__(self, shared: TopicReaders, wake: Wake, qos: QoS) -> None:
+        self.shared = shared
+        self.wake = wake
+        self.depth = qos.depth
+        self.blocking = qos.blocks_publisher
+        self.items: deque[Any] = deque()
+        self.dropped = 0  # keep_last: replaced in this branch before its subscription took them
+
+    def try_take(self) -> Any | None:
+        if not self.items:
+            self.shared.fill(self)
+        try:
+            item = self.items.popleft()
+        except IndexError:
+            return None
+        if self.blocking:  # room freed here: what waited behind a full branch can move on
+            self.shared.fill(self)
+        return item
+
+    def pending(self) -> bool:
+        return bool(self.items) or self.shared.inner.pending()
+
+    def liveliness(self) -> tuple[int, int] | None:
+        return self.shared.inner.liveliness()
+
+    def counters(self) -> dict[str, int]:
+        merged = dict(self.shared.inner.counters())
+        if self.dropped:
+            merged["dropped"] = merged.get("dropped", 0) + self.dropped
+        return merged
+
+    def close(self) -> None:
+        self.shared.remove(self)

@@ -30,6 +30,7 @@ from ._executor import AdaptiveSpin
 from ._qos_events import (
     DeadlineWatch,
     LivelinessWatch,
+    WatchedReader,
 )
 from ._taps import taking_tap
 
@@ -205,6 +206,7 @@ class Subscription(Generic[M]):
         self._injected: deque[M] = deque()
         self._inject_lock = threading.Lock()
         self._plain_take: Callable[[], M | None] | None = None  # the take that injection stands in front of
+        self._watch: DeadlineWatch | None = None  # the topic's deadline, watched on this subscription's reader
 
     def _attach(self, reader: Reader) -> None:
         self._reader = reader
@@ -212,6 +214,10 @@ class Subscription(Generic[M]):
         point = self.node.graph.subscriber_tap(self.topic, self.typename)
         if point is not None:
             self._take = taking_tap(self._take, point)
+
+    def _rebase(self, reader: Reader) -> None:
+        """Take from ``reader`` from now on (its own branch, once the node subscribes to the topic again)."""
+        self._attach(reader if self._watch is None else WatchedReader(reader, self._watch))
 
     def inject(self, message: M) -> None:
         """Deliver ``message`` to this subscription as if a publisher had sent it (``hetros topic pub``):

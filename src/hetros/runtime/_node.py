@@ -26,6 +26,7 @@ from .._qos import QoS
 from ..msg import ActionKind, Message, ServiceKind, service_type
 from ..plan import ROS1_TRANSPORT, NodePlan, request_channel, resolve_name
 from ._clock import Clock, SimulatedTimer, Ticker
+from ._endpoints import Relay, TopicReaders
 from ._entities import Client, HandlingStats, Publisher, Service, Subscription, Timer, typename_of
 from ._executor import Executor
 from ._graph import Graph
@@ -39,6 +40,7 @@ from ._qos_events import (
 )
 
 if TYPE_CHECKING:
+    from ..transport import Reader
     from ._action import ActionClient, ActionServer, ServerGoalHandle
 
 M = TypeVar("M", bound=Message)
@@ -65,6 +67,9 @@ class Node:
                               | ActionClient] = []
         self.clients: dict[str, Client] = {}
         self.action_servers: dict[str, ActionServer] = {}
+        # each topic's transport reader, shared by this node's subscriptions to it (``_topic_reader``)
+        self._topic_readers: dict[str, TopicReaders] = {}
+        self._first_subscription: dict[str, Subscription[Any]] = {}
         # set when the node raised and the graph will stop for it: what it leaves unfinished is
         # then explained by the graph's stop reason rather than answered
         self.failing = False
@@ -140,9 +145,10 @@ class Node:
         if callback is not None:
             self.executor.entities += 1
             self.executor.poll_while_spinning(subscription)
-        reader = self.graph.open_reader(topic, self.name, typename, subscription._on_wake, qos=qos)
         effective = self.graph.qos_of(topic, None)
+        reader = self._topic_reader(subscription, typename, qos)
         watch = watch_deadline(self, f"subscription to {topic} in {self.name}", effective.deadline, on_deadline_missed)
+        subscription._watch = watch
         subscription._attach(reader if watch is None else WatchedReader(reader, watch))
         if on_liveliness_changed is not None or effective.liveliness == "manual_by_topic" or \
                 effective.lease_duration is not None:
@@ -150,6 +156,30 @@ class Node:
                                                       effective.lease_duration, on_liveliness_changed)
         self._closables.append(subscription)
         return subscription
+
+    def _topic_reader(self, subscription: Subscription[Any], typename: str, qos: QoS | None) -> Reader:
+        """The reader of one more subscription to its topic: the topic's transport reader for the first,
+        branches of it once there are two (every subscription gets every message, as in ROS)."""
+        topic = subscription.topic
+        shared = self._topic_readers.get(topic)
+        if shared is None or shared.closed:
+            relay = Relay()
+            relay.target = subscription._on_wake  # before opening: a reader with messages waiting wakes at once
+            inner = self.graph.open_reader(topic, self.name, typename, relay, qos=qos)
+            shared = TopicReaders(inner, relay, lambda: self._forget_topic(topic))
+            self._topic_readers[topic] = shared
+            self._first_subscription[topic] = subscription
+            return shared.sole()
+        effective = self.graph.qos_of(topic, qos)
+        first = self._first_subscription.pop(topic, None)
+        if first is not None and first._reader is not None:  # the first one becomes a branch too
+            first._rebase(shared.branch(first._on_wake, self.graph.qos_of(topic, None)))
+        return shared.branch(subscription._on_wake, effective)
+
+    def _forget_topic(self, topic: str) -> None:
+        """Every subscription to ``topic`` closed: a later one opens the topic afresh."""
+        self._topic_readers.pop(topic, None)
+        self._first_subscription.pop(topic, None)
 
     def create_service(self, srv_type: ServiceKind, name: str, handler: Callable[[Any], Any]) -> Service:
         srv_type = service_type(srv_type)

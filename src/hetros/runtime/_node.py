@@ -145,8 +145,8 @@ class Node:
         if callback is not None:
             self.executor.entities += 1
             self.executor.poll_while_spinning(subscription)
-        effective = self.graph.qos_of(topic, None)
         reader = self._topic_reader(subscription, typename, qos)
+        effective = self.graph.qos_of(topic, None)  # after opening: the first opener's QoS is an ad-hoc topic's
         watch = watch_deadline(self, f"subscription to {topic} in {self.name}", effective.deadline, on_deadline_missed)
         subscription._watch = watch
         subscription._attach(reader if watch is None else WatchedReader(reader, watch))

@@ -16,6 +16,7 @@ from .._errors import LaunchError, NodeError, ShutdownError
 from .._log import get_logger
 from ..msg import registry
 from ..plan import NodePlan, Plan
+from ._argv import set_node_argv
 from ._graph import Graph
 from ._log import node_logger
 from ._node import Node
@@ -48,13 +49,13 @@ def resolve(run: str, root: str, args: tuple[str, ...] = ()) -> Callable[..., An
 
 def script_main(path: Path, args: tuple[str, ...]) -> Callable[[], None]:
     """A script as a ROS main(): run as ``__main__`` (a ROS 1 node's script keeps its logic under
-    ``if __name__ == "__main__":``), ``sys.argv`` its path and ``args``. The argv is the process'."""
+    ``if __name__ == "__main__":``), ``sys.argv`` its path and ``args`` (this node's own, ``_argv``)."""
     if not path.is_file():
         raise LaunchError(f"run: {path} is not a file: give a script's path relative to the project file, or "
                           "module:function")
 
     def main() -> None:
-        sys.argv = [str(path), *args]
+        set_node_argv([str(path), *args])
         try:
             runpy.run_path(str(path), run_name="__main__")
         except SystemExit as exit_:
@@ -62,6 +63,32 @@ def script_main(path: Path, args: tuple[str, ...]) -> Callable[[], None]:
                 raise NodeError(f"script {path.name} exited with {exit_.code!r}") from None
     main.__qualname__ = main.__name__ = path.name
     return main
+
+
+def _program(run: str, body: Callable[..., Any]) -> str:
+    """``sys.argv[0]`` of a node: its script, or the file of the module its ``run:`` names (a console
+    script's argv[0] is its own file too)."""
+    if ":" not in run:
+        return run
+    module = sys.modules.get(run.partition(":")[0])
+    return str(getattr(module, "__file__", None) or getattr(body, "__module__", run))
+
+
+def _give_thread_an_event_loop() -> Any:
+    """A node's main() runs in a thread of its own, where asyncio has no loop: ROS code that calls
+    ``asyncio.get_event_loop()`` (ros2/examples' client_asyncio) gets one, as in a process's main thread.
+    Only where the node's module imported asyncio: a worker that never uses it does not pay for it (it maps
+    OpenSSL) nor for the loop's two file descriptors per node."""
+    asyncio = sys.modules.get("asyncio")
+    if asyncio is None:
+        return None
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        loop = asyncio.new_event_loop()
+        asyncio.set_event_loop(loop)
+        return loop  # closed when the node ends
+    return None
 
 
 def run_node_body(factory: Callable[..., Any], node: Node) -> None:
@@ -122,8 +149,12 @@ class NodeThread:
         while not self.graph.stop.is_set():
             node = Node(self.spec.name, self.graph)
             finished = False
+            loop: Any = None
             try:
-                run_node_body(resolve(self.spec.run, self.spec.root or root, self.spec.args), node)
+                body = resolve(self.spec.run, self.spec.root or root, self.spec.args)
+                set_node_argv([_program(self.spec.run, body), *self.spec.args])
+                loop = _give_thread_an_event_loop()
+                run_node_body(body, node)
                 finished = True
                 if not self.graph.stop.is_set():
                     self.on_done(self.spec.name)
@@ -151,6 +182,8 @@ class NodeThread:
                 )
                 self.graph.stop.wait(min(0.2 * 2**restarts, 2.0))
             finally:
+                if loop is not None and not loop.is_running() and not loop.is_closed():
+                    loop.close()
                 node.report_times()
                 node.close()
                 if finished:  # done for good: its FIFOs, kept for a restart, hold back no publisher now

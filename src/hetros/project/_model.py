@@ -113,7 +113,8 @@ class NodeSpec(_Strict):
     run: str = Field(description="module:function (or module:Class) of the node's code, the module beside the "
                      "project file; or the path of a script (relative to the project file) run as __main__, "
                      "as a ROS 1 node's script is")
-    args: list[str] = Field(default_factory=list, description="a script's command-line arguments (its sys.argv[1:])")
+    args: list[str] = Field(default_factory=list, description="the node's command-line arguments (its sys.argv[1:], "
+                                                          "for a script or a module:function alike)")
     hw: str | None = Field(default=None, description="module:Component or file.v:module: the node's hardware "
                            "implementation, an Amaranth component or a Verilog module whose stream ports are named "
                            "after its topics; on an fpga target it is what runs")
@@ -217,7 +218,7 @@ class InstanceSpec(_Strict):
     parameters: dict[str, Any] = Field(default_factory=dict, description="parameters over the node's")
     parameter_files: list[str] = Field(default_factory=list, description="parameter files after the node's")
     env: dict[str, str] = Field(default_factory=dict, description="environment over the node's")
-    args: list[str] | None = Field(default=None, description="a script's arguments (absent: the node's)")
+    args: list[str] | None = Field(default=None, description="the node's arguments (absent: the node's)")
 
 
 class GroupSpec(_Strict):

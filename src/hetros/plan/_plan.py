@@ -110,7 +110,7 @@ class NodePlan:
     max_goals: dict[str, int] = field(default_factory=dict)
     # "module:Component": the node's hardware implementation, which runs where it is on an fpga target
     hw: str = ""
-    # a script's command-line arguments (``run:`` a script's path)
+    # the node's command-line arguments (its sys.argv[1:], a script's or a module:function's)
     args: tuple[str, ...] = ()
     # how its code's names resolve (``plan.resolve_name``): namespace, remaps, its ROS name ("" = its own)
     namespace: str = ""

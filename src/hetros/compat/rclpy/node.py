@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from ..._errors import ParameterError
+from ..._errors import NodeError, ParameterError
 from ...msg import copy as copy_message
 from ...plan import join_namespace
 from ...runtime import Clock, Ticker, bound_node
@@ -292,22 +292,44 @@ class Node:
     # -- endpoints -----------------------------------------------------------------------------
 
     def create_publisher(self, msg_type: type[Any], topic: str, qos_profile: QoSProfile | int, *,
-                         callback_group: CallbackGroup | None = None, **_ignored: Any) -> Publisher:
+                         callback_group: CallbackGroup | None = None, event_callbacks: Any = None,
+                         qos_overriding_options: Any = None, publisher_class: Any = None) -> Publisher:
         name = self.resolve_topic_name(topic)
-        return Publisher(self, self._hetros.create_publisher(msg_type, name, qos=to_hetros(qos_profile)), msg_type,
-                         name)
+        deadline = None
+        if event_callbacks is not None:
+            from .event_handler import supported
+
+            supported(event_callbacks, f"publisher of {name}")
+            deadline = event_callbacks.deadline
+        _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}")
+        inner = self._hetros.create_publisher(msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline)
+        return Publisher(self, inner, msg_type, name)
 
     def create_subscription(self, msg_type: type[Any], topic: str, callback: Callable[[Any], None],
                             qos_profile: QoSProfile | int, *, callback_group: CallbackGroup | None = None,
-                            **_ignored: Any) -> Subscription:
+                            event_callbacks: Any = None, qos_overriding_options: Any = None, raw: bool = False,
+                            content_filter_options: Any = None, subscription_class: Any = None) -> Subscription:
         name = self.resolve_topic_name(topic)
+        deadline = liveliness = None
+        if event_callbacks is not None:
+            from .event_handler import supported
+
+            supported(event_callbacks, f"subscription to {name}")
+            deadline, liveliness = event_callbacks.deadline, event_callbacks.liveliness
+        _refuse_overrides(qos_overriding_options, subscription_class, f"subscription to {name}")
+        if content_filter_options is not None:
+            raise NodeError(f"subscription to {name}: content filters are not supported by hetros; filter in the "
+                            "callback")
+        if raw:  # ROS 2 hands the serialized message: CDR with its 4-byte encapsulation header
+            callback = _serialized(msg_type, callback)
         entity: list[Any] = []
         # a topic's message reaches the callback as hetros delivered it: numeric sequences stay numpy arrays
         # (zero-copy, read-only; they index, iterate and tolist() as array.array does). Showing them in
         # rclpy's flavour costs a view per field per message, 1.25x the one-way latency of small messages
         # (docs/PERFORMANCE.md); services and actions, off the hot path, show it.
         run = guarded(self, self._hetros, callback, callback_group, entity, again=True)
-        inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile))
+        inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile),
+                                                 on_deadline_missed=deadline, on_liveliness_changed=liveliness)
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)
         return subscription
@@ -444,3 +466,27 @@ class Node:
 
     def destroy_rate(self, rate: Rate) -> bool:
         return True
+
+
+def _refuse_overrides(options: Any, cls: Any, where: str) -> None:
+    """``qos_overriding_options`` keeps the QoS given (as ROS 2 does without override parameters): the
+    project file's ``topics:`` is where hetros overrides a topic's QoS, for every endpoint at once."""
+    del options
+    if cls is not None:
+        raise NodeError(f"{where}: a custom publisher or subscription class is not supported by hetros; remove it")
+
+
+def _serialized(msg_type: type[Any], callback: Callable[[Any], None]) -> Callable[[Any], None]:
+    """The callback of a ``raw=True`` subscription: each message as ROS 2 serializes it (bytes)."""
+    from ...msg import registry
+
+    codec = registry().codec(getattr(msg_type, "__msgtype__", ""))
+
+    def raw(message: Any) -> None:
+        size = codec.size(message)
+        data = bytearray(4 + size)
+        data[1] = 1  # CDR little endian
+        codec.encode(message, memoryview(data)[4:])
+        callback(bytes(data))
+
+    return raw

@@ -1,0 +1,67 @@
+"""rclpy.event_handler: QoS event callbacks, on hetros's deadline and liveliness events.
+
+``create_subscription(..., event_callbacks=SubscriptionEventCallbacks(deadline=..., liveliness=...))``
+and ``create_publisher(..., event_callbacks=PublisherEventCallbacks(deadline=...))`` run the callbacks
+in the node's executor with ROS 2's status fields. ``incompatible_qos`` never fires under hetros:
+``hetros check`` refuses a project whose publishers and subscribers of a topic cannot talk, so a launch
+never has such a pair. The events hetros does not raise (``message_lost``, ``matched``,
+``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never ignored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from typing import Any
+
+from ..._errors import NodeError
+from ...runtime import DeadlineMissedStatus, LivelinessChangedStatus
+
+QoSRequestedDeadlineMissedInfo = DeadlineMissedStatus
+QoSOfferedDeadlineMissedInfo = DeadlineMissedStatus
+QoSLivelinessChangedInfo = LivelinessChangedStatus
+
+
+@dataclass
+class SubscriptionEventCallbacks:
+    deadline: Callable[[DeadlineMissedStatus], Any] | None = None
+    incompatible_qos: Callable[[Any], Any] | None = None
+    liveliness: Callable[[LivelinessChangedStatus], Any] | None = None
+    message_lost: Callable[[Any], Any] | None = None
+    incompatible_type: Callable[[Any], Any] | None = None
+    matched: Callable[[Any], Any] | None = None
+    use_default_callbacks: bool = True
+
+
+@dataclass
+class PublisherEventCallbacks:
+    deadline: Callable[[DeadlineMissedStatus], Any] | None = None
+    liveliness: Callable[[Any], Any] | None = None
+    incompatible_qos: Callable[[Any], Any] | None = None
+    incompatible_type: Callable[[Any], Any] | None = None
+    matched: Callable[[Any], Any] | None = None
+    use_default_callbacks: bool = True
+
+
+_SUPPORTED = {"deadline", "liveliness", "incompatible_qos", "use_default_callbacks"}
+
+
+def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, where: str) -> None:
+    """Refuse the events hetros never raises, naming them (a callback that silently never runs would be
+    a lie); a publisher's liveliness_lost is one of them."""
+    unsupported = [f.name for f in fields(callbacks) if getattr(callbacks, f.name) is not None and
+                   f.name not in _SUPPORTED]
+    if isinstance(callbacks, PublisherEventCallbacks) and callbacks.liveliness is not None:
+        unsupported.append("liveliness")
+    if unsupported:
+        raise NodeError(f"{where}: event_callbacks {', '.join(unsupported)} are events hetros does not raise; "
+                        "remove them (deadline and a subscription's liveliness are supported)")
+
+
+__all__ = [
+    "PublisherEventCallbacks",
+    "QoSLivelinessChangedInfo",
+    "QoSOfferedDeadlineMissedInfo",
+    "QoSRequestedDeadlineMissedInfo",
+    "SubscriptionEventCallbacks",
+]

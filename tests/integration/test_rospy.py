@@ -80,6 +80,54 @@ def test_three_subscriptions_to_one_topic_in_one_node_each_hear_every_message(tm
     assert second[0] in first and first[first.index(second[0]):][:10] == second[:10], output
 
 
+def test_the_timer_talker_is_heard(tmp_path: Path) -> None:
+    """001's talker_timer.py, unchanged: rospy.Timer at 10 Hz, its TimerEvent's current_real in each line."""
+    import shutil
+
+    folder = tmp_path / "scripts"
+    folder.mkdir()
+    for script in ("talker_timer.py", "listener.py"):
+        shutil.copy(f"{RUN}/001_talker_listener/{script}", folder)
+    made = subprocess.run([sys.executable, "-m", "hetros", "init", str(folder), "-o", str(tmp_path / "project.yaml"),
+                           "--name", "timer"], capture_output=True, text=True, timeout=60, check=False)
+    assert made.returncode == 0, made.stderr
+    done = launch(tmp_path, yaml.safe_load((tmp_path / "project.yaml").read_text()), 2.5)
+    assert done.returncode == 0, done.stderr
+    said = re.findall(r"\[talker_\d+_\d+\]: (hello world [\d.]+)", done.stderr)
+    heard = re.findall(r"I heard (hello world [\d.]+)", done.stderr)
+    assert len(said) >= 10 and said[:5] == heard[:5], done.stderr
+
+
+ROSPY_NAMES = '''
+import rospy
+
+
+def main() -> None:
+    rospy.init_node("names")
+    rospy.loginfo("resolved %s %s", rospy.resolve_name("chatter"), rospy.resolve_name("~private"))
+    rospy.loginfo("search %s", rospy.search_param("rate"))
+    rospy.delete_param("~rate")
+    rospy.loginfo("after delete %s %s", rospy.has_param("rate"), rospy.search_param("rate"))
+    try:
+        rospy.delete_param("rate")
+    except KeyError:
+        rospy.loginfo("deleting twice is a KeyError")
+'''
+
+
+def test_rospy_names_and_parameters(tmp_path: Path) -> None:
+    (tmp_path / "names.py").write_text(ROSPY_NAMES)
+    project = {"name": "names", "targets": {"one": {"kind": "process"}},
+               "nodes": {"names": {"run": "names:main", "target": "one", "namespace": "/robot",
+                                   "parameters": {"rate": 5}}}}
+    done = launch(tmp_path, project, 5)
+    assert done.returncode == 0, done.stderr
+    assert "resolved /robot/chatter /robot/names/private" in done.stderr
+    assert "search /robot/names/rate" in done.stderr
+    assert "after delete False None" in done.stderr
+    assert "deleting twice is a KeyError" in done.stderr
+
+
 def test_the_add_two_ints_server_and_client(tmp_path: Path) -> None:
     project = init(tmp_path, "005_add_two_ints")
     assert project["nodes"]["add_two_ints_server"]["services"] == {"add_two_ints": "rospy_tutorials/srv/AddTwoInts"}

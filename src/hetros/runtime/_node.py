@@ -355,6 +355,13 @@ class Node:
                 value = float(value)
         self._parameters = {**self._parameters, name: value}
 
+    def delete_parameter(self, name: str) -> None:
+        """Forget a parameter (rospy's ``delete_param``); KeyError-free when it was never set is not ROS's:
+        a parameter that does not exist raises ParameterError naming it."""
+        if name not in self._parameters:
+            raise ParameterError(f"node {self.name!r} has no parameter {name!r} to delete")
+        self._parameters = {k: v for k, v in self._parameters.items() if k != name}
+
     # -- what a look from outside finds (``hetros node info``, ``top``, ``service call``) ----
 
     def entities(self) -> list[Any]:

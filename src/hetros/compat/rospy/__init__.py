@@ -34,6 +34,9 @@ __all__ = [
     "ServiceProxy",
     "Subscriber",
     "Time",
+    "Timer",
+    "TimerEvent",
+    "delete_param",
     "get_caller_id",
     "get_name",
     "get_param",
@@ -49,6 +52,8 @@ __all__ = [
     "logwarn",
     "myargv",
     "on_shutdown",
+    "resolve_name",
+    "search_param",
     "set_param",
     "signal_shutdown",
     "sleep",
@@ -426,3 +431,87 @@ _MISSING_DEFAULT = object()
 
 def set_param(name: str, value: Any) -> None:
     _state().hetros.set_parameter(_parameter_name(name), value)
+
+
+def delete_param(name: str) -> None:
+    """As rospy: KeyError when the parameter does not exist."""
+    try:
+        _state().hetros.delete_parameter(_parameter_name(name))
+    except ParameterError as exc:
+        raise KeyError(name) from exc
+
+
+def search_param(name: str) -> str | None:
+    """The full name of parameter ``name`` as rospy finds it (here: the node's own, which is where the
+    project file puts every parameter), or None."""
+    return f"{get_name()}/{name.lstrip('~/')}" if has_param(name) else None
+
+
+def resolve_name(name: str, caller_id: str | None = None) -> str:
+    """``name`` resolved as rospy resolves it: ``~private`` under the node, relative under its namespace,
+    remaps applied."""
+    return _resolve(name)
+
+
+# -- timers ---------------------------------------------------------------------------------------
+
+
+class TimerEvent:
+    """What a rospy.Timer callback gets: when this call and the last one were due and when they ran."""
+
+    def __init__(self, last_expected: Time | None, last_real: Time | None, current_expected: Time,
+                 current_real: Time, last_duration: float | None) -> None:
+        self.last_expected, self.last_real = last_expected, last_real
+        self.current_expected, self.current_real = current_expected, current_real
+        self.last_duration = last_duration
+
+
+class Timer:
+    """rospy.Timer: ``callback(event)`` every ``period`` in a thread of its own, on the graph's clock, until
+    ``shutdown()`` or the node's end; ``oneshot`` calls it once."""
+
+    def __init__(self, period: Duration, callback: Callable[[TimerEvent], Any], oneshot: bool = False,
+                 reset: bool = False) -> None:
+        state = _state()
+        self._hetros = state.hetros
+        self._period_ns = period.secs * 1_000_000_000 + period.nsecs
+        if self._period_ns <= 0 and not oneshot:
+            raise ROSException(f"rospy.Timer period must be positive, not {period.to_sec()} s")
+        self._callback, self._oneshot = callback, oneshot
+        self._stopped = threading.Event()
+        self._state = state
+        self._thread = threading.Thread(target=self._run, name=f"rospy timer:{state.name}", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        with _ros_main(self._hetros):  # the callback calls rospy too: this thread runs as the node
+            self._tick()
+
+    def _tick(self) -> None:
+        clock = self._hetros.get_clock()
+        ticker = Ticker(clock, max(self._period_ns, 1))
+        stop = self._hetros.graph.stop
+        last_expected: Time | None = None
+        last_real: Time | None = None
+        last_duration: float | None = None
+        while not self._stopped.is_set():
+            expected = ticker.due
+            if not ticker.sleep(stop) or self._stopped.is_set():
+                return
+            real = Time(0, clock.now_ns())
+            event = TimerEvent(last_expected, last_real, Time(0, expected), real, last_duration)
+            started = _time.perf_counter()
+            try:
+                self._callback(event)
+            except BaseException as exc:  # the node fails at its next rospy call, as for a callback
+                self._state.failure = exc
+                return
+            last_expected, last_real, last_duration = Time(0, expected), real, _time.perf_counter() - started
+            if self._oneshot:
+                return
+
+    def shutdown(self) -> None:
+        self._stopped.set()
+
+    def is_alive(self) -> bool:
+        return self._thread.is_alive()

@@ -98,6 +98,25 @@ def test_the_timer_talker_is_heard(tmp_path: Path) -> None:
     assert len(said) >= 10 and said[:5] == heard[:5], done.stderr
 
 
+def test_an_on_shutdown_hook_runs_once(tmp_path: Path) -> None:
+    """008's publish_on_shutdown.py, unchanged: its hook prints (and publishes) "I'm dead!" once when the
+    launch stops. (That its message reaches the listener, as under roslaunch, hetros does not promise yet:
+    every process stops at once.)"""
+    import shutil
+
+    folder = tmp_path / "scripts"
+    folder.mkdir()
+    shutil.copy(f"{RUN}/008_on_shutdown/publish_on_shutdown.py", folder)
+    shutil.copy(f"{RUN}/001_talker_listener/listener.py", folder)
+    made = subprocess.run([sys.executable, "-m", "hetros", "init", str(folder), "-o", str(tmp_path / "project.yaml"),
+                           "--name", "on_shutdown"], capture_output=True, text=True, timeout=60, check=False)
+    assert made.returncode == 0, made.stderr
+    done = launch(tmp_path, yaml.safe_load((tmp_path / "project.yaml").read_text()), 2.0)
+    assert done.returncode == 0, done.stderr
+    output = done.stdout + done.stderr
+    assert output.count("I'm dead!") == 1, output
+
+
 ROSPY_NAMES = '''
 import rospy
 

@@ -284,3 +284,15 @@ def test_the_read_only_promise_covers_lists_and_views_of_the_callers_memory(grap
     node.create_publisher(UInt8MultiArray, "/frames").publish(UInt8MultiArray(data=view))
     buffer[:] = 5
     assert frames.take(timeout=1.0).data.tolist() == [0, 0, 0, 0]
+
+
+def test_stop_hooks_run_once_however_often_the_graph_stops() -> None:
+    """rospy.on_shutdown hooks ran twice (a stop request, then the process' close)."""
+    graph = Graph.standalone()
+    calls: list[str] = []
+    graph.on_stop(lambda: calls.append("before"))
+    graph.shutdown()
+    graph.shutdown()
+    graph.on_stop(lambda: calls.append("after"))  # registered once stopped: runs at once, once
+    graph.close()
+    assert calls == ["before", "after"]

@@ -148,17 +148,20 @@ class Graph:
         return sources[0] if sources else None
 
     def on_stop(self, hook: Callable[[], None]) -> None:
-        """Call ``hook`` when the graph stops (executors and blocked takes wake up)."""
+        """Call ``hook`` once when the graph stops (executors and blocked takes wake up); at once if it has."""
         with self._lock:
-            self._stop_hooks.append(hook)
-        if self.stop.is_set():
+            stopped = self.stop.is_set()
+            if not stopped:
+                self._stop_hooks.append(hook)
+        if stopped:
             hook()
 
     def shutdown(self) -> None:
-        """Stop every node of this process: set the stop flag and wake everything waiting."""
+        """Stop every node of this process: set the stop flag and wake everything waiting. Each hook runs
+        once, however often the graph is told to stop (a stop request, then the close of the process)."""
         self.stop.set()
         with self._lock:
-            hooks = list(self._stop_hooks)
+            hooks, self._stop_hooks = self._stop_hooks, []
         for hook in hooks:
             hook()
 

@@ -11,6 +11,7 @@ import re
 import shutil
 import subprocess
 import sys
+import textwrap
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -394,6 +395,7 @@ def test_foxglove_sees_the_topics_with_their_schemas_and_messages(tmp_path: Path
 
 
 BUSY_NODES = """
+import textwrap
 import time
 
 from hetros import Node
@@ -516,3 +518,27 @@ def test_foxglove_refuses_an_interface_the_project_does_not_allow(tmp_path: Path
         done = hetros(env, "foxglove", "--host", "0.0.0.0", "--port", "0", check=False, timeout=30)
     assert done.returncode == 1
     assert "listens on 127.0.0.1 only, unless the project file lists the interface (foxglove_hosts" in done.stderr
+
+
+def test_namespaced_nodes_go_by_their_full_ros_names(tmp_path: Path, env: dict[str, str]) -> None:
+    """In a launch that puts the talker under /r2, the commands show /r2/talker and accept it, as ros2's do
+    (the project's key for it, talker, is accepted too)."""
+    shutil.copy(EXAMPLES / "talker_listener" / "nodes.py", tmp_path / "nodes.py")
+    project = tmp_path / "project.yaml"
+    project.write_text(textwrap.dedent("""\
+        name: namespaced
+        targets: {a: {kind: process}, b: {kind: process}}
+        nodes:
+          talker:   {run: nodes:talker, target: a, namespace: /r2, publish: {/chatter: std_msgs/msg/String},
+                     parameters: {hz: 10.0}}
+          listener: {run: nodes:listener, target: b, subscribe: {/chatter: std_msgs/msg/String}}
+        """))
+    with running(project, env, tmp_path / "launch.log"):
+        assert hetros(env, "node", "list").stdout.split() == ["/listener", "/r2/talker"]
+        assert hetros(env, "node", "info", "/r2/talker").stdout.startswith("/r2/talker\n")
+        assert hetros(env, "param", "get", "/r2/talker", "hz").stdout.strip() == "Double value is: 10.0"
+        assert hetros(env, "param", "get", "talker", "hz").stdout.strip() == "Double value is: 10.0"
+        verbose = hetros(env, "topic", "info", "-v", "/chatter").stdout
+        assert "Node name: talker\nNode namespace: /r2\n" in verbose
+        missing = hetros(env, "node", "info", "/talker", check=False)
+        assert missing.returncode != 0 and "no node /talker (its nodes: /listener, /r2/talker)" in missing.stderr

@@ -22,7 +22,7 @@ import yaml
 from .._errors import Error, InspectError
 from ..launch import LaunchLogs, RunningLaunch, TapEvent
 from ..msg import DEFAULT_TRUNCATE_LENGTH, Message, from_plain, normalize_typename, to_plain
-from ..plan import ACTION_PREFIX, Plan
+from ..plan import ACTION_PREFIX, Plan, join_namespace
 
 # ros2 topic hz's default window (messages)
 HZ_WINDOW = 10000
@@ -76,7 +76,8 @@ def cmd_topic_info(args: argparse.Namespace) -> int:
             transports = ", ".join(sorted({e.transport for e in edges})) or "-"
             where = "hardware" if launch.plan.in_hardware(node) else launch.plan.process_of(node)
             qos = channel.qos
-            print(f"Node name: {node}\nNode namespace: /\nTopic type: {typename}\n"
+            namespace = join_namespace("", spec.namespace) or "/"
+            print(f"Node name: {node}\nNode namespace: {namespace}\nTopic type: {typename}\n"
                   f"Endpoint type: {role.upper()}\nTarget: {spec.target} ({where})\nTransports: {transports}\n"
                   f"QoS profile:\n  Reliability: {qos.reliability.upper()}\n  History (Depth): "
                   f"{qos.history.upper()} ({qos.depth})\n  Durability: {qos.durability.upper()}\n")
@@ -244,19 +245,35 @@ def cmd_topic_pub(args: argparse.Namespace) -> int:
 # -- node, service, param -----------------------------------------------------------------------
 
 
+def ros_name(plan: Plan, node: str) -> str:
+    """A node's full ROS name, namespace and name (``/r2/talker``): what the CLI shows and accepts."""
+    return join_namespace(plan.nodes[node].namespace, node) or f"/{node}"
+
+
+def node_key(launch: RunningLaunch, given: str) -> str:
+    """The plan's node for a name given on the command line: its full ROS name (``/r2/talker``), or the
+    project's key for it (``talker``, relative: no leading /)."""
+    plan = launch.plan
+    by_ros_name = {ros_name(plan, node): node for node in plan.nodes}
+    found = by_ros_name.get(given)
+    if found is None and not given.startswith("/"):
+        found = given if given in plan.nodes else by_ros_name.get(f"/{given}")
+    if found is None:
+        raise InspectError(f"launch {launch.record.session} has no node {given} (its nodes: "
+                           f"{', '.join(sorted(by_ros_name))})")
+    return found
+
+
 def cmd_node_list(args: argparse.Namespace) -> int:
     launch = _launch(args)
-    for name in sorted(launch.plan.nodes):
-        print(f"/{name}")
+    for name in sorted(ros_name(launch.plan, node) for node in launch.plan.nodes):
+        print(name)
     return 0
 
 
 def cmd_node_info(args: argparse.Namespace) -> int:
     launch = _launch(args)
-    name = args.node.lstrip("/")
-    if name not in launch.plan.nodes:
-        raise InspectError(f"launch {launch.record.session} has no node {args.node} "
-                           f"(its nodes: {', '.join(sorted(launch.plan.nodes))})")
+    name = node_key(launch, args.node)
     spec = launch.plan.nodes[name]
 
     def section(title: str, entries: dict[str, str]) -> None:
@@ -265,7 +282,7 @@ def cmd_node_info(args: argparse.Namespace) -> int:
             if args.include_hidden or not _hidden(entry):
                 print(f"    {entry}: {typename}")
 
-    print(f"/{name}")
+    print(ros_name(launch.plan, name))
     section("Subscribers", spec.subscribe)
     section("Publishers", spec.publish)
     section("Service Servers", spec.services)
@@ -341,10 +358,11 @@ def _parameter_kind(value: Any) -> str:
 
 def cmd_param_list(args: argparse.Namespace) -> int:
     launch = _launch(args)
-    nodes = [args.node.lstrip("/")] if args.node else sorted(n for n in launch.plan.nodes if launch.plan.runs_here(n))
+    nodes = [node_key(launch, args.node)] if args.node else sorted(
+        n for n in launch.plan.nodes if launch.plan.runs_here(n))
     for node in nodes:
         parameters = launch.parameters(node)
-        print(f"/{node}:")
+        print(f"{ros_name(launch.plan, node)}:")
         for name in sorted(parameters):
             print(f"  {name}")
     return 0
@@ -352,7 +370,7 @@ def cmd_param_list(args: argparse.Namespace) -> int:
 
 def cmd_param_get(args: argparse.Namespace) -> int:
     launch = _launch(args)
-    parameters = launch.parameters(args.node.lstrip("/"))
+    parameters = launch.parameters(node_key(launch, args.node))
     if args.name not in parameters:
         print("Parameter not set")
         return 1
@@ -364,7 +382,7 @@ def cmd_param_get(args: argparse.Namespace) -> int:
 def cmd_param_set(args: argparse.Namespace) -> int:
     launch = _launch(args)
     try:
-        launch.set_parameter(args.node.lstrip("/"), args.name, _values(args.value, "value"))
+        launch.set_parameter(node_key(launch, args.node), args.name, _values(args.value, "value"))
     except InspectError as exc:
         print(f"Setting parameter failed: {exc}")
         return 1
@@ -475,11 +493,7 @@ def cmd_top(args: argparse.Namespace) -> int:
 def cmd_log(args: argparse.Namespace) -> int:
     launch = _launch(args)
     logs = LaunchLogs(launch.folder)
-    nodes = {name.lstrip("/") for name in args.node or []}
-    unknown = nodes - set(launch.plan.nodes)
-    if unknown:
-        raise InspectError(f"launch {launch.record.session} has no node {', '.join(sorted(unknown))} "
-                           f"(its nodes: {', '.join(sorted(launch.plan.nodes))})")
+    nodes = {node_key(launch, name) for name in args.node or []}
     while True:
         for record in logs.new_records():
             if not nodes or record.name in nodes:

@@ -19,7 +19,7 @@ PACKAGES = [RCLPY / "topics" / "minimal_publisher", RCLPY / "topics" / "minimal_
             RCLPY / "services" / "minimal_service", RCLPY / "services" / "minimal_client",
             RCLPY / "actions" / "minimal_action_server", RCLPY / "actions" / "minimal_action_client",
             RCLPY / "executors"]
-ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(str(p) for p in PACKAGES))
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join([*(str(p) for p in PACKAGES), os.environ.get("PYTHONPATH", "")]))
 
 
 def init(tmp_path: Path, *sources: Path) -> dict[str, Any]:
@@ -177,3 +177,37 @@ def test_the_executors_examples(tmp_path: Path) -> None:
     throttled = re.findall(r"\[throttled\.intermittent_talker\]: Publishing: \"Hello World: (\d+)\"", out)
     assert 13 <= len(throttled) <= 18, throttled  # a bucket of 10 at 10 Hz, then a token every 0.5 s
     assert "Traceback" not in out
+
+
+def test_hetros_action_send_goal_reaches_an_unchanged_rclpy_server_and_prints_feedback(tmp_path: Path) -> None:
+    """`hetros action send_goal -f` against ros2/examples' minimal action server, as `ros2 action send_goal
+    -f` is used: each feedback, then the result."""
+    import json
+    import time
+
+    project = init(tmp_path, module("examples_rclpy_minimal_action_server", "server"))
+    path = tmp_path / "project.yaml"
+    path.write_text(yaml.safe_dump(project))
+    env = dict(ENV, XDG_RUNTIME_DIR=str(tmp_path))
+    with subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(path), "--duration", "60"], env=env,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path) as launched:
+        try:
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline:
+                top = subprocess.run([sys.executable, "-m", "hetros", "top", "--json", "--once"], env=env,
+                                     capture_output=True, text=True, timeout=60, check=False)
+                if top.returncode == 0 and not json.loads(top.stdout)["silent"]:
+                    break
+                time.sleep(0.3)
+            done = subprocess.run([sys.executable, "-m", "hetros", "action", "send_goal", "-f", "/fibonacci",
+                                   ACTION, "{order: 3}"], env=env, capture_output=True, text=True, timeout=60,
+                                  check=False)
+        finally:
+            launched.terminate()
+            launched.wait(30)
+    assert done.returncode == 0, done.stdout + done.stderr
+    out = done.stdout
+    assert re.search(r"Goal accepted with ID: [0-9a-f]{32}\n", out), out
+    assert out.count("Feedback:\n    sequence:\n") == 2, out
+    assert out.index("Feedback:") < out.index("Result:") and out.rstrip().endswith(
+        "Goal finished with status: SUCCEEDED"), out

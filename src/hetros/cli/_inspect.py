@@ -331,12 +331,17 @@ def cmd_action_send_goal(args: argparse.Namespace) -> int:
     goal = from_plain(launch.types, f"{given}_Goal", _values(args.values, "values"))
     print("Waiting for an action server to become available...\nSending goal:")
     print("".join(f"     {line}\n" for line in _dump(to_plain(launch.types, goal)).splitlines()))
-    ended = launch.send_goal(args.action, goal)
+    def show_feedback(message: Message) -> None:
+        print("Feedback:")
+        print("".join(f"    {line}\n" for line in _dump(to_plain(launch.types, message)).splitlines()), flush=True)
+
+    ended = launch.send_goal(args.action, goal, feedback=show_feedback if args.feedback else None,
+                             accepted=lambda goal_id: print(f"Goal accepted with ID: {goal_id}\n", flush=True))
     if ended is None:
         print("Goal was rejected.")
         return 1
-    goal_id, status, result = ended
-    print(f"Goal accepted with ID: {goal_id}\n\nResult:")
+    _goal_id, status, result = ended
+    print("Result:")
     print("".join(f"    {line}\n" for line in _dump(to_plain(launch.types, result)).splitlines()))
     print(f"Goal finished with status: {GoalStatus(status).name}")
     return 0 if status == GoalStatus.SUCCEEDED else 1
@@ -568,6 +573,8 @@ def _request_parser(group: Any, verb: str, what: str, description: str,
     parser.add_argument(what)
     parser.add_argument("type")
     parser.add_argument("values", nargs="?", default="{}", help="YAML field values: \"{a: 1, b: 2}\"")
+    if what == "action":
+        parser.add_argument("-f", "--feedback", action="store_true", help="print each feedback as it comes")
     parser.set_defaults(func=function)
 
 

@@ -161,6 +161,8 @@ class ServerGoalHandle:
         # callback's return value is its result (rclpy's contract): the goal ends on return
         self._in_execute = False
         self._decided: tuple[int, Any] | None = None
+        # who else hears this goal's feedback as it is published (`hetros action send_goal -f`)
+        self.feedback_listeners: list[Callable[[Any], None]] = []
 
     def __repr__(self) -> str:
         return f"<goal {_short(self.goal_id)} of {self.server.name}: {STATUS_NAMES[self.status]}>"
@@ -447,6 +449,8 @@ class ActionServer:
         message = self._feedback_type(goal_id=uuid_message(handle.goal_id), feedback=feedback)
         with self._lock:
             self._feedback.write(message)
+        for listener in list(handle.feedback_listeners):
+            listener(feedback)
 
     def succeed(self, handle: ServerGoalHandle, result: Any = None) -> None:
         self._end(handle, SUCCEEDED, result)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import queue
 import socket
 import struct
 import threading
@@ -280,14 +281,28 @@ class ControlServer:
             raise InspectError(f"no server of action {action} runs in {self.process} (yet)")
         server = node.action_servers[action]
         goal = self._codec(f"{server.type.name}_Goal").decode(memoryview(payload))
-        handle = node.call_in_executor(lambda: server.submit(goal), 30.0)
+        feedback: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        wants_feedback = bool(request.get("feedback", False))
+
+        def submit() -> Any:  # in the node's executor: the listener is in place before execution starts
+            handle = server.submit(goal)
+            if handle is not None and wants_feedback:
+                handle.feedback_listeners.append(feedback.put)
+            return handle
+
+        handle = node.call_in_executor(submit, 30.0)
         if handle is None:
             send_frame(connection, {"accepted": False})
             return
         send_frame(connection, {"accepted": True, "goal_id": handle.goal_id.hex()})
+        encode_feedback = self._codec(f"{server.type.name}_Feedback").encode
         deadline = time.monotonic() + timeout
-        while handle._open and time.monotonic() < deadline and not self._closed:
-            time.sleep(0.01)
+        while (handle._open or not feedback.empty()) and time.monotonic() < deadline and not self._closed:
+            try:
+                sent = feedback.get(timeout=0.01)
+            except queue.Empty:
+                continue
+            send_frame(connection, {"feedback": True}, encode_feedback(sent))
         if handle._open:
             raise InspectError(f"goal {handle.goal_id.hex()[:8]} of {action} did not end within {timeout:g} s")
         result = handle.result if handle.result is not None else server.type.Result()

@@ -236,23 +236,32 @@ class RunningLaunch:
         """Action name -> type, of every action served in the launch."""
         return {a: t for node in self.plan.nodes.values() for a, t in node.actions.items()}
 
-    def send_goal(self, action: str, goal: Message, timeout: float = 600.0) -> tuple[str, int, Message] | None:
+    def send_goal(self, action: str, goal: Message, timeout: float = 600.0,
+                  feedback: Callable[[Message], None] | None = None,
+                  accepted: Callable[[str], None] | None = None) -> tuple[str, int, Message] | None:
         """Send ``goal`` to ``action``'s server and wait for the end: (goal id, status, result), or None
-        when the server rejected it."""
+        when the server rejected it. ``feedback(message)`` hears each feedback the goal gets meanwhile;
+        ``accepted(goal_id)`` is told as soon as the server accepted it."""
         server = next((n for n, spec in self.plan.nodes.items() if action in spec.actions), None)
         if server is None:
             known = ", ".join(sorted(self.actions())) or "none"
             raise InspectError(f"launch {self.record.session} has no action {action} (its actions: {known})")
         typename = self.plan.nodes[server].actions[action]
-        with self.connect(self.node_process(server), {"op": "send_goal", "action": action, "timeout": timeout},
-                          bytes(self.codec(f"{typename}_Goal").encode(goal)), timeout=timeout + 30.0) as sock:
+        request = {"op": "send_goal", "action": action, "timeout": timeout, "feedback": feedback is not None}
+        with self.connect(self.node_process(server), request, bytes(self.codec(f"{typename}_Goal").encode(goal)),
+                          timeout=timeout + 30.0) as sock:
             answer, _ = receive_frame(sock)
             if "error" in answer:
                 raise InspectError(answer["error"])
             if not answer["accepted"]:
                 return None
             goal_id = str(answer["goal_id"])
+            if accepted is not None:
+                accepted(goal_id)
             ended, data = receive_frame(sock)
+            while ended.get("feedback") and feedback is not None:
+                feedback(self.decode(f"{typename}_Feedback", data))
+                ended, data = receive_frame(sock)
         if "error" in ended:
             raise InspectError(ended["error"])
         return goal_id, int(ended["status"]), self.decode(f"{typename}_Result", data)

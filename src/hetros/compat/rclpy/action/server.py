@@ -110,6 +110,8 @@ class ActionServer:
             goal_callback=lambda goal: self._goal_callback(received(goal)) == GoalResponse.ACCEPT,
             cancel_callback=lambda goal: self._cancel_callback(self._handle(goal)) == CancelResponse.ACCEPT,
             result_timeout=float(result_timeout))
+        # where looks from outside find it (`hetros action send_goal`), as a server made by the hetros API
+        node._hetros.action_servers.setdefault(self._inner.name, self._inner)
 
     def _handle(self, inner: HetrosGoalHandle) -> ServerGoalHandle:
         with self._lock:

@@ -386,6 +386,31 @@ def test_the_execution_models_of_a_chain_time_dataflow_against_sequential() -> N
     assert (dataflow.cpu_copies, sequential.cpu_copies) == (2, 4)
 
 
+def test_the_vehicles_models_take_rgb8_and_check_each_output_against_the_twins() -> None:
+    """`hw report --models` on the vehicle: an rgb8 frame (what its nodes are built for, channels: 3), and
+    the hardware's every output held to the software twins; a twin that disagrees fails the timing."""
+    from hetros import HardwareError
+    from hetros.hw import _image
+    from hetros.hw._models import channels_of, execution_models, sample_message
+
+    planned = plan(load_project(Path(__file__).resolve().parents[2] / "examples" / "lane_following" /
+                                "project_fpga.yaml"))
+    types = registry()
+    assert channels_of(planned, "fpga", "/image_raw") == 3
+    sample = sample_message(types, IMAGE, (16, 12), 0, channels=3)
+    assert (sample.encoding, sample.step, len(sample.data)) == ("rgb8", 48, 16 * 12 * 3)
+    dataflow, sequential = execution_models(planned, "fpga", types, {"/image_raw": sample})
+    assert dataflow.cycles < sequential.cycles
+    original = _image.GaussianBlur.reference
+    try:
+        _image.GaussianBlur.reference = lambda self: (lambda image: image)  # type: ignore[method-assign]
+        with pytest.raises(HardwareError, match=r"the hardware's /image_blur differs from its software twin in \d+ "
+                                                r"of 576 bytes"):
+            execution_models(planned, "fpga", types, {"/image_raw": sample})
+    finally:
+        _image.GaussianBlur.reference = original  # type: ignore[method-assign]
+
+
 @pytest.mark.parametrize(("component", "twin"), [
     ("hetros.hw.nodes:GaussianBlur", gaussian_blur),
     ("hetros.hw.nodes:Compensation", None),

@@ -179,7 +179,7 @@ def _clock_line(plan: Plan, target: str) -> str:
 
 def _execution_models(args: argparse.Namespace, plan: Plan, targets: list[str]) -> int:
     """``hw report --models``: each target's hardware nodes as a dataflow chain and as a sequential one."""
-    from ..hw import execution_models, format_models, hardware_topics, sample_message
+    from ..hw import channels_of, execution_models, format_models, hardware_topics, sample_message
     from ..plan import gateway_node
 
     width, _, height = args.image.partition("x")
@@ -194,10 +194,13 @@ def _execution_models(args: argparse.Namespace, plan: Plan, targets: list[str]) 
         if not inputs:
             print(f"fpga target {target}: no topic from software into its hardware nodes: no chain to time\n")
             continue
-        samples = {name: sample_message(types, typename, (int(width), int(height)), args.size)
+        samples = {name: sample_message(types, typename, (int(width), int(height)), args.size,
+                                        channels=channels_of(plan, target, name))
                    for name, typename in inputs.items()}
+        kinds = ", ".join(f"{name} {getattr(sample, 'encoding', '') or 'arrays'}" for name, sample in samples.items())
         print(f"fpga target {target}: one message into {', '.join(inputs)} ({args.image} for images, {args.size} "
-              "elements for arrays), co-simulated in Verilator\n")
+              f"elements for arrays; {kinds}), co-simulated in Verilator; each output checked against the nodes' "
+              "software twins\n")
         print(format_models(target, execution_models(plan, target, types, samples)))
         print(_clock_line(plan, target))
     return 0

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from ._clock import TargetClock, target_clock
     from ._cosim import GatewayPort, SimulatedTop, TargetSimulation
     from ._export import export
-    from ._models import execution_models, format_models, sample_message
+    from ._models import channels_of, execution_models, format_models, sample_message
     from ._report import (
         TABLE_I_PAPER_MS,
         TABLE_I_SIZES,
@@ -58,6 +58,7 @@ _LAZY = {
     "available": "._bitstream",
     "bitstreams": "._bitstream",
     "build_bitstream": "._bitstream",
+    "channels_of": "._models",
     "execution_models": "._models",
     "export": "._export",
     "format_bitstreams": "._bitstream",
@@ -105,6 +106,7 @@ __all__ = [
     "bitstreams",
     "build_bitstream",
     "build_target",
+    "channels_of",
     "execution_models",
     "export",
     "field_name",

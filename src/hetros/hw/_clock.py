@@ -55,10 +55,14 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
 
 
 def target_key(plan: Plan, target: str) -> str:
-    from ._build import hardware_nodes, hardware_topics
-    from ._verilog_node import verilog_sources
+    """:func:`design_key` of the whole target, without building its nodes (their Verilog files are read
+    from the plan, as ``verilog_sources`` would list them)."""
+    from ._build import hardware_topics
+    from ._verilog_node import is_verilog
 
-    return design_key(plan, target, hardware_topics(plan, target), verilog_sources(hardware_nodes(plan, target)))
+    sources = sorted({(Path(plan.root) / node.hw.partition(":")[0]).resolve() for name, node in plan.nodes.items()
+                      if node.target == target and node.hw and plan.in_hardware(name) and is_verilog(node.hw)})
+    return design_key(plan, target, hardware_topics(plan, target), sources)
 
 
 def _fmax_file(key: str) -> Path:

@@ -13,8 +13,10 @@ in ``hetros.hw.reference``, the bit-exact specification the tests hold the hardw
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 from amaranth import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.hdl import Value
 from amaranth.lib import wiring
@@ -78,6 +80,30 @@ class ImageFilter3x3(wiring.Component):
         if height < 3 or width < 3:
             raise HardwareError(f"an image of {width}x{height} pixels is too small for a 3x3 window: send images of "
                                 "at least 3x3")
+
+    def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
+        """This filter in software, bit-exact (``hetros.hw.reference``): a function of an image array
+        (rows x columns, or rows x columns x channels), None where a subclass has none."""
+        return None
+
+    def twin(self) -> Callable[[Any], Any] | None:
+        """The node in software, message to message: what `hetros hw report --models` holds the hardware's
+        output to. A fresh twin per stream of frames (a stateful filter keeps state between frames)."""
+        reference = self.reference()
+        if reference is None:
+            return None
+        channels = self.channels
+
+        def filtered(message: Any) -> Any:
+            shape = (int(message.height), int(message.width)) + ((channels,) if channels > 1 else ())
+            pixels = np.asarray(message.data).reshape(int(message.height), int(message.step))
+            image = pixels[:, :int(message.width) * channels].reshape(shape)
+            out = message.copy()
+            out.data = np.ascontiguousarray(reference(image)).reshape(-1)
+            out.step = int(message.width) * channels
+            return out
+
+        return filtered
 
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         """The output pixel of a window (rows top to bottom, each column left to right), 8 bits."""
@@ -247,6 +273,11 @@ def _widened(value: Value) -> Value:
 class Sobel(ImageFilter3x3):
     """Edges: ``min(|Gx| + |Gy|, 255)`` with the 3x3 Sobel kernels (``hetros.hw.reference.sobel`` in software)."""
 
+    def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
+        from .reference import sobel
+
+        return sobel
+
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         right, left = [top[2], middle[2], bottom[2]], [top[0], middle[0], bottom[0]]
         gx = _widened(_row_sum(right)) - _widened(_row_sum(left))
@@ -258,6 +289,11 @@ class Sobel(ImageFilter3x3):
 class GaussianBlur(ImageFilter3x3):
     """3x3 Gaussian ``[1 2 1; 2 4 2; 1 2 1] / 16``, rounded half up (in software:
     ``hetros.hw.reference.gaussian_blur``)."""
+
+    def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
+        from .reference import gaussian_blur
+
+        return gaussian_blur
 
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         total = _row_sum(top) + (_row_sum(middle) << 1) + _row_sum(bottom) + 8
@@ -274,6 +310,11 @@ class Compensation(ImageFilter3x3):
     then a contrast stretch between the 1st and 99th percentile of the previous frame's median image
     (its histogram is counted as the frame streams by and read between frames, so no frame buffer is
     needed; the first frame is not stretched). ``hetros.hw.reference.Compensation`` in software."""
+
+    def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
+        from .reference import Compensation as Twin
+
+        return Twin()
 
     def kernel(self, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         values = [*top, *middle, *bottom]

@@ -39,15 +39,22 @@ class ModelLatency:
         return self.cycles / self.clock_mhz
 
 
-def sample_message(types: TypeRegistry, typename: str, image: tuple[int, int], size: int, seed: int = 0) -> Any:
-    """A message to time a chain with: an Image a random mono8 ``image`` (width, height); anything else with
-    each variable-length primitive array ``size`` random elements long."""
+_ENCODINGS = {1: "mono8", 3: "rgb8", 4: "rgba8"}
+
+
+def sample_message(types: TypeRegistry, typename: str, image: tuple[int, int], size: int, seed: int = 0,
+                   channels: int = 1) -> Any:
+    """A message to time a chain with: an Image a random ``image`` (width, height) of ``channels`` bytes a
+    pixel (mono8, rgb8: what the nodes that take it are built for); anything else with each
+    variable-length primitive array ``size`` random elements long."""
     rng = np.random.default_rng(seed)
     cls = types.get(typename)
     if typename == "sensor_msgs/msg/Image":
         width, height = image
-        return cls(width=width, height=height, encoding="mono8", step=width,
-                   data=rng.integers(0, 256, width * height, dtype=np.uint8))
+        if channels not in _ENCODINGS:
+            raise HardwareError(f"an image sample must have 1, 3 or 4 bytes a pixel, not {channels!r}")
+        return cls(width=width, height=height, encoding=_ENCODINGS[channels], step=width * channels,
+                   data=rng.integers(0, 256, width * height * channels, dtype=np.uint8))
     message = cls()
     for array in array_fields(types, typename):
         if array.length is None and len(array.path) == 1:
@@ -94,9 +101,10 @@ def execution_models(plan: Plan, target: str, types: TypeRegistry, samples: dict
     topic (``samples``: topic -> message)."""
     whole = TargetSimulation(plan, target, types)
     clock = whole.clock_mhz  # clock_mhz, or the Fmax place and route achieved where that is lower
+    components = whole.components
     try:
         inputs = {p.topic: _encoded(types, p.type, samples[p.topic]) for p in whole.inputs if p.topic in samples}
-        cycles, _ = _through(whole, inputs, max_cycles)
+        cycles, out_of_dataflow = _through(whole, inputs, max_cycles)
         dataflow = ModelLatency("dataflow (hardware topics between the nodes)", cycles, clock,
                                 len(whole.inputs) + len(whole.outputs))
     finally:
@@ -119,9 +127,51 @@ def execution_models(plan: Plan, target: str, types: TypeRegistry, samples: dict
             alone.close()
         available.update(produced)
         stages.append((ready, cycles))
+        _check_against_twins(plan, target, types, samples, components, produced, f"sequential stage {ready}")
     sequential = ModelLatency("sequential (each node behind its own gateway)", sum(c for _, c in stages), clock,
                               copies, stages)
+    _check_against_twins(plan, target, types, samples, components, out_of_dataflow, "dataflow")
     return [dataflow, sequential]
+
+
+def _twin_outputs(plan: Plan, target: str, samples: dict[str, Any], components: dict[str, Any]) -> dict[str, Any]:
+    """What the target's nodes' software twins make of ``samples``, topic by topic, along the chain (a node
+    without a twin, or with several inputs, leaves its outputs unknown)."""
+    messages = dict(samples)
+    pending = [n for n, spec in plan.nodes.items() if spec.target == target and plan.in_hardware(n)]
+    while pending:
+        ready = next((n for n in pending if all(t in messages for t in plan.nodes[n].subscribe)), None)
+        if ready is None:
+            break
+        pending.remove(ready)
+        spec = plan.nodes[ready]
+        make = getattr(components.get(ready), "twin", None)
+        twin = make() if make is not None else None
+        if twin is None or len(spec.subscribe) != 1 or len(spec.publish) != 1:
+            continue
+        (topic_in,), (topic_out,) = spec.subscribe, spec.publish
+        messages[topic_out] = twin(messages[topic_in])
+    return messages
+
+
+def _check_against_twins(plan: Plan, target: str, types: TypeRegistry, samples: dict[str, Any],
+                         components: dict[str, Any], produced: dict[str, bytes], what: str) -> None:
+    """Every output the hardware produced is its software twin's, bit for bit: a timing of a wrong result is
+    no timing (HardwareError naming the topic and how many bytes differ)."""
+    expected = _twin_outputs(plan, target, samples, components)
+    for topic, body in produced.items():
+        want = expected.get(topic)
+        if want is None or topic in samples:
+            continue
+        typename = want.__msgtype__
+        got = types.codec(typename).decode(memoryview(body))
+        if not hasattr(want, "data"):
+            continue
+        have, need = np.asarray(got.data), np.asarray(want.data)
+        if have.shape != need.shape or not np.array_equal(have, need):
+            wrong = int(np.count_nonzero(have != need)) if have.shape == need.shape else max(have.size, need.size)
+            raise HardwareError(f"fpga target {target}, {what}: the hardware's {topic} differs from its software "
+                                f"twin in {wrong} of {need.size} bytes; the timing of a wrong result is no timing")
 
 
 def format_models(target: str, rows: list[ModelLatency]) -> str:
@@ -136,3 +186,14 @@ def format_models(target: str, rows: list[ModelLatency]) -> str:
                       "figure counts the hardware's cycles only: each of its extra copies adds the software "
                       "transfer time on top."]
     return "\n".join(lines)
+
+
+def channels_of(plan: Plan, target: str, topic: str) -> int:
+    """The bytes a pixel of the images on ``topic`` have, as the target's hardware nodes that take them are
+    built (their ``channels`` parameter; 1 where none says)."""
+    found = {int(spec.parameters.get("channels", 1)) for name, spec in plan.nodes.items()
+             if spec.target == target and plan.in_hardware(name) and topic in spec.subscribe}
+    if len(found) > 1:
+        raise HardwareError(f"the hardware nodes that take {topic} are built for different pixels ({sorted(found)} "
+                            "bytes): give them one channels parameter")
+    return found.pop() if found else 1

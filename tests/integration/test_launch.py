@@ -328,3 +328,19 @@ def test_a_target_that_had_to_be_killed_fails_the_launch(tmp_path: Path) -> None
     result = hetros("launch", str(project), "--duration", "1", timeout=60)
     assert result.returncode == 1, result.stderr
     assert "did not stop within 5 s" in result.stderr
+
+
+def test_the_start_up_limit_is_a_setting_and_named_when_missed(tmp_path: Path) -> None:
+    """A target whose module takes 3 s to import misses a 1 s limit, with the flag that sets it named; a
+    bad value is refused by the command line."""
+    (tmp_path / "slow.py").write_text("import time\ntime.sleep(3)\n\ndef node(node):\n    pass\n")
+    (tmp_path / "project.yaml").write_text("name: slow\ntargets: {a: {kind: process}}\n"
+                                           "nodes:\n  n: {run: slow:node, target: a}\n")
+    command = [sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"), "--start-timeout"]
+    missed = subprocess.run([*command, "1"], capture_output=True, text=True, timeout=120, check=False, cwd=tmp_path)
+    assert missed.returncode != 0
+    assert "did not start within 1 s (the start-up limit: hetros launch --start-timeout)" in missed.stderr
+    fine = subprocess.run([*command, "30"], capture_output=True, text=True, timeout=120, check=False, cwd=tmp_path)
+    assert fine.returncode == 0, fine.stderr
+    refused = subprocess.run([*command, "nan"], capture_output=True, text=True, timeout=60, check=False, cwd=tmp_path)
+    assert refused.returncode == 2 and "must be a positive number of seconds, not 'nan'" in refused.stderr

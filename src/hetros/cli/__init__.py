@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import faulthandler
+import math
 import os
 import re
 import shlex
@@ -232,6 +233,17 @@ def cmd_ps(args: argparse.Namespace) -> int:
     return 0
 
 
+def _seconds(text: str) -> float:
+    """A positive, finite number of seconds (``--start-timeout``)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0 < value < math.inf:
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, not {text!r}")
+    return value
+
+
 def cmd_launch(args: argparse.Namespace) -> int:
     from ..launch import launch
     from ..project import plan_file
@@ -241,7 +253,7 @@ def cmd_launch(args: argparse.Namespace) -> int:
     if args.node_times:
         os.environ[NODE_TIMES_VARIABLE] = "1"  # the worker processes inherit it
     result = launch(plan, duration=args.duration, host=args.as_host,
-                    record=Path(args.record) if args.record else None)
+                    record=Path(args.record) if args.record else None, start_timeout=args.start_timeout)
     if result.exit_code:
         print(f"[launch] graph stopped: {result.reason} (failed: {', '.join(result.failures) or '-'})",
               file=sys.stderr)
@@ -474,6 +486,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("launch", help="run a project")
     p.add_argument("project")
     p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--start-timeout", type=_seconds, default=60.0,
+                   help="seconds the targets may take to start, a simulator's announced compilation not counted "
+                        "(default 60)")
     p.add_argument("--as", dest="as_host", metavar="HOST",
                    help="with hosts: run this host's targets (default: the host whose address is this machine's)")
     p.add_argument("--record", metavar="RUN.MCAP", help="record every topic into this MCAP file while it runs")

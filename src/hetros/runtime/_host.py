@@ -7,6 +7,7 @@ import inspect
 import runpy
 import sys
 import threading
+import time
 import traceback
 from collections.abc import Callable
 from pathlib import Path
@@ -196,7 +197,10 @@ class Host:
     def __init__(self, plan: Plan, process: str, session: str, on_failure: FailureReport,
                  stop: threading.Event | None = None,
                  on_all_exited: Callable[[], None] = lambda: None,
-                 on_done: DoneReport = lambda node: None) -> None:
+                 on_done: DoneReport = lambda node: None,
+                 on_preparing: Callable[[str, float | None], None] = lambda node, seconds: None) -> None:
+        """``on_preparing(node, None)`` before a node's start-up work (a simulator's compilation) and
+        ``on_preparing(node, seconds)`` after it: the launcher does not count it against its start-up limit."""
         self._running = 0
         # what this process' reliable writers could not deliver before it ended (``Graph.linger``)
         self.unacknowledged: list[str] = []
@@ -214,7 +218,10 @@ class Host:
             if callable(prepare):
                 # start-up work that must not count against the graph's time (a simulator's
                 # compilation): done before this process reports ready, so before any node runs
+                on_preparing(nthread.spec.name, None)
+                started = time.perf_counter()
                 prepare(plan, nthread.spec.name, types)
+                on_preparing(nthread.spec.name, time.perf_counter() - started)
         self.graph.prepare(plan.nodes_in(process))
 
     def _exited(self) -> None:

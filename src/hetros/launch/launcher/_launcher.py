@@ -39,6 +39,10 @@ from ._registry import register, session_folder, unregister, write_private
 log = get_logger("hetros.launch")
 
 
+# seconds the targets may take to start (import, open endpoints), their announced preparation not counted
+START_TIMEOUT = 60.0
+
+
 @dataclass
 class LaunchResult:
     exit_code: int
@@ -57,8 +61,10 @@ class _Child:
 
 
 class Launcher:
-    def __init__(self, plan: Plan, *, duration: float | None = None, record: Path | None = None) -> None:
+    def __init__(self, plan: Plan, *, duration: float | None = None, record: Path | None = None,
+                 start_timeout: float = START_TIMEOUT) -> None:
         self.plan = plan
+        self.start_timeout = start_timeout
         self.record_to = record
         self._recorder: threading.Thread | None = None
         self.duration = duration
@@ -178,17 +184,38 @@ class Launcher:
                              lambda node: self.events.put({"event": "node_done", "node": node}))
             self.control = ControlServer(self.host, session_folder(self.session), LAUNCHER)
         waiting = set(self.children)
-        # --duration bounds the whole launch, start-up included (a target may wait on a ROS master)
-        patience = 60.0 if self.duration is None else min(60.0, self.duration)
+        # --duration bounds the whole launch, start-up included (a target may wait on a ROS master); the start-up
+        # limit does not count a target's preparation (a simulator compiling its design), which is announced
+        limit = self.start_timeout
+        patience = limit if self.duration is None else min(limit, self.duration)
         deadline = time.monotonic() + patience
+        ends = None if self.duration is None else time.monotonic() + self.duration
+        preparing: dict[str, float] = {}
         while waiting:
-            event = self._next_event(deadline - time.monotonic())
+            now = time.monotonic()
+            timeout = min(1.0, ends - now) if preparing and ends is not None else 1.0 if preparing else deadline - now
+            event = self._next_event(timeout)
             if event is None:
-                if patience < 60.0:
+                if preparing and (ends is None or time.monotonic() < ends):
+                    continue
+                if (self.duration is not None and self.duration <= limit) or preparing:
                     sys.stderr.write(f"[ERROR] [launch]: --duration {self.duration:g} s passed while target(s) "
                                      f"{', '.join(sorted(waiting))} were still starting; stopping\n")
                     return LaunchResult(1, sorted(waiting), "duration elapsed during start-up")
-                raise LaunchError(f"targets {sorted(waiting)} did not start within 60 s")
+                raise LaunchError(f"targets {sorted(waiting)} did not start within {limit:g} s (the start-up limit: "
+                                  "hetros launch --start-timeout); see their output above for what they wait on")
+            if event["event"] == "preparing":
+                preparing[f"{event['target']}/{event['node']}"] = time.monotonic()
+                log.info("target %s: preparing %s (a simulator compiles the design on its first launch; this does "
+                         "not count against the start-up limit)", event["target"], event["node"])
+                continue
+            if event["event"] == "prepared":
+                began = preparing.pop(f"{event['target']}/{event['node']}", time.monotonic())
+                deadline += time.monotonic() - began
+                if ends is not None:
+                    deadline = min(deadline, ends)
+                log.info("target %s: %s prepared in %.1f s", event["target"], event["node"], float(event["seconds"]))
+                continue
             if event["event"] == "ready":
                 waiting.discard(event["target"])
                 log.info("target %s ready (pid %s, cpus %s)", event["target"], event["pid"], event["cpus"])
@@ -414,7 +441,7 @@ class Launcher:
 
 
 def launch(plan: Plan, *, duration: float | None = None, host: str | None = None,
-           record: Path | None = None) -> LaunchResult:
+           record: Path | None = None, start_timeout: float = START_TIMEOUT) -> LaunchResult:
     """Run ``plan`` here; with hosts, this machine's share of it (``host``, else the host whose
     address is this machine's)."""
     if plan.hosts:
@@ -430,7 +457,7 @@ def launch(plan: Plan, *, duration: float | None = None, host: str | None = None
         raise LaunchError(f"--as {host}: the project names no hosts (add a hosts: section)")
     _check_hardware(plan)
     _check_shared_memory(plan)
-    return Launcher(plan, duration=duration, record=record).run()
+    return Launcher(plan, duration=duration, record=record, start_timeout=start_timeout).run()
 
 
 def _check_shared_memory(plan: Plan) -> None:

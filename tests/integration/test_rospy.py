@@ -31,6 +31,21 @@ def init(tmp_path: Path, folder: str) -> dict[str, Any]:
     return project
 
 
+def init_scripts(tmp_path: Path, *scripts: str) -> dict[str, Any]:
+    """The project `hetros init` writes for a folder holding these tutorial scripts (from several folders)."""
+    import shutil
+
+    folder = tmp_path / "scripts"
+    folder.mkdir()
+    for script in scripts:
+        shutil.copy(f"{RUN}/{script}", folder)
+    made = subprocess.run([sys.executable, "-m", "hetros", "init", str(folder), "-o", str(tmp_path / "project.yaml"),
+                           "--name", "tutorials"], capture_output=True, text=True, timeout=60, check=False)
+    assert made.returncode == 0, made.stderr
+    project: dict[str, Any] = yaml.safe_load((tmp_path / "project.yaml").read_text())
+    return project
+
+
 def launch(tmp_path: Path, project: dict[str, Any], duration: float,
            env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     path = tmp_path / "project.yaml"
@@ -59,16 +74,8 @@ def test_the_talker_and_listener(tmp_path: Path) -> None:
 def test_three_subscriptions_to_one_topic_in_one_node_each_hear_every_message(tmp_path: Path) -> None:
     """003_listener_with_user_data, unchanged: three rospy.Subscribers on "chatter" in one node (userdata 1,
     2 and a tuple) and one on "chatter2", which nobody publishes (ROS lets it wait), beside 001's talker."""
-    import shutil
-
-    folder = tmp_path / "scripts"
-    folder.mkdir()
-    shutil.copy(f"{RUN}/003_listener_with_user_data/listener_with_user_data.py", folder)
-    shutil.copy(f"{RUN}/001_talker_listener/talker.py", folder)
-    made = subprocess.run([sys.executable, "-m", "hetros", "init", str(folder), "-o", str(tmp_path / "project.yaml"),
-                           "--name", "user_data"], capture_output=True, text=True, timeout=60, check=False)
-    assert made.returncode == 0, made.stderr
-    project = yaml.safe_load((tmp_path / "project.yaml").read_text())
+    project = init_scripts(tmp_path, "003_listener_with_user_data/listener_with_user_data.py",
+                           "001_talker_listener/talker.py")
     done = launch(tmp_path, project, 3.0)
     assert done.returncode == 0, done.stderr
     output = done.stdout + done.stderr
@@ -82,16 +89,8 @@ def test_three_subscriptions_to_one_topic_in_one_node_each_hear_every_message(tm
 
 def test_the_timer_talker_is_heard(tmp_path: Path) -> None:
     """001's talker_timer.py, unchanged: rospy.Timer at 10 Hz, its TimerEvent's current_real in each line."""
-    import shutil
-
-    folder = tmp_path / "scripts"
-    folder.mkdir()
-    for script in ("talker_timer.py", "listener.py"):
-        shutil.copy(f"{RUN}/001_talker_listener/{script}", folder)
-    made = subprocess.run([sys.executable, "-m", "hetros", "init", str(folder), "-o", str(tmp_path / "project.yaml"),
-                           "--name", "timer"], capture_output=True, text=True, timeout=60, check=False)
-    assert made.returncode == 0, made.stderr
-    done = launch(tmp_path, yaml.safe_load((tmp_path / "project.yaml").read_text()), 2.5)
+    project = init_scripts(tmp_path, "001_talker_timer/talker_timer.py", "001_talker_listener/listener.py")
+    done = launch(tmp_path, project, 2.5)
     assert done.returncode == 0, done.stderr
     said = re.findall(r"\[talker_\d+_\d+\]: (hello world [\d.]+)", done.stderr)
     heard = re.findall(r"I heard (hello world [\d.]+)", done.stderr)
@@ -102,16 +101,8 @@ def test_an_on_shutdown_hook_runs_once(tmp_path: Path) -> None:
     """008's publish_on_shutdown.py, unchanged: its hook prints (and publishes) "I'm dead!" once when the
     launch stops. (That its message reaches the listener, as under roslaunch, hetros does not promise yet:
     every process stops at once.)"""
-    import shutil
-
-    folder = tmp_path / "scripts"
-    folder.mkdir()
-    shutil.copy(f"{RUN}/008_on_shutdown/publish_on_shutdown.py", folder)
-    shutil.copy(f"{RUN}/001_talker_listener/listener.py", folder)
-    made = subprocess.run([sys.executable, "-m", "hetros", "init", str(folder), "-o", str(tmp_path / "project.yaml"),
-                           "--name", "on_shutdown"], capture_output=True, text=True, timeout=60, check=False)
-    assert made.returncode == 0, made.stderr
-    done = launch(tmp_path, yaml.safe_load((tmp_path / "project.yaml").read_text()), 2.0)
+    project = init_scripts(tmp_path, "008_on_shutdown/publish_on_shutdown.py", "001_talker_listener/listener.py")
+    done = launch(tmp_path, project, 2.0)
     assert done.returncode == 0, done.stderr
     output = done.stdout + done.stderr
     assert output.count("I'm dead!") == 1, output

@@ -6,8 +6,9 @@ generated from the plan. Amaranth is imported only when a network is built.
 """
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from .._lazy import lazy_exports
 from ..msg import TypeRegistry
 from ..plan import Plan
 from ._beats import BeatCodec, Beats, amaranth_layout, field_name, from_beats, to_beats
@@ -80,13 +81,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    return getattr(importlib.import_module(module, __name__), name)
+__getattr__ = lazy_exports(__name__, _LAZY)
 
 
 __all__ = [

@@ -10,7 +10,9 @@ imports this package first and must not pay for the launcher, the project model 
 its plan does not use.
 """
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from .launcher._deploy import deploy, deploy_commands
@@ -23,22 +25,16 @@ if TYPE_CHECKING:
     from .observe._logs import LaunchLogs
 
 _WHERE = {
-    "Launcher": "launcher._launcher", "LaunchResult": "launcher._launcher", "launch": "launcher._launcher",
-    "deploy": "launcher._deploy", "deploy_commands": "launcher._deploy", "local_host": "launcher._hosts",
-    "format_launches": "launcher._registry", "running": "launcher._registry",
-    "describe_played": "observe._bag", "play": "observe._bag", "play_launching": "observe._bag",
-    "record": "observe._bag", "recordable": "observe._bag", "FoxgloveView": "observe._foxglove",
-    "RunningLaunch": "observe._inspect", "TapEvent": "observe._inspect", "LaunchLogs": "observe._logs",
+    "Launcher": ".launcher._launcher", "LaunchResult": ".launcher._launcher", "launch": ".launcher._launcher",
+    "deploy": ".launcher._deploy", "deploy_commands": ".launcher._deploy", "local_host": ".launcher._hosts",
+    "format_launches": ".launcher._registry", "running": ".launcher._registry",
+    "describe_played": ".observe._bag", "play": ".observe._bag", "play_launching": ".observe._bag",
+    "record": ".observe._bag", "recordable": ".observe._bag", "FoxgloveView": ".observe._foxglove",
+    "RunningLaunch": ".observe._inspect", "TapEvent": ".observe._inspect", "LaunchLogs": ".observe._logs",
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _WHERE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
+__getattr__ = lazy_exports(__name__, _WHERE)
 
 
 

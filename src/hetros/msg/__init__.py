@@ -1,7 +1,8 @@
 """Message layer: types from .msg/.srv/.action files, CDR codecs, read-only delivery."""
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from .._lazy import lazy_exports
 from ._layout import ArrayField, FlatLayout, LayoutField, array_fields, flat_layout, get_path, set_path
 from ._message import FrozenMessage, LoanBuffer, Message, copy, default_maker, freeze, hand_over, loaned_array
 from ._registry import (
@@ -40,13 +41,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    return getattr(importlib.import_module(module, __name__), name)
+__getattr__ = lazy_exports(__name__, _LAZY)
 
 
 __all__ = [

@@ -1,7 +1,8 @@
 """Runtime: node API, per-node executor, per-process graph, the host of a process' nodes."""
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from .._lazy import lazy_exports
 from ._clock import Clock, Duration, SimulatedClock, Time
 from ._entities import Client, Publisher, Replies, Service, Subscription, Timer
 from ._graph import Graph
@@ -41,13 +42,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    return getattr(importlib.import_module(module, __name__), name)
+__getattr__ = lazy_exports(__name__, _LAZY)
 
 
 __all__ = [

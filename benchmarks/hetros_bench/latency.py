@@ -498,6 +498,21 @@ def log_axes(ax: Any, title: str, unit: str) -> None:
     ax.grid(True, which="both", alpha=0.3)
 
 
+# sizes from which a loan must be at least as fast as a plain publish: its arrays are not copied
+LOAN_PAYS_FROM = 196 * 1024
+
+
+def loan_regressions(results: list[Result]) -> list[str]:
+    """Each size (from ``LOAN_PAYS_FROM``) at which the loaned publish was slower than the plain one in this run,
+    one line each: the zero-copy path users of large messages are told to take must never lose to a copy."""
+    p50 = {(r.system, r.size): r.one_way.p50 for r in results if r.one_way is not None}
+    return [f"hetros-shm-loan is slower than hetros-shm at {SIZE_LABELS.get(size, size)}: p50 {loaned:.1f} µs "
+            f"against {p50[('hetros-shm', size)]:.1f} µs"
+            for (system, size), loaned in sorted(p50.items())
+            if system == "hetros-shm-loan" and size >= LOAN_PAYS_FROM and ("hetros-shm", size) in p50
+            and loaned > p50[("hetros-shm", size)]]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true",
@@ -570,7 +585,10 @@ def main(argv: list[str] | None = None) -> int:
             handle.write(json.dumps({"missing": system, "why": why}) + "\n")
     plot(run, [s for s in systems if s not in run.missing], out / "latency.png")
     print(f"\nwrote {out / 'latency.md'}, {out / 'latency.jsonl'}, {out / 'latency.png'}")
-    return 0
+    regressions = loan_regressions(run.results)
+    for line in regressions:  # loud: the run fails, so that a regression of the zero-copy path cannot pass unseen
+        print(f"REGRESSION: {line}", file=sys.stderr)
+    return 1 if regressions else 0
 
 
 if __name__ == "__main__":

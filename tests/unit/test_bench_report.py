@@ -59,3 +59,18 @@ def test_the_cli_forwards_sizes_to_the_benchmark(bench: str, monkeypatch: pytest
     args = build_parser().parse_args(["bench", bench, "--sizes", "4B,196kB"])
     assert args.func(args) == 0
     assert seen and seen[0][seen[0].index("--sizes") + 1] == "4B,196kB"
+
+
+def test_a_loan_slower_than_a_plain_publish_at_large_sizes_fails_the_run() -> None:
+    """The benchmark's guard of the zero-copy path: from 196 kB a loaned publish must not lose to a copy."""
+    from hetros_bench.latency import Stats, loan_regressions
+
+    def row(system: str, size: int, p50: float) -> Result:
+        return Result(system, size, one_way=Stats(p50, 1.0, p50, p50, 100))
+
+    fine = [row("hetros-shm", 196608, 15.8), row("hetros-shm-loan", 196608, 13.1),
+            row("hetros-shm", 4, 5.0), row("hetros-shm-loan", 4, 6.0)]  # small: a loan may cost a little
+    assert loan_regressions(fine) == []
+    slow = [row("hetros-shm", 3145728, 229.0), row("hetros-shm-loan", 3145728, 643.0)]
+    assert loan_regressions(slow) == ["hetros-shm-loan is slower than hetros-shm at 3146 kB: p50 643.0 µs against "
+                                      "229.0 µs"]

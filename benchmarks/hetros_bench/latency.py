@@ -498,19 +498,23 @@ def log_axes(ax: Any, title: str, unit: str) -> None:
     ax.grid(True, which="both", alpha=0.3)
 
 
-# sizes from which a loan must be at least as fast as a plain publish: its arrays are not copied
+# sizes from which a loan must be at least as fast as a plain publish: its arrays are not copied. Where both
+# cost the same copy (one way, a producer that writes its data) they differ by this machine's noise, a few
+# per cent either way: a loan more than 10 % slower is the regression (it was 3-6x when it happened)
 LOAN_PAYS_FROM = 196 * 1024
+LOAN_NOISE = 1.10
 
 
 def loan_regressions(results: list[Result]) -> list[str]:
-    """Each size (from ``LOAN_PAYS_FROM``) at which the loaned publish was slower than the plain one in this run,
-    one line each: the zero-copy path users of large messages are told to take must never lose to a copy."""
+    """Each size (from ``LOAN_PAYS_FROM``) at which the loaned publish was slower than the plain one in this run
+    (beyond ``LOAN_NOISE``), one line each: the zero-copy path users of large messages are told to take must
+    never lose to a copy."""
     p50 = {(r.system, r.size): r.one_way.p50 for r in results if r.one_way is not None}
     return [f"hetros-shm-loan is slower than hetros-shm at {SIZE_LABELS.get(size, size)}: p50 {loaned:.1f} µs "
             f"against {p50[('hetros-shm', size)]:.1f} µs"
             for (system, size), loaned in sorted(p50.items())
             if system == "hetros-shm-loan" and size >= LOAN_PAYS_FROM and ("hetros-shm", size) in p50
-            and loaned > p50[("hetros-shm", size)]]
+            and loaned > LOAN_NOISE * p50[("hetros-shm", size)]]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -69,6 +69,7 @@ def test_a_loan_slower_than_a_plain_publish_at_large_sizes_fails_the_run() -> No
         return Result(system, size, one_way=Stats(p50, 1.0, p50, p50, 100))
 
     fine = [row("hetros-shm", 196608, 15.8), row("hetros-shm-loan", 196608, 13.1),
+            row("hetros-shm", 3145728, 67.9), row("hetros-shm-loan", 3145728, 70.8),  # one copy each: noise
             row("hetros-shm", 4, 5.0), row("hetros-shm-loan", 4, 6.0)]  # small: a loan may cost a little
     assert loan_regressions(fine) == []
     slow = [row("hetros-shm", 3145728, 229.0), row("hetros-shm-loan", 3145728, 643.0)]

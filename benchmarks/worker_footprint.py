@@ -1,4 +1,5 @@
-"""What one worker process costs before its nodes run: resident memory and import time, per kind of edge.
+"""What one worker process costs: resident memory and import time before its nodes run, per kind of edge,
+and the resident memory of the README talker/listener's workers while a real launch runs them.
 
     .venv/bin/python benchmarks/worker_footprint.py [--runs 5] [--out out/bench]
 
@@ -21,6 +22,7 @@ import subprocess
 import sys
 import tempfile
 import textwrap
+import time
 from pathlib import Path
 
 from hetros.project import load_project, plan
@@ -137,6 +139,44 @@ def measure(runs: int) -> dict[str, dict[str, object]]:
     return rows
 
 
+_EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "talker_listener" / "project.yaml"
+
+
+def running_workers(runs: int) -> dict[str, dict[str, object]]:
+    """The README's talker/listener as ``hetros launch`` runs it: each worker's VmRSS once its nodes have run
+    for 4 s (the talker's process, and the two listeners' process), the median of ``runs`` launches."""
+    seen: dict[str, list[dict[str, object]]] = {"running talker worker (launch)": [],
+                                                 "running listeners worker (launch)": []}
+    for _ in range(runs):
+        with subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(_EXAMPLE), "--duration", "7"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=_CHILD_ENV) as launch:
+            time.sleep(5.0)
+            for pid in _children(launch.pid):
+                command = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+                if b"hetros.launch.launcher._worker" not in command:
+                    continue
+                target = command[command.index(b"--target") + 1].decode()
+                status = Path(f"/proc/{pid}/status").read_text()
+                rss_kb = int(status.split("VmRSS:")[1].split()[0])
+                role = "talker" if target == "cluster1" else "listeners"
+                seen[f"running {role} worker (launch)"].append({"rss_kb": rss_kb, "import_ms": 0.0})
+            launch.wait(60)
+    return {label: _summary(samples) for label, samples in seen.items() if samples}
+
+
+def _children(pid: int) -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                parent = int((entry / "stat").read_text().rpartition(")")[2].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+            if parent == pid:
+                found.append(int(entry.name))
+    return found
+
+
 def _summary(samples: list[dict[str, object]]) -> dict[str, object]:
     def median(key: str) -> float:
         return statistics.median(float(str(s[key])) for s in samples)
@@ -187,6 +227,7 @@ def main() -> None:
     if args.source is not None:
         _CHILD_ENV["PYTHONPATH"] = str(args.source.resolve())
     rows = measure(args.runs)
+    rows.update(running_workers(min(args.runs, 3)))
     args.out.mkdir(parents=True, exist_ok=True)
     report = render(rows)
     print(report)

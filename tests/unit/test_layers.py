@@ -249,3 +249,13 @@ def test_an_unregistered_kind_is_refused_with_the_registered_ones_named() -> Non
     with pytest.raises(TransportError, match=r"no transport is registered for edges of kind 'carrier_pigeon' "
                                              r"\(registered: .*dds.*shm"):
         transport_class("carrier_pigeon")
+
+
+def test_no_function_in_project_is_over_sixty_lines() -> None:
+    """The rules every feature touches stay readable: a check is a named rule, the planner a list of steps
+    (``project/_checks.py``, ``project/_planner.py``); a function that grows past 60 lines is split."""
+    long = [f"{path.relative_to(SRC)}:{node.lineno} {node.name} ({node.end_lineno - node.lineno + 1} lines)"
+            for path in _files("project") for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and node.end_lineno is not None
+            and node.end_lineno - node.lineno + 1 > 60]
+    assert not long, "functions over 60 lines in project/:\n" + "\n".join(long)

@@ -11,6 +11,8 @@
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 from pathlib import Path
 from typing import Any
 
@@ -107,21 +109,59 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
     targets: dict[str, Any] = {}
     nodes: dict[str, Any] = {}
     notes: list[str] = []
+    hardware_nodes: set[str] = set()
+    cfg = _read_build_cfg(path, module, targets, nodes, notes, hardware_nodes)
+    if not nodes:
+        raise ProjectError(f"{path}: no [ResourceGroup@...] section with a rosnode/roscpp entry found")
+    hardware_groups: set[str] = set()  # groups of hardware threads
+    for spec in cfg.threads:
+        if spec.get("HwSource") and spec.get("ResourceGroup"):
+            groups_of_thread = set()
+            for named in re.split(r"[, ]+", spec["ResourceGroup"].strip()):
+                base = re.sub(r"\(.*\)$", "", named)
+                groups_of_thread.update(cfg.ranged.get(base, [base]))
+            hardware_groups.update(groups_of_thread)
+            _two_implementations(path, spec, groups_of_thread, module, nodes, notes)
+    for spec in cfg.gateways:
+        _join_gateway(path, spec, nodes, notes)
+    if hardware_nodes or hardware_groups:
+        fpga: dict[str, Any] = {"kind": "fpga"}
+        clock = cfg.clocks.get(cfg.general.get("SystemClock", ""), {}).get("ClockFreq", "")
+        if clock.isdigit():
+            fpga["clock_mhz"] = int(clock) / 1e6
+        if cfg.general.get("TargetPart"):
+            fpga["part"] = cfg.general["TargetPart"]
+        targets[FPGA_TARGET] = fpga
+        for name in sorted(hardware_nodes):
+            nodes[name]["target"] = FPGA_TARGET
+            nodes[name].setdefault("hw", f"{module}_hw:{name}")  # its hw-flagged endpoints exist in hardware only
+        used = {spec["target"] for spec in nodes.values()} | {FPGA_TARGET}
+        targets = {name: spec for name, spec in targets.items() if name in used}
+    return {"name": path.stem, "targets": targets, "nodes": nodes}, notes
+
+
+@dataclass
+class _BuildCfg:
+    """What a build.cfg says besides its resources (which go straight into targets and nodes)."""
+
+    general: dict[str, str] = dataclass_field(default_factory=dict)
+    clocks: dict[str, dict[str, str]] = dataclass_field(default_factory=dict)
+    threads: list[dict[str, str]] = dataclass_field(default_factory=list)
+    gateways: list[dict[str, str]] = dataclass_field(default_factory=list)
+    ranged: dict[str, list[str]] = dataclass_field(default_factory=dict)  # a ranged group's name -> its expanded groups
+
+
+def _read_build_cfg(path: Path, module: str, targets: dict[str, Any], nodes: dict[str, Any], notes: list[str],
+                    hardware_nodes: set[str]) -> _BuildCfg:
+    """Read ``path`` section by section: resources become targets and nodes as they come; the rest is kept."""
+    cfg = _BuildCfg()
     # the resource groups of the current section, each with the index `%` stands for ("" without a range)
     groups: list[tuple[str, str]] = []
-    section_kind = ""
+    section_kind = clock_name = ""
     # per group: variable -> node name / message type
     variables: dict[tuple[str, str], str] = {}
     messages: dict[tuple[str, str], str] = {}
-    hardware_nodes: set[str] = set()
-    hardware_groups: set[str] = set()  # groups of hardware threads
     thread: dict[str, str] = {}
-    general: dict[str, str] = {}
-    clocks: dict[str, dict[str, str]] = {}
-    threads: list[dict[str, str]] = []
-    gateways: list[dict[str, str]] = []
-    clock_name = ""
-    ranged: dict[str, list[str]] = {}  # a ranged group's name -> its expanded groups
     for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
         line = re.sub(r"^\d+\s+", "", raw.split("#", 1)[0].strip())
         if not line:
@@ -132,64 +172,37 @@ def import_reconros(path: Path, module: str = "nodes") -> tuple[dict[str, Any], 
             groups = []
             if section_kind == "ROSGateway":
                 thread = {"line": str(lineno), "section": line}
-                gateways.append(thread)
+                cfg.gateways.append(thread)
             if section and section_kind == "ResourceGroup":
                 name = section.group("name").strip()
                 if section.group("start") is not None:
                     indices = range(int(section.group("start")), int(section.group("end")) + 1)
                     groups = [(f"{name}_{i}", str(i)) for i in indices]
-                    ranged[name] = [group for group, _ in groups]
+                    cfg.ranged[name] = [group for group, _ in groups]
                 else:
                     groups = [(name, "")]
             if section_kind == "ReconosThread":
                 thread = {"line": str(lineno)}
-                threads.append(thread)
+                cfg.threads.append(thread)
             if section and section_kind == "Clock":
-                clocks[section.group("name")] = {}
+                cfg.clocks[section.group("name")] = {}
             clock_name = section.group("name") if section and section_kind == "Clock" else ""
             continue
         if "=" not in line:
             continue
         var, _, value = (p.strip() for p in line.partition("="))
         if section_kind == "General":
-            general[var] = value
-            continue
-        if section_kind in ("ReconosThread", "ROSGateway"):
+            cfg.general[var] = value
+        elif section_kind in ("ReconosThread", "ROSGateway"):
             thread[var] = value.strip().strip('"')
-            continue
-        if section_kind == "Clock" and clock_name:
-            clocks[clock_name][var] = value
-            continue
-        for number, (group, index) in enumerate(groups):
-            fields = [f.replace("%", index) for f in _fields(value)] if index else _fields(value)
-            _resource(path, lineno, module, group, var, fields, targets, nodes, notes, variables, messages,
-                      hardware_nodes, first=number == 0)
-    if not nodes:
-        raise ProjectError(f"{path}: no [ResourceGroup@...] section with a rosnode/roscpp entry found")
-    for spec in threads:
-        if spec.get("HwSource") and spec.get("ResourceGroup"):
-            groups_of_thread = set()
-            for named in re.split(r"[, ]+", spec["ResourceGroup"].strip()):
-                base = re.sub(r"\(.*\)$", "", named)
-                groups_of_thread.update(ranged.get(base, [base]))
-            hardware_groups.update(groups_of_thread)
-            _two_implementations(path, spec, groups_of_thread, module, nodes, notes)
-    for spec in gateways:
-        _join_gateway(path, spec, nodes, notes)
-    if hardware_nodes or hardware_groups:
-        fpga: dict[str, Any] = {"kind": "fpga"}
-        clock = clocks.get(general.get("SystemClock", ""), {}).get("ClockFreq", "")
-        if clock.isdigit():
-            fpga["clock_mhz"] = int(clock) / 1e6
-        if general.get("TargetPart"):
-            fpga["part"] = general["TargetPart"]
-        targets[FPGA_TARGET] = fpga
-        for name in sorted(hardware_nodes):
-            nodes[name]["target"] = FPGA_TARGET
-            nodes[name].setdefault("hw", f"{module}_hw:{name}")  # its hw-flagged endpoints exist in hardware only
-        used = {spec["target"] for spec in nodes.values()} | {FPGA_TARGET}
-        targets = {name: spec for name, spec in targets.items() if name in used}
-    return {"name": path.stem, "targets": targets, "nodes": nodes}, notes
+        elif section_kind == "Clock" and clock_name:
+            cfg.clocks[clock_name][var] = value
+        else:
+            for number, (group, index) in enumerate(groups):
+                fields = [f.replace("%", index) for f in _fields(value)] if index else _fields(value)
+                _resource(path, lineno, module, group, var, fields, targets, nodes, notes, variables, messages,
+                          hardware_nodes, first=number == 0)
+    return cfg
 
 
 def _two_implementations(path: Path, thread: dict[str, str], groups: set[str], module: str,

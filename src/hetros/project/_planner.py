@@ -71,6 +71,15 @@ def plan(project: LoadedProject, types: TypeRegistry | None = None) -> Plan:
         | {g: host_of_target[t] for g, t in (gateways | clocks).items()})
     edges = tuple(EdgePlan(c.name, p, s, kind) for c in channels.values() for p in c.publishers
                   for s in c.subscribers if (kind := edge_transport(c.name, p, s, placement)) is not None)
+    return _tables(project, channels, edges, bridges, gateways, clocks, host_of_target, framed, speaks_ros1)
+
+
+def _tables(project: LoadedProject, channels: dict[str, ChannelPlan], edges: tuple[EdgePlan, ...],
+            bridges: list[NodePlan], gateways: dict[str, str], clocks: dict[str, str], host_of_target: dict[str, str],
+            framed: dict[str, tuple[tuple[str, ...], tuple[str, ...]]], speaks_ros1: set[str]) -> Plan:
+    """The last step: the plan's tables from what the steps before found."""
+    model = project.model
+    first_host = next(iter(model.hosts), "")
     external = model.external
     return Plan(
         name=model.name,

@@ -55,6 +55,18 @@ def test_export_writes_a_vivado_project_the_open_tools_accept(project: str, boar
         assert f"hetros/{dma['interface']}]" in tcl, dma
         assert f"assign_bd_address -offset {dma['base_address']} " in tcl
         assert ("M_AXIS_MM2S" if dma["channel"] == "sendchannel" else "S_AXIS_S2MM") in tcl
+    for dma in manifest["dmas"]:  # the DMA's memory side as wide as its stream (its default is 32 bits)
+        width = dma["width"]
+        assert f"CONFIG.c_m_axi_mm2s_data_width {{{width}}} CONFIG.c_m_axi_s2mm_data_width {{{width}}}" in tcl
+    # the board's preset before hetros's own settings, and the clock association on the aclk port itself
+    part = {"zcu104": "xilinx.com:zcu104:part0:1.1", "pynq-z2": "tul.com.tw:pynq-z2:part0:1.0",
+            "ultra96": "avnet.com:ultra96v2:part0:1.2"}[board]
+    assert f"set_property board_part {part} [current_project]" in tcl
+    preset = tcl.index('apply_board_preset "1"')
+    assert preset < tcl.index("CONFIG.PSU__USE__M_AXI_GP0" if board != "pynq-z2" else "CONFIG.PCW_USE_S_AXI_HP0")
+    assert re.search(r'\(\* X_INTERFACE_INFO = "xilinx.com:signal:clock:1.0 aclk CLK", X_INTERFACE_PARAMETER = '
+                     r'"ASSOCIATED_BUSIF [\w:]+, ASSOCIATED_RESET aresetn" \*\)\n  input wire aclk', wrapper), wrapper
+    assert not re.search(r"\*\)\s*module", wrapper), "the association belongs on the aclk port, not the module"
     addresses = sorted(int(d["base_address"], 16) for d in manifest["dmas"])
     assert addresses == [dma_base + 0x10000 * k for k in range(len(addresses))]
     assert "write_bitstream" in tcl and manifest["hwh"] in tcl and manifest["bitstream"] in tcl

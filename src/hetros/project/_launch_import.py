@@ -77,6 +77,8 @@ def _yaml_tree(path: Path) -> _Element:
         raise ProjectError(f"{path}:1: a YAML launch file holds `launch:`, a list of actions")
 
     def convert(tag: str, body: Any) -> _Element:
+        if tag == "group" and isinstance(body, list):  # a group's list form: its actions, no attributes
+            return _Element(tag, {}, 0, [convert(*next(iter(item.items()))) for item in body])
         if not isinstance(body, dict):
             raise ProjectError(f"{path}: launch: {tag}: must be a mapping, not {body!r}")
         element = _Element(tag, {}, 0)
@@ -107,7 +109,8 @@ class LaunchImporter:
 
     def __init__(self, ros2: bool, package_paths: list[Path], base: Path) -> None:
         self.ros2 = ros2
-        self.package_paths = package_paths
+        # absolute: $(find) answers with a path that must still name the package from the project's folder
+        self.package_paths = [folder.resolve() for folder in package_paths]
         self.base = base  # the folder the project file goes to: scripts and files are named relative to it
         self.project: dict[str, Any] = {"targets": {}, "nodes": {}}
         self.notes: list[str] = []
@@ -152,6 +155,15 @@ class LaunchImporter:
                 return os.environ.get(rest[0], " ".join(rest[1:]))
             if kind == "dirname":
                 return str(path.parent.resolve())
+            if kind == "file-content":
+                if not rest:
+                    raise ProjectError(f"{where}: $(file-content) needs a file")
+                named = Path(" ".join(rest))
+                source = named if named.is_absolute() else path.parent / named
+                try:
+                    return source.read_text(encoding="utf-8")
+                except OSError as exc:
+                    raise ProjectError(f"{where}: $(file-content {named}): {exc.strerror}") from None
             if kind == "anon":
                 return f"{rest[0]}_{os.getpid()}"
             raise ProjectError(f"{where}: $({kind} ...) has no counterpart in hetros; write the value out")

@@ -119,8 +119,10 @@ def test_the_minimal_action_servers_and_clients(tmp_path: Path) -> None:
              "functions": ("server_not_composable", "client_not_composable"), "cancel": ("server", "client_cancel")}
     project = init(tmp_path, *(module("examples_rclpy_minimal_action_server", server) for server, _ in pairs.values()),
                    *(module("examples_rclpy_minimal_action_client", client) for _, client in pairs.values()))
-    servers = sorted(k for k in project["nodes"] if k.startswith("minimal_action_server"))
-    clients = sorted(k for k in project["nodes"] if k.startswith("minimal_action_client"))
+    # keyed by their entry points (all four servers name their node the same), in the order given
+    servers = [k for k, n in project["nodes"].items() if "minimal_action_server." in n["run"]]
+    clients = [k for k, n in project["nodes"].items() if "minimal_action_client." in n["run"]]
+    assert servers == ["server", "server_defer", "server_not_composable", "server_2"], servers
     assert len(servers) == len(clients) == 4
     for node in project["nodes"].values():
         assert node.get("actions", node.get("action_clients")) == {"fibonacci": ACTION}

@@ -64,8 +64,9 @@ def test_init_reads_an_rclpy_package_from_its_entry_points() -> None:
 
     project, notes = ros_template([ROS2_EXAMPLES / "topics" / "minimal_publisher"], "p", Path.cwd())
     assert notes == []
-    # setup.py's console_scripts, one written as two adjacent strings; all three name their node the same
-    assert set(project["nodes"]) == {"minimal_publisher", "minimal_publisher_2", "minimal_publisher_3"}
+    # setup.py's console_scripts, one written as two adjacent strings; all three name their node the same, so
+    # each is keyed by its console script, as `ros2 run` knows it (and its node name is kept as name:)
+    assert set(project["nodes"]) == {"publisher_old_school", "publisher_local_function", "publisher_member_function"}
     runs = {n["run"] for n in project["nodes"].values()}
     assert runs == {f"examples_rclpy_minimal_publisher.{m}:main"
                     for m in ("publisher_old_school", "publisher_local_function", "publisher_member_function")}
@@ -122,3 +123,23 @@ def test_init_leaves_a_placeholder_that_check_refuses_naming_file_and_line(tmp_p
     (tmp_path / "p.yaml").write_text(yaml.safe_dump(project))
     report = check(load_project(tmp_path / "p.yaml"))
     assert len(report.errors) == 1 and "placeholder 'topic at relay.py:10' left by `hetros init`" in report.errors[0]
+
+
+def test_init_skips_tests_and_symlinks_and_adds_the_packages_own_interfaces(tmp_path: Path) -> None:
+    """A package's test/ scripts are no nodes, a symlink to a script is not a second node, and a package's own
+    msg/ is in the project's messages:."""
+    import shutil
+
+    from hetros.project import ros_template
+
+    package = tmp_path / "pkg"
+    shutil.copytree(TUTORIALS / "001_talker_listener", package / "scripts")
+    (package / "package.xml").write_text("<package><name>pkg</name></package>\n")
+    (package / "msg").mkdir()
+    (package / "msg" / "Count.msg").write_text("int32 count\n")
+    (package / "test").mkdir()
+    shutil.copy(TUTORIALS / "001_talker_listener" / "talker.py", package / "test" / "talker_test.py")
+    (package / "scripts" / "talker_link.py").symlink_to(package / "scripts" / "talker.py")
+    project, _ = ros_template([package], "p", tmp_path)
+    assert sorted(n["run"] for n in project["nodes"].values()) == ["pkg/scripts/listener.py", "pkg/scripts/talker.py"]
+    assert project["messages"] == ["pkg"]

@@ -274,16 +274,24 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     ``main``, else the whole file as a script); each node on a process of its own, as ``ros2 run`` runs it.
     ``base`` is the folder the project file goes to (scripts are named relative to it)."""
     nodes: list[RosNode] = []
+    interfaces: list[Path] = []  # the given packages' own msg/, srv/, action/ folders
+    seen: set[Path] = set()  # scripts by their real path: a symlink to one is not a second node
     for given in paths:
         if given.is_dir():
             root = given
             for key, target in sorted(entry_points(given).items()):
                 nodes.append(scan_ros_entry(root, key, target))
             for script in sorted(given.rglob("*")):
+                inside = script.relative_to(given).parts[:-1]
+                if any(part in ("test", "tests") for part in inside) or script.resolve() in seen:
+                    continue  # a package's tests are no nodes of its graph
                 if script.is_file() and script.suffix in ("", ".py") and "setup" not in script.name and \
                         writes_ros(script) and "init_node" in script.read_text(encoding="utf-8") and \
                         not any(n.run.partition(":")[0].replace(".", "/") in str(script) for n in nodes):
+                    seen.add(script.resolve())
                     nodes.append(scan_ros_script(script, root, base))
+            interfaces += sorted({xml.parent for xml in given.rglob("package.xml")
+                                  if any((xml.parent / kind).is_dir() for kind in ("msg", "srv", "action"))})
         else:
             root = _package_root(given)
             module = ".".join(given.resolve().relative_to(root.resolve()).with_suffix("").parts)
@@ -293,11 +301,14 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
             else:
                 nodes.append(scan_ros_script(given, root, base))
     project: dict[str, Any] = {"name": name, "targets": {}, "nodes": {}, "topics": {}}
+    if interfaces:
+        project["messages"] = [os.path.relpath(folder.resolve(), base.resolve()) for folder in interfaces]
     notes: list[str] = []
-    for node in nodes:
-        # a main that makes one node is named after it; one that makes several (composed) after its entry point
-        ros_name = node.ros_names[0] if len(set(node.ros_names)) == 1 else ""
-        key = unique_key(ros_name or node.key, project["nodes"])
+    named = [n.ros_names[0] if len(set(n.ros_names)) == 1 else "" for n in nodes]
+    for node, ros_name in zip(nodes, named, strict=True):
+        # a main that makes one node is named after it; one that makes several (composed), or whose node name
+        # another main makes too, after its entry point (the console script's name), as `ros2 run` knows it
+        key = unique_key(ros_name if ros_name and named.count(ros_name) == 1 else node.key, project["nodes"])
         project["targets"][key] = {"kind": "process"}
         entry: dict[str, Any] = {"run": node.run, "target": key}
         if ros_name and ros_name != key:

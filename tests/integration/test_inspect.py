@@ -431,7 +431,9 @@ def test_top_counts_a_slow_subscribers_stalls_and_drops(tmp_path: Path, env: dic
     topics = {t["topic"]: t for t in rows["topics"]}
     assert topics["/steady"]["stalls"] > 0 and topics["/steady"]["dropped"] == 0, topics
     assert topics["/lossy"]["dropped"] > 0 and topics["/lossy"]["stalls"] == 0, topics
-    assert topics["/steady"]["rate_hz"] < 100 < topics["/lossy"]["rate_hz"]  # held to the subscriber's pace, or not
+    # held to the subscriber's pace (50 Hz), or not (the publisher's 200 Hz): a ratio, since a loaded machine
+    # stretches both and the first interval holds the start's burst
+    assert topics["/steady"]["rate_hz"] < 0.75 * topics["/lossy"]["rate_hz"], topics
 
 
 CAMERA_NODES = """

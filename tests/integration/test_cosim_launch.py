@@ -336,47 +336,19 @@ def test_a_full_subscriber_holds_back_only_its_own_port(tmp_path: Path, mapping:
     assert "30 pairs through two ports of one target" in result.stderr
 
 
-IGNORES_TREADY = """\
-// An echo that takes a beat every cycle and overwrites its output whether or not it was taken: it
-// ignores b_TREADY, which a gateway port whose subscriber is full takes low.
-module careless_echo (
-    input  wire        ap_clk,
-    input  wire        ap_rst_n,
-    input  wire [63:0] a_TDATA,
-    input  wire [7:0]  a_TKEEP,
-    input  wire        a_TLAST,
-    input  wire        a_TVALID,
-    output wire        a_TREADY,
-    output reg  [63:0] b_TDATA,
-    output reg  [7:0]  b_TKEEP,
-    output reg         b_TLAST,
-    output reg         b_TVALID,
-    input  wire        b_TREADY
-);
-    assign a_TREADY = 1'b1;
-    always @(posedge ap_clk) begin
-        if (!ap_rst_n) begin
-            b_TVALID <= 1'b0;
-        end else begin
-            b_TVALID <= a_TVALID;
-            b_TDATA <= a_TDATA;
-            b_TKEEP <= a_TKEEP;
-            b_TLAST <= a_TLAST;
-        end
-    end
-endmodule
-"""
-
-
 def test_a_verilog_node_that_ignores_tready_is_caught_at_its_gateway_port(tmp_path: Path) -> None:
     """A slow subscriber behind the gateway takes TREADY low at the node's output: a node that overwrites a
     beat nobody took breaks AXI4-Stream, and the launch names the port and the rule instead of losing data."""
-    (tmp_path / "rtl").mkdir()
-    (tmp_path / "rtl" / "careless_echo.v").write_text(IGNORES_TREADY)
-    project = _echo_project(tmp_path, sink=", pause: 0.02")
-    text = project.read_text().replace('hw: "hetros.hw.nodes:Echo"', "hw: rtl/careless_echo.v:careless_echo")
-    text = text.replace("parameters: {source: /a, sink: /b},", "").replace("data_width: 32", "data_width: 64")
-    project.write_text(text)
+    # an echo that takes a beat every cycle and overwrites its output whether or not it was taken
+    project = _verilog_echo(tmp_path, """\
+    assign a_TREADY = 1'b1;
+    always @(posedge ap_clk) begin
+        if (!ap_rst_n) b_TVALID <= 1'b0;
+        else begin
+            b_TVALID <= a_TVALID; b_TDATA <= a_TDATA; b_TKEEP <= a_TKEEP; b_TLAST <= a_TLAST;
+        end
+    end
+""", sink=", pause: 0.02")
     result = launch(project, tmp_path)
     assert result.returncode != 0
     assert re.search(r"hardware node echo port 'b' \(/b\): .*before TREADY at cycle \d+", result.stderr), result.stderr

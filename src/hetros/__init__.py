@@ -12,6 +12,7 @@ if is_command_line():  # before the imports below: they take most of a second
 from ._errors import (
     ActionError,
     ActionTimeoutError,
+    AdviseError,
     CheckError,
     DefinitionError,
     Error,
@@ -76,6 +77,7 @@ __all__ = [
     "ActionError",
     "ActionServer",
     "ActionTimeoutError",
+    "AdviseError",
     "CheckError",
     "Client",
     "ClientGoalHandle",

@@ -31,6 +31,8 @@ one root and still tell the kinds apart::
     ├── MachineError           the machine around a launch: a private folder squatted or foreign,
     │                          shared memory full (named, with the fix)
     ├── InspectError           looking inside a running launch (which one, what, refused)
+    ├── AdviseError            the mapping advisor: no such chain, a profile of another project or
+    │                          machine, a deadline no mapping meets (by how much, and why)
     └── BenchError             a benchmark run gave no samples (hetros_bench; its text goes in the report)
 """
 
@@ -160,3 +162,9 @@ class MachineError(Error):
 class InspectError(Error):
     """A look inside a running launch failed: no launch or several, an unknown topic or node, a
     process that did not answer."""
+
+
+class AdviseError(Error):
+    """The mapping advisor cannot give the advice asked: a chain that does not exist, a profile that
+    does not fit the project, a deadline no mapping within the limits meets (the message says by how
+    much the best misses and which node dominates)."""

@@ -21,7 +21,7 @@ from hetros import DefinitionError
 from hetros.msg import TypeRegistry
 from tests.support.messages import random_message
 
-FUZZ_CASES = int(os.environ.get("HETROS_FUZZ_CASES", "2500"))
+FUZZ_CASES = int(os.environ.get("HETROS_FUZZ_CASES", "1500"))
 SETTINGS = settings(max_examples=FUZZ_CASES, deadline=None, derandomize=True, database=None,
                     suppress_health_check=list(HealthCheck))
 FILE_LINE = re.compile(r"\.(msg|srv|action):[1-9]\d*: ")

@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from hetros import ProjectError
 from hetros.project import check, load_project
 
-FUZZ_CASES = int(os.environ.get("HETROS_FUZZ_CASES", "2500"))
+FUZZ_CASES = int(os.environ.get("HETROS_FUZZ_CASES", "1500"))
 PER_CASE_SECONDS = 5.0
 NODES_PY = "def talker(node):\n    pass\n"
 BASE = {

@@ -9,6 +9,7 @@ keep_last edge keeps the newest ``depth``. Two real processes over loopback.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -19,7 +20,7 @@ from tests.support.ros2 import free_domain
 
 PEER = Path(__file__).resolve().parent / "dds_edge_peer.py"
 # long enough for an unbounded queue to show (3 GB offered) and for the RSS to be seen settled for 20 s
-SECONDS = 30.0
+SECONDS = 60.0 if os.environ.get("HETROS_SOAK") else 18.0
 
 
 @pytest.mark.slow
@@ -36,8 +37,8 @@ def test_a_subscriber_that_never_takes_holds_its_memory_flat_while_the_publisher
     sent = json.loads((tmp_path / "w.json").read_text())
     seen = json.loads((tmp_path / "r.json").read_text())
     assert seen["matched"] == [1, 1]
-    # 100 Hz of 1 MB for half a minute is 3 GB offered; the keep_last edge took it all
-    assert sent["sent_last"] > 1000, sent
+    # 100 Hz of 1 MB: 1.8 GB offered in 18 s; the keep_last edge took it all (a third of the rate at least)
+    assert sent["sent_last"] > 33 * SECONDS, sent
     # keep_all: the reader's depth (4) plus the writer's (4), then the writer waits and raises
     assert sent["sent_all"] <= 12, sent
     assert sent["timeouts_all"] >= SECONDS / 1.0 / 2, sent

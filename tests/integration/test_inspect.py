@@ -490,7 +490,7 @@ def test_foxglove_clients_that_never_read_stay_bounded_and_slow_nobody(tmp_path:
             clients = []
             for _ in range(5):
                 client = sync_client.connect(url[0], subprotocols=["foxglove.sdk.v1"], open_timeout=20,
-                                             max_size=None)
+                                             close_timeout=1, max_size=None)
                 channel = None
                 while channel is None:
                     answer = json.loads(text) if isinstance(text := client.recv(timeout=20), str) else {}

@@ -43,6 +43,8 @@ BROKEN = {
                        "reliability: best_effort}}},\n"
                        f"        b: {{run: json:dumps, target: main, subscribe: {{/x: {STRING}}}}}}}"),
     "hardware_topics": f"nodes: {{a: {{run: json:dumps, target: f, publish: {{/x: {STRING}}}}}}}",
+    "chains_name_topics": (f"nodes: {{a: {{run: json:dumps, target: main, publish: {{/x: {STRING}}}}}}}\n"
+                           "chains: {c: {first: /x, last: /y}}"),
     "shm_within_budget": (f"nodes: {{a: {{run: json:dumps, target: p, publish: {{/x: {STRING}}}}},\n"
                           f"        b: {{run: json:dumps, target: main, subscribe: {{/x: {STRING}}}}}}}\n"
                           "topics: {/x: {depth: 20000}}"),

@@ -44,7 +44,7 @@ def test_known_keys_follow_the_yaml_path(yaml_path: tuple[str, ...], expected: s
     ("topics: {/x: {dpeth: 3}}", "topics./x.dpeth: unknown key 'dpeth'; did you mean 'depth'?"),
     ("targets: {t: {kind: process, cpu: [0]}}", "targets.t.cpu: unknown key 'cpu'; did you mean 'cpus'?"),
     ("on_peer_lsot: stop", "on_peer_lsot: unknown key 'on_peer_lsot'; did you mean 'on_peer_lost'?"),
-    ("zzz: 1", "unknown key 'zzz': one of args, dds_domain, external, foxglove_hosts, groups, hosts, include, "
+    ("zzz: 1", "unknown key 'zzz': one of args, chains, dds_domain, external, foxglove_hosts, groups, hosts, include, "
                "messages, name, nodes"),
 ])
 def test_a_mistyped_key_gets_the_nearest_one(tmp_path: Path, text: str, message: str) -> None:

@@ -495,6 +495,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--node-times", action="store_true",
                    help="at the end, log each node's time per message on each subscription and service")
     p.set_defaults(func=cmd_launch)
+    from ._advise import add_parser as add_advise
+
+    add_advise(sub)
     p = sub.add_parser("deploy", help="start every host of a project (this one directly, the others over ssh)")
     p.add_argument("project")
     p.add_argument("--duration", type=float, help="stop after this many seconds")

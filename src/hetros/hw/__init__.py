@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from ._clock import TargetClock, target_clock
     from ._cosim import GatewayPort, SimulatedTop, TargetSimulation
     from ._export import export
-    from ._models import channels_of, execution_models, format_models, sample_message
+    from ._models import channels_of, execution_models, format_models, one_message_through, sample_message
     from ._report import (
         TABLE_I_PAPER_MS,
         TABLE_I_SIZES,
@@ -37,6 +37,7 @@ if TYPE_CHECKING:
         part_of,
         synth_report,
         synthesize,
+        synthesize_node,
         transfer_cycles,
         transfer_report,
     )
@@ -69,10 +70,12 @@ _LAZY = {
     "format_transfers": "._report",
     "hardware_topics": "._build",
     "part_of": "._report",
+    "one_message_through": "._models",
     "sample_message": "._models",
     "simulate": "._sim",
     "synth_report": "._report",
     "synthesize": "._report",
+    "synthesize_node": "._report",
     "target_clock": "._clock",
     "top_name": "._build",
     "topic_verilog": "._rtl",
@@ -112,11 +115,13 @@ __all__ = [
     "format_transfers",
     "from_beats",
     "hardware_topics",
+    "one_message_through",
     "part_of",
     "sample_message",
     "simulate",
     "synth_report",
     "synthesize",
+    "synthesize_node",
     "target_clock",
     "to_beats",
     "top_name",

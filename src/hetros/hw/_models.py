@@ -72,7 +72,8 @@ def _encoded(types: TypeRegistry, typename: str, message: Any) -> bytes:
     return bytes(body)
 
 
-def _through(simulation: TargetSimulation, inputs: dict[str, bytes], max_cycles: int) -> tuple[int, dict[str, bytes]]:
+def one_message_through(simulation: TargetSimulation, inputs: dict[str, bytes],
+                        max_cycles: int) -> tuple[int, dict[str, bytes]]:
     """Push one message into each input port; the cycles until every output port ended one, and those."""
     top = simulation.top
     missing = [p.topic for p in simulation.inputs if p.topic not in inputs]
@@ -104,7 +105,7 @@ def execution_models(plan: Plan, target: str, types: TypeRegistry, samples: dict
     components = whole.components
     try:
         inputs = {p.topic: _encoded(types, p.type, samples[p.topic]) for p in whole.inputs if p.topic in samples}
-        cycles, out_of_dataflow = _through(whole, inputs, max_cycles)
+        cycles, out_of_dataflow = one_message_through(whole, inputs, max_cycles)
         dataflow = ModelLatency("dataflow (hardware topics between the nodes)", cycles, clock,
                                 len(whole.inputs) + len(whole.outputs))
     finally:
@@ -121,7 +122,7 @@ def execution_models(plan: Plan, target: str, types: TypeRegistry, samples: dict
         hardware.remove(ready)
         alone = TargetSimulation(plan, target, types, only={ready})
         try:
-            cycles, produced = _through(alone, available, max_cycles)
+            cycles, produced = one_message_through(alone, available, max_cycles)
             copies += len(alone.inputs) + len(alone.outputs)
         finally:
             alone.close()

@@ -304,12 +304,24 @@ def bridged_endpoints_fit(c: CheckContext) -> None:
                       c.types, c.report)
 
 
+def chains_name_topics(c: CheckContext) -> None:
+    """A chain's first and last topics are topics of the graph."""
+    known = set(c.publishers) | set(c.subscribers)
+    for name, chain in c.project.model.chains.items():
+        for key in ("first", "last"):
+            topic = getattr(chain, key)
+            if topic not in known:
+                c.error(f"{c.project.where('chains', name, key)}: no node publishes or subscribes {topic}"
+                        f"{_nearest(topic, known)}; a chain runs from one topic of the graph to "
+                        "another")
+
+
 # the order matters where a rule reads what an earlier one gathered (gather_endpoints, nodes_are_well_formed)
 RULES: tuple[Callable[[CheckContext], None], ...] = (
     cpus_exist, hosts_and_env, bridge_names_reserved, nodes_are_well_formed, gather_endpoints, code_runs,
     actions_pair, subscriptions_have_publishers, one_type_per_topic, clients_have_servers,
     one_server_one_type_per_service, topic_entries_are_used, qos_compatible, hardware_topics, shm_within_budget,
-    ros1_nodes_fit, sources_exist, bridged_endpoints_fit,
+    ros1_nodes_fit, sources_exist, bridged_endpoints_fit, chains_name_topics,
 )
 
 

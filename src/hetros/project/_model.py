@@ -348,6 +348,13 @@ def _plain_names(what: str, names: Iterable[str]) -> None:
             raise ValueError(problem)
 
 
+class ChainSpec(_Strict):
+    first: str = Field(description="the topic the chain starts at: a message's publish there starts its clock")
+    last: str = Field(description="the topic it ends at: the publish there of what became of the message stops it")
+    deadline_ms: float | None = Field(default=None, gt=0, description="what its latency's median must stay within "
+                                      "(`hetros advise` looks for a mapping that meets it)")
+
+
 class Project(_Strict):
     name: str = Field(description="the project's name: an ASCII letter, then letters, digits, _ or -")
     messages: list[str] = Field(default_factory=list, description="folders of .msg/.srv/.action packages, "
@@ -382,6 +389,9 @@ class Project(_Strict):
     use_sim_time: bool = Field(default=False, description="every node's clock (get_clock, create_timer, rate) "
                                "follows /clock (rosgraph_msgs/msg/Clock, published by a simulator node or "
                                "`hetros play --clock`) instead of the wall")
+    chains: dict[str, ChainSpec] = Field(default_factory=dict, description="name -> a path of topics whose "
+                                         "latency matters (first topic to last): `hetros advise` predicts, "
+                                         "meets and verifies it")
 
     @field_validator("shm_budget")
     @classmethod

@@ -4,7 +4,7 @@ from typing import TYPE_CHECKING
 
 from .._lazy import lazy_exports
 from ._clock import Clock, Duration, SimulatedClock, Time
-from ._entities import Client, Publisher, Replies, Service, Subscription, Timer
+from ._entities import PROFILE_VARIABLE, Client, Publisher, Replies, Service, Subscription, Timer
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
@@ -47,6 +47,7 @@ __getattr__ = lazy_exports(__name__, _LAZY)
 
 __all__ = [
     "NODE_TIMES_VARIABLE",
+    "PROFILE_VARIABLE",
     "ActionClient",
     "ActionServer",
     "AdaptiveSpin",

@@ -40,6 +40,12 @@ if TYPE_CHECKING:
 M = TypeVar("M", bound=Message)
 _MISSING: Any = object()
 
+# set (to 1) by ``hetros advise`` in the launches it profiles: node times then also count the CPU time
+# the node's thread spent (its own work, apart from waiting for a shared core or the GIL), and each
+# publish counts which input the node was handling when it sent (the causal edges of the advisor's model)
+PROFILE_VARIABLE = "HETROS_PROFILE"
+PROFILING = os.environ.get(PROFILE_VARIABLE, "") not in ("", "0")
+
 
 
 def _nothing() -> None:
@@ -101,6 +107,8 @@ class Publisher(Generic[M]):
             self.deadline.seen()
         if self.manual_liveliness:
             self._writer.assert_liveliness()
+        if PROFILING:
+            self.node.count_publish(self.topic)
 
     def has_room(self) -> bool:
         """Whether ``publish`` now would go through without waiting for a reliable subscriber's room (a
@@ -155,20 +163,30 @@ class HandlingStats:
     ``RECENT`` durations are kept for ``hetros top``'s percentiles.
     """
 
-    __slots__ = ("count", "recent", "total", "total_sq")
+    __slots__ = ("count", "cpu_count", "cpu_recent", "cpu_total", "recent", "total", "total_sq")
     RECENT = 256
+    QUANTILES = 21  # 0 %, 5 %, ..., 100 %: the shape the advisor's model samples from
 
     def __init__(self) -> None:
         self.count = 0
         self.total = 0.0
         self.total_sq = 0.0
         self.recent = [0.0] * self.RECENT
+        # the thread's CPU time per message, counted only while profiling (``HETROS_PROFILE``)
+        self.cpu_count = 0
+        self.cpu_total = 0.0
+        self.cpu_recent = [0.0] * self.RECENT
 
     def add(self, seconds: float) -> None:
         self.recent[self.count % self.RECENT] = seconds
         self.count += 1
         self.total += seconds
         self.total_sq += seconds * seconds
+
+    def add_cpu(self, seconds: float) -> None:
+        self.cpu_recent[self.cpu_count % self.RECENT] = seconds
+        self.cpu_count += 1
+        self.cpu_total += seconds
 
     def summary(self) -> tuple[int, float, float]:
         """(count, mean ms, std ms)."""
@@ -183,8 +201,20 @@ class HandlingStats:
         recent = sorted(self.recent[:min(count, self.RECENT)])
         if not recent:
             return {"count": 0, "total_s": 0.0, "p50_s": 0.0, "p99_s": 0.0}
-        return {"count": count, "total_s": self.total, "p50_s": recent[len(recent) // 2],
-                "p99_s": recent[min(len(recent) - 1, int(len(recent) * 0.99))]}
+        found: dict[str, Any] = {"count": count, "total_s": self.total, "p50_s": recent[len(recent) // 2],
+                                 "p99_s": recent[min(len(recent) - 1, int(len(recent) * 0.99))],
+                                 "quantiles_s": _quantiles(recent, self.QUANTILES)}
+        if self.cpu_count:
+            cpu = sorted(self.cpu_recent[:min(self.cpu_count, self.RECENT)])
+            found.update(cpu_count=self.cpu_count, cpu_total_s=self.cpu_total,
+                         cpu_quantiles_s=_quantiles(cpu, self.QUANTILES))
+        return found
+
+
+def _quantiles(ordered: list[float], points: int) -> list[float]:
+    """``points`` evenly spaced quantiles (0 to 100 %) of ``ordered`` (sorted, not empty)."""
+    last = len(ordered) - 1
+    return [ordered[round(last * k / (points - 1))] for k in range(points)]
 
 
 class Subscription(Generic[M]):
@@ -244,6 +274,8 @@ class Subscription(Generic[M]):
             self.node.executor.wake()
 
     def dispatch(self) -> bool:
+        if PROFILING:
+            return self._profiled()
         message = self._take()
         if message is None:
             return False
@@ -251,6 +283,25 @@ class Subscription(Generic[M]):
         start = time.perf_counter()
         self.callback(message)
         self.stats.add(time.perf_counter() - start)
+        return True
+
+    def _profiled(self) -> bool:
+        """``dispatch`` while profiling: the CPU time counted includes taking (decoding) the message,
+        which the receiving node's core pays for."""
+        cpu = time.thread_time()
+        message = self._take()
+        if message is None:
+            return False
+        assert self.callback is not None
+        node = self.node
+        node.handling = self.topic
+        start = time.perf_counter()
+        try:
+            self.callback(message)
+        finally:
+            node.handling = None
+        self.stats.add(time.perf_counter() - start)
+        self.stats.add_cpu(time.thread_time() - cpu)
         return True
 
     def pending(self) -> bool:
@@ -276,6 +327,8 @@ class Subscription(Generic[M]):
             # the node's time on the message it took last ends at its next take, on whichever
             # subscription: waiting for another topic is not time spent on this one's message
             working_on.stats.add(now - node.taken_at)
+            if PROFILING:
+                working_on.stats.add_cpu(time.thread_time() - node.taken_cpu)
             node.taken_by = None  # a take that times out or is interrupted starts no node time
         message: M | None = self._take()
         if message is None:
@@ -283,6 +336,9 @@ class Subscription(Generic[M]):
         else:  # a message was already waiting: the common case of a busy loop, without the waiting machinery
             self._spin.arrived(now)
         node.taken_by, node.taken_at = self, time.perf_counter()
+        if PROFILING:
+            node.taken_cpu = time.thread_time()
+            node.in_period = False
         return message
 
     def _wait_for_message(self, timeout: float | None) -> M:

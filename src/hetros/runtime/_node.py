@@ -78,6 +78,12 @@ class Node:
         # the subscription whose message a take loop works on now, and since when (its node time)
         self.taken_by: Subscription[Any] | None = None
         self.taken_at = 0.0
+        self.taken_cpu = 0.0
+        # while profiling (``HETROS_PROFILE``): the topic whose callback runs now, and per (input, output)
+        # topic how many messages the node published while handling that input ("" for timers and loops)
+        self.handling: str | None = None
+        self.triggers: dict[tuple[str, str], int] = {}
+        self.in_period = False  # a rate's period began since the last take: what it publishes, the period caused
         self.action_clients: dict[str, ActionClient] = {}
         # what the node's own figures are for ``hetros top`` (a gateway's cycles per message), when it has any
         self.figures: Callable[[], dict[str, Any]] | None = None
@@ -284,6 +290,7 @@ class Node:
         for tick in itertools.count():
             if self.graph.stop.is_set():
                 return
+            self.period_began()
             yield tick
             due += period
             delay = due - time.monotonic()
@@ -298,6 +305,7 @@ class Node:
         for tick in itertools.count():
             if self.graph.stop.is_set():
                 return
+            self.period_began()
             yield tick
             if not ticker.sleep(self.graph.stop):
                 return
@@ -367,6 +375,18 @@ class Node:
     def entities(self) -> list[Any]:
         """The node's publishers, subscriptions, services, clients and actions, as created."""
         return list(self._closables)
+
+    def period_began(self) -> None:
+        """A rate loop woke for its next period (``rate``, rclpy's and rospy's ``Rate.sleep``): until the
+        next take, what the node publishes is the period's doing, not the last message's."""
+        self.in_period = True
+
+    def count_publish(self, topic: str) -> None:
+        """Count a publish on ``topic`` against the input the node is handling (profiling only)."""
+        taken = self.taken_by
+        cause = self.handling or (taken.topic if taken is not None and not self.in_period else "")
+        key = (cause, topic)
+        self.triggers[key] = self.triggers.get(key, 0) + 1
 
     def handling_stats(self) -> dict[str, HandlingStats]:
         """Per subscription and service: the node's time per message."""

@@ -217,6 +217,7 @@ class Rate:
     """``node.create_rate(hz)``: ``sleep()`` until the next period of the graph's clock."""
 
     def __init__(self, node: Node, frequency: float) -> None:
+        self._node = node._hetros
         self._stop = node._hetros.graph.stop
         self._ticker = Ticker(node.get_clock(), int(1e9 / frequency))
 
@@ -225,6 +226,7 @@ class Rate:
             from .executors import ExternalShutdownException
 
             raise ExternalShutdownException("the graph is shutting down")
+        self._node.period_began()
 
     def destroy(self) -> None:
         pass

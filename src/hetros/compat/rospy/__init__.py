@@ -252,6 +252,7 @@ class Rate:
     def sleep(self) -> None:
         if not self._ticker.sleep(self._hetros.graph.stop) or is_shutdown():
             raise ROSInterruptException("rospy.Rate.sleep() interrupted: the node is shutting down")
+        self._hetros.period_began()
 
     def remaining(self) -> Duration:
         return Duration(0, max(self._ticker.due - self._ticker.clock.now_ns(), 0))

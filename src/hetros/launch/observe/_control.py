@@ -185,8 +185,11 @@ class ControlServer:
                 for name, stats in live.handling_stats().items():
                     handling[name] = stats.snapshot()
             figures = live.figures() if live is not None and live.figures is not None else {}
+            triggers = [[cause, topic, count] for (cause, topic), count in live.triggers.items()] \
+                if live is not None else []
             nodes[thread.spec.name] = {"cpu_s": _thread_cpu_seconds(thread.thread.native_id),
-                                       "alive": thread.thread.is_alive(), "handling": handling, "figures": figures}
+                                       "alive": thread.thread.is_alive(), "handling": handling, "figures": figures,
+                                       "triggers": triggers}
         topics: dict[str, dict[str, Any]] = {
             topic: {"published": point.published, "type": point.typename, "dropped": 0, "stalls": 0, "bytes": 0}
             for topic, point in self.graph.taps().items()}

@@ -1,0 +1,182 @@
+"""``hetros advise``: profile (or read a profile), calibrate, search, tell, write, verify."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .._errors import AdviseError
+from ..plan import Plan
+from ._calibrate import Calibration, calibration
+from ._chains import Chain, ChainLatency
+from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budget
+from ._model import Mapping, Placement, hop_overhead, predict
+from ._observe import observe
+from ._profile import Profile, build, chain_latencies, graph_key
+from ._report import plot_timeline, table, write_project
+from ._search import Candidate, Limits, search
+
+
+@dataclass
+class Options:
+    chains: list[Chain]
+    out: Path
+    profile: Path | None = None  # read this profile instead of running the project
+    duration: float = 20.0
+    warmup: float = 5.0
+    cores: int = 0  # 0: the cores this process may use
+    pinned: frozenset[str] = frozenset()
+    fpga: bool = False  # candidates may put nodes with ``hw:`` into the project's fpga target
+    keep: int = 3
+    calibration: Path | None = None
+    recalibrate: bool = False
+    time_limit_s: float = 60.0
+
+
+@dataclass
+class Advice:
+    profile: Profile
+    calibrated: str
+    original: Candidate
+    ranked: list[Candidate]
+    how: str
+    paths: list[tuple[Chain, list[str]]]
+    limits: Limits
+    targets: dict[str, str]
+    warnings: list[str] = field(default_factory=list)
+
+    def table(self) -> str:
+        rows = [(f"#{i}", c) for i, c in enumerate(self.ranked, 1)] + [("as given", self.original)]
+        return table(rows, [c for c, _ in self.paths], self.original.mapping, self.targets, self.limits, self.profile)
+
+    def shortfall(self) -> str:
+        """Why no mapping meets the deadlines: by how much the best misses, and what dominates; "" when one does."""
+        chains = [c for c, _ in self.paths]
+        best = self.ranked[0]
+        if best.meets(chains):
+            return ""
+        misses = []
+        for chain in chains:
+            prediction = best.prediction.chains[chain.name]
+            if chain.deadline_ms and prediction.p50_ms > chain.deadline_ms:
+                node = prediction.dominant()
+                misses.append(f"chain {chain.name}: the best mapping's p50 is {prediction.p50_ms:.1f} ms, "
+                              f"{prediction.p50_ms - chain.deadline_ms:.1f} ms over its {chain.deadline_ms:g} ms "
+                              f"deadline; {node} dominates ({prediction.working_ms.get(node, 0.0):.1f} ms working, "
+                              f"{prediction.waiting_ms.get(node, 0.0):.1f} ms waiting)")
+        return "no mapping within the limits meets the deadline: " + "; ".join(misses) + \
+            ". Allow more cores (--cores), hardware (--fpga, for nodes with hw:), or make that node faster"
+
+
+def mapping_of(plan: Plan) -> tuple[Mapping, dict[str, str]]:
+    """Each node's placement in ``plan``, and its target's name."""
+    found, targets = {}, {}
+    for node, spec in plan.nodes.items():
+        if spec.run.startswith("hetros."):
+            continue
+        target = plan.targets[spec.target]
+        found[node] = Placement(target.name if target.kind == "fpga" else plan.process_of(node), tuple(target.cpus),
+                                fpga=target.kind == "fpga")
+        targets[node] = spec.target
+    return found, targets
+
+
+SOFTWARE_TARGET = "advise_software"
+
+
+def profile_project(project: Path, plan: Plan, options: Options) -> Profile:
+    """Run the project and keep what the model needs (``<out>/profile.json``): as it is mapped, except
+    that nodes in hardware run their software (``run:``) in a process of their own, so that both of
+    their figures are known; those with ``hw:`` are then co-simulated on the inputs they met."""
+    for chain in options.chains:
+        chain.check(plan)
+    capable = hardware_nodes(plan) if fpga_target(plan) else []
+    in_hardware = [n for n in plan.nodes if plan.in_hardware(n)]
+    samples = frozenset(t for n in capable for t in plan.nodes[n].subscribe)
+    run, remove = project, None
+    if in_hardware:
+        original, targets = mapping_of(plan)
+        software = {n: Placement(SOFTWARE_TARGET) if n in in_hardware else p for n, p in original.items()}
+        run = write_project(project, software, original, targets, project.with_name(f".{project.stem}_software.yaml"))
+        remove = run
+    try:
+        from ..project import plan_file
+
+        seen = observe(run, plan_file(run), duration=options.duration, warmup=options.warmup, profiling=True,
+                       log=options.out / "profile-launch.log", samples=samples)
+    finally:
+        if remove is not None:
+            remove.unlink(missing_ok=True)
+    profile = build(seen, options.chains, project)
+    profile.graph = graph_key(plan)
+    hardware_profile(plan, project, profile, seen)
+    profile.save(options.out / "profile.json")
+    return profile
+
+
+def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], None] = lambda _: None) -> Advice:
+    """The best mappings of ``project`` for ``options.chains``; ``warn`` hears what does not stop the advice
+    (a profile taken of another graph or on another machine) as soon as it is known."""
+    paths = [(c, c.check(plan)) for c in options.chains]
+    if not paths:
+        raise AdviseError("name at least one chain: --chain /first_topic:/last_topic[@DEADLINEms], or chains: in "
+                          "the project file")
+    warnings: list[str] = []
+    if options.profile is not None:
+        profile = Profile.load(options.profile)
+        warnings += profile.fits(plan)
+        for warning in warnings:
+            warn(warning)
+    else:
+        profile = profile_project(project, plan, options)
+    if options.calibration is not None:
+        calibrated, source = Calibration.load(options.calibration), f"calibration {options.calibration}"
+    else:
+        calibrated, source = calibration(again=options.recalibrate)
+    original, targets = mapping_of(plan)
+    unknown = sorted(set(original) - set(profile.nodes))
+    if unknown:
+        raise AdviseError(f"the profile has no figures of node(s) {', '.join(unknown)}: they did not run while it "
+                          "was taken (or it is another project's); profile again")
+    cores = options.cores or len(os.sched_getaffinity(0))
+    fpga = fpga_target(plan) if options.fpga else ""
+    if options.fpga and not fpga:
+        raise AdviseError("--fpga needs an fpga target in the project (targets: {name: {kind: fpga, ...}}) to put "
+                          "hardware nodes into, and nodes with hw: implementations")
+    limits = Limits(cores, fpga, part_budget(plan, fpga) if fpga else {}, options.pinned)
+    chains = [c for c, _ in paths]
+    profiled = _profiled_mapping(profile, original)
+    hop_ms = hop_overhead(profile, calibrated, profiled, chains, cores)
+    shipped = Candidate(original, predict(profile, calibrated, original, chains, cores, hop_ms=hop_ms))
+    ranked, how = search(profile, calibrated, original, paths, limits, keep=options.keep,
+                         time_limit_s=options.time_limit_s, hop_ms=hop_ms)
+    how += f"; each hop {hop_ms * 1000:.0f} µs beyond the calibrated transport (fitted on the profiled run)"
+    return Advice(profile, source, shipped, ranked, how, paths, limits, targets, warnings)
+
+
+def _profiled_mapping(profile: Profile, original: Mapping) -> Mapping:
+    """The mapping the profile was measured in: each node's process and cpus as the profile recorded them
+    (the project's own, except that nodes it maps to hardware ran their software in a process)."""
+    return {n: Placement(profile.nodes[n].process, tuple(profile.nodes[n].cpus)) if n in profile.nodes else p
+            for n, p in original.items()}
+
+
+def write(project: Path, advice: Advice, out: Path) -> tuple[Path, Path]:
+    """The best mapping as a project file beside ``project`` and its predicted timeline (a PNG in ``out``)."""
+    written = write_project(project, advice.ranked[0].mapping, advice.original.mapping, advice.targets,
+                            project.with_name(f"{project.stem}_advised.yaml"))
+    picture = plot_timeline(advice.ranked[0], [c for c, _ in advice.paths], out / "timeline.png")
+    return written, picture
+
+
+def verify(projects: dict[str, Path], plans: dict[str, Plan], chains: list[Chain], options: Options
+           ) -> dict[str, dict[str, ChainLatency | None]]:
+    """Launch each project (not profiling) and measure its chains."""
+    found = {}
+    for label, project in projects.items():
+        seen = observe(project, plans[label], duration=options.duration, warmup=options.warmup, profiling=False,
+                       log=options.out / f"verify-{label}.log")
+        found[label] = chain_latencies(seen, chains)
+    return found

@@ -1,0 +1,138 @@
+"""Chains: a named path from a first topic to a last one, and its latency measured from taps.
+
+A chain's latency is the time from a message's publish on the first topic to the publish, on
+the last topic, of what became of it. Where both topics carry a ``std_msgs/Header`` and the
+nodes hand its stamp on (what ROS code does, and what ``message_filters`` relies on), the two
+publishes are matched by stamp; where they do not, each message on the last topic is matched
+with the newest one on the first topic published before it, which is exact while the chain
+is faster than the first topic's period and says so in the result.
+"""
+
+from __future__ import annotations
+
+import bisect
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import AdviseError
+from ..plan import Plan
+
+_CHAIN = re.compile(r"(?:(?P<name>[A-Za-z_][\w-]*)=)?(?P<first>/?[^:@\s]+):(?P<last>/?[^:@\s]+)"
+                    r"(?:@(?P<deadline>[0-9.]+)\s*ms)?")
+
+
+@dataclass(frozen=True)
+class Chain:
+    """From ``first`` topic to ``last`` topic, with an optional deadline on its latency (ms)."""
+
+    name: str
+    first: str
+    last: str
+    deadline_ms: float | None = None
+
+    @classmethod
+    def parse(cls, text: str) -> Chain:
+        """``[name=]/first:/last[@30ms]`` (what ``hetros advise --chain`` takes)."""
+        found = _CHAIN.fullmatch(text.strip())
+        if found is None:
+            raise AdviseError(f"a chain must be written [name=]/first_topic:/last_topic[@DEADLINEms], "
+                              f"not {text!r} (for example alpha=/image_raw:/cmd_vel@30ms)")
+        deadline = float(found["deadline"]) if found["deadline"] else None
+        if deadline is not None and not deadline > 0:
+            raise AdviseError(f"a chain's deadline must be a positive number of ms, not {found['deadline']!r}")
+        first, last = found["first"], found["last"]
+        return cls(found["name"] or f"{first}->{last}", first, last, deadline)
+
+    def check(self, plan: Plan) -> list[str]:
+        """The nodes the chain passes through (each on some path from the first topic's subscribers to the
+        last topic's publishers), nearest the first topic first; AdviseError naming the topics where no
+        path leads from the first topic to the last."""
+        topics = sorted(n for n, c in plan.channels.items() if c.kind == "topic")
+        for topic in (self.first, self.last):
+            if topic not in plan.channels or plan.channels[topic].kind != "topic":
+                raise AdviseError(f"chain {self.name}: the project has no topic {topic} (its topics: "
+                                  f"{', '.join(topics)})")
+        forward = _reach(plan, self.first, downstream=True)
+        backward = _reach(plan, self.last, downstream=False)
+        nodes = [n for n in forward if n in backward]
+        if not nodes:
+            raise AdviseError(f"chain {self.name}: no node path leads from {self.first} to {self.last}: nothing "
+                              f"that subscribes {self.first} publishes, through other nodes, {self.last}")
+        return nodes
+
+
+def _reach(plan: Plan, topic: str, *, downstream: bool) -> dict[str, int]:
+    """The nodes reachable from ``topic`` (downstream: through subscribers and what they publish;
+    upstream: through publishers and what they subscribe), with their distance in nodes."""
+    found: dict[str, int] = {}
+    frontier, seen, distance = [topic], {topic}, 0
+    while frontier:
+        distance += 1
+        following = []
+        for name in frontier:
+            channel = plan.channels.get(name)
+            if channel is None:
+                continue
+            for node in channel.subscribers if downstream else channel.publishers:
+                if node in found or node not in plan.nodes:
+                    continue
+                found[node] = distance
+                spec = plan.nodes[node]
+                for out in spec.publish if downstream else spec.subscribe:
+                    if out not in seen:
+                        seen.add(out)
+                        following.append(out)
+        frontier = following
+    return found
+
+
+@dataclass(frozen=True)
+class Published:
+    """One publish a tap saw: wall time (ns), encoded size, header stamp (ns) when there is one."""
+
+    time_ns: int
+    size: int
+    stamp: int | None
+
+
+@dataclass(frozen=True)
+class ChainLatency:
+    """A chain's measured latency: p50 and p99 in ms over ``samples`` messages, and how they were matched."""
+
+    p50_ms: float
+    p99_ms: float
+    samples: int
+    matched_by: str
+    values_ms: tuple[float, ...] = ()
+
+    def as_dict(self) -> dict[str, object]:
+        return {"p50_ms": self.p50_ms, "p99_ms": self.p99_ms, "samples": self.samples, "matched_by": self.matched_by}
+
+
+def measure(first: list[Published], last: list[Published]) -> ChainLatency | None:
+    """The latencies from ``first``'s publishes to ``last``'s (both in time order); None when no
+    message on ``last`` follows one on ``first``."""
+    stamped = [p for p in first if p.stamp] and [p for p in last if p.stamp]
+    values: list[float] = []
+    if stamped:
+        sent: dict[int, int] = {}
+        for published in first:
+            if published.stamp:
+                sent.setdefault(published.stamp, published.time_ns)
+        values = [(p.time_ns - sent[p.stamp]) / 1e6 for p in last
+                  if p.stamp in sent and p.time_ns >= sent[p.stamp]]
+    matched_by = "header stamp"
+    if not values:
+        matched_by = "newest message on the first topic before it"
+        times = [p.time_ns for p in first]
+        for published in last:
+            at = bisect.bisect_right(times, published.time_ns)
+            if at:
+                values.append((published.time_ns - times[at - 1]) / 1e6)
+    if not values:
+        return None
+    array = np.asarray(values)
+    return ChainLatency(float(np.percentile(array, 50)), float(np.percentile(array, 99)), len(values), matched_by,
+                        tuple(values))

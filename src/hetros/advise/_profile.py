@@ -1,0 +1,215 @@
+"""The profile: what the advisor's model knows of a project, measured once and kept as a file.
+
+Per node and input topic the node's time per message (its thread's CPU time while profiling,
+so that waiting for a shared core or the GIL is not counted as work) as 21 quantiles, and which
+outputs it publishes per message of that input; per source (a node that publishes from a loop
+or a timer) its CPU per message; per topic its rate and size; per process its CPU share; per
+chain its measured latency. The profile names the project's graph (not its mapping) and the
+machine, so that advice from it can be recomputed without running again, and a profile from
+elsewhere is noticed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import platform
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import __version__
+from .._errors import AdviseError
+from ..plan import Plan
+from ._chains import Chain, ChainLatency, measure
+from ._observe import Observation
+
+FORMAT = 1
+
+
+def machine() -> dict[str, Any]:
+    """What a profile's and a calibration's figures depend on: the host, its CPU model and count."""
+    model = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text(encoding="utf-8").splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        model = platform.processor()
+    return {"host": platform.node(), "cpu": model, "cpus": len(os.sched_getaffinity(0)), "hetros": __version__}
+
+
+def graph_key(plan: Plan) -> str:
+    """The project's graph apart from its mapping: nodes, what they run, their topics and parameters."""
+    nodes = {name: [spec.run, spec.hw, sorted(spec.publish.items()), sorted(spec.subscribe.items()),
+                    json.dumps(spec.parameters, sort_keys=True, default=str)]
+             for name, spec in sorted(plan.nodes.items()) if not _system(plan, name)}
+    return hashlib.sha256(json.dumps([plan.name, nodes], sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _system(plan: Plan, node: str) -> bool:
+    """A node the planner added (a gateway, a bridge, the clock follower): never moved on its own."""
+    return plan.nodes[node].run.startswith("hetros.")
+
+
+@dataclass
+class Handling:
+    """A node's time per message of one input: mean and 21 quantiles (ms); CPU time when ``cpu``."""
+
+    count: int
+    mean_ms: float
+    quantiles_ms: list[float]
+    cpu: bool
+
+
+@dataclass
+class NodeProfile:
+    process: str
+    cpus: list[int]
+    handling: dict[str, Handling] = field(default_factory=dict)
+    # per input topic ("" for a loop or timer): per output topic, messages published per message handled
+    triggers: dict[str, dict[str, float]] = field(default_factory=dict)
+    cpu_share: float = 0.0  # of one core, over the window
+    hardware: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class TopicProfile:
+    type: str
+    rate_hz: float
+    size_bytes: int
+    publishers: list[str]
+    subscribers: list[str]
+
+
+@dataclass
+class Profile:
+    project: str
+    graph: str
+    machine: dict[str, Any]
+    window_s: float
+    mapping: dict[str, str]
+    nodes: dict[str, NodeProfile]
+    topics: dict[str, TopicProfile]
+    processes: dict[str, float]  # CPU share of one core per process
+    chains: dict[str, dict[str, Any]] = field(default_factory=dict)
+    format: int = FORMAT
+
+    def save(self, path: Path) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(asdict(self), indent=1) + "\n", encoding="utf-8")
+
+    @classmethod
+    def load(cls, path: Path) -> Profile:
+        try:
+            raw = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise AdviseError(f"{path}: not a readable profile ({exc}); make one with `hetros advise --profile-only`") \
+                from None
+        if not isinstance(raw, dict) or raw.get("format") != FORMAT:
+            raise AdviseError(f"{path}: a profile of format {FORMAT} expected, not "
+                              f"{raw.get('format') if isinstance(raw, dict) else type(raw).__name__!r}; profile again")
+        try:
+            nodes = {name: NodeProfile(**{**spec, "handling": {t: Handling(**h) for t, h in spec["handling"].items()}})
+                     for name, spec in raw["nodes"].items()}
+            topics = {name: TopicProfile(**spec) for name, spec in raw["topics"].items()}
+            return cls(**{**raw, "nodes": nodes, "topics": topics})
+        except (KeyError, TypeError, AttributeError) as exc:
+            raise AdviseError(f"{path}: a damaged profile ({exc!r}); profile again") from None
+
+    def fits(self, plan: Plan) -> list[str]:
+        """Why this profile may not describe ``plan`` on this machine: warnings, empty when it does."""
+        warnings = []
+        if self.graph != graph_key(plan):
+            warnings.append(f"the profile is of another graph (project {self.project!r}, graph {self.graph}; this one "
+                            f"is {plan.name!r}, graph {graph_key(plan)}): nodes, code or topics changed since; "
+                            "profile again for advice that fits")
+        here = machine()
+        changed = [f"{key} {self.machine.get(key)!r} -> {here[key]!r}" for key in ("host", "cpu", "cpus")
+                   if self.machine.get(key) != here[key]]
+        if changed:
+            warnings.append(f"the profile was measured on another machine ({'; '.join(changed)}): the node times are "
+                            "that machine's; the transport costs are recalibrated here (`--calibrate`)")
+        return warnings
+
+
+def _quantiles_ms(handling: dict[str, Any]) -> tuple[list[float], bool]:
+    cpu = handling.get("cpu_quantiles_s")
+    chosen = cpu if cpu else handling.get("quantiles_s") or [handling.get("p50_s", 0.0)] * 21
+    return [float(v) * 1000.0 for v in chosen], bool(cpu)
+
+
+def _handling(early: dict[str, Any] | None, late: dict[str, Any]) -> Handling:
+    """A node's time on one input from the figures at the warm-up's end and at the end."""
+    quantiles, cpu = _quantiles_ms(late)
+    key_count, key_total = ("cpu_count", "cpu_total_s") if cpu else ("count", "total_s")
+    count = int(late.get(key_count, 0)) - int((early or {}).get(key_count, 0))
+    total = float(late.get(key_total, 0.0)) - float((early or {}).get(key_total, 0.0))
+    if count <= 0:  # nothing new after the warm-up: the figures of the whole run
+        count, total = int(late.get(key_count, 0)), float(late.get(key_total, 0.0))
+    mean = total / count * 1000.0 if count else float(np.mean(quantiles))
+    return Handling(count, mean, quantiles, cpu)
+
+
+def build(observation: Observation, chains: list[Chain], project: Path) -> Profile:
+    """The profile of one watched run."""
+    plan, window = observation.plan, observation.window_s
+    nodes: dict[str, NodeProfile] = {}
+    processes: dict[str, float] = {}
+    for process, late in observation.late.items():
+        early = observation.early.get(process, {})
+        processes[process] = max(0.0, (late["cpu_s"] - early.get("cpu_s", late["cpu_s"])) / window)
+        for name, figures in late["nodes"].items():
+            if name not in plan.nodes or _system(plan, name):
+                continue
+            before = early.get("nodes", {}).get(name, {})
+            handling = {topic: _handling(before.get("handling", {}).get(topic), h)
+                        for topic, h in figures["handling"].items() if h.get("count")}
+            counts: dict[tuple[str, str], int] = {(c, t): n for c, t, n in figures.get("triggers", [])}
+            triggers: dict[str, dict[str, float]] = {}
+            for (cause, topic), count in counts.items():  # both counted over the whole run
+                handled = int(figures["handling"].get(cause, {}).get("count", 0)) if cause else 0
+                per = count / handled if handled else 0.0
+                triggers.setdefault(cause, {})[topic] = per
+            cpus = list(plan.targets[plan.nodes[name].target].cpus)
+            nodes[name] = NodeProfile(plan.process_of(name), cpus, handling, triggers,
+                                      max(0.0, (figures["cpu_s"] - before.get("cpu_s", figures["cpu_s"])) / window))
+    topics = {}
+    for name, channel in plan.channels.items():
+        if channel.kind != "topic":
+            continue
+        events = observation.published.get(name, [])
+        size = int(np.median([p.size for p in events])) if events else 0
+        topics[name] = TopicProfile(channel.type, len(events) / window, size, list(channel.publishers),
+                                    list(channel.subscribers))
+    for name, node in nodes.items():  # a loop's or timer's publishes: per second, its share of the topic's rate
+        counts = {(c, t): n for c, t, n in _late_node(observation, name).get("triggers", [])}
+        for topic in list(node.triggers.get("", {})):
+            total = sum(n for (_, t), n in counts.items() if t == topic)
+            rate = topics[topic].rate_hz if topic in topics else 0.0
+            node.triggers[""][topic] = rate * counts[("", topic)] / total if total else 0.0
+    measured = {}
+    for chain in chains:
+        latency = measure(observation.published.get(chain.first, []), observation.published.get(chain.last, []))
+        if latency is not None:
+            measured[chain.name] = {"first": chain.first, "last": chain.last, **latency.as_dict()}
+    return Profile(plan.name, graph_key(plan), machine(), window,
+                   {n: plan.nodes[n].target for n in plan.nodes if not _system(plan, n)}, nodes, topics, processes,
+                   measured)
+
+
+def _late_node(observation: Observation, node: str) -> dict[str, Any]:
+    for late in observation.late.values():
+        if node in late["nodes"]:
+            found: dict[str, Any] = late["nodes"][node]
+            return found
+    return {}
+
+
+def chain_latencies(observation: Observation, chains: list[Chain]) -> dict[str, ChainLatency | None]:
+    return {chain.name: measure(observation.published.get(chain.first, []), observation.published.get(chain.last, []))
+            for chain in chains}

@@ -1,0 +1,119 @@
+"""The advice, told: a table of the best mappings, the chosen one as a project file, and the
+predicted timeline of one message through each chain as a picture."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .._errors import AdviseError
+from ._chains import Chain
+from ._model import Mapping, Placement
+from ._profile import Profile
+from ._search import Candidate, Limits
+
+
+def target_names(candidate: Mapping, original: Mapping, targets: dict[str, str]) -> dict[str, str]:
+    """Per node the target the written project gives it: its own where it stays, the project's target
+    of the same nodes on the same core where the candidate regroups nothing, else a target per core."""
+    groups: dict[Placement, set[str]] = {}
+    for node, placement in candidate.items():
+        groups.setdefault(placement, set()).add(node)
+    names = {}
+    for placement, nodes in groups.items():
+        same = [targets[n] for n in nodes if original[n] == placement or (
+            not placement.fpga and not original[n].fpga and original[n].cpus == placement.cpus and
+            {m for m, p in original.items() if p == original[n]} == nodes)]
+        for node in nodes:
+            names[node] = same[0] if same and len(set(same)) == 1 else placement.process
+    return names
+
+
+def moved(candidate: Mapping, original: Mapping, targets: dict[str, str]) -> list[str]:
+    """What a candidate changes: ``node target->target``, in the names the written project would use."""
+    names = target_names(candidate, original, targets)
+    return [f"{node} {targets[node]}->{names[node]}" for node in sorted(candidate) if names[node] != targets[node]]
+
+
+def table(rows: list[tuple[str, Candidate]], chains: list[Chain], original: Mapping, targets: dict[str, str],
+          limits: Limits, profile: Profile) -> str:
+    """The ranked mappings (and the project's own, for comparison) as a text table."""
+    heads = ["mapping", *[f"{c.name} p50/p99 ms" + (f" (≤{c.deadline_ms:g})" if c.deadline_ms else "") for c in chains],
+             "cores", "load per core", "fpga", "moved"]
+    lines = []
+    for label, candidate in rows:
+        figures = [f"{candidate.prediction.chains[c.name].p50_ms:.1f}/{candidate.prediction.chains[c.name].p99_ms:.1f}"
+                   for c in chains]
+        load = " ".join(f"{share * 100:.0f}%" for _, share in sorted(candidate.prediction.core_load.items()))
+        fpga = (f"{len(candidate.prediction.fpga_nodes)} nodes, {candidate.fpga_share(limits.fpga_budget, profile):.0%}"
+                if candidate.prediction.fpga_nodes else "-")
+        change = ", ".join(moved(candidate.mapping, original, targets)) or "(as the project maps it)"
+        lines.append([label, *figures, str(candidate.cores_used()), load, fpga, change])
+    widths = [max(len(str(row[i])) for row in [heads, *lines]) for i in range(len(heads) - 1)]
+    out = ["  ".join(h.ljust(w) for h, w in zip(heads, [*widths, 0], strict=True)).rstrip()]
+    for row in lines:
+        out.append("  ".join(str(v).ljust(w) for v, w in zip(row, [*widths, 0], strict=True)).rstrip())
+    return "\n".join(out)
+
+
+def write_project(source: Path, mapping: Mapping, original: Mapping, targets: dict[str, str], out: Path) -> Path:
+    """``source`` with its nodes' targets (and the targets' cpus) as ``mapping`` puts them: nothing else
+    changes (comments are not kept: the file is written anew)."""
+    raw: dict[str, Any] = yaml.safe_load(source.read_text(encoding="utf-8"))
+    nodes = raw.get("nodes")
+    if not isinstance(nodes, dict):
+        raise AdviseError(f"{source}: nodes: is not a mapping of node entries; write the advised targets by hand")
+    old_targets: dict[str, Any] = dict(raw.get("targets") or {})
+    new_targets: dict[str, Any] = {}
+    names = target_names(mapping, original, targets)
+    for node, placement in mapping.items():
+        entry = nodes.get(node)
+        name = names[node]
+        if not isinstance(entry, dict):
+            raise AdviseError(f"{source}: node {node} is not an entry of nodes: (it comes from an include or a "
+                              f"group); set its target by hand: {name}")
+        if name in old_targets and (name == targets[node] or placement.fpga or name in targets.values()):
+            new_targets[name] = old_targets[name]
+        else:
+            if name in old_targets and old_targets[name] != {"kind": "process", "cpus": list(placement.cpus)}:
+                name = f"advised_{name}"
+            new_targets[name] = {"kind": "process", "cpus": list(placement.cpus)}
+        entry["target"] = name
+    raw["targets"] = {name: new_targets[name] for name in [*old_targets, *sorted(new_targets)]
+                      if name in new_targets}
+    text = yaml.safe_dump(raw, sort_keys=False, default_flow_style=None, width=120)
+    out.write_text(f"# written by `hetros advise` from {source.name}: only targets and cpus differ\n{text}",
+                   encoding="utf-8")
+    return out
+
+
+def plot_timeline(candidate: Candidate, chains: list[Chain], out: Path) -> Path:
+    """Each chain's predicted way of one message (the median one): per node, waiting and working."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    drawn = [c for c in chains if candidate.prediction.chains[c.name].timeline]
+    figure, axes = plt.subplots(len(drawn) or 1, 1, figsize=(9, 1.2 + 0.45 * max(
+        (len(candidate.prediction.chains[c.name].timeline) for c in drawn), default=1) * max(len(drawn), 1)),
+        squeeze=False)
+    for axis, chain in zip(axes[:, 0], drawn, strict=False):
+        hops = candidate.prediction.chains[chain.name].timeline
+        for row, hop in enumerate(hops):
+            axis.barh(row, hop.started - hop.arrived, left=hop.arrived, color="#f4c27a", edgecolor="none")
+            axis.barh(row, hop.ended - hop.started, left=hop.started, color="#3b6fb6", edgecolor="none")
+        axis.set_yticks(range(len(hops)), [f"{h.node} ({h.where})" for h in hops], fontsize=8)
+        axis.invert_yaxis()
+        prediction = candidate.prediction.chains[chain.name]
+        axis.set_title(f"chain {chain.name}: one message, predicted p50 {prediction.p50_ms:.1f} ms "
+                       "(orange: waiting for its process or core; blue: working)", fontsize=9)
+        if chain.deadline_ms:
+            axis.axvline(chain.deadline_ms, color="#b33", linestyle="--", linewidth=1)
+        axis.set_xlabel("ms after the message's publish on " + chain.first, fontsize=8)
+    figure.tight_layout()
+    figure.savefig(out, dpi=110)
+    plt.close(figure)
+    return out

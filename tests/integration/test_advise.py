@@ -1,0 +1,102 @@
+"""``hetros advise`` on a shipped example, as a user runs it: calibrate this machine (the latency
+benchmark's shortest variant, into a cache of the test's own), profile a real launch, search, write the
+advised project, launch the shown mappings and measure them (``--verify``); then the refusals, from the
+same profile and calibration."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[2]
+CHAIN = "steer=/current_pose:/twist_cmd@100ms"
+
+pytestmark = pytest.mark.slow
+
+
+CACHE: dict[str, str] = {}
+
+
+def advise(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, XDG_CACHE_HOME=CACHE["folder"])
+    return subprocess.run([sys.executable, "-m", "hetros", "advise", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=300, check=False, env=env)
+
+
+@pytest.fixture(scope="module")
+def advised(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, subprocess.CompletedProcess[str]]:
+    """The autoware slice copied (so that the advised project is written beside the copy), advised, verified."""
+    folder = tmp_path_factory.mktemp("advise")
+    CACHE["folder"] = str(folder / "cache")
+    example = folder / "autoware"
+    subprocess.run(["cp", "-r", str(ROOT / "examples" / "autoware"), str(example)], check=True)
+    out = folder / "out"
+    done = advise("project.yaml", "--chain", CHAIN, "--duration", "6", "--warmup", "2", "--out", str(out), "--verify",
+                  "--top", "2", cwd=example)
+    return example, out, done
+
+
+def test_the_advice_is_a_table_a_project_a_timeline_and_a_verified_launch(
+        advised: tuple[Path, Path, subprocess.CompletedProcess[str]]) -> None:
+    example, out, done = advised
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "calibrated now (benchmarks/latency.py --quick)" in done.stdout
+    calibration = json.loads((Path(CACHE["folder"]) / "hetros" / "calibration.json").read_text())
+    assert set(calibration["table"]) == {"inproc", "shm", "copy"}
+    assert "all 128 candidates simulated" in done.stdout
+    lines = done.stdout.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("mapping"))
+    assert [line.split()[0] for line in lines[head + 1:head + 4]] == ["#1", "#2", "as"]
+    before = yaml.safe_load((example / "project.yaml").read_text())
+    after = yaml.safe_load((example / "project_advised.yaml").read_text())
+    assert {k: v for k, v in before.items() if k not in ("targets", "nodes")} == \
+        {k: v for k, v in after.items() if k not in ("targets", "nodes")}
+    for node, entry in before["nodes"].items():
+        assert {k: v for k, v in entry.items() if k != "target"} == \
+            {k: v for k, v in after["nodes"][node].items() if k != "target"}
+    assert (out / "timeline.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    profile = json.loads((out / "profile.json").read_text())
+    assert profile["chains"]["steer"]["samples"] >= 25
+    assert profile["nodes"]["lane_select"]["triggers"] == {"/current_pose": {"/base_waypoints": 1.0}}
+    assert profile["nodes"]["vehicle"]["triggers"][""]["/current_pose"] == pytest.approx(10.0, rel=0.2)
+    assert "verified" in done.stdout
+    summary = json.loads((out / "advice.json").read_text())
+    for label in ("#1", "#2", "as given"):
+        assert summary["measured"][label]["steer"] > 0
+        assert summary["predicted"][label]["steer"] > 0
+
+
+def test_a_chain_that_is_not_there_is_refused_before_anything_runs(
+        advised: tuple[Path, Path, subprocess.CompletedProcess[str]], tmp_path: Path) -> None:
+    done = advise(str(ROOT / "examples/autoware/project.yaml"), "--chain", "/current_pose:/nowhere",
+                  "--out", str(tmp_path), cwd=tmp_path)
+    assert done.returncode == 1
+    assert "chain /current_pose->/nowhere: the project has no topic /nowhere" in done.stderr
+    assert not (tmp_path / "profile.json").exists()
+
+
+def test_a_deadline_no_mapping_meets_says_by_how_much_and_why(
+        advised: tuple[Path, Path, subprocess.CompletedProcess[str]], tmp_path: Path) -> None:
+    example, out, _ = advised
+    done = advise("project.yaml", "--chain", "steer=/current_pose:/twist_cmd@0.05ms", "--profile",
+                  str(out / "profile.json"), "--out", str(tmp_path), cwd=example)
+    assert "cached calibration" in done.stdout
+    assert done.returncode == 1
+    assert "no mapping within the limits meets the deadline: chain steer: the best mapping's p50 is" in done.stdout
+    assert "over its 0.05 ms deadline;" in done.stdout and "dominates" in done.stdout
+
+
+def test_a_profile_of_another_project_is_warned_about(
+        advised: tuple[Path, Path, subprocess.CompletedProcess[str]], tmp_path: Path) -> None:
+    _, out, _ = advised
+    done = advise(str(ROOT / "examples/lane_following/project.yaml"), "--profile", str(out / "profile.json"),
+                  "--out", str(tmp_path), cwd=tmp_path)
+    assert "warning: the profile is of another graph" in done.stdout
+    assert done.returncode == 1
+    assert "the profile has no figures of node(s) camera" in done.stderr

@@ -1,0 +1,238 @@
+"""The advisor's model, search and report on profiles written by hand, whose chain latencies can be
+worked out on paper: a source, a chain of two nodes, and a side node that competes for a core."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from hetros import AdviseError
+from hetros.advise import (
+    Calibration,
+    Chain,
+    Handling,
+    Limits,
+    NodeProfile,
+    Placement,
+    Profile,
+    Published,
+    TopicProfile,
+    measure,
+    predict,
+    search,
+)
+from hetros.advise import _search as search_module
+from hetros.advise._report import moved, target_names, write_project
+from hetros.advise._search import exhaustive, proposed
+
+ROOT = Path(__file__).resolve().parents[2]
+INPROC_MS, SHM_MS = 0.01, 0.1
+CALIBRATION = Calibration({"host": "paper"}, {
+    "inproc": [(4, INPROC_MS * 1000, INPROC_MS * 1000), (4_000_000, INPROC_MS * 1000, INPROC_MS * 1000)],
+    "shm": [(4, SHM_MS * 1000, SHM_MS * 1000), (4_000_000, SHM_MS * 1000, SHM_MS * 1000)],
+    "copy": [(4, 1.0, 1.0), (4_000_000, 1.0, 1.0)],
+})
+CHAIN = Chain("main", "/x", "/z", deadline_ms=20.0)
+
+
+def constant(ms: float, count: int = 100) -> Handling:
+    return Handling(count, ms, [ms] * 21, cpu=True)
+
+
+def paper_profile(side_ms: float = 10.0) -> Profile:
+    """camera (10 Hz, 1 ms a frame) -> /x -> a (10 ms) -> /y -> b (5 ms) -> /z; side (side_ms) also reads /x."""
+    nodes = {
+        "camera": NodeProfile("cam", [], {}, {"": {"/x": 10.0}}, cpu_share=0.01),
+        "side": NodeProfile("p", [], {"/x": constant(side_ms)}, {}, cpu_share=side_ms / 100),
+        "a": NodeProfile("p", [], {"/x": constant(10.0)}, {"/x": {"/y": 1.0}}, cpu_share=0.1),
+        "b": NodeProfile("p", [], {"/y": constant(5.0)}, {"/y": {"/z": 1.0}}, cpu_share=0.05),
+    }
+    topics = {
+        "/x": TopicProfile("m/X", 10.0, 1000, ["camera"], ["side", "a"]),
+        "/y": TopicProfile("m/Y", 10.0, 1000, ["a"], ["b"]),
+        "/z": TopicProfile("m/Z", 10.0, 10, ["b"], []),
+    }
+    return Profile("paper", "g", {"host": "paper"}, 10.0, {}, nodes, topics, {})
+
+
+def on(process: str, *cpus: int) -> Placement:
+    return Placement(process, cpus)
+
+
+def test_one_process_adds_the_work_and_the_in_process_hops() -> None:
+    """a and b alone on one core: 10 + 5 ms of work, /x from the camera's process, /y in process; side
+    elsewhere."""
+    mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": on("p", 0), "b": on("p", 0)}
+    found = predict(paper_profile(), CALIBRATION, mapping, [CHAIN], cores=2).chains["main"]
+    assert found.p50_ms == pytest.approx(SHM_MS + 10.0 + INPROC_MS + 5.0)
+    assert found.p99_ms == pytest.approx(found.p50_ms)
+    assert [h.node for h in found.timeline] == ["a", "b"]
+
+
+def test_processes_apart_pay_shared_memory_hops() -> None:
+    mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": on("pa", 0), "b": on("pb", 0)}
+    found = predict(paper_profile(), CALIBRATION, mapping, [CHAIN], cores=2).chains["main"]
+    assert found.p50_ms == pytest.approx(15.0 + 2 * SHM_MS)
+
+
+def test_a_side_node_in_the_same_process_makes_the_chain_wait() -> None:
+    """side subscribes /x before a: one process takes them in turn, so a starts 10 ms late."""
+    mapping = {"camera": on("cam", 1), "side": on("p", 0), "a": on("p", 0), "b": on("p", 0)}
+    found = predict(paper_profile(), CALIBRATION, mapping, [CHAIN], cores=2).chains["main"]
+    assert found.p50_ms == pytest.approx(SHM_MS + 25.0 + INPROC_MS)
+    assert found.waiting_ms["a"] == pytest.approx(10.0)
+    assert found.dominant() == "a"
+
+
+def test_two_processes_on_one_core_share_it() -> None:
+    """side and a start together on one core: each gets half of it until side ends at 20 ms."""
+    mapping = {"camera": on("cam", 1), "side": on("s", 0), "a": on("p", 0), "b": on("p", 0)}
+    prediction = predict(paper_profile(), CALIBRATION, mapping, [CHAIN], cores=2)
+    found = prediction.chains["main"]
+    # /x reaches both at 0.1 ms; both progress at half speed: a ends at 0.1 + 20 = 20.1; b: +0.01 + 5
+    assert found.p50_ms == pytest.approx(SHM_MS + 20.0 + INPROC_MS + 5.0)
+    assert prediction.core_load[0] == pytest.approx(0.25, abs=0.01)  # 25 ms of work each 100 ms
+
+
+def test_the_search_separates_what_competes_and_meets_the_deadline() -> None:
+    profile = paper_profile()
+    original = {"camera": on("cam"), "side": on("p", 0), "a": on("p", 0), "b": on("p", 0)}
+    ranked, how = search(profile, CALIBRATION, original, [(CHAIN, ["a", "b"])], Limits(cores=2), keep=3)
+    assert "all" in how
+    best = ranked[0]
+    assert best.meets([CHAIN])
+    assert best.mapping["side"].cpus != best.mapping["a"].cpus
+    assert best.mapping["a"] == best.mapping["b"]  # together: in-process hops
+    assert best.prediction.chains["main"].p50_ms == pytest.approx(15.0 + 2 * INPROC_MS)  # the camera joins them
+
+
+def test_pinned_nodes_stay_and_cores_are_counted_once() -> None:
+    profile = paper_profile()
+    original = {"camera": on("cam"), "side": on("p", 0), "a": on("p", 0), "b": on("p", 0)}
+    options = search_module.choices(profile, original, Limits(cores=2, pinned=frozenset({"camera"})))
+    assert options["camera"] == [on("cam")]
+    found = list(exhaustive(options, 2))
+    assert len(found) == 4  # three nodes on two interchangeable cores: all on one, or one of three apart
+    assert all(m["camera"] == on("cam") for m in found)
+    assert search_module._count(options, True, 2) == len(found)
+
+
+def test_the_solver_proposes_what_the_simulation_ranks_best(monkeypatch: pytest.MonkeyPatch) -> None:
+    profile = paper_profile()
+    original = {"camera": on("cam"), "side": on("p", 0), "a": on("p", 0), "b": on("p", 0)}
+    options = search_module.choices(profile, original, Limits(cores=2))
+    mappings = proposed(profile, CALIBRATION, options, [(CHAIN, ["a", "b"])], 2, count=4, time_limit_s=10)
+    assert mappings and len({tuple(sorted(m.items())) for m in mappings}) == len(mappings)
+    first = mappings[0]
+    assert first["side"].cpus != first["a"].cpus and first["a"] == first["b"]
+    monkeypatch.setattr(search_module, "EXHAUSTIVE_LIMIT", 1)
+    ranked, how = search(profile, CALIBRATION, original, [(CHAIN, ["a", "b"])], Limits(cores=2), keep=2)
+    assert "HiGHS" in how and ranked[0].meets([CHAIN])
+
+
+def test_a_deadline_no_mapping_meets_is_told_with_the_dominant_node() -> None:
+    from hetros.advise import Advice
+
+    profile = paper_profile()
+    tight = Chain("main", "/x", "/z", deadline_ms=12.0)
+    original = {"camera": on("cam"), "side": on("p", 0), "a": on("p", 0), "b": on("p", 0)}
+    limits = Limits(cores=2)
+    ranked, how = search(profile, CALIBRATION, original, [(tight, ["a", "b"])], limits)
+    advice = Advice(profile, "paper", ranked[-1], ranked, how, [(tight, ["a", "b"])], limits,
+                    {n: "t" for n in original})
+    text = advice.shortfall()
+    assert "3.0 ms over its 12 ms deadline" in text and "a dominates (10.0 ms working" in text
+
+
+def test_hardware_nodes_stream_within_a_target() -> None:
+    """a and b in hardware on one target: b works beside a (dataflow), so the chain takes the longer
+    of the two plus the gateway's copies, not their sum."""
+    profile = paper_profile()
+    profile.nodes["a"].hardware = {"ms": 4.0, "resources": {"lut": 10}}
+    profile.nodes["b"].hardware = {"ms": 3.0, "resources": {"lut": 10}}
+    mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": Placement("fpga", (), True),
+               "b": Placement("fpga", (), True)}
+    found = predict(profile, CALIBRATION, mapping, [CHAIN], cores=2).chains["main"]
+    copy_ms = CALIBRATION.latency_ms("copy", 1000)
+    # into hardware: one copy and a shared-memory hop; a 4 ms; b already done beside it
+    assert found.p50_ms == pytest.approx(copy_ms + SHM_MS + 4.0)
+    apart = dict(mapping, b=on("pb", 0))
+    sequential = predict(profile, CALIBRATION, apart, [CHAIN], cores=2).chains["main"]
+    assert sequential.p50_ms == pytest.approx(copy_ms + SHM_MS + 4.0 + copy_ms + SHM_MS + 5.0)
+
+
+def test_measured_chains_match_by_stamp_or_by_the_newest_message() -> None:
+    first = [Published(1_000_000 * t, 10, t) for t in (100, 200, 300)]
+    last = [Published(1_000_000 * t + 15_000_000, 10, t) for t in (100, 200, 300)]
+    found = measure(first, last)
+    assert found is not None and found.matched_by == "header stamp" and found.p50_ms == pytest.approx(15.0)
+    bare = [Published(p.time_ns, 10, None) for p in last]
+    found = measure([Published(p.time_ns, 10, None) for p in first], bare)
+    assert found is not None and found.matched_by.startswith("newest") and found.p50_ms == pytest.approx(15.0)
+    assert measure(first, []) is None
+
+
+@pytest.mark.parametrize(("text", "problem"), [
+    ("/x", "must be written"), ("/x:/y@-3ms", "must be written"), ("/x:/y@0ms", "positive"),
+])
+def test_chains_are_written_one_way(text: str, problem: str) -> None:
+    with pytest.raises(AdviseError, match=problem):
+        Chain.parse(text)
+
+
+def test_a_chain_is_parsed_with_its_name_and_deadline() -> None:
+    assert Chain.parse("alpha=/image_raw:/cmd_vel@30ms") == Chain("alpha", "/image_raw", "/cmd_vel", 30.0)
+    assert Chain.parse("/a:/b").name == "/a->/b"
+
+
+def test_a_chain_the_graph_cannot_carry_is_refused() -> None:
+    from hetros.project import plan_file
+
+    plan = plan_file(ROOT / "examples/lane_following/project.yaml")
+    assert Chain.parse("/image_raw:/cmd_vel").check(plan) == [
+        "compensation", "gaussian_blur", "red_light", "green_light", "projection", "lane_control", "lane_following"]
+    with pytest.raises(AdviseError, match="no topic /nope"):
+        Chain.parse("/image_raw:/nope").check(plan)
+    with pytest.raises(AdviseError, match="no node path leads from /cmd_vel to /image_raw"):
+        Chain.parse("/cmd_vel:/image_raw").check(plan)
+
+
+def test_the_written_project_differs_only_in_targets(tmp_path: Path) -> None:
+    from hetros.advise import mapping_of
+    from hetros.project import plan_file
+
+    source = ROOT / "examples/lane_following/project.yaml"
+    plan = plan_file(source)
+    original, targets = mapping_of(plan)
+    candidate = dict(original)
+    candidate["green_light"] = Placement("core1", (1,))
+    candidate["red_light"] = Placement("core1", (1,))
+    assert target_names(original, original, targets) == targets
+    assert moved(candidate, original, targets) == ["green_light chain_a->core1", "red_light chain_a->core1"]
+    out = write_project(source, candidate, original, targets, tmp_path / "advised.yaml")
+    before, after = yaml.safe_load(source.read_text()), yaml.safe_load(out.read_text())
+    assert after["targets"]["core1"] == {"kind": "process", "cpus": [1]}
+    for key in set(before) | set(after):
+        if key not in ("targets", "nodes"):
+            assert before[key] == after[key]
+    for node, entry in before["nodes"].items():
+        assert {k: v for k, v in entry.items() if k != "target"} == \
+            {k: v for k, v in after["nodes"][node].items() if k != "target"}
+    assert after["nodes"]["red_light"]["target"] == "core1"
+    assert after["nodes"]["compensation"]["target"] == "chain_a"
+
+
+def test_a_profile_survives_its_file_and_knows_where_it_was_taken(tmp_path: Path) -> None:
+    profile = paper_profile()
+    profile.save(tmp_path / "profile.json")
+    again = Profile.load(tmp_path / "profile.json")
+    assert again == profile
+    (tmp_path / "bad.json").write_text('{"format": 99}')
+    with pytest.raises(AdviseError, match="format 1 expected"):
+        Profile.load(tmp_path / "bad.json")
+    from hetros.project import plan_file
+
+    warnings = again.fits(plan_file(ROOT / "examples/lane_following/project.yaml"))
+    assert any("another graph" in w for w in warnings) and any("another machine" in w for w in warnings)

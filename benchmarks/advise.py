@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 from hetros_bench._provenance import provenance
@@ -28,10 +30,10 @@ CHAINS = {
 }
 
 
-def advise(example: str, out: Path) -> dict[str, object]:
+def advise(example: str, out: Path, examples: Path) -> dict[str, object]:
     chain, duration, warmup = CHAINS[example]
     folder = out / example
-    command = [sys.executable, "-m", "hetros", "advise", str(EXAMPLES / example / "project.yaml"), "--chain", chain,
+    command = [sys.executable, "-m", "hetros", "advise", str(examples / example / "project.yaml"), "--chain", chain,
                "--duration", str(duration), "--warmup", str(warmup), "--out", str(folder), "--verify"]
     done = subprocess.run(command, capture_output=True, text=True, check=False, timeout=1800)
     print(done.stdout, flush=True)
@@ -95,7 +97,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     out = Path(args.out) / "advise"
     out.mkdir(parents=True, exist_ok=True)
-    results = {example: advise(example, out) for example in args.examples.split(",")}
+    with tempfile.TemporaryDirectory(prefix="hetros-advise-") as name:  # the advised projects are written there
+        examples = Path(name) / "examples"
+        shutil.copytree(EXAMPLES, examples, ignore=shutil.ignore_patterns("__pycache__", "out"))
+        results = {example: advise(example, out, examples) for example in args.examples.split(",")}
     report = table(results)
     print(report)
     (out.parent / "advise.md").write_text(provenance() + "\n\n" + report + "\n", encoding="utf-8")

@@ -38,7 +38,7 @@ CHAIN = Chain("main", "/x", "/z", deadline_ms=20.0)
 
 
 def constant(ms: float, count: int = 100) -> Handling:
-    return Handling(count, ms, [ms] * 21, cpu=True)
+    return Handling(count, ms, [ms] * 22, cpu=True)
 
 
 def paper_profile(side_ms: float = 10.0) -> Profile:
@@ -75,6 +75,14 @@ def test_processes_apart_pay_shared_memory_hops() -> None:
     mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": on("pa", 0), "b": on("pb", 0)}
     found = predict(paper_profile(), CALIBRATION, mapping, [CHAIN], cores=2).chains["main"]
     assert found.p50_ms == pytest.approx(15.0 + 2 * SHM_MS)
+
+
+def test_each_hop_also_wakes_its_subscriber() -> None:
+    """The calibration's wake (a sleeping subscriber's, beyond the benchmark's awake one) is paid per hop."""
+    waking = Calibration(CALIBRATION.machine, CALIBRATION.table, {"inproc": 0.05, "shm": 0.2})
+    mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": on("p", 0), "b": on("p", 0)}
+    found = predict(paper_profile(), waking, mapping, [CHAIN], cores=2).chains["main"]
+    assert found.p50_ms == pytest.approx((SHM_MS + 0.2) + 10.0 + (INPROC_MS + 0.05) + 5.0)
 
 
 def test_a_side_node_in_the_same_process_makes_the_chain_wait() -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .._errors import AdviseError
@@ -12,7 +12,7 @@ from ..plan import Plan
 from ._calibrate import Calibration, calibration
 from ._chains import Chain, ChainLatency
 from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budget
-from ._model import Mapping, Placement, hop_overhead, predict
+from ._model import Mapping, Placement, predict, wake_scale
 from ._observe import observe
 from ._profile import Profile, build, chain_latencies, graph_key
 from ._report import plot_timeline, table, write_project
@@ -147,12 +147,16 @@ def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], No
                           "hardware nodes into, and nodes with hw: implementations")
     limits = Limits(cores, fpga, part_budget(plan, fpga) if fpga else {}, options.pinned)
     chains = [c for c, _ in paths]
-    profiled = _profiled_mapping(profile, original)
-    hop_ms = hop_overhead(profile, calibrated, profiled, chains, cores)
-    shipped = Candidate(original, predict(profile, calibrated, original, chains, cores, hop_ms=hop_ms))
+    scale = wake_scale(profile, calibrated, _profiled_mapping(profile, original), chains, cores)
+    calibrated = replace(calibrated, wake_scale=1.0 if scale is None else scale)
+    shipped = Candidate(original, predict(profile, calibrated, original, chains, cores))
     ranked, how = search(profile, calibrated, original, paths, limits, keep=options.keep,
-                         time_limit_s=options.time_limit_s, hop_ms=hop_ms)
-    how += f"; each hop {hop_ms * 1000:.0f} µs beyond the calibrated transport (fitted on the profiled run)"
+                         time_limit_s=options.time_limit_s)
+    wake = calibrated.wake_ms
+    how += (f"; waking a subscriber adds {wake.get('inproc', 0.0) * calibrated.wake_scale * 1000:.0f} µs in a "
+            f"process, {wake.get('shm', 0.0) * calibrated.wake_scale * 1000:.0f} µs across processes ("
+            + ("as calibrated" if scale is None else f"{scale:.2f} of the calibrated, as the profiled chains show")
+            + ")")
     return Advice(profile, source, shipped, ranked, how, paths, limits, targets, warnings)
 
 
@@ -177,6 +181,6 @@ def verify(projects: dict[str, Path], plans: dict[str, Plan], chains: list[Chain
     found = {}
     for label, project in projects.items():
         seen = observe(project, plans[label], duration=options.duration, warmup=options.warmup, profiling=False,
-                       log=options.out / f"verify-{label}.log")
+                       log=options.out / f"verify-{label.strip('#').replace(' ', '-')}.log")
         found[label] = chain_latencies(seen, chains)
     return found

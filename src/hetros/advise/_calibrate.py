@@ -5,6 +5,12 @@ give an edge (in one process; shared memory between processes, a subscriber's ca
 it) and the cost of a plain copy (what a gateway pays per message into and out of hardware).
 Those are rows of ``benchmarks/latency.py``; its shortest variant (``--quick``, three systems) runs
 once per machine and is cached under ``$XDG_CACHE_HOME/hetros`` with the machine it describes.
+
+The benchmark's receivers are awake when a message comes (each spins on its reader for a while
+after the last one). In a graph whose messages come a period apart they are asleep, and waking a
+thread costs more than the transport itself on a virtual machine. So the calibration also launches
+a small graph as users write one (a 50 Hz publisher, a callback in its process and one in another)
+and keeps, per kind of hop, what it takes beyond the benchmark's figure: the wake.
 """
 
 from __future__ import annotations
@@ -15,7 +21,8 @@ import os
 import subprocess
 import sys
 import tempfile
-from dataclasses import dataclass
+import textwrap
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -33,10 +40,14 @@ def cache_path() -> Path:
 
 @dataclass
 class Calibration:
-    """Per transport (``inproc``, ``shm``, ``copy``): sizes (bytes) and one-way p50 and p99 (µs)."""
+    """Per transport (``inproc``, ``shm``, ``copy``): sizes (bytes) and one-way p50 and p99 (µs); per
+    hop kind (``inproc``, ``shm``), what waking a sleeping subscriber adds (ms)."""
 
     machine: dict[str, object]
     table: dict[str, list[tuple[int, float, float]]]
+    wake_ms: dict[str, float] = field(default_factory=dict)
+    # how much of the calibrated wake a graph's hops pay: fitted on a profile's chains (not saved)
+    wake_scale: float = 1.0
 
     def latency_ms(self, transport: str, size: int, *, p99: bool = False) -> float:
         """The one-way latency of ``size`` bytes over ``transport``, interpolated between the measured
@@ -52,9 +63,14 @@ class Calibration:
             return float(values[-1] + slope * (size - sizes[-1])) / 1000.0
         return float(np.interp(size, sizes, values)) / 1000.0
 
+    def hop_ms(self, transport: str, size: int) -> float:
+        """One hop of ``size`` bytes to a sleeping subscriber: the transport and the wake."""
+        return self.latency_ms(transport, size) + self.wake_ms.get(transport, 0.0) * self.wake_scale
+
     def save(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({"machine": self.machine, "table": self.table}, indent=1) + "\n", encoding="utf-8")
+        path.write_text(json.dumps({"machine": self.machine, "table": self.table, "wake_ms": self.wake_ms}, indent=1)
+                        + "\n", encoding="utf-8")
 
     @classmethod
     def load(cls, path: Path) -> Calibration:
@@ -62,7 +78,8 @@ class Calibration:
             raw = json.loads(path.read_text(encoding="utf-8"))
             table = {name: [(int(s), float(p50), float(p99)) for s, p50, p99 in rows]
                      for name, rows in raw["table"].items()}
-            return cls(dict(raw["machine"]), table)
+            wake = {str(k): float(v) for k, v in raw.get("wake_ms", {}).items()}
+            return cls(dict(raw["machine"]), table, wake)
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise AdviseError(f"{path}: not a readable calibration ({exc!r}); calibrate again "
                               "(`hetros advise --calibrate`)") from None
@@ -96,9 +113,10 @@ def calibration(*, again: bool = False, path: Path | None = None) -> tuple[Calib
     if path.exists() and not again:
         cached = Calibration.load(path)
         here = machine()
-        if all(cached.machine.get(key) == here[key] for key in ("host", "cpu", "cpus", "hetros")):
+        if all(cached.machine.get(key) == here[key] for key in ("host", "cpu", "cpus", "hetros")) and cached.wake_ms:
             return cached, f"cached calibration {path}"
     measured = run_benchmark()
+    measured.wake_ms = wakes(measured)
     measured.save(path)
     return measured, f"calibrated now (benchmarks/latency.py --quick), cached in {path}"
 
@@ -115,3 +133,68 @@ def run_benchmark() -> Calibration:
         if not jsonl.exists():
             raise AdviseError(f"the latency benchmark failed (exit {done.returncode}):\n{done.stderr[-2000:]}")
         return Calibration.from_benchmark(jsonl)
+
+
+WAKE_HZ = 50.0
+WAKE_SAMPLES = 200
+_WAKE_NODES = textwrap.dedent("""\
+    import json
+    import time
+
+    from hetros import Node
+    from hetros.interfaces.std_msgs.msg import Int64
+
+
+    def ping(node: Node) -> None:
+        pub = node.create_publisher(Int64, "/ping")
+        for tick in node.rate(node.get_parameter("hz")):
+            pub.publish(Int64(data=time.monotonic_ns()))
+            if tick + 1 >= node.get_parameter("samples") + 20:
+                return
+
+
+    def listen(node: Node) -> None:
+        seen = []
+        out, wanted = node.get_parameter("out"), node.get_parameter("samples")
+
+        def heard(message: Int64) -> None:
+            seen.append(time.monotonic_ns() - message.data)
+            if len(seen) == wanted + 10:  # the first ten are start-up
+                with open(out, "w", encoding="utf-8") as handle:
+                    json.dump(seen[10:], handle)
+
+        node.create_subscription(Int64, "/ping", heard)
+    """)
+
+
+def wakes(measured: Calibration) -> dict[str, float]:
+    """Per hop kind, a sporadic callback's one-way p50 beyond the benchmark's (ms, at least 0): a 50 Hz
+    publisher heard by a callback in its own process and by one in another, launched as a project."""
+    with tempfile.TemporaryDirectory(prefix="hetros-wake-") as name:
+        folder = Path(name)
+        (folder / "nodes.py").write_text(_WAKE_NODES, encoding="utf-8")
+        cpus = "[0]" if len(os.sched_getaffinity(0)) < 2 else "[1]"
+        common = f"hz: {WAKE_HZ}, samples: {WAKE_SAMPLES}"
+        (folder / "project.yaml").write_text(textwrap.dedent(f"""\
+            name: wake
+            targets: {{a: {{kind: process, cpus: [0]}}, b: {{kind: process, cpus: {cpus}}}}}
+            nodes:
+              ping: {{run: nodes:ping, target: a, parameters: {{{common}}}, publish: {{/ping: std_msgs/msg/Int64}}}}
+              near: {{run: nodes:listen, target: a, parameters: {{{common}, out: {folder / 'inproc.json'}}},
+                      subscribe: {{/ping: std_msgs/msg/Int64}}}}
+              far:  {{run: nodes:listen, target: b, parameters: {{{common}, out: {folder / 'shm.json'}}},
+                      subscribe: {{/ping: std_msgs/msg/Int64}}}}
+            """), encoding="utf-8")
+        seconds = (WAKE_SAMPLES + 30) / WAKE_HZ + 2
+        done = subprocess.run([sys.executable, "-m", "hetros", "launch", str(folder / "project.yaml"), "--duration",
+                               f"{seconds:g}"], capture_output=True, text=True, timeout=seconds + 120, check=False)
+        found = {}
+        for kind in ("inproc", "shm"):
+            try:
+                samples = json.loads((folder / f"{kind}.json").read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                raise AdviseError(f"the wake-up calibration heard too little ({kind}); its launch said:\n"
+                                  f"{done.stderr[-2000:]}") from None
+            p50_ms = float(np.percentile(np.asarray(samples, dtype=np.float64), 50)) / 1e6
+            found[kind] = max(0.0, p50_ms - measured.latency_ms(kind, 8))
+        return found

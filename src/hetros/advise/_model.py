@@ -8,11 +8,12 @@ seconds of its sources' periods:
 - a **core** shares itself equally among the processes working on it at the moment (processor
   sharing); a process pinned to one core works there, one pinned to several or to none works
   on the least busy of them when it starts a message;
-- a **node's work** per message is drawn from its profiled CPU time on that input (21 quantiles,
+- a **node's work** per message is drawn from its profiled CPU time on that input (its quantiles,
   interpolated), and it then publishes what the profile says it publishes per message of it;
   a source (a loop or timer) works for its profiled CPU per period, once per period;
 - an **edge** delays a message by the calibrated one-way latency of the transport the planner
-  would give it at the topic's size (in one process, or shared memory between processes);
+  would give it at the topic's size (in one process, or shared memory between processes), and by
+  the calibrated time to wake a sleeping subscriber of that kind;
 - a **hardware node** is its own server (its cycles per message at the target's clock); an edge
   between two hardware nodes of one target streams (the second finishes no earlier than the
   first: dataflow), an edge into or out of a target pays the gateway's copy and a shared-memory
@@ -27,7 +28,7 @@ from __future__ import annotations
 import heapq
 import itertools
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -94,11 +95,12 @@ class Prediction:
 
 
 class _Sampler:
-    """Draws a node's time per message from its 21 quantiles (a piecewise-linear inverse CDF)."""
+    """Draws a node's time per message from its quantiles (a piecewise-linear inverse CDF)."""
 
-    def __init__(self, quantiles_ms: list[float], rng: np.random.Generator) -> None:
+    def __init__(self, quantiles_ms: list[float], points: list[float], rng: np.random.Generator) -> None:
         self.values = np.asarray(quantiles_ms, dtype=np.float64)
-        self.points = np.linspace(0.0, 1.0, len(self.values))
+        self.points = np.asarray(points, dtype=np.float64) if len(points) == len(self.values) else \
+            np.linspace(0.0, 1.0, len(self.values))
         self.rng = rng
         self._batch: list[float] = []
 
@@ -126,9 +128,8 @@ class Simulation:
     """One candidate mapping, simulated; ``run`` gives the prediction."""
 
     def __init__(self, profile: Profile, calibration: Calibration, mapping: Mapping, chains: list[Chain],
-                 cores: int, *, seed: int = 1, horizon_s: float = HORIZON_S, hop_ms: float = 0.0) -> None:
+                 cores: int, *, seed: int = 1, horizon_s: float = HORIZON_S) -> None:
         self.profile = profile
-        self.hop_ms = hop_ms
         self.calibration = calibration
         self.mapping = mapping
         self.chains = chains
@@ -171,7 +172,8 @@ class Simulation:
         sampler = self.samplers.get(key)
         if sampler is None:
             handling = spec.handling.get(topic)
-            sampler = self.samplers[key] = _Sampler(handling.quantiles_ms if handling else [0.0], self.rng)
+            sampler = self.samplers[key] = _Sampler(handling.quantiles_ms if handling else [0.0],
+                                                    handling.points if handling else [0.0], self.rng)
         return sampler.draw()
 
     def _delay(self, publisher: str, subscriber: str, topic: str) -> float:
@@ -184,9 +186,9 @@ class Simulation:
         if sender.fpga or receiver.fpga:  # the gateway's copy, and its hop to or from the node's process
             delay += self.calibration.latency_ms("copy", size) * (int(sender.fpga) + int(receiver.fpga))
             if sender.fpga and receiver.fpga:
-                return delay + self.calibration.latency_ms("shm", size)
+                return delay + self.calibration.hop_ms("shm", size)
         same = sender.process == receiver.process and not (sender.fpga or receiver.fpga)
-        return delay + self.calibration.latency_ms("inproc" if same else "shm", size) + self.hop_ms
+        return delay + self.calibration.hop_ms("inproc" if same else "shm", size)
 
     # -- events -----------------------------------------------------------------------------
 
@@ -433,24 +435,30 @@ def _source_work(spec: NodeProfile, window_s: float) -> float:
 
 
 def predict(profile: Profile, calibration: Calibration, mapping: Mapping, chains: list[Chain], cores: int,
-            *, seed: int = 1, hop_ms: float = 0.0) -> Prediction:
-    return Simulation(profile, calibration, mapping, chains, cores, seed=seed, hop_ms=hop_ms).run()
+            *, seed: int = 1) -> Prediction:
+    return Simulation(profile, calibration, mapping, chains, cores, seed=seed).run()
 
 
-def hop_overhead(profile: Profile, calibration: Calibration, mapping: Mapping, chains: list[Chain],
-                 cores: int) -> float:
-    """What each hop costs beyond the calibrated transport (ms), fitted on the profiled run's own chains.
+def wake_scale(profile: Profile, calibration: Calibration, mapping: Mapping, chains: list[Chain],
+               cores: int) -> float | None:
+    """How much of the calibrated wakes the profiled run's chains show, or None where it measured none.
 
-    The latency benchmark times a receiver that is already awake (it spins on its reader); in a
-    graph whose messages come a period apart, each hop also wakes a sleeping thread, which on a
-    virtual machine costs tens of microseconds. The chains measured while profiling tell how much:
-    their measured p50 less the model's prediction of that very mapping, per hop, never below 0.
+    The calibration wakes a subscriber that slept a whole period; along a chain the next node is
+    often still warm from its last message, or shares the core's cache, and pays less. The chains
+    measured while profiling tell how much: their measured p50 less the model's prediction of that
+    very mapping without wakes, over what the calibrated wakes add to it (0 to 2, averaged over the
+    chains). The ratio between a wake in a process and one across processes stays the calibration's.
     """
-    measured = {name: figures["p50_ms"] for name, figures in profile.chains.items()}
-    prediction = predict(profile, calibration, mapping, chains, cores)
-    gaps = []
+    measured = {name: float(figures["p50_ms"]) for name, figures in profile.chains.items()}
+    if not any(c.name in measured for c in chains):
+        return None
+    bare = predict(profile, replace(calibration, wake_scale=0.0), mapping, chains, cores)
+    full = predict(profile, replace(calibration, wake_scale=1.0), mapping, chains, cores)
+    scales = []
     for chain in chains:
-        found = prediction.chains[chain.name]
-        if chain.name in measured and found.timeline:
-            gaps.append((measured[chain.name] - found.p50_ms) / len(found.timeline))
-    return max(0.0, float(np.mean(gaps))) if gaps else 0.0
+        if chain.name not in measured:
+            continue
+        added = full.chains[chain.name].p50_ms - bare.chains[chain.name].p50_ms
+        if added > 0:
+            scales.append((measured[chain.name] - bare.chains[chain.name].p50_ms) / added)
+    return min(2.0, max(0.0, float(np.mean(scales)))) if scales else None

@@ -1,7 +1,7 @@
 """The profile: what the advisor's model knows of a project, measured once and kept as a file.
 
 Per node and input topic the node's time per message (its thread's CPU time while profiling,
-so that waiting for a shared core or the GIL is not counted as work) as 21 quantiles, and which
+so that waiting for a shared core or the GIL is not counted as work) as quantiles, and which
 outputs it publishes per message of that input; per source (a node that publishes from a loop
 or a timer) its CPU per message; per topic its rate and size; per process its CPU share; per
 chain its measured latency. The profile names the project's graph (not its mapping) and the
@@ -24,6 +24,7 @@ import numpy as np
 from .. import __version__
 from .._errors import AdviseError
 from ..plan import Plan
+from ..runtime import HandlingStats
 from ._chains import Chain, ChainLatency, measure
 from ._observe import Observation
 
@@ -58,12 +59,14 @@ def _system(plan: Plan, node: str) -> bool:
 
 @dataclass
 class Handling:
-    """A node's time per message of one input: mean and 21 quantiles (ms); CPU time when ``cpu``."""
+    """A node's time per message of one input: mean and quantiles (ms) at ``points`` (fractions);
+    CPU time when ``cpu``."""
 
     count: int
     mean_ms: float
     quantiles_ms: list[float]
     cpu: bool
+    points: list[float] = field(default_factory=lambda: list(HandlingStats.POINTS))
 
 
 @dataclass
@@ -139,7 +142,7 @@ class Profile:
 
 def _quantiles_ms(handling: dict[str, Any]) -> tuple[list[float], bool]:
     cpu = handling.get("cpu_quantiles_s")
-    chosen = cpu if cpu else handling.get("quantiles_s") or [handling.get("p50_s", 0.0)] * 21
+    chosen = cpu if cpu else handling.get("quantiles_s") or [handling.get("p50_s", 0.0)] * len(HandlingStats.POINTS)
     return [float(v) * 1000.0 for v in chosen], bool(cpu)
 
 

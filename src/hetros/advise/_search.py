@@ -172,7 +172,7 @@ def proposed(profile: Profile, calibration: Calibration, options: dict[str, list
                 objective = objective + weight * work * pick[node, k]
         for sender, receiver, topic in _edges(profile, path):
             size = profile.topics[topic].size_bytes
-            hop = calibration.latency_ms("shm", size) - calibration.latency_ms("inproc", size) + 0.01
+            hop = calibration.hop_ms("shm", size) - calibration.hop_ms("inproc", size) + 0.01
             for core in range(cores):
                 apart = solver.addVariable(lb=0.0)
                 solver.addConstr(apart >= sum(on_core.get((sender, core), [])) - sum(on_core.get((receiver, core), [])))
@@ -218,8 +218,7 @@ def _mean_ms(profile: Profile, node: str) -> float:
 
 
 def search(profile: Profile, calibration: Calibration, original: Mapping, chains: list[tuple[Chain, list[str]]],
-           limits: Limits, *, keep: int = 5, time_limit_s: float = 60.0, hop_ms: float = 0.0
-           ) -> tuple[list[Candidate], str]:
+           limits: Limits, *, keep: int = 5, time_limit_s: float = 60.0) -> tuple[list[Candidate], str]:
     """The candidates, simulated and ranked (deadlines met first, then the worst chain's latency, then
     fewer cores and less fpga); and how they were found."""
     options = choices(profile, original, limits)
@@ -235,7 +234,7 @@ def search(profile: Profile, calibration: Calibration, original: Mapping, chains
                "each simulated")
     if original not in mappings:  # the project's own mapping competes too: where nothing beats it, it stays
         mappings.append(original)
-    scored = [Candidate(m, predict(profile, calibration, m, plain, limits.cores, hop_ms=hop_ms)) for m in mappings]
+    scored = [Candidate(m, predict(profile, calibration, m, plain, limits.cores)) for m in mappings]
     scored = [c for c in scored if not _over_budget(c, limits, profile)]
     scored.sort(key=lambda c: (not c.meets(plain), _bucket(c.worst(plain), plain), _moves(c.mapping, original),
                                c.cores_used(), c.fpga_share(limits.fpga_budget, profile)))

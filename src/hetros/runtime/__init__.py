@@ -4,7 +4,7 @@ from typing import TYPE_CHECKING
 
 from .._lazy import lazy_exports
 from ._clock import Clock, Duration, SimulatedClock, Time
-from ._entities import PROFILE_VARIABLE, Client, Publisher, Replies, Service, Subscription, Timer
+from ._entities import PROFILE_VARIABLE, Client, HandlingStats, Publisher, Replies, Service, Subscription, Timer
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
@@ -58,6 +58,7 @@ __all__ = [
     "Duration",
     "GoalStatus",
     "Graph",
+    "HandlingStats",
     "Host",
     "LivelinessChangedStatus",
     "Node",

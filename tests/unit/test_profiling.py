@@ -9,8 +9,7 @@ import pytest
 
 from hetros import Node
 from hetros.interfaces.std_msgs.msg import Int32
-from hetros.runtime import Graph
-from hetros.runtime import _entities
+from hetros.runtime import Graph, _entities
 
 
 @pytest.fixture

@@ -220,7 +220,7 @@ def _mean_ms(profile: Profile, node: str) -> float:
 def search(profile: Profile, calibration: Calibration, original: Mapping, chains: list[tuple[Chain, list[str]]],
            limits: Limits, *, keep: int = 5, time_limit_s: float = 60.0) -> tuple[list[Candidate], str]:
     """The candidates, simulated and ranked (deadlines met first, then the worst chain's latency, then
-    fewer cores and less fpga); and how they were found."""
+    fewer nodes moved, fewer cores and less fpga); and how they were found."""
     options = choices(profile, original, limits)
     symmetric = not any(o[0].cpus for o in options.values() if len(o) == 1)
     total = _count(options, symmetric, limits.cores)
@@ -236,15 +236,22 @@ def search(profile: Profile, calibration: Calibration, original: Mapping, chains
         mappings.append(original)
     scored = [Candidate(m, predict(profile, calibration, m, plain, limits.cores)) for m in mappings]
     scored = [c for c in scored if not _over_budget(c, limits, profile)]
-    scored.sort(key=lambda c: (not c.meets(plain), _bucket(c.worst(plain), plain), _moves(c.mapping, original),
+    given = next(c for c in scored if c.mapping == original).worst(plain)
+    scored.sort(key=lambda c: (not c.meets(plain), _latency_key(c.worst(plain), given), _moves(c.mapping, original),
                                c.cores_used(), c.fpga_share(limits.fpga_budget, profile)))
     return scored[:keep], how
 
 
-def _bucket(worst: float, chains: list[Chain]) -> int:
-    """The ranking's latency key, coarse enough that noise does not outrank fewer changes: 1 % of a
-    deadline, or 0.1 ms where a chain has none."""
-    return round(worst * 100) if all(c.deadline_ms for c in chains) else round(worst * 10)
+WORTH_MOVING = 0.03
+
+
+def _latency_key(worst: float, given: float) -> float:
+    """The ranking's latency key: a candidate within ``WORTH_MOVING`` (3 %) of the project's own mapping
+    ranks as that mapping does, so that a gain smaller than what runs differ by never buys a change
+    (fewer nodes moved decide); beyond it, the worst chain in steps of 1 %."""
+    if abs(worst - given) <= WORTH_MOVING * given:
+        return round(given * 100, 6)
+    return float(round(worst * 100))
 
 
 def _moves(mapping: Mapping, original: Mapping) -> int:

@@ -172,22 +172,26 @@ def wakes(measured: Calibration) -> dict[str, float]:
     publisher heard by a callback in its own process and by one in another, launched as a project."""
     with tempfile.TemporaryDirectory(prefix="hetros-wake-") as name:
         folder = Path(name)
-        (folder / "nodes.py").write_text(_WAKE_NODES, encoding="utf-8")
+        # a name of its own, run from its own folder: a nodes.py of the caller's must not stand in for it
+        (folder / "hetros_wake_nodes.py").write_text(_WAKE_NODES, encoding="utf-8")
         cpus = "[0]" if len(os.sched_getaffinity(0)) < 2 else "[1]"
         common = f"hz: {WAKE_HZ}, samples: {WAKE_SAMPLES}"
+        topic = "subscribe: {/ping: std_msgs/msg/Int64}"
         (folder / "project.yaml").write_text(textwrap.dedent(f"""\
             name: wake
             targets: {{a: {{kind: process, cpus: [0]}}, b: {{kind: process, cpus: {cpus}}}}}
             nodes:
-              ping: {{run: nodes:ping, target: a, parameters: {{{common}}}, publish: {{/ping: std_msgs/msg/Int64}}}}
-              near: {{run: nodes:listen, target: a, parameters: {{{common}, out: {folder / 'inproc.json'}}},
-                      subscribe: {{/ping: std_msgs/msg/Int64}}}}
-              far:  {{run: nodes:listen, target: b, parameters: {{{common}, out: {folder / 'shm.json'}}},
-                      subscribe: {{/ping: std_msgs/msg/Int64}}}}
+              ping: {{run: hetros_wake_nodes:ping, target: a, parameters: {{{common}}},
+                      publish: {{/ping: std_msgs/msg/Int64}}}}
+              near: {{run: hetros_wake_nodes:listen, target: a, {topic},
+                      parameters: {{{common}, out: {folder / 'inproc.json'}}}}}
+              far:  {{run: hetros_wake_nodes:listen, target: b, {topic},
+                      parameters: {{{common}, out: {folder / 'shm.json'}}}}}
             """), encoding="utf-8")
         seconds = (WAKE_SAMPLES + 30) / WAKE_HZ + 2
         done = subprocess.run([sys.executable, "-m", "hetros", "launch", str(folder / "project.yaml"), "--duration",
-                               f"{seconds:g}"], capture_output=True, text=True, timeout=seconds + 120, check=False)
+                               f"{seconds:g}"], capture_output=True, text=True, timeout=seconds + 120, check=False,
+                              cwd=folder)
         found = {}
         for kind in ("inproc", "shm"):
             try:

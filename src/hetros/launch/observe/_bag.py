@@ -169,6 +169,49 @@ def describe_played(counts: dict[str, int]) -> str:
     return f"played {sum(counts.values())} messages: " + ", ".join(f"{t} {n}" for t, n in sorted(counts.items()))
 
 
+def recording_info(path: Path) -> str:
+    """What ``ros2 bag info`` prints of a recording: its files and size, its time span, and per topic its
+    type and message count (read from the messages, so a damaged file is described as far as it is whole)."""
+    counts: dict[str, int] = {}
+    first = last = None
+    with Recording(path) as recording:
+        types = dict(recording.topics)
+        for topic, stamp, _data in recording.messages(set(types)):
+            counts[topic] = counts.get(topic, 0) + 1
+            first = stamp if first is None else min(first, stamp)
+            last = stamp if last is None else max(last, stamp)
+    files = mcap_files(path)
+    size = sum(f.stat().st_size for f in files)
+    lines = [f"Files:             {', '.join(f.name for f in files)}",
+             f"Bag size:          {_size(size)}",
+             "Storage id:        mcap",
+             f"Duration:          {((last or 0) - (first or 0)) / 1e9:.9f}s"]
+    if first is not None and last is not None:
+        lines += [f"Start:             {_when(first)} ({first / 1e9:.9f})",
+                  f"End:               {_when(last)} ({last / 1e9:.9f})"]
+    lines.append(f"Messages:          {sum(counts.values())}")
+    rows = [f"Topic: {topic} | Type: {types[topic]} | Count: {counts.get(topic, 0)} | Serialization Format: cdr"
+            for topic in sorted(types)]
+    lines.append("Topic information: " + "\n                   ".join(rows))
+    return "\n".join(lines)
+
+
+def _size(count: int) -> str:
+    value = float(count)
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if value < 1024 or unit == "GiB":
+            return f"{value:.1f} {unit}" if unit != "B" else f"{count} B"
+        value /= 1024
+    return f"{count} B"
+
+
+def _when(stamp_ns: int) -> str:
+    import datetime
+
+    moment = datetime.datetime.fromtimestamp(stamp_ns / 1e9, tz=datetime.UTC)
+    return moment.strftime("%b %d %Y %H:%M:%S.") + f"{moment.microsecond // 1000:03d}"
+
+
 def recorded_topics(path: Path) -> dict[str, str]:
     """Topic -> type of what ``path`` holds."""
     with Recording(path) as recording:

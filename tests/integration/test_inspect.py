@@ -300,9 +300,13 @@ def test_a_recording_holds_what_was_published_and_plays_back_into_a_running_laun
     with Reader(recorded) as reader:
         (connection,) = reader.connections
         assert (connection.topic, connection.msgtype) == ("/chatter", "std_msgs/msg/String")
+        (qos,) = connection.ext.offered_qos_profiles  # what the project offers: ros2 bag play offers it again
+        assert (qos.history.name, qos.depth, qos.reliability.name, qos.durability.name) == \
+            ("KEEP_ALL", 10, "RELIABLE", "VOLATILE")
         texts = [store.deserialize_cdr(data, connection.msgtype).data for _, _, data in reader.messages()]
     assert texts[:3] == ["hello world 0", "hello world 1", "hello world 2"]  # from the very first message
     assert len(texts) >= 25
+    assert b"relative_file_paths:\n- run.mcap\n" in recorded.read_bytes()  # the metadata names the file itself
     info = hetros(env, "bag", "info", str(recorded)).stdout
     assert info.startswith("Files:             run.mcap\nBag size:          ") and "Storage id:        mcap\n" in info
     assert re.search(r"^Duration:          [23]\.\d{9}s$", info, re.MULTILINE), info

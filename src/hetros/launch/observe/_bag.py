@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from ..._errors import InspectError
+from ..._qos import QoS
 from ...plan import CLOCK_TOPIC, CLOCK_TYPE
 from ._inspect import RunningLaunch
 from ._mcap import check, mcap_files, seal, whole_messages
@@ -67,15 +68,22 @@ def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: flo
     if out.exists():
         raise InspectError(f"{out} exists already: hetros record does not overwrite; choose another -o")
     single = out.suffix == ".mcap"
-    folder = out.with_name(f".{out.stem}.recording") if single else out
-    shutil.rmtree(folder, ignore_errors=True)
+    # rosbags names the file after its folder, and the metadata inside names the file: a folder named
+    # as the recording's stem, in a hidden one beside it, gives a file whose metadata names it truly
+    scratch = out.with_name(f".{out.name}.recording")
+    folder = scratch / out.stem if single else out
+    if single:
+        shutil.rmtree(scratch, ignore_errors=True)
+        scratch.mkdir(parents=True)
     writer = Writer(folder, version=9, storage_plugin=StoragePlugin.MCAP)
     writer.open()
     summary = RecordSummary(out)
     stop = stop or threading.Event()
     try:
         connections = {topic: writer.add_connection(topic, launch.plan.channels[topic].type,
-                                                    typestore=launch.types.store) for topic in topics}
+                                                    typestore=launch.types.store,
+                                                    offered_qos_profiles=[offered_qos(launch.plan.channels[topic].qos)])
+                       for topic in topics}
         deadline = None if duration is None else time.monotonic() + duration
         for topic, event in launch.tap_many(topics, data=True, attached=attached):
             if event is not None and event.data is not None:
@@ -95,11 +103,26 @@ def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: flo
         for written in mcap_files(folder):
             seal(written)  # chunk, data and summary CRCs: `hetros play` then names damage instead of playing it
         if single:
-            (folder / f"{folder.name}.mcap").replace(out)
-            shutil.rmtree(folder, ignore_errors=True)
+            (folder / out.name).replace(out)
+            shutil.rmtree(scratch, ignore_errors=True)
     for topic in topics:
         summary.messages.setdefault(topic, 0)
     return summary
+
+
+def offered_qos(qos: QoS) -> Any:
+    """A topic's QoS as rosbag2's metadata keeps it (``offered_qos_profiles``), so that ``ros2 bag play``
+    offers what the recorded publishers offered."""
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+    def span(seconds: float | None) -> QosTime:
+        if seconds is None:  # rosbag2's "infinite"
+            return QosTime(0x7FFFFFFF, 0xFFFFFFFF)
+        return QosTime(int(seconds), round((seconds - int(seconds)) * 1e9))
+
+    return Qos(QosHistory[qos.history.upper()], qos.depth, QosReliability[qos.reliability.upper()],
+               QosDurability[qos.durability.upper()], span(qos.deadline), span(qos.lifespan),
+               QosLiveliness[qos.liveliness.upper()], span(qos.lease_duration), False)
 
 
 def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = False, clock: bool = False,

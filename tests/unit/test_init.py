@@ -167,3 +167,15 @@ def test_init_skips_tests_and_symlinks_and_adds_the_packages_own_interfaces(tmp_
     project, _ = ros_template([package], "p", tmp_path)
     assert sorted(n["run"] for n in project["nodes"].values()) == ["pkg/scripts/listener.py", "pkg/scripts/talker.py"]
     assert project["messages"] == ["pkg"]
+
+
+def test_init_writes_into_a_folder_it_makes(tmp_path: Path) -> None:
+    """`-o sub/project.yaml` where sub/ does not exist yet: made, not a traceback."""
+    from hetros.cli import main
+
+    (tmp_path / "nodes.py").write_text("from hetros import Node\nfrom hetros.interfaces.std_msgs.msg import String\n"
+                                       "\n\ndef talker(node: Node) -> None:\n"
+                                       "    node.create_publisher(String, '/chatter')\n", encoding="utf-8")
+    out = tmp_path / "sub" / "deeper" / "project.yaml"
+    assert main(["init", str(tmp_path / "nodes.py"), "-o", str(out)]) == 0
+    assert "talker" in yaml.safe_load(out.read_text())["nodes"]

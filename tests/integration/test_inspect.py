@@ -99,6 +99,15 @@ def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -
         refused = hetros(env, "param", "set", "/talker", "hz", "fast", check=False)
         assert refused.returncode == 1 and "is a float, not a str" in refused.stdout
         assert hetros(env, "param", "list", "/talker").stdout == "/talker:\n  hz\n"
+        assert yaml.safe_load(hetros(env, "param", "dump", "/talker").stdout) == \
+            {"/talker": {"ros__parameters": {"hz": 12.0}}}
+        (tmp_path / "params.yaml").write_text("/talker:\n  ros__parameters:\n    hz: 11.0\n")
+        assert hetros(env, "param", "load", "/talker", str(tmp_path / "params.yaml")).stdout == \
+            "Set parameter hz successful\n"
+        assert hetros(env, "param", "get", "/talker", "hz").stdout == "Double value is: 11.0\n"
+        assert hetros(env, "topic", "type", "/chatter").stdout == "std_msgs/msg/String\n"
+        assert hetros(env, "topic", "find", "std_msgs/msg/String").stdout == "/chatter\n"
+        assert hetros(env, "topic", "find", "std_msgs/msg/Int32").stdout == ""
         logged = hetros(env, "log", "--node", "listener2").stdout.splitlines()
         stamps = [float(re.match(r"\[INFO\] \[([\d.]+)\] \[listener2\]: I heard: \[hello world \d+\]$", line)[1])
                   for line in logged]
@@ -158,6 +167,10 @@ def test_an_action_goal_is_sent_and_its_result_printed(tmp_path: Path, env: dict
     env = dict(env, PYTHONPATH=os.pathsep.join(filter(None, [str(example), env.get("PYTHONPATH", "")])))
     with running(project, env, tmp_path / "launch.log"):
         assert hetros(env, "action", "list", "-t").stdout == "/sort [sorter_msgs/action/Sort]\n"
+        assert hetros(env, "action", "info", "/sort", "-t").stdout == (
+            "Action: /sort\nAction clients: 0\nAction servers: 1\n    /sorter [sorter_msgs/action/Sort]\n")
+        unknown = hetros(env, "action", "info", "/nope", check=False)
+        assert unknown.returncode == 1 and "has no action /nope (its actions: /sort)" in unknown.stderr
         sent = hetros(env, "action", "send_goal", "/sort", "sorter_msgs/action/Sort", "{unsorted: [5, 3, 9, 1]}")
         assert "Sending goal:\n     unsorted:\n     - 5\n" in sent.stdout
         assert re.search(r"Goal accepted with ID: [0-9a-f]{32}\n\nResult:\n    sorted:\n    - 1\n    - 3\n    - 5\n"
@@ -287,9 +300,19 @@ def test_a_recording_holds_what_was_published_and_plays_back_into_a_running_laun
     with Reader(recorded) as reader:
         (connection,) = reader.connections
         assert (connection.topic, connection.msgtype) == ("/chatter", "std_msgs/msg/String")
+        (qos,) = connection.ext.offered_qos_profiles  # what the project offers: ros2 bag play offers it again
+        assert (qos.history.name, qos.depth, qos.reliability.name, qos.durability.name) == \
+            ("KEEP_ALL", 10, "RELIABLE", "VOLATILE")
         texts = [store.deserialize_cdr(data, connection.msgtype).data for _, _, data in reader.messages()]
     assert texts[:3] == ["hello world 0", "hello world 1", "hello world 2"]  # from the very first message
     assert len(texts) >= 25
+    assert b"relative_file_paths:\n- run.mcap\n" in recorded.read_bytes()  # the metadata names the file itself
+    info = hetros(env, "bag", "info", str(recorded)).stdout
+    assert info.startswith("Files:             run.mcap\nBag size:          ") and "Storage id:        mcap\n" in info
+    assert re.search(r"^Duration:          [23]\.\d{9}s$", info, re.MULTILINE), info
+    assert f"Messages:          {len(texts)}\n" in info
+    assert info.endswith(f"Topic information: Topic: /chatter | Type: std_msgs/msg/String | Count: {len(texts)} | "
+                         "Serialization Format: cdr\n")
     log = tmp_path / "listeners.log"
     with running(EXAMPLES / "talker_listener" / "project.yaml", env, log):
         assert hetros(env, "play", str(recorded), "--rate", "4").stdout == f"played {len(texts)} messages: " \

@@ -125,6 +125,30 @@ def test_init_leaves_a_placeholder_that_check_refuses_naming_file_and_line(tmp_p
     assert len(report.errors) == 1 and "placeholder 'topic at relay.py:10' left by `hetros init`" in report.errors[0]
 
 
+def test_init_reads_topics_named_through_constants(tmp_path: Path) -> None:
+    """A topic in a module constant, a function's local, or a + of those is read as the string it is; a name
+    bound to anything else stays a placeholder."""
+    from hetros.project import ros_template
+
+    (tmp_path / "relay.py").write_text(
+        "import rclpy\nfrom std_msgs.msg import String\n\nPREFIX = 'robot'\nSTATUS = 'status'\n\n\n"
+        "def main(args=None):\n"
+        "    rclpy.init(args=args)\n"
+        "    node = rclpy.create_node('relay')\n"
+        "    topic = 'chatter'\n"
+        "    node.create_subscription(String, topic, print, 10)\n"
+        "    node.create_publisher(String, PREFIX + '/' + STATUS, 10)\n"
+        "    for name in ('a', 'b'):\n"
+        "        node.create_publisher(String, name, 10)\n"
+        "    rclpy.spin(node)\n", encoding="utf-8")
+    project, notes = ros_template([tmp_path / "relay.py"], "p", tmp_path)
+    node = project["nodes"]["relay"]
+    assert node["subscribe"] == {"chatter": "std_msgs/msg/String"}
+    assert "robot/status" in node["publish"] and len(node["publish"]) == 2
+    assert notes == ["relay.py:15: node.create_publisher(..., name) names its publish endpoint at run time; replace "
+                     "the placeholder under nodes.relay.publish with the name (hetros check refuses it until then)"]
+
+
 def test_init_skips_tests_and_symlinks_and_adds_the_packages_own_interfaces(tmp_path: Path) -> None:
     """A package's test/ scripts are no nodes, a symlink to a script is not a second node, and a package's own
     msg/ is in the project's messages:."""
@@ -143,3 +167,15 @@ def test_init_skips_tests_and_symlinks_and_adds_the_packages_own_interfaces(tmp_
     project, _ = ros_template([package], "p", tmp_path)
     assert sorted(n["run"] for n in project["nodes"].values()) == ["pkg/scripts/listener.py", "pkg/scripts/talker.py"]
     assert project["messages"] == ["pkg"]
+
+
+def test_init_writes_into_a_folder_it_makes(tmp_path: Path) -> None:
+    """`-o sub/project.yaml` where sub/ does not exist yet: made, not a traceback."""
+    from hetros.cli import main
+
+    (tmp_path / "nodes.py").write_text("from hetros import Node\nfrom hetros.interfaces.std_msgs.msg import String\n"
+                                       "\n\ndef talker(node: Node) -> None:\n"
+                                       "    node.create_publisher(String, '/chatter')\n", encoding="utf-8")
+    out = tmp_path / "sub" / "deeper" / "project.yaml"
+    assert main(["init", str(tmp_path / "nodes.py"), "-o", str(out)]) == 0
+    assert "talker" in yaml.safe_load(out.read_text())["nodes"]

@@ -12,6 +12,7 @@ from hetros.project._launch_import import import_launch
 
 TESTS = Path(__file__).resolve().parents[1]
 ROS2_PACKAGES = TESTS / "data" / "ros2_examples" / "rclpy"
+ROS1_PACKAGES = TESTS / "data" / "ros_tutorials"
 
 
 def test_file_content_is_the_files_text(tmp_path: Path) -> None:
@@ -48,3 +49,15 @@ def test_a_relative_package_path_finds_the_package_from_anywhere(tmp_path: Path,
     project, _ = import_launch(launch, True, [relative], tmp_path)
     share = Path(project["nodes"]["talker"]["parameters"]["share"])
     assert share.is_absolute() and (share / "package.xml").is_file()
+
+
+def test_ros1_params_in_groups_beside_a_node_reach_it_by_their_relative_names(tmp_path: Path) -> None:
+    """ROS 1's parameter server: /outer/inner/b and /outer/d, set in groups that hold no node, are read by
+    the node in /outer as inner/b and d; /elsewhere/e is not in its namespace."""
+    launch = tmp_path / "t.launch"
+    launch.write_text(
+        '<launch>\n  <group ns="outer">\n    <node pkg="rospy_tutorials" type="talker.py" name="talker"/>\n'
+        '    <group ns="inner"><param name="b" value="3"/></group>\n    <group><param name="d" value="5"/></group>\n'
+        '  </group>\n  <group ns="elsewhere"><param name="e" value="6"/></group>\n</launch>\n')
+    project, _ = import_launch(launch, False, [ROS1_PACKAGES], tmp_path)
+    assert project["nodes"]["talker"]["parameters"] == {"inner/b": 3, "d": 5}

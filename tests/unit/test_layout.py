@@ -71,3 +71,37 @@ def test_array_fields_reach_into_nested_messages() -> None:
     fields = array_fields(registry(), "geometry_msgs/msg/PoseWithCovarianceStamped")
     assert [(f.path, f.length) for f in fields] == [(("pose", "covariance"), 36)]
     assert [f.path for f in array_fields(registry(), "sensor_msgs/msg/PointCloud2")] == [("data",)]
+
+
+def _evaluate(expression: str, lengths: list[int]) -> int:
+    """An offset expression of ``msg layout`` (``a4(12+n1)+8``) for the given length words."""
+    import re
+
+    text = re.sub(r"n(\d+)", lambda m: str(lengths[int(m[1]) - 1]), expression)
+    text = re.sub(r"a(\d)\(", r"_a(\1, ", text)
+    return int(eval(text, {"_a": lambda n, x: (x + n - 1) // n * n}))
+
+
+def test_offsets_after_a_string_are_expressions_that_hold_on_the_wire() -> None:
+    """`hetros msg layout sensor_msgs/msg/Image`: each offset after frame_id, evaluated with the message's
+    length words, is where the encoded field is."""
+    import struct
+
+    from hetros.interfaces.sensor_msgs.msg import Image
+
+    types = registry()
+    layout = flat_layout(types, "sensor_msgs/msg/Image")
+    image = Image(height=3, width=7, encoding="mono16", is_bigendian=1, step=14, data=np.arange(5, dtype=np.uint8))
+    image.header.frame_id = "camera"
+    codec = types.codec("sensor_msgs/msg/Image")
+    wire = bytearray(codec.size(image))
+    codec.encode(image, memoryview(wire))
+    body = bytes(wire)  # the codec writes the body (the transports add the encapsulation header)
+    lengths = [len("camera") + 1, len("mono16") + 1, 5]
+    found = {f.path: f for f in layout.fields}
+    for path, fmt, value in (("height", "<I", 3), ("width", "<I", 7), ("is_bigendian", "<B", 1), ("step", "<I", 14)):
+        at = _evaluate(found[path].at, lengths)
+        assert struct.unpack_from(fmt, body, at)[0] == value, (path, found[path].at, at)
+    data_at = _evaluate(found["data"].at, lengths)
+    assert struct.unpack_from("<I", body, data_at)[0] == 5 and body[data_at + 4:data_at + 9] == bytes(range(5))
+    assert "a4(12+n1)" in layout.describe() and "nK: the K-th length word" in layout.describe()

@@ -168,6 +168,10 @@ def test_default_values_are_honoured(tmp_path: Path) -> None:
     other.triple[0] = 9
     assert msg.triple[0] == 1, "each message gets its own copy of an array default"
     assert cls(x=6).x == 6
+    # None given for a field is its default, as rospy's generated classes take it: Msg(None, ...)
+    given = cls(None, 2.5, None, None, None, None, None, 4)
+    assert (given.x, given.gain, given.on, given.name, given.plain) == (5, 2.5, True, "robot", 4)
+    assert given.triple.tolist() == [1, 2, 3] and given.words == ["a", "b"]
 
 
 @pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "pure"])

@@ -30,6 +30,7 @@ EXIT_ERROR = 1
 def _write_yaml(data: object, out: str | None) -> None:
     text = yaml.safe_dump(data, sort_keys=False, default_flow_style=False)
     if out:
+        Path(out).parent.mkdir(parents=True, exist_ok=True)
         Path(out).write_text(text, encoding="utf-8")
         print(f"wrote {out}")
     else:

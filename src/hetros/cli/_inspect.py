@@ -84,6 +84,20 @@ def cmd_topic_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_topic_type(args: argparse.Namespace) -> int:
+    print(_launch(args).topic(args.topic))
+    return 0
+
+
+def cmd_topic_find(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    wanted = normalize_typename(args.type, "msg")
+    for name, channel in sorted(launch.plan.channels.items()):
+        if channel.kind == "topic" and channel.type == wanted and (args.include_hidden_topics or not _hidden(name)):
+            print(name)
+    return 0
+
+
 def _field(message: Message, path: str) -> Any:
     value: Any = message
     for part in filter(None, path.split(".")):
@@ -320,6 +334,26 @@ def cmd_action_list(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_action_info(args: argparse.Namespace) -> int:
+    """ros2 action info: the action's clients and servers, by full ROS name (``-t``: with the type)."""
+    launch = _launch(args)
+    plan = launch.plan
+    typename = launch.actions().get(args.action)
+    clients = sorted(n for n, spec in plan.nodes.items() if args.action in spec.action_clients)
+    if typename is None and not clients:
+        raise InspectError(f"launch {launch.record.session} has no action {args.action} (its actions: "
+                           f"{', '.join(sorted(launch.actions())) or 'none'})")
+    typename = typename or next(plan.nodes[n].action_clients[args.action] for n in clients)
+    servers = sorted(n for n, spec in plan.nodes.items() if args.action in spec.actions)
+    suffix = f" [{typename}]" if args.show_types else ""
+    print(f"Action: {args.action}")
+    for role, nodes in (("Action clients", clients), ("Action servers", servers)):
+        print(f"{role}: {len(nodes)}")
+        for node in nodes:
+            print(f"    {ros_name(plan, node)}{suffix}")
+    return 0
+
+
 def cmd_action_send_goal(args: argparse.Namespace) -> int:
     from ..runtime import GoalStatus
 
@@ -392,6 +426,54 @@ def cmd_param_set(args: argparse.Namespace) -> int:
         print(f"Setting parameter failed: {exc}")
         return 1
     print("Set parameter successful")
+    return 0
+
+
+def cmd_param_dump(args: argparse.Namespace) -> int:
+    """ros2 param dump: the node's parameters as a parameter file (``ros__parameters``), which
+    ``param load`` and a project's ``parameters:`` read back."""
+    launch = _launch(args)
+    node = node_key(launch, args.node)
+    text = _dump({ros_name(launch.plan, node): {"ros__parameters": launch.parameters(node)}})
+    if args.output_dir:
+        out = Path(args.output_dir) / f"{ros_name(launch.plan, node).strip('/').replace('/', '__')}.yaml"
+        out.write_text(text, encoding="utf-8")
+        print(f"Saving to:  {out}")
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def cmd_param_load(args: argparse.Namespace) -> int:
+    """ros2 param load: set a node's parameters from a parameter file (its ``ros__parameters`` under the
+    node's name, ``/**`` or the bare mapping)."""
+    launch = _launch(args)
+    node = node_key(launch, args.node)
+    try:
+        loaded = yaml.safe_load(Path(args.file).read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise InspectError(f"{args.file}: not a readable parameter file ({exc})") from None
+    name = ros_name(launch.plan, node)
+    section = loaded.get(name, loaded.get(name.lstrip("/"), loaded.get("/**"))) if isinstance(loaded, dict) else None
+    values = section.get("ros__parameters") if isinstance(section, dict) else None
+    if not isinstance(values, dict):
+        raise InspectError(f"{args.file}: no parameters for {name}: write them as {name}: {{ros__parameters: "
+                           "{name: value}}} (or under /**)")
+    failed = 0
+    for key, value in values.items():
+        try:
+            launch.set_parameter(node, str(key), value)
+            print(f"Set parameter {key} successful")
+        except InspectError as exc:
+            print(f"Set parameter {key} failed: {exc}")
+            failed += 1
+    return 1 if failed else 0
+
+
+def cmd_bag_info(args: argparse.Namespace) -> int:
+    from ..launch import recording_info
+
+    print(recording_info(Path(args.bag)))
     return 0
 
 
@@ -590,6 +672,13 @@ def add_commands(sub: Any) -> None:
     p.add_argument("topic")
     p.add_argument("-v", "--verbose", action="store_true", help="each endpoint: node, target, transports, QoS")
     p.set_defaults(func=cmd_topic_info)
+    p = topic.add_parser("type", help="a topic's type")
+    p.add_argument("topic")
+    p.set_defaults(func=cmd_topic_type)
+    p = topic.add_parser("find", help="the topics of a type")
+    p.add_argument("type")
+    p.add_argument("--include-hidden-topics", action="store_true", help="also actions' topics")
+    p.set_defaults(func=cmd_topic_find)
     p = topic.add_parser("echo", help="print a topic's messages as YAML")
     p.add_argument("topic")
     p.add_argument("--once", action="store_true", help="print one message and exit")
@@ -638,6 +727,10 @@ def add_commands(sub: Any) -> None:
         p.add_argument("-t", "--show-types", action="store_true")
         p.set_defaults(func=list_function)
         _request_parser(group, verb, word, description, request_function)
+    p = groups["action"].add_parser("info", help="an action's clients and servers")
+    p.add_argument("action")
+    p.add_argument("-t", "--show-types", action="store_true")
+    p.set_defaults(func=cmd_action_info)
     param = sub.add_parser("param", help="parameters of a running launch's nodes (ros2 param)").add_subparsers(
         dest="param_command", required=True)
     p = param.add_parser("list")
@@ -652,6 +745,14 @@ def add_commands(sub: Any) -> None:
     p.add_argument("name")
     p.add_argument("value", help="YAML: 5, 2.5, true, hello, [1, 2]")
     p.set_defaults(func=cmd_param_set)
+    p = param.add_parser("dump", help="a node's parameters as a parameter file (ros__parameters)")
+    p.add_argument("node")
+    p.add_argument("--output-dir", help="write <node>.yaml there instead of printing it")
+    p.set_defaults(func=cmd_param_dump)
+    p = param.add_parser("load", help="set a node's parameters from a parameter file")
+    p.add_argument("node")
+    p.add_argument("file")
+    p.set_defaults(func=cmd_param_load)
     p = sub.add_parser("top", help="a running launch's live figures: CPU, memory, callback times, topic rates")
     p.add_argument("--json", action="store_true", help="one JSON object per interval, for machines")
     p.add_argument("--interval", type=float, default=1.0, help="seconds between figures (default 1)")
@@ -676,6 +777,10 @@ def add_commands(sub: Any) -> None:
     p.add_argument("-o", "--output", help="run.mcap (one file), or a folder for a rosbag2 bag")
     p.add_argument("--duration", type=float, help="stop after this many seconds")
     p.set_defaults(func=cmd_record)
+    bag = sub.add_parser("bag", help="recordings (ros2 bag)").add_subparsers(dest="bag_command", required=True)
+    p = bag.add_parser("info", help="a recording's files, size, duration, and per topic its type and count")
+    p.add_argument("bag", help="an .mcap file or a rosbag2 folder")
+    p.set_defaults(func=cmd_bag_info)
     p = sub.add_parser("play", help="play a recording into a running launch (ros2 bag play)")
     p.add_argument("bag", help="an .mcap file or a rosbag2 folder")
     p.add_argument("-r", "--rate", type=float, default=1.0, help="speed factor (default 1)")

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from .launcher._hosts import local_host
     from .launcher._launcher import Launcher, LaunchResult, launch
     from .launcher._registry import format_launches, running
-    from .observe._bag import describe_played, play, play_launching, record, recordable
+    from .observe._bag import describe_played, play, play_launching, record, recordable, recording_info
     from .observe._foxglove import FoxgloveView
     from .observe._inspect import RunningLaunch, TapEvent
     from .observe._logs import LaunchLogs
@@ -29,7 +29,8 @@ _WHERE = {
     "deploy": ".launcher._deploy", "deploy_commands": ".launcher._deploy", "local_host": ".launcher._hosts",
     "format_launches": ".launcher._registry", "running": ".launcher._registry",
     "describe_played": ".observe._bag", "play": ".observe._bag", "play_launching": ".observe._bag",
-    "record": ".observe._bag", "recordable": ".observe._bag", "FoxgloveView": ".observe._foxglove",
+    "record": ".observe._bag", "recordable": ".observe._bag", "recording_info": ".observe._bag",
+    "FoxgloveView": ".observe._foxglove",
     "RunningLaunch": ".observe._inspect", "TapEvent": ".observe._inspect", "LaunchLogs": ".observe._logs",
 }
 
@@ -55,5 +56,6 @@ __all__ = [
     "play_launching",
     "record",
     "recordable",
+    "recording_info",
     "running",
 ]

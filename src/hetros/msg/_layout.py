@@ -32,13 +32,17 @@ _NUMPY = {
 
 @dataclass(frozen=True)
 class LayoutField:
-    """One flattened primitive (or fixed array of primitives)."""
+    """One flattened primitive (or fixed array of primitives). Where the offset or size depends on the
+    data (after a string or a sequence), ``at`` and ``spans`` say how, as an expression of the lengths
+    before it (``a4(12+n1)``: 12 plus the first length, rounded up to a multiple of 4)."""
 
     path: str
     type: str
     offset: int | None
     size: int | None
     count: int = 1
+    at: str = ""
+    spans: str = ""
 
     @property
     def variable(self) -> bool:
@@ -97,12 +101,18 @@ class FlatLayout:
     def describe(self) -> str:
         lines = [f"{self.typename}: "
                  + (f"fixed size, {self.size} bytes (CDR body)" if self.fixed_size else "variable size")]
-        lines.append(f"  {'offset':>7} {'size':>6}  {'type':<12} field")
+        width = max([7, *(len(f.at) for f in self.fields)])
+        spans = max([6, *(len(f.spans) for f in self.fields)])
+        lines.append(f"  {'offset':>{width}} {'size':>{spans}}  {'type':<12} field")
         for f in self.fields:
-            offset = "var" if f.offset is None else str(f.offset)
-            size = "var" if f.size is None else str(f.size)
+            offset = (f.at or "var") if f.offset is None else str(f.offset)
+            size = (f.spans or "var") if f.size is None else str(f.size)
             kind = f.type + (f"[{f.count}]" if f.count > 1 else "")
-            lines.append(f"  {offset:>7} {size:>6}  {kind:<12} {f.path}")
+            lines.append(f"  {offset:>{width}} {size:>{spans}}  {kind:<12} {f.path}")
+        legend = [f.spans for f in self.fields if f.spans]
+        if legend:
+            lines.append("  (offsets from the CDR body's start; nK: the K-th length word's value: a string's bytes "
+                         "with its NUL, a sequence's elements; aN(x): x rounded up to a multiple of N)")
         return "\n".join(lines)
 
 
@@ -110,7 +120,86 @@ def flat_layout(types: TypeRegistry, typename: str) -> FlatLayout:
     """Flatten ``typename`` into primitives with CDR offsets."""
     fields: list[LayoutField] = []
     _flatten(types, types.get(typename).__msgtype__, "", [0], fields)
-    return FlatLayout(types.get(typename).__msgtype__, tuple(fields))
+    return FlatLayout(types.get(typename).__msgtype__, tuple(_symbolic(fields)))
+
+
+def _symbolic(fields: list[LayoutField]) -> list[LayoutField]:
+    """``fields`` with the data-dependent offsets and sizes written as expressions (``at``, ``spans``): each
+    string or sequence adds its length word's value (``n1``, ``n2``...), and each field starts where CDR
+    aligns it. A field whose shape cannot be written so (a sequence of strings or messages) ends them."""
+    out: list[LayoutField] = []
+    cursor = _Cursor()
+    lengths = 0
+    for field in fields:
+        if field.offset is not None and field.size is not None and not cursor.base:
+            out.append(field)
+            cursor.const = field.offset + field.size
+            continue
+        if cursor.stopped:
+            out.append(field)
+            continue
+        element = 1 if field.type == "string" else _SIZES.get(field.type.removesuffix("[]"), 0)
+        if field.type == "string" or (field.type.endswith("[]") and element):
+            start = cursor.align(4)
+            lengths += 1
+            name = f"n{lengths}"
+            items = name if element == 1 else f"{name}*{element}"
+            if element > 4:
+                cursor.const += 4
+                cursor.align(8)
+                out.append(LayoutField(field.path, field.type, None, None, field.count, start, f"4+pad+{items}"))
+            else:
+                out.append(LayoutField(field.path, field.type, None, None, field.count, start, f"4+{items}"))
+                cursor.const += 4
+            cursor.add(items, element)
+            continue
+        size = _SIZES.get(field.type)
+        if size is None:  # a sequence of strings or messages: the offsets after it are not one expression
+            out.append(field)
+            cursor.stopped = True
+            continue
+        start = cursor.align(size)
+        out.append(LayoutField(field.path, field.type, None, size * field.count, field.count, start))
+        cursor.const += size * field.count
+    return out
+
+
+class _Cursor:
+    """Where the next field starts: ``base`` (an expression of the lengths, a multiple of ``aligned``)
+    plus ``const`` bytes."""
+
+    def __init__(self) -> None:
+        self.base = ""
+        self.const = 0
+        self.aligned = 8
+        self.stopped = False
+
+    def text(self) -> str:
+        if not self.base:
+            return str(self.const)
+        return f"{self.base}+{self.const}" if self.const else self.base
+
+    def align(self, size: int) -> str:
+        """Move to the next multiple of ``size`` (at most 8, as CDR aligns) and say where that is."""
+        need = min(size, 8)
+        if not self.base:
+            self.const = _align(self.const, need)
+        elif need > self.aligned or self.const % need:
+            if need <= self.aligned:
+                self.const = _align(self.const, need)
+            else:
+                self.base, self.const, self.aligned = f"a{need}({self.text()})", 0, need
+        return self.text()
+
+    def add(self, items: str, element: int) -> None:
+        """Past ``items`` bytes known only from the data, each element ``element`` bytes wide."""
+        self.base = f"{self.text()}+{items}" if self.base or self.const else items
+        self.const = 0
+        self.aligned = min(element, 8)
+
+
+def _largest_power(value: int) -> int:
+    return min(8, value & -value) if value else 8
 
 
 def _align(pos: int, size: int) -> int:

@@ -372,7 +372,8 @@ class TypeRegistry:
                                                      f"{full.rsplit('/', 1)[-1]}.{attr}")
             params.append(f"{attr}=_U")
             value = f"{coerce}({attr})" if coerce else attr
-            body.append(f"        _m.{attr} = {default_expr} if {attr} is _U else {value}")
+            # None stands for the field's default, as in rospy's generated classes (``Point(1.0, None, 2.0)``)
+            body.append(f"        _m.{attr} = {default_expr} if {attr} is _U or {attr} is None else {value}")
         short = full.rsplit("/", 1)[-1]
         lines = [f"class {short}(_Message):", f"    __slots__ = {tuple(fieldnames)!r}"]
         lines.append(f"    __msgtype__ = {full!r}")

@@ -115,6 +115,9 @@ class LaunchImporter:
         self.project: dict[str, Any] = {"targets": {}, "nodes": {}}
         self.notes: list[str] = []
         self._packages: dict[str, list[Path]] | None = None
+        # ROS 1: every <param>/<rosparam> outside a node by its full name; after reading, each node gets
+        # those in its namespace or below under their names relative to it (``inner/b``), as rospy reads them
+        self.global_params: dict[str, Any] = {}
 
     # -- packages --------------------------------------------------------------------------
 
@@ -236,10 +239,22 @@ class LaunchImporter:
     _on_set_env = _on_env
 
     def _on_param(self, element: _Element, scope: _Scope, path: Path) -> None:
-        scope.params.update(self._parameters(element, scope, path))
+        found = self._parameters(element, scope, path)
+        scope.params.update(found)
+        if not self.ros2:
+            for name, value in found.items():
+                self.global_params[join_namespace(scope.namespace, name)] = value
 
-    def _on_rosparam(self, element: _Element, scope: _Scope, path: Path) -> None:
-        scope.params.update(self._parameters(element, scope, path))
+    _on_rosparam = _on_param
+
+    def share_global_params(self) -> None:
+        """ROS 1's parameter server, as each node's parameters: a parameter in a node's namespace or below
+        (set in a group beside or after the node) under its name relative to that namespace."""
+        for node in self.project["nodes"].values():
+            namespace = node.get("namespace", "").rstrip("/")
+            for name, value in self.global_params.items():
+                if name.startswith(f"{namespace}/"):
+                    node.setdefault("parameters", {}).setdefault(name[len(namespace) + 1:], value)
 
     def _on_include(self, element: _Element, scope: _Scope, path: Path) -> None:
         file = Path(self.attribute(element, "file", scope, path))
@@ -376,6 +391,7 @@ def import_launch(path: Path, ros2: bool, package_paths: list[Path], base: Path,
     its nodes' code could not follow."""
     importer = LaunchImporter(ros2, [*package_paths, path.parent.resolve()], base)
     importer.read(path, _Scope(args=dict(args or {})))
+    importer.share_global_params()
     if not importer.project.get("topics"):
         importer.project.pop("topics", None)
     if not importer.project["nodes"]:

@@ -118,6 +118,7 @@ class _Reader:
                         self.types[local] = f"{parts[0]}/{parts[1]}/{alias.name}"
                     elif _module_file(root, stmt.module) is not None:
                         self.imported[local] = stmt.module
+        self.constants = _constants(self.tree)
         self.classes = {s.name: s for s in self.tree.body if isinstance(s, ast.ClassDef)}
         self.functions = {s.name: s for s in self.tree.body if isinstance(s, ast.FunctionDef | ast.AsyncFunctionDef)}
 
@@ -170,7 +171,7 @@ class _Reader:
 
     def _add(self, node: RosNode, section: str, call: ast.Call, type_expr: ast.expr, name_expr: ast.expr,
              qos: ast.expr | None) -> None:
-        name = _string(name_expr)
+        name = _joined(name_expr, self.constants)
         kind = {"services": "srv", "clients": "srv", "actions": "action", "action_clients": "action"}.get(section,
                                                                                                           "msg")
         typename = self.type_of(type_expr, kind)
@@ -186,6 +187,24 @@ class _Reader:
             described = _qos(qos)
             if described:
                 node.qos[name] = described
+
+
+def _constants(tree: ast.AST) -> dict[str, str]:
+    """The names the module binds to one string only, wherever (``TOPIC = "chatter"`` at the top,
+    ``topic = "chatter"`` in a function): a topic named through one is as good as the string. A name
+    bound anywhere else (a parameter, a loop, another value) is not one."""
+    strings: dict[int, str | None] = {}
+    for stmt in ast.walk(tree):
+        if isinstance(stmt, ast.Assign | ast.AnnAssign) and stmt.value is not None:
+            for target in stmt.targets if isinstance(stmt, ast.Assign) else [stmt.target]:
+                strings[id(target)] = _string(stmt.value)
+    bound: dict[str, set[str | None]] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            bound.setdefault(node.id, set()).add(strings.get(id(node)))
+        elif isinstance(node, ast.arg):
+            bound.setdefault(node.arg, set()).add(None)
+    return {name: value for name, values in bound.items() if len(values) == 1 and (value := next(iter(values)))}
 
 
 def _is_rospy(func: ast.expr) -> bool:

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from ..._errors import InspectError
+from ..._qos import QoS
 from ...plan import CLOCK_TOPIC, CLOCK_TYPE
 from ._inspect import RunningLaunch
 from ._mcap import check, mcap_files, seal, whole_messages
@@ -67,15 +68,22 @@ def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: flo
     if out.exists():
         raise InspectError(f"{out} exists already: hetros record does not overwrite; choose another -o")
     single = out.suffix == ".mcap"
-    folder = out.with_name(f".{out.stem}.recording") if single else out
-    shutil.rmtree(folder, ignore_errors=True)
+    # rosbags names the file after its folder, and the metadata inside names the file: a folder named
+    # as the recording's stem, in a hidden one beside it, gives a file whose metadata names it truly
+    scratch = out.with_name(f".{out.name}.recording")
+    folder = scratch / out.stem if single else out
+    if single:
+        shutil.rmtree(scratch, ignore_errors=True)
+        scratch.mkdir(parents=True)
     writer = Writer(folder, version=9, storage_plugin=StoragePlugin.MCAP)
     writer.open()
     summary = RecordSummary(out)
     stop = stop or threading.Event()
     try:
         connections = {topic: writer.add_connection(topic, launch.plan.channels[topic].type,
-                                                    typestore=launch.types.store) for topic in topics}
+                                                    typestore=launch.types.store,
+                                                    offered_qos_profiles=[offered_qos(launch.plan.channels[topic].qos)])
+                       for topic in topics}
         deadline = None if duration is None else time.monotonic() + duration
         for topic, event in launch.tap_many(topics, data=True, attached=attached):
             if event is not None and event.data is not None:
@@ -95,11 +103,26 @@ def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: flo
         for written in mcap_files(folder):
             seal(written)  # chunk, data and summary CRCs: `hetros play` then names damage instead of playing it
         if single:
-            (folder / f"{folder.name}.mcap").replace(out)
-            shutil.rmtree(folder, ignore_errors=True)
+            (folder / out.name).replace(out)
+            shutil.rmtree(scratch, ignore_errors=True)
     for topic in topics:
         summary.messages.setdefault(topic, 0)
     return summary
+
+
+def offered_qos(qos: QoS) -> Any:
+    """A topic's QoS as rosbag2's metadata keeps it (``offered_qos_profiles``), so that ``ros2 bag play``
+    offers what the recorded publishers offered."""
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+    def span(seconds: float | None) -> QosTime:
+        if seconds is None:  # rosbag2's "infinite"
+            return QosTime(0x7FFFFFFF, 0xFFFFFFFF)
+        return QosTime(int(seconds), round((seconds - int(seconds)) * 1e9))
+
+    return Qos(QosHistory[qos.history.upper()], qos.depth, QosReliability[qos.reliability.upper()],
+               QosDurability[qos.durability.upper()], span(qos.deadline), span(qos.lifespan),
+               QosLiveliness[qos.liveliness.upper()], span(qos.lease_duration), False)
 
 
 def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = False, clock: bool = False,
@@ -167,6 +190,49 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
 
 def describe_played(counts: dict[str, int]) -> str:
     return f"played {sum(counts.values())} messages: " + ", ".join(f"{t} {n}" for t, n in sorted(counts.items()))
+
+
+def recording_info(path: Path) -> str:
+    """What ``ros2 bag info`` prints of a recording: its files and size, its time span, and per topic its
+    type and message count (read from the messages, so a damaged file is described as far as it is whole)."""
+    counts: dict[str, int] = {}
+    first = last = None
+    with Recording(path) as recording:
+        types = dict(recording.topics)
+        for topic, stamp, _data in recording.messages(set(types)):
+            counts[topic] = counts.get(topic, 0) + 1
+            first = stamp if first is None else min(first, stamp)
+            last = stamp if last is None else max(last, stamp)
+    files = mcap_files(path)
+    size = sum(f.stat().st_size for f in files)
+    lines = [f"Files:             {', '.join(f.name for f in files)}",
+             f"Bag size:          {_size(size)}",
+             "Storage id:        mcap",
+             f"Duration:          {((last or 0) - (first or 0)) / 1e9:.9f}s"]
+    if first is not None and last is not None:
+        lines += [f"Start:             {_when(first)} ({first / 1e9:.9f})",
+                  f"End:               {_when(last)} ({last / 1e9:.9f})"]
+    lines.append(f"Messages:          {sum(counts.values())}")
+    rows = [f"Topic: {topic} | Type: {types[topic]} | Count: {counts.get(topic, 0)} | Serialization Format: cdr"
+            for topic in sorted(types)]
+    lines.append("Topic information: " + "\n                   ".join(rows))
+    return "\n".join(lines)
+
+
+def _size(count: int) -> str:
+    value = float(count)
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if value < 1024 or unit == "GiB":
+            return f"{value:.1f} {unit}" if unit != "B" else f"{count} B"
+        value /= 1024
+    return f"{count} B"
+
+
+def _when(stamp_ns: int) -> str:
+    import datetime
+
+    moment = datetime.datetime.fromtimestamp(stamp_ns / 1e9, tz=datetime.UTC)
+    return moment.strftime("%b %d %Y %H:%M:%S.") + f"{moment.microsecond // 1000:03d}"
 
 
 def recorded_topics(path: Path) -> dict[str, str]:

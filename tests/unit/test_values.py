@@ -28,9 +28,15 @@ odd_values = st.one_of(
 )
 
 
+def _set(message: Any, field: str, value: Any) -> Any:
+    """``message`` with ``field`` assigned after construction (None given to the constructor is the default)."""
+    setattr(message, field, value)
+    return message
+
+
 @pytest.mark.parametrize(("make", "message"), [
     (lambda c: c(data=5), "String.data must be a str, not 5 (int)"),
-    (lambda c: c(data=None), "String.data must be a str, not None (NoneType)"),
+    (lambda c: _set(c(), "data", None), "String.data must be a str, not None (NoneType)"),
 ])
 def test_string_values(make: Any, message: str) -> None:
     with pytest.raises(FieldValueError, match=message.replace("(", r"\(").replace(")", r"\)")):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .._errors import AdviseError
@@ -45,7 +45,6 @@ class Advice:
     paths: list[tuple[Chain, list[str]]]
     limits: Limits
     targets: dict[str, str]
-    warnings: list[str] = field(default_factory=list)
 
     def table(self) -> str:
         rows = [(f"#{i}", c) for i, c in enumerate(self.ranked, 1)] + [("as given", self.original)]
@@ -109,7 +108,7 @@ def profile_project(project: Path, plan: Plan, options: Options) -> Profile:
     finally:
         if remove is not None:
             remove.unlink(missing_ok=True)
-    profile = build(seen, options.chains, project)
+    profile = build(seen, options.chains)
     profile.graph = graph_key(plan)
     hardware_profile(plan, project, profile, seen)
     profile.save(options.out / "profile.json")
@@ -123,11 +122,9 @@ def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], No
     if not paths:
         raise AdviseError("name at least one chain: --chain /first_topic:/last_topic[@DEADLINEms], or chains: in "
                           "the project file")
-    warnings: list[str] = []
     if options.profile is not None:
         profile = Profile.load(options.profile)
-        warnings += profile.fits(plan)
-        for warning in warnings:
+        for warning in profile.fits(plan):
             warn(warning)
     else:
         profile = profile_project(project, plan, options)
@@ -157,7 +154,7 @@ def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], No
             f"process, {wake.get('shm', 0.0) * calibrated.wake_scale * 1000:.0f} µs across processes ("
             + ("as calibrated" if scale is None else f"{scale:.2f} of the calibrated, as the profiled chains show")
             + ")")
-    return Advice(profile, source, shipped, ranked, how, paths, limits, targets, warnings)
+    return Advice(profile, source, shipped, ranked, how, paths, limits, targets)
 
 
 def _profiled_mapping(profile: Profile, original: Mapping) -> Mapping:

@@ -43,8 +43,6 @@ class Observation:
     published: dict[str, list[Published]] = field(default_factory=dict)
     # one encoded message per topic asked for (``samples``): the first published after the warm-up
     samples: dict[str, bytes] = field(default_factory=dict)
-    exit_code: int = 0
-    log: str = ""
 
 
 def observe(project: Path, plan: Plan, *, duration: float, warmup: float, profiling: bool,
@@ -70,8 +68,6 @@ def observe(project: Path, plan: Plan, *, duration: float, warmup: float, profil
             if child.poll() is None:
                 child.terminate()
                 child.wait(timeout=30)
-    seen.exit_code = child.returncode
-    seen.log = str(log)
     if child.returncode:
         tail = "\n".join(log.read_text(encoding="utf-8", errors="replace").splitlines()[-15:])
         raise AdviseError(f"the launch of {project} failed (exit {child.returncode}); its output ({log}) ends:\n"

@@ -158,9 +158,17 @@ def _handling(early: dict[str, Any] | None, late: dict[str, Any]) -> Handling:
     return Handling(count, mean, quantiles, cpu)
 
 
-def build(observation: Observation, chains: list[Chain], project: Path) -> Profile:
+def build(observation: Observation, chains: list[Chain]) -> Profile:
     """The profile of one watched run."""
     plan, window = observation.plan, observation.window_s
+    topics = {}
+    for name, channel in plan.channels.items():
+        if channel.kind != "topic":
+            continue
+        events = observation.published.get(name, [])
+        size = int(np.median([p.size for p in events])) if events else 0
+        topics[name] = TopicProfile(channel.type, len(events) / window, size, list(channel.publishers),
+                                    list(channel.subscribers))
     nodes: dict[str, NodeProfile] = {}
     processes: dict[str, float] = {}
     for process, late in observation.late.items():
@@ -172,45 +180,31 @@ def build(observation: Observation, chains: list[Chain], project: Path) -> Profi
             before = early.get("nodes", {}).get(name, {})
             handling = {topic: _handling(before.get("handling", {}).get(topic), h)
                         for topic, h in figures["handling"].items() if h.get("count")}
-            counts: dict[tuple[str, str], int] = {(c, t): n for c, t, n in figures.get("triggers", [])}
-            triggers: dict[str, dict[str, float]] = {}
-            for (cause, topic), count in counts.items():  # both counted over the whole run
-                handled = int(figures["handling"].get(cause, {}).get("count", 0)) if cause else 0
-                per = count / handled if handled else 0.0
-                triggers.setdefault(cause, {})[topic] = per
             cpus = list(plan.targets[plan.nodes[name].target].cpus)
-            nodes[name] = NodeProfile(plan.process_of(name), cpus, handling, triggers,
+            nodes[name] = NodeProfile(plan.process_of(name), cpus, handling, _triggers(figures, topics),
                                       max(0.0, (figures["cpu_s"] - before.get("cpu_s", figures["cpu_s"])) / window))
-    topics = {}
-    for name, channel in plan.channels.items():
-        if channel.kind != "topic":
-            continue
-        events = observation.published.get(name, [])
-        size = int(np.median([p.size for p in events])) if events else 0
-        topics[name] = TopicProfile(channel.type, len(events) / window, size, list(channel.publishers),
-                                    list(channel.subscribers))
-    for name, node in nodes.items():  # a loop's or timer's publishes: per second, its share of the topic's rate
-        counts = {(c, t): n for c, t, n in _late_node(observation, name).get("triggers", [])}
-        for topic in list(node.triggers.get("", {})):
-            total = sum(n for (_, t), n in counts.items() if t == topic)
-            rate = topics[topic].rate_hz if topic in topics else 0.0
-            node.triggers[""][topic] = rate * counts[("", topic)] / total if total else 0.0
-    measured = {}
-    for chain in chains:
-        latency = measure(observation.published.get(chain.first, []), observation.published.get(chain.last, []))
-        if latency is not None:
-            measured[chain.name] = {"first": chain.first, "last": chain.last, **latency.as_dict()}
+    latencies = chain_latencies(observation, chains)
+    measured = {chain.name: {"first": chain.first, "last": chain.last, **latency.as_dict()}
+                for chain in chains if (latency := latencies[chain.name]) is not None}
     return Profile(plan.name, graph_key(plan), machine(), window,
                    {n: plan.nodes[n].target for n in plan.nodes if not _system(plan, n)}, nodes, topics, processes,
                    measured)
 
 
-def _late_node(observation: Observation, node: str) -> dict[str, Any]:
-    for late in observation.late.values():
-        if node in late["nodes"]:
-            found: dict[str, Any] = late["nodes"][node]
-            return found
-    return {}
+def _triggers(figures: dict[str, Any], topics: dict[str, TopicProfile]) -> dict[str, dict[str, float]]:
+    """Per input, what the node published per message of it (both counted over the whole run); for a
+    loop's or timer's publishes (input ""), per second: its share of the topic's rate."""
+    counts: dict[tuple[str, str], int] = {(c, t): n for c, t, n in figures.get("triggers", [])}
+    triggers: dict[str, dict[str, float]] = {}
+    for (cause, topic), count in counts.items():
+        if cause:
+            handled = int(figures["handling"].get(cause, {}).get("count", 0))
+            triggers.setdefault(cause, {})[topic] = count / handled if handled else 0.0
+        else:
+            total = sum(n for (_, t), n in counts.items() if t == topic)
+            rate = topics[topic].rate_hz if topic in topics else 0.0
+            triggers.setdefault(cause, {})[topic] = rate * count / total
+    return triggers
 
 
 def chain_latencies(observation: Observation, chains: list[Chain]) -> dict[str, ChainLatency | None]:

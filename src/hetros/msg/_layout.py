@@ -198,10 +198,6 @@ class _Cursor:
         self.aligned = min(element, 8)
 
 
-def _largest_power(value: int) -> int:
-    return min(8, value & -value) if value else 8
-
-
 def _align(pos: int, size: int) -> int:
     return (pos + size - 1) & -size
 

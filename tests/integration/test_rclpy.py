@@ -19,7 +19,6 @@ PACKAGES = [RCLPY / "topics" / "minimal_publisher", RCLPY / "topics" / "minimal_
             RCLPY / "services" / "minimal_service", RCLPY / "services" / "minimal_client",
             RCLPY / "actions" / "minimal_action_server", RCLPY / "actions" / "minimal_action_client",
             RCLPY / "executors"]
-ENV = dict(os.environ, PYTHONPATH=os.pathsep.join([*(str(p) for p in PACKAGES), os.environ.get("PYTHONPATH", "")]))
 
 
 def init(tmp_path: Path, *sources: Path) -> dict[str, Any]:
@@ -33,14 +32,15 @@ def init(tmp_path: Path, *sources: Path) -> dict[str, Any]:
 
 
 def launch(tmp_path: Path, project: dict[str, Any], duration: float) -> subprocess.CompletedProcess[str]:
-    """Check, then launch, ``project`` (the packages' code on PYTHONPATH, as colcon would put it)."""
+    """Check, then launch, ``project``: the packages' code is found through the python_path: that init
+    wrote (the environment's PYTHONPATH is left as it is)."""
     path = tmp_path / "project.yaml"
     path.write_text(yaml.safe_dump(project))
     checked = subprocess.run([sys.executable, "-m", "hetros", "check", str(path)], capture_output=True,
-                             text=True, env=ENV, timeout=120, check=False)
+                             text=True, timeout=120, check=False)
     assert checked.returncode == 0, checked.stdout + checked.stderr
     return subprocess.run([sys.executable, "-m", "hetros", "launch", str(path), "--duration", str(duration)],
-                          capture_output=True, text=True, env=ENV, timeout=120, check=False, cwd=tmp_path)
+                          capture_output=True, text=True, timeout=120, check=False, cwd=tmp_path)
 
 
 def module(package: str, name: str) -> Path:
@@ -190,7 +190,7 @@ def test_hetros_action_send_goal_reaches_an_unchanged_rclpy_server_and_prints_fe
     project = init(tmp_path, module("examples_rclpy_minimal_action_server", "server"))
     path = tmp_path / "project.yaml"
     path.write_text(yaml.safe_dump(project))
-    env = dict(ENV, XDG_RUNTIME_DIR=str(tmp_path))
+    env = dict(os.environ, XDG_RUNTIME_DIR=str(tmp_path))
     with subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(path), "--duration", "60"], env=env,
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path) as launched:
         try:

@@ -178,4 +178,22 @@ def test_init_writes_into_a_folder_it_makes(tmp_path: Path) -> None:
                                        "    node.create_publisher(String, '/chatter')\n", encoding="utf-8")
     out = tmp_path / "sub" / "deeper" / "project.yaml"
     assert main(["init", str(tmp_path / "nodes.py"), "-o", str(out)]) == 0
-    assert "talker" in yaml.safe_load(out.read_text())["nodes"]
+    written = yaml.safe_load(out.read_text())
+    assert "talker" in written["nodes"]
+    assert written["python_path"] == ["../.."]
+    # it checks from where it was written: the module is found through python_path:, not PYTHONPATH
+    assert main(["check", str(out)]) == 0
+
+
+def test_python_path_must_name_folders(tmp_path: Path) -> None:
+    from hetros.project import check, load_project
+
+    (tmp_path / "project.yaml").write_text("name: p\npython_path: [src, missing]\nnodes:\n"
+                                          "  a: {run: 'nodes:a'}\n", encoding="utf-8")
+    (tmp_path / "src").mkdir()
+    (tmp_path / "src" / "nodes.py").write_text("def a(node):\n    pass\n", encoding="utf-8")
+    report = check(load_project(tmp_path / "project.yaml"))
+    assert [e for e in report.errors if "python_path" in e] == [
+        f"{tmp_path / 'project.yaml'}:2: python_path.1: {str(tmp_path / 'missing')!r} is not a folder; python_path "
+        "lists the folders node modules are imported from, relative to the project file"]
+    assert not any("found neither" in e for e in report.errors), report.errors

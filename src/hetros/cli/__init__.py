@@ -284,10 +284,11 @@ def cmd_init(args: argparse.Namespace) -> int:
         return EXIT_ERROR
     root = Path(args.root) if args.root else (files[0].parent if files else Path.cwd())
     name = args.name or re.sub(r"[^A-Za-z0-9_-]", "_", root.resolve().name).lstrip("_-0123456789") or "project"
+    base = Path(args.output).parent if args.output else Path.cwd()
     if any(f.is_dir() or writes_ros(f) for f in files):
-        data, unresolved = ros_template(files, name, Path(args.output).parent if args.output else Path.cwd())
+        data, unresolved = ros_template(files, name, base)
     else:
-        data, unresolved = template_from_sources(files, root, name)
+        data, unresolved = template_from_sources(files, root, name, base)
     if not data["nodes"]:
         print("no nodes found: no create_* calls, ROS entry points (setup.py, setup.cfg) or rospy.init_node in "
               "the given files", file=sys.stderr)

@@ -172,6 +172,8 @@ class Plan:
     foxglove_hosts: tuple[str, ...] = ()
     # every process' clock follows /clock (see CLOCK_PREFIX) instead of the wall
     use_sim_time: bool = False
+    # folders node modules are imported from after the project file's own (its python_path:), absolute
+    python_path: tuple[str, ...] = ()
 
     def process_of(self, node: str) -> str:
         """Threads share their host's launcher process (called 'launcher'); others run alone."""
@@ -293,6 +295,7 @@ class Plan:
             dds_domain=raw.get("dds_domain"),
             project_hash=raw.get("project_hash", ""),
             foxglove_hosts=tuple(raw.get("foxglove_hosts", ())),
+            python_path=tuple(raw.get("python_path", ())),
         )
 
 

@@ -145,6 +145,13 @@ def bridge_names_reserved(c: CheckContext) -> None:
                     "rename the node or target")
 
 
+def import_folders_exist(c: CheckContext) -> None:
+    for index, folder in enumerate(c.project.model.python_path):
+        if not (c.project.root / folder).is_dir():
+            c.error(f"{c.project.where('python_path', index)}: {folder!r} is not a folder; python_path lists the "
+                    "folders node modules are imported from, relative to the project file")
+
+
 def nodes_are_well_formed(c: CheckContext) -> None:
     """Each node's target exists, its names are ROS names, its run: can be found."""
     model, where = c.project.model, c.project.where
@@ -164,8 +171,9 @@ def nodes_are_well_formed(c: CheckContext) -> None:
                         f"{c.project.root / spec.run}); write module:function for a node function, or a script's "
                         "path relative to the project file")
         elif not module_findable(c.project, module):
-            c.error(f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the project file "
-                    "nor in the environment")
+            c.error(f"{where('nodes', nname, 'run')}: module {module!r} is found neither next to the project file, "
+                    "nor in its python_path: folders, nor in the environment; add the folder it is imported "
+                    "from to python_path:")
         else:
             c.runnable.setdefault(spec.run, []).append(nname)
         _check_actions(c.project, nname, spec, c.types, c.report)
@@ -318,8 +326,8 @@ def chains_name_topics(c: CheckContext) -> None:
 
 # the order matters where a rule reads what an earlier one gathered (gather_endpoints, nodes_are_well_formed)
 RULES: tuple[Callable[[CheckContext], None], ...] = (
-    cpus_exist, hosts_and_env, bridge_names_reserved, nodes_are_well_formed, gather_endpoints, code_runs,
-    actions_pair, subscriptions_have_publishers, one_type_per_topic, clients_have_servers,
+    cpus_exist, hosts_and_env, bridge_names_reserved, import_folders_exist, nodes_are_well_formed,
+    gather_endpoints, code_runs, actions_pair, subscriptions_have_publishers, one_type_per_topic, clients_have_servers,
     one_server_one_type_per_service, topic_entries_are_used, qos_compatible, hardware_topics, shm_within_budget,
     ros1_nodes_fit, sources_exist, bridged_endpoints_fit, chains_name_topics,
 )

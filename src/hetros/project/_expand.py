@@ -113,6 +113,8 @@ class Expanded:
     targets: dict[str, Any] = field(default_factory=dict)
     topics: dict[str, Any] = field(default_factory=dict)
     messages: list[str] = field(default_factory=list)
+    # python_path: folders of every file, absolute (an included file's are relative to it)
+    python_path: list[str] = field(default_factory=list)
     # expanded YAML path -> the path of what it came from, for error messages
     aliases: dict[tuple[str, ...], tuple[str, ...]] = field(default_factory=dict)
     # node -> the folder its run: is relative to (an included file's)
@@ -154,6 +156,9 @@ def _expand_into(out: Expanded, data: dict[str, Any], scope: _Scope, path: Path,
     for folder in data.get("messages") or []:
         if (scope.folder / folder).resolve() not in known:
             out.messages.append(str((scope.folder / folder).resolve()) if scope.prefix else folder)
+    for folder in data.get("python_path") or []:
+        if (absolute := str((scope.folder / folder).resolve())) not in out.python_path:
+            out.python_path.append(absolute)
     for key, spec in (data.get("nodes") or {}).items():
         _node(out, key, spec, scope, ("nodes", key))
     for group_name, group in (data.get("groups") or {}).items():

@@ -359,6 +359,9 @@ class Project(_Strict):
     name: str = Field(description="the project's name: an ASCII letter, then letters, digits, _ or -")
     messages: list[str] = Field(default_factory=list, description="folders of .msg/.srv/.action packages, "
                                 "relative to the project file")
+    python_path: list[str] = Field(default_factory=list, description="folders, relative to the project file, "
+                                   "where the nodes' modules are imported from besides the project file's own "
+                                   "(a ROS package's source, say, when the project file lives elsewhere)")
     shm_budget: int | str = Field(default="1GiB", description="the most shared memory all topics may reserve "
                                   "(bytes, or like 4GiB)")
     targets: dict[str, TargetSpec] = Field(default_factory=lambda: {"main": TargetSpec(kind="thread")},
@@ -438,6 +441,8 @@ class LoadedProject:
         self._aliases = aliases or {}
         # node -> the folder its run: is found in, for nodes of an included file elsewhere
         self.node_roots = roots or {}
+        # where node modules are imported from: the project file's folder, then its python_path:
+        self.import_folders = (self.root.resolve(), *((self.root / p).resolve() for p in model.python_path))
         # topics a recording feeds (``hetros play --launch``): subscribing to them needs no publisher
         self.replayed: frozenset[str] = frozenset()
 
@@ -542,7 +547,7 @@ def load_project(path: str | Path) -> LoadedProject:
     expanded = expand(model.model_dump(by_alias=True), path, load_included)
     flat = {**model.model_dump(by_alias=True, exclude_unset=True), "nodes": expanded.nodes,
             "targets": expanded.targets, "topics": expanded.topics, "messages": expanded.messages,
-            "groups": {}, "include": {}}
+            "python_path": expanded.python_path, "groups": {}, "include": {}}
     if not expanded.nodes:
         raise ProjectError(f"{path}:1: the project has no nodes; list them under nodes: (or bring them with "
                            "groups: or include:)")

@@ -104,6 +104,7 @@ def _tables(project: LoadedProject, channels: dict[str, ChannelPlan], edges: tup
         project_hash=project_hash(project),
         use_sim_time=model.use_sim_time,
         foxglove_hosts=tuple(model.foxglove_hosts),
+        python_path=tuple(map(str, project.import_folders[1:])),
     )
 
 

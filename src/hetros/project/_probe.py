@@ -14,9 +14,10 @@ from ._model import LoadedProject
 
 
 def module_findable(project: LoadedProject, module: str) -> bool:
-    candidate = project.root.joinpath(*module.split("."))
-    if candidate.with_suffix(".py").is_file() or (candidate / "__init__.py").is_file():
-        return True
+    for folder in project.import_folders:
+        candidate = folder.joinpath(*module.split("."))
+        if candidate.with_suffix(".py").is_file() or (candidate / "__init__.py").is_file():
+            return True
     try:
         return importlib.util.find_spec(module) is not None
     except (ImportError, ValueError):
@@ -75,7 +76,7 @@ def _probe(project: LoadedProject, program: str, arguments: list[str], timeout: 
     its answer is the last line that starts with the mark (its mapping of keys to problems)."""
     root = str(project.root.resolve())
     env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [root, env.get("PYTHONPATH", "")]))
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [*map(str, project.import_folders), env.get("PYTHONPATH", "")]))
     try:
         done = subprocess.run([sys.executable, "-c", program, *arguments], capture_output=True, text=True,
                               timeout=timeout, env=env, cwd=root, check=False)
@@ -101,7 +102,7 @@ def runnable_problems(project: LoadedProject, runs: list[str]) -> dict[str, str]
     if not runs:
         return {}
     root = str(project.root.resolve())
-    stamps = tuple(p.stat().st_mtime for p in sorted(project.root.glob("**/*.py")))
+    stamps = tuple(p.stat().st_mtime for folder in project.import_folders for p in sorted(folder.glob("**/*.py")))
     key = (root, tuple(sorted(runs)), stamps)
     if key in _probed:
         return _probed[key]

@@ -295,9 +295,11 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     nodes: list[RosNode] = []
     interfaces: list[Path] = []  # the given packages' own msg/, srv/, action/ folders
     seen: set[Path] = set()  # scripts by their real path: a symlink to one is not a second node
+    imported_from: list[Path] = []  # the folders entry points' modules are imported from
     for given in paths:
         if given.is_dir():
             root = given
+            imported_from.append(root)
             for key, target in sorted(entry_points(given).items()):
                 nodes.append(scan_ros_entry(root, key, target))
             for script in sorted(given.rglob("*")):
@@ -316,10 +318,15 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
             module = ".".join(given.resolve().relative_to(root.resolve()).with_suffix("").parts)
             reader = _Reader(given, root)
             if "main" in reader.functions:
+                imported_from.append(root)
                 nodes.append(scan_ros_entry(root, given.stem, f"{module}:main"))
             else:
                 nodes.append(scan_ros_script(given, root, base))
     project: dict[str, Any] = {"name": name, "targets": {}, "nodes": {}, "topics": {}}
+    # the project file goes to base: a package elsewhere is found through python_path:
+    folders = dict.fromkeys(os.path.relpath(f.resolve(), base.resolve()) for f in imported_from)
+    if folders.keys() - {"."}:
+        project["python_path"] = [f for f in folders if f != "."]
     if interfaces:
         project["messages"] = [os.path.relpath(folder.resolve(), base.resolve()) for folder in interfaces]
     notes: list[str] = []

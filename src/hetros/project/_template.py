@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
 from ._scan import module_name_for, scan_file
 
 
-def template_from_sources(files: list[Path], root: Path, name: str) -> tuple[dict[str, Any], list[str]]:
-    """The template project, and what the scan could not follow (each naming file:line and the fix)."""
+def template_from_sources(files: list[Path], root: Path, name: str,
+                          base: Path | None = None) -> tuple[dict[str, Any], list[str]]:
+    """The template project, and what the scan could not follow (each naming file:line and the fix).
+    Modules are named from ``root``; a project file written to another folder, ``base``, finds them
+    through ``python_path:``."""
     nodes: dict[str, Any] = {}
     unresolved: list[str] = []
     for path in files:
@@ -20,4 +24,7 @@ def template_from_sources(files: list[Path], root: Path, name: str) -> tuple[dic
                 if endpoints:
                     entry[section] = dict(endpoints)
             nodes[scanned.name] = entry
-    return {"name": name, "targets": {"main": {"kind": "thread"}}, "nodes": nodes}, unresolved
+    project: dict[str, Any] = {"name": name, "targets": {"main": {"kind": "thread"}}, "nodes": nodes}
+    if base is not None and (relative := os.path.relpath(root.resolve(), base.resolve())) != ".":
+        project = {"name": name, "python_path": [relative], **project}
+    return project, unresolved

@@ -206,6 +206,9 @@ class Host:
         self.unacknowledged: list[str] = []
         self._count_lock = threading.Lock()
         self._on_all_exited = on_all_exited
+        for folder in reversed(plan.python_path):
+            if folder not in sys.path:
+                sys.path.insert(0, folder)
         types = registry()
         for folder in plan.message_paths:
             types.load_folder(Path(folder))

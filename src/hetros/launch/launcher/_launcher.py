@@ -86,7 +86,8 @@ class Launcher:
         cmd = [sys.executable, "-m", "hetros.launch.launcher._worker", "--plan", str(self._plan_file),
                "--target", target, "--session", self.session, "--status-fd", str(write_fd)]
         env = dict(os.environ) | self.plan.env_of(target)
-        env["PYTHONPATH"] = os.pathsep.join(filter(None, [self.plan.root, env.get("PYTHONPATH", "")]))
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [self.plan.root, *self.plan.python_path,
+                                                          env.get("PYTHONPATH", "")]))
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, pass_fds=(write_fd,), text=True, env=env,
                                 start_new_session=True)
         os.close(write_fd)

@@ -60,3 +60,18 @@ def test_the_transport_reader_closes_with_the_last_branch() -> None:
     assert not shared.closed
     two.close()
     assert shared.closed and "forgotten" in woken
+
+
+def test_a_branch_that_still_holds_messages_after_a_take_is_woken_again() -> None:
+    """A caller that takes one message per wake (the executor's polling spin) must hear that more are
+    left: fill() moves everything the transport holds into the taker too, but wakes only the others."""
+    topic, shared, woken = _shared(QoS(depth=8))
+    taker = shared.branch(lambda: woken.append("taker"), QoS(depth=8))
+    shared.branch(lambda: woken.append("other"), QoS(depth=8))
+    for seq in range(3):
+        topic.deliver(seq)
+    woken.clear()
+    assert taker.try_take() == 0
+    assert woken.count("taker") == 1  # two are left in its FIFO
+    assert [taker.try_take(), taker.try_take()] == [1, 2]
+    assert woken.count("taker") == 2  # one more after the second take, none after the last

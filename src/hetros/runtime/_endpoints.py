@@ -340,6 +340,10 @@ class _Branch(Reader):
             return None
         if self.blocking:  # room freed here: what waited behind a full branch can move on
             self.shared.fill(self)
+        if self.items:
+            # fill() wakes the other branches, not the taker; a caller that takes one message per
+            # wake (the executor's polling spin) would leave the rest here when the stream stops
+            self.wake()
         return item
 
     def pending(self) -> bool:

@@ -7,17 +7,21 @@ master under ``/<node>``; its peers are whatever the master knows, not edges of 
 from __future__ import annotations
 
 import threading
+import time
 from typing import Any
 
 from ..._errors import UndeclaredEndpointError
+from ..._log import get_logger
 from ..._qos import DEFAULT_QOS, QoS
 from ...plan import SERVICE_QOS, Plan, service_of
 from .._base import Reader, Wake, Writer
 from .._seam import Endpoint, Transport, TransportContext
 from ._endpoints import Ros1ServiceCaller, Ros1ServiceServer, Ros1Writer, open_ros1_reader
-from ._peer import Ros1Peer, get_ros1_parameter
+from ._peer import Ros1Peer, Ros1Publication, get_ros1_parameter
 from ._stream import SocketWaiter
 from ._types import Ros1ServiceType, Ros1Type
+
+log = get_logger("hetros.graph")
 
 
 class Ros1Transport(Transport):
@@ -33,6 +37,8 @@ class Ros1Transport(Transport):
         self._servers: dict[tuple[str, str], Ros1ServiceServer] = {}
         self._callers: dict[tuple[str, str], Ros1ServiceCaller] = {}
         self._waiters: dict[str, SocketWaiter] = {}
+        # publications advertised before their node runs: (node, topic) -> it
+        self._early: dict[tuple[str, str], Ros1Publication] = {}
 
     def wait_source(self, node: str) -> SocketWaiter | None:
         """A ROS 1 node's executor waits on its subscriptions' connections and in-process wake-ups."""
@@ -87,6 +93,10 @@ class Ros1Transport(Transport):
         if not endpoint.envelope:
             typename = self._declared(node, "publish", name)
             qos = self._qos(name)
+            with self._lock:
+                early = self._early.pop((node, name), None)
+            if early is not None:
+                return Ros1Writer(early)
             kind = Ros1Type(self.context.types, typename)
             return Ros1Writer(self._peer(node).advertise(name, kind, latch=qos.keeps_history, qos=qos))
         service, client = service_of(name)
@@ -111,6 +121,42 @@ class Ros1Transport(Transport):
             return server.reader
         return self._caller(node, service).attach(wake)
 
+    def prepare(self, nodes: list[str]) -> None:
+        """Advertise what ``nodes`` publish to the project's other ROS 1 nodes before they run, so those
+        subscribers connect meanwhile (``wait_matched``): a ROS 1 publisher's first messages go to
+        nobody otherwise, and a reliable topic must not lose them to start-up order."""
+        for node in nodes:
+            if not self._plan.speaks_ros1(node):
+                continue
+            for topic, typename in self._plan.nodes[node].publish.items():
+                if self._planned_subscribers(topic):
+                    qos = self._qos(topic)
+                    publication = self._peer(node).advertise(topic, Ros1Type(self.context.types, typename),
+                                                             latch=qos.keeps_history, qos=qos)
+                    with self._lock:
+                        self._early[(node, topic)] = publication
+
+    def _planned_subscribers(self, topic: str) -> set[str]:
+        """The project's ``kind: ros1`` nodes that subscribe to ``topic`` (they subscribe before they run; the
+        ROS 1 bridge subscribes as it runs, and is not waited for)."""
+        return {n for n, spec in self._plan.nodes.items() if topic in spec.subscribe and self._plan.speaks_ros1(n)}
+
+    def wait_matched(self, timeout: float) -> list[str]:
+        with self._lock:
+            expected = {publication: len(self._planned_subscribers(topic))
+                        for (_node, topic), publication in self._early.items()}
+        deadline = time.monotonic() + timeout
+        while not self.context.stop.is_set():
+            short = {p.topic: (len(set(p.subscribers)), wanted) for p, wanted in expected.items()
+                     if len(set(p.subscribers)) < wanted}
+            if not short or time.monotonic() > deadline:
+                for topic, (connected, wanted) in short.items():
+                    log.warning("%s: %d of %d ROS 1 subscribers of the project connected after %g s; publishing "
+                                "anyway", topic, connected, wanted, timeout)
+                return list(short)
+            time.sleep(0.01)
+        return []
+
     def parameter(self, node: str, name: str) -> Any:
         """``/global``, ``relative`` (to ``/``) or ``~private`` (to ``/<node>``) on the master's server."""
         return get_ros1_parameter(self._plan.ros1_master, "/" + node, name)
@@ -120,6 +166,9 @@ class Ros1Transport(Transport):
             callers, self._callers = list(self._callers.values()), {}
             peers, self._peers = list(self._peers.values()), {}
             waiters, self._waiters = list(self._waiters.values()), {}
+            early, self._early = list(self._early.values()), {}
+        for publication in early:
+            publication.close()
         for caller in callers:
             caller.close()
         for peer in peers:

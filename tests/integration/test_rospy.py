@@ -65,8 +65,10 @@ def test_the_talker_and_listener(tmp_path: Path) -> None:
     assert project["targets"] == {"talker": {"kind": "process"}, "listener": {"kind": "process"}}
     done = launch(tmp_path, project, 2.5)
     assert done.returncode == 0, done.stderr
-    said = re.findall(r"\[talker_\d+_\d+\]: (hello world [\d.]+)", done.stderr)
-    heard = re.findall(r"\[listener_\d+_\d+\]: /listener_\d+_\d+I heard (hello world [\d.]+)", done.stderr)
+    # rospy's console form, as roslaunch shows it: [INFO] [walltime]: message
+    said = re.findall(r"^\[INFO\] \[\d+\.\d{6}\]: (hello world [\d.]+)$", done.stderr, re.MULTILINE)
+    heard = re.findall(r"^\[INFO\] \[\d+\.\d{6}\]: /listener_\d+_\d+I heard (hello world [\d.]+)$", done.stderr,
+                       re.MULTILINE)
     assert len(said) >= 15 and heard[:10] == said[:10], done.stderr
     assert "Traceback" not in done.stderr
 
@@ -92,7 +94,7 @@ def test_the_timer_talker_is_heard(tmp_path: Path) -> None:
     project = init_scripts(tmp_path, "001_talker_timer/talker_timer.py", "001_talker_listener/listener.py")
     done = launch(tmp_path, project, 2.5)
     assert done.returncode == 0, done.stderr
-    said = re.findall(r"\[talker_\d+_\d+\]: (hello world [\d.]+)", done.stderr)
+    said = re.findall(r"^\[INFO\] \[[\d.]+\]: (hello world [\d.]+)$", done.stderr, re.MULTILINE)
     heard = re.findall(r"I heard (hello world [\d.]+)", done.stderr)
     assert len(said) >= 10 and said[:5] == heard[:5], done.stderr
 

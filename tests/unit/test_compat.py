@@ -8,7 +8,7 @@ import threading
 import numpy as np
 import pytest
 
-from hetros import MissingFieldError, ReadOnlyMessageError
+from hetros import ReadOnlyMessageError
 from hetros.compat._flavour import SequenceView, flavoured, flavoured_action, received
 from hetros.compat.rclpy.task import Future, run_to_end
 from hetros.msg import copy, freeze, registry
@@ -54,13 +54,21 @@ def test_nested_sequences_are_shown_too() -> None:
     assert repr(message.feedback.sequence) == "array('i')"
 
 
-def test_rospy_code_asking_header_seq_is_told_why() -> None:
-    import hetros.compat.rospy  # noqa: F401  (installs the explanation)
+def test_rospy_code_sees_ros1_header_seq_and_stamp_accessors() -> None:
+    """rospy's view of ROS 2's messages: header.seq (0 outside a callback or publish; what a subscription
+    counts inside one, see test_rospy), stamp.secs / nsecs / to_sec() / to_nsec()."""
+    import hetros.compat.rospy as rospy_shim
 
     header = registry().get("std_msgs/msg/Header")()
-    assert not hasattr(header, "seq")
-    with pytest.raises(MissingFieldError, match="ROS 2's layout"):
-        header.seq = 3
+    assert header.seq == 0
+    header.seq = 3  # rospy code may write it; a publisher writes its own count
+    assert header.seq == 3
+    header.stamp.sec, header.stamp.nanosec = 12, 500_000_000
+    assert (header.stamp.secs, header.stamp.nsecs) == (12, 500_000_000)
+    assert header.stamp.to_sec() == 12.5 and header.stamp.to_nsec() == 12_500_000_000
+    duration = registry().get("builtin_interfaces/msg/Duration")(sec=1, nanosec=2)
+    assert duration.to_nsec() == 1_000_000_002
+    assert isinstance(rospy_shim, object)
 
 
 def test_an_async_callback_runs_to_its_end_awaiting_futures() -> None:

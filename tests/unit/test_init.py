@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from hetros.project import template_from_sources
+from hetros.project import ros_template, template_from_sources
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 SECTIONS = ("publish", "subscribe", "services", "clients", "actions", "action_clients")
@@ -111,7 +111,7 @@ def test_init_leaves_a_placeholder_that_check_refuses_naming_file_and_line(tmp_p
         "class Relay(Node):\n"
         "    def __init__(self):\n"
         "        super().__init__('relay')\n"
-        "        topic = self.declare_parameter('topic', 'in').value\n"
+        "        topic = sys.argv[1]\n"
         "        self.create_subscription(String, topic, print, rclpy.qos.qos_profile_sensor_data)\n"
         "        self.create_publisher(String, 'out', rclpy.qos.qos_profile_sensor_data)\n\n\n"
         "def main():\n    rclpy.init()\n    rclpy.spin(Relay())\n", encoding="utf-8")
@@ -123,6 +123,42 @@ def test_init_leaves_a_placeholder_that_check_refuses_naming_file_and_line(tmp_p
     (tmp_path / "p.yaml").write_text(yaml.safe_dump(project))
     report = check(load_project(tmp_path / "p.yaml"))
     assert len(report.errors) == 1 and "placeholder 'topic at relay.py:10' left by `hetros init`" in report.errors[0]
+
+
+def test_init_follows_names_through_constructor_arguments_and_attributes(tmp_path: Path) -> None:
+    """ros2/demos' quality_of_service_demo shape: main passes a local to a Node subclass, whose __init__
+    keeps it in an attribute that another method names its endpoint with."""
+    (tmp_path / "qos.py").write_text(
+        "import rclpy\nfrom rclpy.node import Node\nfrom std_msgs.msg import String\n\n\n"
+        "class Talker(Node):\n"
+        "    def __init__(self, topic_name, qos, node_name='talker'):\n"
+        "        super().__init__(node_name)\n"
+        "        self.topic_name = topic_name\n"
+        "        self.pub = self.create_publisher(String, topic_name, qos)\n\n"
+        "    def again(self):\n"
+        "        return self.create_subscription(String, self.topic_name + '_echo', print, 10)\n\n\n"
+        "def main():\n    rclpy.init()\n    topic = 'qos_chatter'\n    Talker(topic, 10)\n", encoding="utf-8")
+    project, notes = ros_template([tmp_path / "qos.py"], "p", tmp_path)
+    assert notes == []
+    node = project["nodes"]["talker"]
+    assert node["publish"] == {"qos_chatter": "std_msgs/msg/String"}
+    assert node["subscribe"] == {"qos_chatter_echo": "std_msgs/msg/String"}
+
+
+def test_init_names_a_topic_by_its_parameter_and_says_so(tmp_path: Path) -> None:
+    (tmp_path / "relay.py").write_text(
+        "import rclpy\nfrom rclpy.node import Node\nfrom std_msgs.msg import String\n\n\n"
+        "class Relay(Node):\n"
+        "    def __init__(self):\n"
+        "        super().__init__('relay')\n"
+        "        topic = self.declare_parameter('topic', 'in').value\n"
+        "        self.create_subscription(String, topic, print, 10)\n\n\n"
+        "def main():\n    rclpy.init()\n    rclpy.spin(Relay())\n", encoding="utf-8")
+    project, notes = ros_template([tmp_path / "relay.py"], "p", tmp_path)
+    assert project["nodes"]["relay"]["subscribe"] == {"in": "std_msgs/msg/String"}
+    assert notes == ["relay.py:10: the subscribe endpoint is named by parameter 'topic': written as 'in', its value "
+                     "here; a project that sets the parameter to another name must rename the endpoint under "
+                     "nodes.relay.subscribe too"]
 
 
 def test_init_reads_topics_named_through_constants(tmp_path: Path) -> None:

@@ -115,6 +115,10 @@ class LaunchImporter:
         self.project: dict[str, Any] = {"targets": {}, "nodes": {}}
         self.notes: list[str] = []
         self._packages: dict[str, list[Path]] | None = None
+        # the packages whose nodes the file starts: their own msg/srv/action folders join messages:, the
+        # folders ROS 2 entry points import from join python_path:
+        self.used_packages: dict[Path, None] = {}
+        self.imported_from: dict[Path, None] = {}
         # ROS 1: every <param>/<rosparam> outside a node by its full name; after reading, each node gets
         # those in its namespace or below under their names relative to it (``inner/b``), as rospy reads them
         self.global_params: dict[str, Any] = {}
@@ -278,8 +282,6 @@ class LaunchImporter:
                                    "its target (map it with targets: and hosts:)")
         package = self.attribute(element, "pkg", scope, path)
         executable = self.attribute(element, "exec" if self.ros2 else "type", scope, path)
-        found = self._code(package, self.find_package(package, where), executable, where)
-        key_name = self.attribute(element, "name", scope, path, "") or found.key
         namespace = join_namespace(scope.namespace, self.attribute(element, "namespace" if self.ros2 else "ns", scope,
                                                                  path, ""))
         remap = dict(scope.remap)
@@ -295,6 +297,8 @@ class LaunchImporter:
             else:
                 raise ProjectError(f"{path}:{child.line}: <node> holds <remap>, <param>, <rosparam> and <env>, not "
                                    f"<{child.tag}>")
+        found = self._code(package, self.find_package(package, where), executable, where, params)
+        key_name = self.attribute(element, "name", scope, path, "") or found.key
         key = unique_key(key_name, self.project["nodes"])
         node: dict[str, Any] = {"run": found.run, "target": key}
         if namespace:
@@ -329,20 +333,23 @@ class LaunchImporter:
 
     # -- helpers -----------------------------------------------------------------------------
 
-    def _code(self, name: str, folders: list[Path], executable: str, where: str) -> Any:
+    def _code(self, name: str, folders: list[Path], executable: str, where: str, parameters: dict[str, Any]) -> Any:
         if self.ros2:
             targets: dict[str, str] = {}
             for package in folders:
                 targets = entry_points(package)
                 if executable in targets:
-                    return scan_ros_entry(package, executable, targets[executable])
+                    self.used_packages[package] = None
+                    self.imported_from[package] = None
+                    return scan_ros_entry(package, executable, targets[executable], parameters)
             raise ProjectError(f"{where}: package {name} has no entry point {executable!r} (its console_scripts: "
                                f"{', '.join(sorted(targets)) or 'none'})")
         for package in folders:
             candidates = [package / folder / executable for folder in _EXECUTABLE_FOLDERS]
             for candidate in [*candidates, *package.rglob(executable)]:
                 if candidate.is_file():
-                    return scan_ros_script(candidate, package, self.base)
+                    self.used_packages[package] = None
+                    return scan_ros_script(candidate, package, self.base, parameters)
         raise ProjectError(f"{where}: package {name} has no executable {executable!r} (looked in "
                            f"{', '.join(f or '.' for f in _EXECUTABLE_FOLDERS)} and below)")
 
@@ -392,6 +399,13 @@ def import_launch(path: Path, ros2: bool, package_paths: list[Path], base: Path,
     importer = LaunchImporter(ros2, [*package_paths, path.parent.resolve()], base)
     importer.read(path, _Scope(args=dict(args or {})))
     importer.share_global_params()
+    relative = [os.path.relpath(folder, base.resolve()) for folder in importer.imported_from]
+    if [folder for folder in relative if folder != "."]:
+        importer.project = {"python_path": [f for f in relative if f != "."], **importer.project}
+    interfaces = [os.path.relpath(folder, base.resolve()) for folder in importer.used_packages
+                  if any((folder / kind).is_dir() for kind in ("msg", "srv", "action"))]
+    if interfaces:
+        importer.project = {"messages": interfaces, **importer.project}
     if not importer.project.get("topics"):
         importer.project.pop("topics", None)
     if not importer.project["nodes"]:

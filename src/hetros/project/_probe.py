@@ -6,8 +6,10 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import re
 import subprocess
 import sys
+from pathlib import Path
 from typing import Any
 
 from ._model import LoadedProject
@@ -28,6 +30,7 @@ _PROBE = """
 import importlib, json, sys
 from pathlib import Path
 from hetros.compat import install
+from hetros.project._probe import import_problem
 from hetros.msg import registry
 types = registry()
 for folder in json.loads(sys.argv[2]):
@@ -39,11 +42,7 @@ for run in json.loads(sys.argv[1]):
     try:
         module = importlib.import_module(module_name)
     except BaseException as exc:
-        tb = exc.__traceback__
-        while tb is not None and tb.tb_next is not None:
-            tb = tb.tb_next
-        place = f" ({tb.tb_frame.f_code.co_filename}:{tb.tb_lineno})" if tb is not None else ""
-        out[run] = f"importing {module_name!r} raised {type(exc).__name__}: {exc}{place}; fix the module"
+        out[run] = import_problem(module_name, exc)
         continue
     target = getattr(module, attr, None)
     if target is None:
@@ -53,6 +52,41 @@ for run in json.loads(sys.argv[1]):
                     f"not {type(target).__name__}")
 print("\\n" + sys.argv[3] + json.dumps(out))
 """
+
+
+# packages of a ROS installation that hetros's rclpy and rospy do not stand in for
+_ROS_ONLY = frozenset({"ament_index_python", "sensor_msgs_py", "tf2_ros", "tf2_py", "rosidl_runtime_py", "launch",
+                       "launch_ros", "rclpy_message_converter", "message_filters", "cv_bridge", "rosbag", "rosbag2_py",
+                       "roslib", "rosgraph", "rostest", "rosunit", "dynamic_reconfigure", "actionlib"})
+_SHIM = "hetros.compat."
+
+
+def import_problem(module_name: str, exc: BaseException) -> str:
+    """What ``hetros check`` says when importing a node module raised ``exc``: a piece of ROS hetros does
+    not provide is named with the user's line that used it (the module is fine); anything else is the
+    module's own error at its innermost line of user code."""
+    package = str(Path(__file__).resolve().parents[1])
+    place = ""
+    tb = exc.__traceback__
+    while tb is not None:
+        filename = tb.tb_frame.f_code.co_filename
+        if not filename.startswith((package, "<")) and "importlib" not in filename:
+            place = f"{filename}:{tb.tb_lineno}"
+        tb = tb.tb_next
+    missing = ""
+    if isinstance(exc, ImportError) and exc.name:
+        shim = exc.name.startswith(_SHIM)
+        name = exc.name.removeprefix(_SHIM)
+        if isinstance(exc, ModuleNotFoundError) and (shim or name.split(".")[0] in _ROS_ONLY):
+            missing = name
+        elif shim and (quoted := re.search(r"cannot import name '([^']+)'", str(exc))):
+            missing = f"{name}.{quoted[1]}"
+    if missing:
+        return (f"{place or module_name}: uses {missing}, which hetros does not provide (its rclpy and rospy cover "
+                "what docs/GUIDE.md lists); the module is fine as ROS code: drop that use under hetros, or run the "
+                "node under ROS and join it through external:")
+    where = f" ({place})" if place else ""
+    return f"importing {module_name!r} raised {type(exc).__name__}: {exc}{where}; fix the module"
 
 
 # the probe's answer line starts with this: a node module that prints, or ends the interpreter

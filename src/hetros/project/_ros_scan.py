@@ -99,9 +99,10 @@ def _module_file(root: Path, module: str) -> Path | None:
 class _Reader:
     """What one module creates, and where its names come from."""
 
-    def __init__(self, path: Path, root: Path) -> None:
+    def __init__(self, path: Path, root: Path, parameters: dict[str, Any] | None = None) -> None:
         self.path = path
         self.root = root
+        self.parameters = parameters or {}
         self.tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
         self.types: dict[str, str] = {}  # local name -> pkg/kind/Type
         self.imported: dict[str, str] = {}  # local name -> module it comes from (the package's own)
@@ -118,7 +119,8 @@ class _Reader:
                         self.types[local] = f"{parts[0]}/{parts[1]}/{alias.name}"
                     elif _module_file(root, stmt.module) is not None:
                         self.imported[local] = stmt.module
-        self.constants = _constants(self.tree)
+        self.from_parameters = _from_parameters(self.tree, self.parameters)
+        self.constants = {**_constants(self.tree), **{k: text for k, (text, _) in self.from_parameters.items()}}
         self.classes = {s.name: s for s in self.tree.body if isinstance(s, ast.ClassDef)}
         self.functions = {s.name: s for s in self.tree.body if isinstance(s, ast.FunctionDef | ast.AsyncFunctionDef)}
 
@@ -135,8 +137,14 @@ class _Reader:
             return f"{expr.value.id}/{expr.attr}"
         return f"{PLACEHOLDER}type of {ast.unparse(expr)} at {self.where(expr)}"
 
-    def collect(self, scope: ast.AST, node: RosNode, seen: set[str]) -> None:
-        """The endpoints ``scope`` creates, following the package's classes and functions it uses."""
+    def collect(self, scope: ast.AST, node: RosNode, seen: set[str], bound: dict[str, str] | None = None) -> None:
+        """The endpoints ``scope`` creates, following the package's classes and functions it uses.
+
+        ``bound``: the strings ``scope``'s parameters (and ``self.<attr>`` set from them) hold in the call
+        that led here, so ``Talker('chatter')`` names the topic its ``__init__(self, topic_name)`` uses."""
+        names = {**self.constants, **(bound or {})}
+        if isinstance(scope, ast.ClassDef):
+            names |= _attributes(scope, names)
         for call in ast.walk(scope):
             if not isinstance(call, ast.Call):
                 continue
@@ -146,32 +154,36 @@ class _Reader:
                 section, type_at, name_at, qos_at = _RCLPY_CALLS[callee]
                 self._add(node, section, call, call.args[type_at], call.args[name_at],
                           call.args[qos_at] if qos_at is not None and len(call.args) > qos_at else
-                          _keyword(call, "qos_profile"))
+                          _keyword(call, "qos_profile"), names)
             elif callee in _ACTION_CALLS and len(call.args) >= 3:
                 section, type_at, name_at = _ACTION_CALLS[callee]
-                self._add(node, section, call, call.args[type_at], call.args[name_at], None)
+                self._add(node, section, call, call.args[type_at], call.args[name_at], None, names)
             elif callee in _ROSPY_CALLS and _is_rospy(call.func) and len(call.args) >= 2:
                 section, name_at, type_at = _ROSPY_CALLS[callee]
-                self._add(node, section, call, call.args[type_at], call.args[name_at], _keyword(call, "queue_size"))
+                self._add(node, section, call, call.args[type_at], call.args[name_at], _keyword(call, "queue_size"),
+                          names)
             elif callee in ("init_node", "create_node") and call.args:
-                node.ros_names.append(_string(call.args[0]) or "")
+                node.ros_names.append(_joined(call.args[0], names) or "")
             elif callee == "__init__" and isinstance(call.func, ast.Attribute) and call.args:
-                node.ros_names.append(_string(call.args[0]) or "")  # super().__init__('name') of a Node subclass
+                node.ros_names.append(_joined(call.args[0], names) or "")  # super().__init__('name') of a Node
             elif callee in self.classes and callee not in seen:
-                self.collect(self.classes[callee], node, seen | {callee})
+                cls = self.classes[callee]
+                self.collect(cls, node, seen | {callee}, _arguments(call, _init_of(cls), names))
             elif callee in self.functions and callee not in seen:
-                self.collect(self.functions[callee], node, seen | {callee})
+                function = self.functions[callee]
+                self.collect(function, node, seen | {callee}, _arguments(call, function, names))
             elif callee in self.imported and callee not in seen:
                 path = _module_file(self.root, self.imported[callee])
                 if path is not None:
-                    other = _Reader(path, self.root)
-                    definition = other.classes.get(callee) or other.functions.get(callee)
-                    if definition is not None:
-                        other.collect(definition, node, seen | {callee})
+                    other = _Reader(path, self.root, self.parameters)
+                    found = other.classes.get(callee) or other.functions.get(callee)
+                    if found is not None:
+                        init = _init_of(found) if isinstance(found, ast.ClassDef) else found
+                        other.collect(found, node, seen | {callee}, _arguments(call, init, names))
 
     def _add(self, node: RosNode, section: str, call: ast.Call, type_expr: ast.expr, name_expr: ast.expr,
-             qos: ast.expr | None) -> None:
-        name = _joined(name_expr, self.constants)
+             qos: ast.expr | None, names: dict[str, str]) -> None:
+        name = _joined(name_expr, names)
         kind = {"services": "srv", "clients": "srv", "actions": "action", "action_clients": "action"}.get(section,
                                                                                                           "msg")
         typename = self.type_of(type_expr, kind)
@@ -182,6 +194,12 @@ class _Reader:
             node.notes.append(f"{self.where(call)}: {ast.unparse(call.func)}(..., {ast.unparse(name_expr)}) names its "
                               f"{section} endpoint at run time; replace the placeholder under nodes.{{node}}."
                               f"{section} with the name (hetros check refuses it until then)")
+        key = ast.unparse(name_expr)
+        if key in self.from_parameters and not name.startswith(PLACEHOLDER):
+            parameter = self.from_parameters[key][1]
+            node.notes.append(f"{self.where(call)}: the {section} endpoint is named by parameter {parameter!r}: "
+                              f"written as {name!r}, its value here; a project that sets the parameter to another "
+                              f"name must rename the endpoint under nodes.{{node}}.{section} too")
         node.endpoints.setdefault(section, {})[name] = typename
         if section in ("publish", "subscribe") and qos is not None:
             described = _qos(qos)
@@ -207,6 +225,80 @@ def _constants(tree: ast.AST) -> dict[str, str]:
     return {name: value for name, values in bound.items() if len(values) == 1 and (value := next(iter(values)))}
 
 
+_PARAMETER_CALLS = ("get_param", "declare_parameter", "get_parameter", "get_parameter_or")
+
+
+def _from_parameters(tree: ast.AST, parameters: dict[str, Any]) -> dict[str, tuple[str, str]]:
+    """Names bound once to a parameter's text (``topic = rospy.get_param('~topic_name')``,
+    ``self.declare_parameter('topic', 'chatter').value``): its value where the launch file gives it,
+    else the default the code names; and the parameter's name."""
+    found: dict[str, tuple[str, str] | None] = {}
+    for stmt in ast.walk(tree):
+        if not isinstance(stmt, ast.Assign) or len(stmt.targets) != 1:
+            continue
+        target, value = stmt.targets[0], stmt.value
+        if isinstance(value, ast.Attribute) and value.attr == "value":
+            value = value.value  # rclpy's Parameter(...).value
+        if not isinstance(value, ast.Call) or not value.args:
+            continue
+        callee = value.func.attr if isinstance(value.func, ast.Attribute) else getattr(value.func, "id", "")
+        parameter = _string(value.args[0])
+        if callee not in _PARAMETER_CALLS or parameter is None:
+            continue
+        given = parameters.get(parameter.lstrip("~/"))
+        text = str(given) if isinstance(given, str | int | float) and not isinstance(given, bool) else \
+            (_string(value.args[1]) if len(value.args) > 1 else None)
+        key = target.id if isinstance(target, ast.Name) else \
+            f"{target.value.id}.{target.attr}" if isinstance(target, ast.Attribute) and \
+            isinstance(target.value, ast.Name) else None
+        if key is not None:
+            entry = None if text is None else (text, parameter)
+            found[key] = entry if key not in found or found[key] == entry else None
+    return {key: entry for key, entry in found.items() if entry is not None}
+
+
+def _init_of(cls: ast.ClassDef) -> ast.FunctionDef | ast.AsyncFunctionDef | None:
+    return next((s for s in cls.body if isinstance(s, ast.FunctionDef | ast.AsyncFunctionDef)
+                 and s.name == "__init__"), None)
+
+
+def _arguments(call: ast.Call, function: ast.FunctionDef | ast.AsyncFunctionDef | None,
+               names: dict[str, str]) -> dict[str, str]:
+    """The strings ``call`` passes to ``function``'s parameters, by position (``self`` skipped for a
+    method) and by keyword, where the scan can read them."""
+    if function is None:
+        return {}
+    parameters = [a.arg for a in function.args.posonlyargs + function.args.args]
+    if parameters and parameters[0] in ("self", "cls"):
+        parameters = parameters[1:]
+    passed: dict[str, str] = {}
+    for parameter, argument in zip(parameters, call.args, strict=False):
+        if (text := _joined(argument, names)) is not None:
+            passed[parameter] = text
+    for keyword in call.keywords:
+        if keyword.arg is not None and (text := _joined(keyword.value, names)) is not None:
+            passed[keyword.arg] = text
+    for parameter, default in zip(reversed(parameters), reversed(function.args.defaults), strict=False):
+        if parameter not in passed and (text := _string(default)) is not None:
+            passed[parameter] = text
+    return passed
+
+
+def _attributes(cls: ast.ClassDef, names: dict[str, str]) -> dict[str, str]:
+    """``self.<attr>`` a class sets once, in ``__init__``, to a string the scan knows (a parameter bound
+    by the call, a constant)."""
+    found: dict[str, str | None] = {}
+    for stmt in ast.walk(cls):
+        if isinstance(stmt, ast.Assign):
+            for target in stmt.targets:
+                if isinstance(target, ast.Attribute) and isinstance(target.value, ast.Name) \
+                        and target.value.id == "self":
+                    key = f"self.{target.attr}"
+                    value = _joined(stmt.value, names)
+                    found[key] = value if key not in found or found[key] == value else None
+    return {key: value for key, value in found.items() if value is not None}
+
+
 def _is_rospy(func: ast.expr) -> bool:
     return isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name) and func.value.id == "rospy"
 
@@ -219,6 +311,8 @@ def _joined(expr: ast.expr, names: dict[str, str]) -> str | None:
     """A string constant, a name bound to one, or a ``+`` of those."""
     if isinstance(expr, ast.Name):
         return names.get(expr.id)
+    if isinstance(expr, ast.Attribute) and isinstance(expr.value, ast.Name):
+        return names.get(f"{expr.value.id}.{expr.attr}")
     if isinstance(expr, ast.BinOp) and isinstance(expr.op, ast.Add):
         left, right = _joined(expr.left, names), _joined(expr.right, names)
         return None if left is None or right is None else left + right
@@ -252,15 +346,16 @@ def _qos(expr: ast.expr) -> dict[str, Any]:
     return {}
 
 
-def scan_ros_entry(root: Path, key: str, target: str) -> RosNode:
-    """The node whose entry point is ``target`` (``module:function``) of the package rooted at ``root``."""
+def scan_ros_entry(root: Path, key: str, target: str, parameters: dict[str, Any] | None = None) -> RosNode:
+    """The node whose entry point is ``target`` (``module:function``) of the package rooted at ``root``
+    (``parameters``: the node's, where a launch file gives them: topics may be named by them)."""
     module, _, function = target.partition(":")
     node = RosNode(key, target)
     path = _module_file(root, module)
     if path is None:
         node.notes.append(f"{target}: module {module} is not under {root}; add its endpoints by hand")
         return node
-    reader = _Reader(path, root)
+    reader = _Reader(path, root, parameters)
     scope = reader.functions.get(function)
     if scope is None:
         node.notes.append(f"{path.name}: no function {function!r} (entry point {key}); add its endpoints by hand")
@@ -269,12 +364,12 @@ def scan_ros_entry(root: Path, key: str, target: str) -> RosNode:
     return node
 
 
-def scan_ros_script(path: Path, root: Path, base: Path) -> RosNode:
+def scan_ros_script(path: Path, root: Path, base: Path, parameters: dict[str, Any] | None = None) -> RosNode:
     """A rospy script (run as ``__main__``; its path relative to ``base``, the project file's folder): everything
     the file creates."""
     key = re.sub(r"\W", "_", path.stem)
     node = RosNode(key, os.path.relpath(path.resolve(), base.resolve()))
-    reader = _Reader(path, root)
+    reader = _Reader(path, root, parameters)
     reader.collect(reader.tree, node, set())
     return node
 

@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle, uuid_message
     from ._clock import Ticker
     from ._executor import AdaptiveSpin
-    from ._log import log_to_file, node_logger, stop_logging_to
+    from ._log import RCLPY_CONSOLE, ROSPY_CONSOLE, log_to_file, node_logger, stop_logging_to
     from ._ros_main import bound_node, mark_shut_down, ros_main, shut_down
     from ._taps import TapSink, check_rate
 
@@ -28,6 +28,8 @@ _LAZY = {
     "GoalStatus": "._action",
     "ServerGoalHandle": "._action",
     "AdaptiveSpin": "._executor",
+    "RCLPY_CONSOLE": "._log",
+    "ROSPY_CONSOLE": "._log",
     "TapSink": "._taps",
     "Ticker": "._clock",
     "bound_node": "._ros_main",
@@ -48,6 +50,8 @@ __getattr__ = lazy_exports(__name__, _LAZY)
 __all__ = [
     "NODE_TIMES_VARIABLE",
     "PROFILE_VARIABLE",
+    "RCLPY_CONSOLE",
+    "ROSPY_CONSOLE",
     "ActionClient",
     "ActionServer",
     "AdaptiveSpin",

@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 import threading
 from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from typing import Any, SupportsIndex, overload
 
 _local = threading.local()
@@ -105,3 +106,15 @@ def set_node_argv(argv: list[str]) -> None:
         _process = list(sys.argv)
         sys.argv = NodeArgv(_process)
     _local.argv = list(argv)
+
+
+@contextmanager
+def node_argv(argv: list[str]) -> Iterator[None]:
+    """``argv`` as the calling thread's ``sys.argv`` for a while: a node module imported now sees its node's
+    command line (``def main(argv=sys.argv[1:])`` reads it at import), not the worker's."""
+    previous: list[str] | None = getattr(_local, "argv", None)
+    set_node_argv(argv)
+    try:
+        yield
+    finally:
+        _local.argv = previous

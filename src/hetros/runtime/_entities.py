@@ -273,7 +273,7 @@ class Subscription(Generic[M]):
         if self.callback is not None:
             self.node.executor.notify(self)
         else:
-            self.node.executor.wake()
+            self.node.executor.arrived()
 
     def dispatch(self) -> bool:
         if PROFILING:
@@ -515,7 +515,7 @@ class Client:
 
     def _reply_arrived(self) -> None:
         self._on_reply()
-        self.node.executor.wake()
+        self.node.executor.arrived()
 
     def _on_reply(self) -> None:
         while self._reader is not None:

@@ -97,6 +97,7 @@ class Executor:
         # node, every poll from the first wake-up by another thread of this process on
         self.yield_every = SPARSE_YIELD
         self.entities = 0
+        self.arrivals = 0  # see arrived()
 
     @property
     def generation(self) -> int:
@@ -113,6 +114,13 @@ class Executor:
             interrupt = self._woken()
         if interrupt and self._source is not None:
             self._source.interrupt()
+
+    def arrived(self) -> None:
+        """Something was delivered outside the callback queue (a reply, a message for a take loop or an
+        action's answer): every waiter rechecks, and ``arrivals`` counts it, so that a loop waiting for
+        work (rclpy's ``spin_once``) can tell it from a wait that merely ended."""
+        self.arrivals += 1
+        self.wake()
 
     def wake(self) -> None:
         """Something may be ready: every waiter rechecks (callable from any thread)."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import inspect
 import runpy
 import sys
@@ -17,7 +18,7 @@ from .._errors import LaunchError, NodeError, ShutdownError
 from .._log import get_logger
 from ..msg import registry
 from ..plan import NodePlan, Plan
-from ._argv import set_node_argv
+from ._argv import node_argv, set_node_argv
 from ._graph import Graph
 from ._log import node_logger
 from ._node import Node
@@ -38,7 +39,8 @@ def resolve(run: str, root: str, args: tuple[str, ...] = ()) -> Callable[..., An
     if root and root not in sys.path:
         sys.path.insert(0, root)
     try:
-        module = importlib.import_module(module_name)
+        with node_argv([_module_file(module_name), *args]):
+            module = importlib.import_module(module_name)
     except ImportError as exc:
         raise LaunchError(f"cannot import {module_name!r} for run: {run!r}: {exc}") from exc
     try:
@@ -64,6 +66,19 @@ def script_main(path: Path, args: tuple[str, ...]) -> Callable[[], None]:
                 raise NodeError(f"script {path.name} exited with {exit_.code!r}") from None
     main.__qualname__ = main.__name__ = path.name
     return main
+
+
+def _module_file(module_name: str) -> str:
+    """The file ``module_name`` would be imported from (its name when that cannot be told without importing
+    it): what a console script's ``sys.argv[0]`` is, while the module is imported."""
+    loaded = sys.modules.get(module_name)
+    if loaded is not None:
+        return str(getattr(loaded, "__file__", None) or module_name)
+    try:
+        spec = importlib.util.find_spec(module_name)
+    except (ImportError, ValueError):
+        return module_name
+    return str(spec.origin) if spec is not None and spec.origin else module_name
 
 
 def _program(run: str, body: Callable[..., Any]) -> str:

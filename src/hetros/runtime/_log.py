@@ -14,8 +14,17 @@ NODE_LOGGER_PREFIX = "hetros.node."
 _SEVERITY = {"WARNING": "WARN", "CRITICAL": "FATAL"}
 
 
+# a record's ``ros_console`` (``extra=``): the console form of the ROS client library the node is written for
+RCLPY_CONSOLE = {"ros_console": "rclpy"}
+ROSPY_CONSOLE = {"ros_console": "rospy"}
+
+
 class NodeFormatter(logging.Formatter):
-    """``[INFO] [listener]: I heard: hello 3`` (the shape ROS users know)."""
+    """``[INFO] [listener]: I heard: hello 3`` (the shape ROS users know); a node written for rclpy gets
+    ROS 2's ``[INFO] [1795662970.538698702] [listener]: ...`` and one written for rospy ROS 1's
+    ``[INFO] [1795662970.538698]: ...``, as they would print under ROS."""
+
+    stamped = False  # every line with its wall time and node, whatever its form (log files)
 
     def format(self, record: logging.LogRecord) -> str:
         name = record.name
@@ -23,7 +32,15 @@ class NodeFormatter(logging.Formatter):
             name = name[len(NODE_LOGGER_PREFIX):]
         elif name.startswith("hetros."):
             name = name[len("hetros."):]
-        text = f"[{_SEVERITY.get(record.levelname, record.levelname)}] [{name}]: {record.getMessage()}"
+        severity = f"[{_SEVERITY.get(record.levelname, record.levelname)}]"
+        console = getattr(record, "ros_console", "")
+        if self.stamped or console == "rclpy":
+            head = f"{severity} [{record.created:.9f}] [{name}]"
+        elif console == "rospy":
+            head = f"{severity} [{record.created:.6f}]"
+        else:
+            head = f"{severity} [{name}]"
+        text = f"{head}: {record.getMessage()}"
         if record.exc_info:
             text += "\n" + self.formatException(record.exc_info)
         return text
@@ -50,9 +67,7 @@ class StampedFormatter(NodeFormatter):
     """``[INFO] [1795662970.538698702] [listener]: I heard: hello 3``: ROS 2's console format, with the
     wall time that lets ``hetros log`` merge the lines of every process of a launch."""
 
-    def format(self, record: logging.LogRecord) -> str:
-        level, _, rest = super().format(record).partition(" ")
-        return f"{level} [{record.created:.9f}] {rest}"
+    stamped = True
 
 
 def log_to_file(path: Path) -> logging.Handler:

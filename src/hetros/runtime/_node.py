@@ -63,6 +63,8 @@ class Node:
         self._parameters = dict(parameters or {})
         if self.graph.plan is not None and name in self.graph.plan.nodes and parameters is None:
             self._parameters = dict(self.graph.plan.nodes[name].parameters)
+        # what `hetros param set` goes through when the node's API has its own rules (rclpy's callbacks)
+        self.parameter_gate: Callable[[str, Any], None] | None = None
         self._closables: list[Publisher[Any] | Subscription[Any] | Service | Client | ActionServer
                               | ActionClient] = []
         self.clients: dict[str, Client] = {}
@@ -348,6 +350,14 @@ class Node:
     @property
     def parameters(self) -> dict[str, Any]:
         return dict(self._parameters)
+
+    def set_parameter_from_outside(self, name: str, value: Any) -> None:
+        """``hetros param set``: through the node's own gate where its API has one (rclpy's parameter
+        callbacks may change, refuse or react to the value), else straight in."""
+        if self.parameter_gate is not None:
+            self.parameter_gate(name, value)
+        else:
+            self.set_parameter(name, value)
 
     def set_parameter(self, name: str, value: Any) -> None:
         """Change a parameter while the node runs (``hetros param set``); ``get_parameter`` returns the

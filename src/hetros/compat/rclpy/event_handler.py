@@ -5,7 +5,8 @@ and ``create_publisher(..., event_callbacks=PublisherEventCallbacks(deadline=...
 in the node's executor with ROS 2's status fields. ``incompatible_qos`` never fires under hetros:
 ``hetros check`` refuses a project whose publishers and subscribers of a topic cannot talk, so a launch
 never has such a pair. The events hetros does not raise (``message_lost``, ``matched``,
-``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never ignored.
+``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never ignored:
+``UnsupportedEventTypeError``, as rclpy raises for a middleware without the event.
 """
 
 from __future__ import annotations
@@ -43,6 +44,10 @@ class PublisherEventCallbacks:
     use_default_callbacks: bool = True
 
 
+class UnsupportedEventTypeError(NodeError):
+    """An event this middleware does not raise (rclpy raises it for an RMW without the event)."""
+
+
 _SUPPORTED = {"deadline", "liveliness", "incompatible_qos", "use_default_callbacks"}
 
 
@@ -54,8 +59,9 @@ def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, w
     if isinstance(callbacks, PublisherEventCallbacks) and callbacks.liveliness is not None:
         unsupported.append("liveliness")
     if unsupported:
-        raise NodeError(f"{where}: event_callbacks {', '.join(unsupported)} are events hetros does not raise; "
-                        "remove them (deadline and a subscription's liveliness are supported)")
+        raise UnsupportedEventTypeError(f"{where}: event_callbacks {', '.join(unsupported)} are events hetros does "
+                                        "not raise; remove them (deadline and a subscription's liveliness are "
+                                        "supported)")
 
 
 __all__ = [
@@ -64,4 +70,5 @@ __all__ = [
     "QoSOfferedDeadlineMissedInfo",
     "QoSRequestedDeadlineMissedInfo",
     "SubscriptionEventCallbacks",
+    "UnsupportedEventTypeError",
 ]

@@ -45,13 +45,15 @@ def spin_once_node(hetros: HetrosNode, timeout_sec: float | None) -> None:
     if hetros.graph.stop.is_set():
         raise ExternalShutdownException("the graph is shutting down")
     executor = hetros.executor
-    seen = executor.generation
+    seen = executor.arrivals
     deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
     while _running(hetros):
         left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             return
-        if executor.spin_once(0.02 if left is None else min(left, 0.02)) or executor.generation != seen:
+        # a wait that merely ended (each one moves the executor's generation) is no work done: a
+        # `while cycles < 20: spin_once(node)` loop must count callbacks, not 20 ms waits
+        if executor.spin_once(0.02 if left is None else min(left, 0.02)) or executor.arrivals != seen:
             return
 
 

@@ -8,7 +8,7 @@ import logging as _logging
 import time
 from typing import Any
 
-from ...runtime import node_logger
+from ...runtime import RCLPY_CONSOLE, node_logger
 
 
 class LoggingSeverity(enum.IntEnum):
@@ -52,7 +52,7 @@ class RcutilsLogger:
                 return False
             self._seen[key] = now
         level = _logging.CRITICAL if int(severity) >= LoggingSeverity.FATAL else int(severity)
-        self._logger.log(level, "%s", message)
+        self._logger.log(level, "%s", message, extra=RCLPY_CONSOLE)
         return True
 
     def debug(self, message: Any, **kwargs: Any) -> bool:

@@ -199,6 +199,11 @@ class Client:
     def remove_pending_request(self, future: Future) -> None:
         future.cancel()
 
+    def configure_introspection(self, clock: Any, service_event_qos_profile: Any, introspection_state: Any) -> None:
+        from .service_introspection import configure
+
+        configure(self.srv_name, introspection_state)
+
     def destroy(self) -> None:
         self._inner.close()
 
@@ -208,6 +213,11 @@ class Service:
         self._inner = inner
         self.srv_type = srv_type
         self.srv_name = name
+
+    def configure_introspection(self, clock: Any, service_event_qos_profile: Any, introspection_state: Any) -> None:
+        from .service_introspection import configure
+
+        configure(self.srv_name, introspection_state)
 
     def destroy(self) -> None:
         self._inner.close()
@@ -259,6 +269,10 @@ class Node:
         self._declared: dict[str, Parameter] = {}
         self._allow_undeclared = allow_undeclared_parameters
         self._on_set: list[Callable[[list[Parameter]], Any]] = []
+        self._pre_set: list[Callable[[list[Parameter]], list[Parameter]]] = []
+        self._post_set: list[Callable[[list[Parameter]], Any]] = []
+        # `hetros param set` goes through this node's callbacks, as `ros2 param set` through rclpy's service
+        self._hetros.parameter_gate = self._set_from_outside
         self.default_callback_group: CallbackGroup = MutuallyExclusiveCallbackGroup()
         self.executor: Any = None
         if automatically_declare_parameters_from_overrides:
@@ -303,7 +317,7 @@ class Node:
 
             supported(event_callbacks, f"publisher of {name}")
             deadline = event_callbacks.deadline
-        _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}")
+        _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}", qos_profile)
         inner = self._hetros.create_publisher(msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline)
         return Publisher(self, inner, msg_type, name)
 
@@ -318,7 +332,7 @@ class Node:
 
             supported(event_callbacks, f"subscription to {name}")
             deadline, liveliness = event_callbacks.deadline, event_callbacks.liveliness
-        _refuse_overrides(qos_overriding_options, subscription_class, f"subscription to {name}")
+        _refuse_overrides(qos_overriding_options, subscription_class, f"subscription to {name}", qos_profile)
         if content_filter_options is not None:
             raise NodeError(f"subscription to {name}: content filters are not supported by hetros; filter in the "
                             "callback")
@@ -392,10 +406,13 @@ class Node:
             value = None  # declared by type only: its value comes from the overrides
         chosen = value if ignore_override or name not in self._overrides else self._overrides[name]
         parameter = Parameter(name, value=chosen)
-        self._declared[name] = parameter
-        if chosen is not None:
-            self._hetros.set_parameter(name, chosen)
-        return parameter
+        # declaring sets: rclpy runs the pre-, on- and post-set callbacks registered so far
+        result = self._set_atomically(self._pre_setting([parameter]))
+        if not result.successful:
+            from .exceptions import InvalidParameterValueException
+
+            raise InvalidParameterValueException(name, chosen, result.reason)
+        return self._declared.get(name, parameter)
 
     def declare_parameters(self, namespace: str, parameters: Iterable[tuple[Any, ...]],
                            ignore_override: bool = False) -> list[Parameter]:
@@ -424,19 +441,58 @@ class Node:
         return [self.get_parameter(name) for name in names]
 
     def set_parameters(self, parameters: list[Parameter]) -> list[SetParametersResult]:
-        results = []
+        """rclpy's order: the pre-set callbacks may change the list; then each parameter on its own is
+        validated (on-set), stored, and announced (post-set)."""
+        return [self._set_atomically([parameter]) for parameter in self._pre_setting(parameters)]
+
+    def set_parameters_atomically(self, parameters: list[Parameter]) -> SetParametersResult:
+        return self._set_atomically(self._pre_setting(parameters))
+
+    def _pre_setting(self, parameters: list[Parameter]) -> list[Parameter]:
+        for callback in self._pre_set:
+            parameters = list(callback(list(parameters)))
+            if not parameters:
+                raise ParameterError(f"node {self._name!r}: a pre-set parameters callback left no parameter to "
+                                     "set (rclpy refuses an empty list too)")
+        return parameters
+
+    def _set_atomically(self, parameters: list[Parameter]) -> SetParametersResult:
         for callback in self._on_set:
             verdict = callback(parameters)
             if verdict is not None and not getattr(verdict, "successful", True):
-                return [SetParametersResult(False, getattr(verdict, "reason", ""))] * len(parameters)
+                return SetParametersResult(False, getattr(verdict, "reason", ""))
         for parameter in parameters:
             self._declared[parameter.name] = parameter
-            self._hetros.set_parameter(parameter.name, parameter.value)
-            results.append(SetParametersResult(True))
-        return results
+            if parameter.value is not None:
+                self._hetros.set_parameter(parameter.name, parameter.value)
+        for post in self._post_set:
+            post(parameters)
+        return SetParametersResult(True)
+
+    def _set_from_outside(self, name: str, value: Any) -> None:
+        """``hetros param set``: through the callbacks; a refusal reaches the command as an error."""
+        for result in self.set_parameters([Parameter(name, value=value)]):
+            if not result.successful:
+                reason = result.reason or "no reason given"
+                raise ParameterError(f"node {self._name!r} refused {name}={value!r}: {reason}")
 
     def add_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], Any]) -> None:
         self._on_set.append(callback)
+
+    def remove_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], Any]) -> None:
+        self._on_set.remove(callback)
+
+    def add_pre_set_parameters_callback(self, callback: Callable[[list[Parameter]], list[Parameter]]) -> None:
+        self._pre_set.append(callback)
+
+    def remove_pre_set_parameters_callback(self, callback: Callable[[list[Parameter]], list[Parameter]]) -> None:
+        self._pre_set.remove(callback)
+
+    def add_post_set_parameters_callback(self, callback: Callable[[list[Parameter]], Any]) -> None:
+        self._post_set.append(callback)
+
+    def remove_post_set_parameters_callback(self, callback: Callable[[list[Parameter]], Any]) -> None:
+        self._post_set.remove(callback)
 
     def undeclare_parameter(self, name: str) -> None:
         self._declared.pop(name, None)
@@ -470,10 +526,14 @@ class Node:
         return True
 
 
-def _refuse_overrides(options: Any, cls: Any, where: str) -> None:
+def _refuse_overrides(options: Any, cls: Any, where: str, qos: QoSProfile | int) -> None:
     """``qos_overriding_options`` keeps the QoS given (as ROS 2 does without override parameters): the
-    project file's ``topics:`` is where hetros overrides a topic's QoS, for every endpoint at once."""
-    del options
+    project file's ``topics:`` is where hetros overrides a topic's QoS, for every endpoint at once. Its
+    callback still validates the QoS, as rclpy's does."""
+    if options is not None:
+        from .qos_overriding_options import validate
+
+        validate(options, qos if isinstance(qos, QoSProfile) else QoSProfile(depth=qos), where)
     if cls is not None:
         raise NodeError(f"{where}: a custom publisher or subscription class is not supported by hetros; remove it")
 

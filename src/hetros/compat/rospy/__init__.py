@@ -15,11 +15,11 @@ import time as _time
 from collections.abc import Callable
 from typing import Any
 
-from ..._errors import Error, MissingFieldError, ParameterError, ShutdownError
+from ..._errors import Error, ParameterError, ShutdownError
 from ...msg import Message, registry
 from ...msg import copy as copy_message
+from ...runtime import ROSPY_CONSOLE, Ticker, node_logger
 from ...runtime import Node as HetrosNode
-from ...runtime import Ticker, node_logger
 from ...runtime import bound_node as _bound_node
 from ...runtime import ros_main as _ros_main
 
@@ -127,22 +127,55 @@ def _resolve(name: str) -> str:
     return state.hetros.resolve_name(private, node_name=state.name)
 
 
-def _no_seq(header: Any, value: Any = None) -> Any:
-    raise MissingFieldError(
-        "std_msgs/Header has no seq in hetros: every hetros transport, rclpy node and ROS 2 peer shares ROS 2's "
-        "layout of it (stamp, frame_id), which dropped seq; count messages in the node if it needs a number (ROS 1 "
-        "peers across the bridge see seq 0)")
+# header.seq of the headers rospy code holds now: received ones while their callback runs, published ones
+# after publish (rospy writes the publisher's count into the message it sends); bounded, keyed by id
+_SEQS: dict[int, int] = {}
+_SEQS_KEPT = 1024
 
 
-def _explain_ros1_fields() -> None:
-    """ROS 1's ``header.seq``, asked by rospy code, fails saying why and what to do instead of a bare
-    AttributeError (the class gains a property only: its slots and codec stay as they are)."""
+def _seq_of(header: Any) -> int:
+    return _SEQS.get(id(header), 0)
+
+
+def _set_seq(header: Any, value: int) -> None:
+    if len(_SEQS) >= _SEQS_KEPT:
+        del _SEQS[next(iter(_SEQS))]
+    _SEQS[id(header)] = int(value)
+
+
+def _secs(stamp: Any) -> int:
+    return int(stamp.sec)
+
+
+def _nsecs(stamp: Any) -> int:
+    return int(stamp.nanosec)
+
+
+def _to_sec(stamp: Any) -> float:
+    return float(stamp.sec) + float(stamp.nanosec) / 1e9
+
+
+def _to_nsec(stamp: Any) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def _ros1_layouts() -> None:
+    """ROS 1's view of the messages ROS 2 changed, for rospy code: ``header.seq`` (hetros transports carry
+    ROS 2's Header, so a subscriber's seq is the count of what its subscription received, 1 first — rospy's
+    publisher count wherever one publisher's stream arrives whole, as hetros's reliable topics do), and
+    ``stamp.secs``, ``nsecs``, ``to_sec()``, ``to_nsec()`` on times and durations. The classes gain
+    properties and methods only: their slots and codecs stay as they are."""
     header = registry().get("std_msgs/msg/Header")
     if not isinstance(header.__dict__.get("seq"), property):
-        header.seq = property(_no_seq, _no_seq)
+        header.seq = property(_seq_of, _set_seq)
+    for typename in ("builtin_interfaces/msg/Time", "builtin_interfaces/msg/Duration"):
+        stamp = registry().get(typename)
+        if not isinstance(stamp.__dict__.get("secs"), property):
+            stamp.secs, stamp.nsecs = property(_secs), property(_nsecs)
+            stamp.to_sec, stamp.to_nsec = _to_sec, _to_nsec
 
 
-_explain_ros1_fields()
+_ros1_layouts()
 
 
 # -- the node -------------------------------------------------------------------------------------
@@ -263,7 +296,7 @@ class Rate:
 
 def _log(level: int, message: Any, *args: Any) -> None:
     text = str(message) % args if args else str(message)
-    node_logger(_state().name).log(level, "%s", text)
+    node_logger(_state().name).log(level, "%s", text, extra=ROSPY_CONSOLE)
 
 
 def logdebug(message: Any, *args: Any, **_kwargs: Any) -> None:
@@ -303,9 +336,14 @@ class Publisher:
         self.data_class = data_class
         self.type = getattr(data_class, "__msgtype__", "")
         self._inner = _state().hetros.create_publisher(data_class, self.name)
+        self._seq = 0  # rospy's count of messages published, written into their header.seq
 
     def publish(self, *args: Any, **kwargs: Any) -> None:
-        self._inner.publish(_message(self.data_class, args, kwargs))
+        message = _message(self.data_class, args, kwargs)
+        self._inner.publish(message)
+        self._seq += 1
+        if hasattr(message, "header") and hasattr(type(message.header), "seq"):
+            _set_seq(message.header, self._seq)
 
     def get_num_connections(self) -> int:
         plan = _state().hetros.graph.plan
@@ -324,9 +362,21 @@ class Subscriber:
         self.data_class = data_class
         state = _state()
 
+        received = 0
+        header = getattr(data_class, "__slots__", ()) and "header" in data_class.__slots__
+
         def deliver(message: Any) -> None:
-            if callback is not None:
+            nonlocal received
+            received += 1
+            if callback is None:
+                return
+            if header:
+                _set_seq(message.header, received)
+            try:
                 callback(message) if callback_args is None else callback(message, callback_args)
+            finally:
+                if header:
+                    _SEQS.pop(id(message.header), None)
         self._inner = state.hetros.create_subscription(data_class, self.name, deliver)
         state.start_callbacks()
 
@@ -415,12 +465,31 @@ def _parameter_name(name: str) -> str:
 
 
 def get_param(name: str, default: Any = _MISSING) -> Any:
+    """As rospy: a namespace of parameters (``gains`` over ``gains/P``, ``gains/I``) is a dictionary."""
     hetros = _state().hetros
+    key = _parameter_name(name)
     try:
-        return hetros.get_parameter(_parameter_name(name)) if default is _MISSING else \
-            hetros.get_parameter(_parameter_name(name), default)
+        return hetros.get_parameter(key)
     except ParameterError as exc:
+        below = _namespace_of(hetros.parameters, key)
+        if below:
+            return below
+        if default is not _MISSING:
+            return hetros.get_parameter(key, default)
         raise KeyError(name) from exc
+
+
+def _namespace_of(parameters: dict[str, Any], key: str) -> dict[str, Any]:
+    tree: dict[str, Any] = {}
+    prefix = f"{key.rstrip('/')}/"
+    for full, value in parameters.items():
+        if full.startswith(prefix):
+            *parents, leaf = full[len(prefix):].split("/")
+            branch = tree
+            for parent in parents:
+                branch = branch.setdefault(parent, {})
+            branch[leaf] = value
+    return tree
 
 
 def has_param(name: str) -> bool:

@@ -322,7 +322,7 @@ class ControlServer:
 
     def _op_set_param(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
         node = self._node(_text(request, "node"))
-        node.set_parameter(_text(request, "name"), request.get("value"))
+        node.set_parameter_from_outside(_text(request, "name"), request.get("value"))
         send_frame(connection, {"ok": True})
 
 

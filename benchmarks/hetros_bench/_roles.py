@@ -328,6 +328,72 @@ class CycloneEndpoint(Endpoint):
 
 # echo nodes written the ROS way (their ping side is hetros-shm's)
 ROS_STYLE = {"hetros-rclpy-cb": "rclpy", "hetros-rospy-cb": "rospy"}
+# both ends written the ROS way: the pinger too (hetros-shm-cb is the same pair in hetros's own API)
+ROS_BOTH = {"hetros-rclpy-pp": "rclpy", "hetros-rospy-pp": "rospy"}
+
+
+class RosPingEndpoint(Endpoint):
+    """The pinger written the rclpy or the rospy way, as users port a ping-pong unchanged: a publisher, and
+    a subscription callback that keeps the reply; rclpy spins the node until it comes, rospy's callback
+    thread hands it over."""
+
+    def __init__(self, cfg: dict[str, Any], flavour: str) -> None:
+        from hetros import Node
+        from hetros.compat import install
+        from hetros.runtime import Graph, ros_main
+
+        self.graph = Graph(_hetros_plan(16), "p0", cfg["session"])
+        self.graph.prepare(["ping"])
+        self.hetros = Node("ping", self.graph)
+        install()
+        self._bound = ros_main(self.hetros)
+        self._bound.__enter__()
+        self.flavour = flavour
+        self.Image = importlib.import_module("sensor_msgs.msg").Image
+        self.replies: list[Any] = []
+        if flavour == "rclpy":
+            self.rclpy = importlib.import_module("rclpy")
+            self.rclpy.init()
+            self.node = self.rclpy.create_node("ping")
+            self.pub = self.node.create_publisher(self.Image, "/send", 16)
+            self.node.create_subscription(self.Image, "/recv", self.replies.append, 16)
+        else:
+            rospy = importlib.import_module("rospy")
+            rospy.init_node("ping")
+            self.arrived = threading.Event()
+            self.pub = rospy.Publisher("/send", self.Image, queue_size=16)
+
+            def on_reply(msg: Any) -> None:
+                self.replies.append(msg)
+                self.arrived.set()
+            rospy.Subscriber("/recv", self.Image, on_reply, queue_size=16)
+
+    def send(self, stamp: int, seq: int, payload: Any) -> None:
+        msg = self.Image()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+        msg.height, msg.width = seq & 0xFFFFFFFF, 1 if seq < 0 else 0
+        msg.data = payload
+        self.pub.publish(msg)
+
+    def recv(self, timeout: float) -> tuple[int, int, Any] | None:
+        end = time.monotonic() + timeout
+        while not self.replies:
+            left = end - time.monotonic()
+            if left <= 0:
+                return None
+            if self.flavour == "rclpy":
+                self.rclpy.spin_once(self.node, timeout_sec=left)
+            else:
+                self.arrived.wait(left)
+                self.arrived.clear()
+        msg = self.replies.pop(0)
+        seq = msg.height if not msg.width else msg.height - (1 << 32)
+        return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec, seq, msg.data
+
+    def close(self) -> None:
+        self._bound.__exit__(None, None, None)
+        self.hetros.close()
+        self.graph.close()
 
 
 def open_endpoint(system: str, role: str, cfg: dict[str, Any]) -> Endpoint:
@@ -555,8 +621,12 @@ def main() -> None:
     else:
         if cfg.get("cpus"):
             os.sched_setaffinity(0, [cfg["cpus"][0 if role == "ping" else 1]])
-        if role == "echo" and system in ROS_STYLE:
-            result = ros_echo(cfg, ROS_STYLE[system])
+        if role == "echo" and system in ROS_STYLE | ROS_BOTH:
+            result = ros_echo(cfg, (ROS_STYLE | ROS_BOTH)[system])
+        elif role == "ping" and system in ROS_BOTH:
+            ros_pinger = RosPingEndpoint(cfg, ROS_BOTH[system])
+            result = ping(ros_pinger, cfg)
+            ros_pinger.close()
         elif role == "echo" and system.endswith("-cb"):
             result = callback_echo(cfg, loaned="loan" in system)
         else:

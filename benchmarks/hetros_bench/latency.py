@@ -37,12 +37,14 @@ SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "
 # -cb: the echo node is a subscription callback that publishes (what users write); the others
 # take in a loop on both sides. -py: the same with HETROS_PURE_PYTHON=1 (no compiled hot path)
 PURE_PYTHON = "-py"
-# -rclpy-cb / -rospy-cb: the callback echo node written the rclpy or rospy way, run through hetros's shims
+# -rclpy-cb / -rospy-cb: the callback echo node written the rclpy or rospy way, run through hetros's shims;
+# -rclpy-pp / -rospy-pp: the pinger too (both ends of the ping-pong as ROS users port them)
 SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb",
-           "hetros-rclpy-cb", "hetros-rospy-cb", "hetros-shm-py", "hetros-shm-cb-py", "iceoryx2", "cyclonedds",
+           "hetros-rclpy-cb", "hetros-rospy-cb", "hetros-rclpy-pp", "hetros-rospy-pp", "hetros-shm-py",
+           "hetros-shm-cb-py", "iceoryx2", "cyclonedds",
            "zenoh", "dora-rs", "rospy", "mp-pipe", "numpy-copy"]
 HETROS_SHM = ("hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb", "hetros-rclpy-cb",
-              "hetros-rospy-cb", "hetros-shm-py", "hetros-shm-cb-py")
+              "hetros-rospy-cb", "hetros-rclpy-pp", "hetros-rospy-pp", "hetros-shm-py", "hetros-shm-cb-py")
 HERE = Path(__file__).resolve().parent
 LOOPBACK_CYCLONEDDS = textwrap.dedent("""\
     <CycloneDDS><Domain id="any">
@@ -423,6 +425,17 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
     if shims and "hetros-shm-cb" in shown:
         _table(lines, "Cost of the rclpy and rospy shims: p50 one-way of the unchanged ROS-style echo node / "
                       "hetros-shm-cb p50", shims, sizes, shim_cost)
+    both: list[str] = [s for s in ("hetros-rclpy-pp", "hetros-rospy-pp") if s in shown]
+
+    def both_ends(size: int, ported: str) -> str:
+        mine, native = by.get((ported, size)), by.get(("hetros-shm-cb", size))
+        if mine is None or native is None or mine.rtt is None or native.rtt is None:
+            return "-"
+        return f"{mine.rtt.p50 / native.rtt.p50:.2f}x"
+
+    if both and "hetros-shm-cb" in shown:
+        _table(lines, "Both ends written the ROS way: p50 round trip of the unchanged rclpy/rospy ping-pong / "
+                      "hetros-shm-cb p50 (the same pair in hetros's API)", both, sizes, both_ends)
     peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
     for ours in ("hetros-shm-cb", "hetros-shm-loan-cb", "hetros-shm-loan", "hetros-inproc"):
         if ours in shown:

@@ -68,7 +68,12 @@ def test_rospy_code_sees_ros1_header_seq_and_stamp_accessors() -> None:
     assert header.stamp.to_sec() == 12.5 and header.stamp.to_nsec() == 12_500_000_000
     duration = registry().get("builtin_interfaces/msg/Duration")(sec=1, nanosec=2)
     assert duration.to_nsec() == 1_000_000_002
-    assert isinstance(rospy_shim, object)
+    # rospy.Time and Duration are stamps themselves: header.stamp = rospy.Time(...) goes into the message
+    header.stamp = rospy_shim.Time(3, 5)
+    assert (header.stamp.sec, header.stamp.nanosec) == (3, 5)
+    later = rospy_shim.Time(4) + rospy_shim.Duration(0.5)
+    assert later.to_nsec() == 4_500_000_000 and (later - header.stamp).to_sec() == pytest.approx(1.499999995)
+    assert header.stamp < later and not later.is_zero()
 
 
 def test_an_async_callback_runs_to_its_end_awaiting_futures() -> None:

@@ -17,6 +17,9 @@ from . import _flavour
 # module names served from hetros.compat (the shims), and their prefix there
 _SHIMS = ("rclpy", "rospy")
 _KINDS = ("msg", "srv", "action")
+# the helpers beside the message packages that ROS code imports: rospy's sensor_msgs.point_cloud2, rclpy's
+# sensor_msgs_py.point_cloud2 (one implementation, hetros.compat.point_cloud2)
+_HELPERS = ("sensor_msgs.point_cloud2", "sensor_msgs_py", "sensor_msgs_py.point_cloud2")
 
 
 # The loaders and the finder follow importlib's protocols without subclassing ``importlib.abc``: in
@@ -50,6 +53,11 @@ class _RosNames:
         top = fullname.split(".", 1)[0]
         if top in _SHIMS:
             return self._spec(fullname, f"{__package__}.{fullname}")
+        if fullname in _HELPERS:
+            spec = importlib.machinery.ModuleSpec(fullname, _Helper(), is_package=fullname == "sensor_msgs_py")
+            if fullname == "sensor_msgs_py":
+                spec.submodule_search_locations = []
+            return spec
         parts = fullname.split(".")
         if len(parts) > 2 or getattr(self._busy, "on", False):
             return None  # busy: the registry, asked below, imports modules of its own
@@ -71,6 +79,25 @@ class _RosNames:
         spec = importlib.machinery.ModuleSpec(fullname, _Alias(target), is_package=True)
         spec.submodule_search_locations = []
         return spec
+
+
+class _Helper(_Loader):
+    """A helper module of ROS's message packages (see ``_HELPERS``)."""
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
+        from . import point_cloud2
+
+        if spec.name == "sensor_msgs.point_cloud2":
+            module: types.ModuleType = point_cloud2.ros1_module()
+            return module
+        if spec.name == "sensor_msgs_py":
+            package = types.ModuleType(spec.name, "sensor_msgs_py, as hetros serves it: its point_cloud2")
+            package.__path__ = []
+            return package
+        return point_cloud2
+
+    def exec_module(self, module: types.ModuleType) -> None:
+        return None
 
 
 class _Interfaces(_Loader):

@@ -81,6 +81,11 @@ def import_problem(module_name: str, exc: BaseException) -> str:
             missing = name
         elif shim and (quoted := re.search(r"cannot import name '([^']+)'", str(exc))):
             missing = f"{name}.{quoted[1]}"
+        elif re.fullmatch(r"\w+\.(msg|srv|action)", name) and \
+                (quoted := re.search(r"cannot import name '([^']+)'", str(exc))):
+            typename = f"{name.replace('.', '/')}/{quoted[1]}"
+            return (f"{place or module_name}: uses {typename}, a type hetros does not know; add the folder of the "
+                    f"package that defines it to messages: (`hetros msg show` lists the known ones)")
     if missing:
         return (f"{place or module_name}: uses {missing}, which hetros does not provide (its rclpy and rospy cover "
                 "what docs/GUIDE.md lists); the module is fine as ROS code: drop that use under hetros, or run the "

@@ -159,6 +159,26 @@ def _to_nsec(stamp: Any) -> int:
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
+def _is_zero(stamp: Any) -> bool:
+    return _to_nsec(stamp) == 0
+
+
+def _before(stamp: Any, other: Any) -> bool:
+    return _to_nsec(stamp) < _to_nsec(other)
+
+
+def _not_after(stamp: Any, other: Any) -> bool:
+    return _to_nsec(stamp) <= _to_nsec(other)
+
+
+def _after(stamp: Any, other: Any) -> bool:
+    return _to_nsec(stamp) > _to_nsec(other)
+
+
+def _not_before(stamp: Any, other: Any) -> bool:
+    return _to_nsec(stamp) >= _to_nsec(other)
+
+
 def _ros1_layouts() -> None:
     """ROS 1's view of the messages ROS 2 changed, for rospy code: ``header.seq`` (hetros transports carry
     ROS 2's Header, so a subscriber's seq is the count of what its subscription received, 1 first — rospy's
@@ -172,7 +192,9 @@ def _ros1_layouts() -> None:
         stamp = registry().get(typename)
         if not isinstance(stamp.__dict__.get("secs"), property):
             stamp.secs, stamp.nsecs = property(_secs), property(_nsecs)
-            stamp.to_sec, stamp.to_nsec = _to_sec, _to_nsec
+            stamp.to_sec, stamp.to_nsec, stamp.is_zero = _to_sec, _to_nsec, _is_zero
+            stamp.__lt__, stamp.__le__ = _before, _not_after
+            stamp.__gt__, stamp.__ge__ = _after, _not_before
 
 
 _ros1_layouts()
@@ -229,30 +251,60 @@ def spin() -> None:
 # -- time -----------------------------------------------------------------------------------------
 
 
-class Duration:
-    """rospy.Duration: ``secs``, ``nsecs``, ``to_sec()``."""
+def _total(secs: float, nsecs: int) -> tuple[int, int]:
+    return divmod(round(secs * 1_000_000_000) + int(nsecs), 1_000_000_000)
+
+
+class Duration(registry().get("builtin_interfaces/msg/Duration")):  # type: ignore[misc]
+    """rospy.Duration: ``secs``, ``nsecs``, ``to_sec()``; a builtin_interfaces/Duration message too, so that
+    it goes into messages as it is."""
+
+    __slots__ = ()
 
     def __init__(self, secs: float = 0, nsecs: int = 0) -> None:
-        total = int(secs * 1_000_000_000) + int(nsecs)
-        self.secs, self.nsecs = divmod(total, 1_000_000_000)
+        sec, nanosec = _total(secs, nsecs)
+        super().__init__(sec=sec, nanosec=nanosec)
 
     @classmethod
     def from_sec(cls, seconds: float) -> Duration:
         return cls(seconds)
 
-    def to_sec(self) -> float:
-        return self.secs + self.nsecs / 1e9
+    def __add__(self, other: Any) -> Duration:
+        return Duration(0, self.to_nsec() + other.to_nsec())
 
-    def to_nsec(self) -> int:
-        return self.secs * 1_000_000_000 + self.nsecs
+    def __sub__(self, other: Any) -> Duration:
+        return Duration(0, self.to_nsec() - other.to_nsec())
+
+    def __repr__(self) -> str:
+        return f"rospy.Duration[{self.to_nsec()}]"
 
 
-class Time(Duration):
-    """rospy.Time: the graph's clock (``Time.now()``)."""
+class Time(registry().get("builtin_interfaces/msg/Time")):  # type: ignore[misc]
+    """rospy.Time: the graph's clock (``Time.now()``); a builtin_interfaces/Time message too, so that
+    ``header.stamp = rospy.Time.now()`` is a stamp."""
+
+    __slots__ = ()
+
+    def __init__(self, secs: float = 0, nsecs: int = 0) -> None:
+        sec, nanosec = _total(secs, nsecs)
+        super().__init__(sec=sec, nanosec=nanosec)
 
     @classmethod
     def now(cls) -> Time:
         return cls(0, _state().hetros.get_clock().now_ns())
+
+    @classmethod
+    def from_sec(cls, seconds: float) -> Time:
+        return cls(seconds)
+
+    def __add__(self, other: Any) -> Time:
+        return Time(0, self.to_nsec() + other.to_nsec())
+
+    def __sub__(self, other: Any) -> Any:
+        """Time - Time is a Duration; Time - Duration a Time (as rospy)."""
+        if isinstance(other, Duration):
+            return Time(0, self.to_nsec() - other.to_nsec())
+        return Duration(0, self.to_nsec() - other.to_nsec())
 
     def __repr__(self) -> str:
         return f"rospy.Time[{self.to_nsec()}]"
@@ -263,7 +315,7 @@ def get_rostime() -> Time:
 
 
 def get_time() -> float:
-    return Time.now().to_sec()
+    return float(Time.now().to_sec())
 
 
 def sleep(duration: float | Duration) -> None:

@@ -1,0 +1,6 @@
+"""A node module written for ROS 2 that imports an interface hetros does not know (a check case)."""
+from rcl_interfaces.srv import GetLoggerLevels  # noqa: F401
+
+
+def main() -> None:
+    pass

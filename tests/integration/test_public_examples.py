@@ -1,0 +1,132 @@
+"""Public ROS examples, unchanged, under `hetros init` / `hetros import` and `hetros launch`: the Python
+packages of ros2/demos (tests/data/ros2_demos) and rospy tutorials with their own launch files
+(tests/data/ros_tutorials), each node in a process of its own, printing what they print under ROS
+(time stamps aside). The ros2/examples rclpy packages and the other rospy tutorials have their own
+tests (test_rclpy.py, test_rospy.py)."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+DEMOS = DATA / "ros2_demos"
+TUTORIALS = DATA / "ros_tutorials"
+
+
+def _hetros(*argv: str, cwd: Path | None = None, timeout: float = 60) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "hetros", *argv], capture_output=True, text=True, timeout=timeout,
+                          check=False, cwd=cwd)
+
+
+def _demos_project(tmp_path: Path) -> dict[str, Any]:
+    """`hetros init` of the three packages, then the choice a user makes: which nodes, in which namespace
+    (two demos serve add_two_ints), with which command line."""
+    made = _hetros("init", str(DEMOS / "demo_nodes_py"), str(DEMOS / "action_tutorials_py"),
+                   str(DEMOS / "quality_of_service_demo_py"), "-o", str(tmp_path / "all.yaml"), "--name", "demos")
+    assert made.returncode == 0, made.stderr
+    project: dict[str, Any] = yaml.safe_load((tmp_path / "all.yaml").read_text())
+    chosen = {"talker": "", "listener": "", "serialized_subscriber": "", "talker_qos": "qos", "listener_qos": "qos",
+              "add_two_ints_server": "", "add_two_ints_client": "", "add_two_ints_client_async": "",
+              "introspection": "intro", "set_parameters_callback": "", "fibonacci_action_server": "",
+              "fibonacci_action_client": "", "qos_overrides_talker": "", "qos_overrides_listener": ""}
+    nodes = {key: node for key, node in project["nodes"].items() if key in chosen}
+    assert sorted(nodes) == sorted(chosen), sorted(project["nodes"])
+    for key, namespace in chosen.items():
+        if namespace:
+            nodes[key]["namespace"] = namespace
+    nodes["talker_qos"]["args"] = ["--reliable", "-n", "4"]
+    nodes["listener_qos"]["args"] = ["--reliable", "-n", "4"]
+    project["nodes"] = nodes
+    project["targets"] = {node["target"]: {"kind": "process"} for node in nodes.values()}
+    project["topics"] = {"/chatter": {"history": "keep_last", "depth": 10},
+                         "/qos/chatter": {"history": "keep_last", "depth": 10},
+                         "/qos_overrides_chatter": {"history": "keep_last", "depth": 10}}
+    return project
+
+
+def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
+    project = _demos_project(tmp_path)
+    path = tmp_path / "project.yaml"
+    path.write_text(yaml.safe_dump(project))
+    checked = _hetros("check", str(path))
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    launched = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(path), "--duration", "14"],
+                                cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        # ros2 param set /set_parameters_callback param1 10.0: its pre-set callback sets param2 to 4.0
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and _hetros("param", "get", "/set_parameters_callback", "param1",
+                                                      cwd=tmp_path).returncode != 0:
+            time.sleep(0.3)
+        assert _hetros("param", "set", "/set_parameters_callback", "param1", "10.0", cwd=tmp_path).returncode == 0
+        got = _hetros("param", "get", "/set_parameters_callback", "param2", cwd=tmp_path)
+        assert got.stdout.strip() == "Double value is: 4.0", got.stdout + got.stderr
+        refused = _hetros("param", "set", "/set_parameters_callback", "param3", "1", cwd=tmp_path)
+        assert refused.returncode != 0
+        _, err = launched.communicate(timeout=90)
+    finally:
+        launched.kill()
+    assert launched.returncode == 0, err
+    lines = err.splitlines()
+
+    def said(node: str) -> list[str]:
+        """What ``node`` logged, in ROS 2's console form ``[INFO] [sec.nsec] [node]: text``."""
+        form = re.compile(rf"^\[INFO\] \[\d+\.\d{{9}}\] \[{re.escape(node)}\]: (.*)$")
+        return [m.group(1) for line in lines if (m := form.match(line))]
+
+    assert said("talker")[:3] == [f'Publishing: "Hello World: {i}"' for i in range(3)], err
+    assert said("listener")[:3] == [f"I heard: [Hello World: {i}]" for i in range(3)], err
+    # listener_serialized: raw=True hands the callback the CDR bytes
+    assert said("serialized_subscriber")[0] == \
+        "I heard: \"b'\\x00\\x01\\x00\\x00\\x0f\\x00\\x00\\x00Hello World: 0\\x00'\"", err
+    # talker_qos/listener_qos --reliable -n 4: argparse on each node's own command line
+    assert said("qos.talker_qos")[:5] == ["Reliable talker", *(f'Publishing: "Hello World: {i}"' for i in range(4))]
+    assert said("qos.listener_qos")[0] == "Reliable listener"
+    assert said("qos.listener_qos")[1:] == [f"I heard: [Hello World: {i}]" for i in range(len(said("qos.listener_qos"))
+                                                                                           - 1)], err
+    assert len(said("qos.listener_qos")) >= 3, err
+    assert said("add_two_ints_client").count("Result of add_two_ints: 5") == 2, err  # the client and the async one
+    assert said("add_two_ints_server").count("Incoming request") == 2, err
+    assert "Result of add_two_ints: 5" in said("intro.introspection_client"), err
+    assert said("fibonacci_action_client")[:2] == ["Goal accepted :)", "Received feedback: array('i', [0, 1, 1])"]
+    assert "Result: array('i', [0, 1, 1, 2, 3, 5, 8, 13, 21, 34, 55])" in said("fibonacci_action_client"), err
+    assert said("qos_overrides_talker")[0] == 'Publishing: "Hello World: 0"', err
+    assert said("qos_overrides_listener")[0] == "I heard: [Hello World: 0]", err
+    assert "Traceback" not in err, err
+
+
+def test_rospy_tutorials_from_their_launch_files(tmp_path: Path) -> None:
+    """002_headers (header.seq, stamp.to_sec()), 006_parameters (parameters in nested groups, a topic
+    named by a private parameter, get_param of a namespace) and 010_publish_pointcloud2
+    (sensor_msgs.point_cloud2, header.stamp = rospy.Time.now()), imported from their .launch files and
+    started together (a project including them)."""
+    for name, launch in (("headers", "002_headers/headers.launch"), ("params", "006_parameters/param_talker.launch"),
+                         ("clouds", "010_publish_pointcloud2/publish_pointcloud2.launch")):
+        imported = _hetros("import", "roslaunch", str(TUTORIALS / "rospy_tutorials" / launch), "--package-path",
+                           str(TUTORIALS), "-o", str(tmp_path / f"{name}.yaml"))
+        assert imported.returncode == 0, imported.stderr
+    (tmp_path / "project.yaml").write_text("name: tutorials\ntargets: {main: {kind: thread}}\n"
+                                           "include:\n  headers: {file: headers.yaml}\n"
+                                           "  params: {file: params.yaml}\n  clouds: {file: clouds.yaml}\n")
+    checked = _hetros("check", str(tmp_path / "project.yaml"))
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    done = _hetros("launch", str(tmp_path / "project.yaml"), "--duration", "2.5", cwd=tmp_path, timeout=90)
+    assert done.returncode == 0, done.stderr
+    heard = re.findall(r"^/listener_header_\d+_\d+ (\d+) I just heard that hello world (\d+) at +([\d.]+)$",
+                       done.stdout, re.MULTILINE)
+    assert len(heard) >= 5, done.stdout
+    assert [(int(seq), int(count)) for seq, count, _ in heard[:5]] == [(i + 1, i) for i in range(5)]
+    assert all(stamp == "0.000000" for _, _, stamp in heard)  # rospy leaves a None header's stamp at zero
+    logged = re.findall(r"^\[INFO\] \[\d+\.\d{6}\]: (.*)$", done.stderr, re.MULTILINE)
+    assert logged[:5] == ["/global_example is global value", "/foo/utterance is Hello World",
+                          "/foo/param_talker/topic_name is chatter", "/foo/default_param is default_value",
+                          "gains are 1.0, 2.0, 3.0"], done.stderr
+    assert "deleted /foo/to_delete parameter" in logged and logged.count("Hello World") >= 2, done.stderr
+    assert "Traceback" not in done.stderr, done.stderr  # the point cloud publisher ran until the end

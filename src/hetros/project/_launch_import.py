@@ -27,7 +27,7 @@ import yaml
 from .._errors import ProjectError
 from ..plan import join_namespace, resolve_name
 from ._expand import flatten
-from ._ros_scan import entry_points, package_name, scan_ros_entry, scan_ros_script, unique_key
+from ._ros_scan import code_folders, entry_points, package_name, scan_ros_entry, scan_ros_script, unique_key
 
 _EXECUTABLE_FOLDERS = ("scripts", "nodes", "bin", "src", "")
 
@@ -399,13 +399,7 @@ def import_launch(path: Path, ros2: bool, package_paths: list[Path], base: Path,
     importer = LaunchImporter(ros2, [*package_paths, path.parent.resolve()], base)
     importer.read(path, _Scope(args=dict(args or {})))
     importer.share_global_params()
-    relative = [os.path.relpath(folder, base.resolve()) for folder in importer.imported_from]
-    if [folder for folder in relative if folder != "."]:
-        importer.project = {"python_path": [f for f in relative if f != "."], **importer.project}
-    interfaces = [os.path.relpath(folder, base.resolve()) for folder in importer.used_packages
-                  if any((folder / kind).is_dir() for kind in ("msg", "srv", "action"))]
-    if interfaces:
-        importer.project = {"messages": interfaces, **importer.project}
+    importer.project = {**code_folders(base, importer.imported_from, importer.used_packages), **importer.project}
     if not importer.project.get("topics"):
         importer.project.pop("topics", None)
     if not importer.project["nodes"]:

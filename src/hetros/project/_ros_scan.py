@@ -15,6 +15,7 @@ import ast
 import configparser
 import os
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -417,13 +418,8 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
                 nodes.append(scan_ros_entry(root, given.stem, f"{module}:main"))
             else:
                 nodes.append(scan_ros_script(given, root, base))
-    project: dict[str, Any] = {"name": name, "targets": {}, "nodes": {}, "topics": {}}
-    # the project file goes to base: a package elsewhere is found through python_path:
-    folders = dict.fromkeys(os.path.relpath(f.resolve(), base.resolve()) for f in imported_from)
-    if folders.keys() - {"."}:
-        project["python_path"] = [f for f in folders if f != "."]
-    if interfaces:
-        project["messages"] = [os.path.relpath(folder.resolve(), base.resolve()) for folder in interfaces]
+    project: dict[str, Any] = {"name": name, **code_folders(base, imported_from, interfaces),
+                               "targets": {}, "nodes": {}, "topics": {}}
     notes: list[str] = []
     named = [n.ros_names[0] if len(set(n.ros_names)) == 1 else "" for n in nodes]
     for node, ros_name in zip(nodes, named, strict=True):
@@ -445,6 +441,21 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     if not project["topics"]:
         del project["topics"]
     return project, notes
+
+
+def code_folders(base: Path, imported_from: Iterable[Path], packages: Iterable[Path]) -> dict[str, list[str]]:
+    """The ``python_path:`` and ``messages:`` of a project file written to ``base`` for code that is imported
+    from ``imported_from`` and whose ``packages`` may hold msg/, srv/ and action/ folders (each relative to
+    ``base``; a folder that is ``base`` itself needs no python_path entry)."""
+    def relative(folders: Iterable[Path]) -> list[str]:
+        return list(dict.fromkeys(os.path.relpath(folder.resolve(), base.resolve()) for folder in folders))
+
+    out: dict[str, list[str]] = {}
+    if python_path := [folder for folder in relative(imported_from) if folder != "."]:
+        out["python_path"] = python_path
+    if messages := relative(p for p in packages if any((p / kind).is_dir() for kind in ("msg", "srv", "action"))):
+        out["messages"] = messages
+    return out
 
 
 def unique_key(wanted: str, taken: dict[str, Any]) -> str:

@@ -394,11 +394,15 @@ def test_foxglove_sees_the_topics_with_their_schemas_and_messages(tmp_path: Path
             assert url[0].startswith("ws://127.0.0.1:")
             with sync_client.connect(url[0], subprotocols=["foxglove.sdk.v1"], open_timeout=20) as socket_:
                 channels: dict[str, dict[str, object]] = {}
+                capabilities: list[str] = []
                 while "/chatter" not in channels:
                     text = socket_.recv(timeout=20)
                     answer = json.loads(text) if isinstance(text, str) else {}
                     if answer.get("op") == "advertise":
                         channels.update({c["topic"]: c for c in answer["channels"]})
+                    elif answer.get("op") == "serverInfo":
+                        capabilities = answer["capabilities"]
+                assert {"clientPublish", "parameters", "services"} <= set(capabilities), capabilities
                 chatter = channels["/chatter"]
                 assert (chatter["encoding"], chatter["schemaName"], chatter["schemaEncoding"]) == (
                     "cdr", "std_msgs/msg/String", "ros2msg")
@@ -412,6 +416,56 @@ def test_foxglove_sees_the_topics_with_their_schemas_and_messages(tmp_path: Path
                 assert int.from_bytes(frame[1:5], "little") == 7
                 message = MessageCodec(registry(), "std_msgs/msg/String").decode(memoryview(frame[13:]))
                 assert re.fullmatch(r"hello world \d+", message.data)
+        finally:
+            server.terminate()
+            server.wait(30)
+
+
+def test_a_foxglove_websocket_v1_client_subscribes_and_publishes(tmp_path: Path, env: dict[str, str]) -> None:
+    """The older subprotocol (Foxglove Studio, Lichtblick) on the same port: the channels, a subscription's
+    messageData frames, and a client-advertised channel whose message reaches the launch's listeners."""
+    pytest.importorskip("foxglove")
+    sync_client = pytest.importorskip("websockets.sync.client")
+    from hetros.msg import registry
+    from hetros.transport import MessageCodec
+
+    codec = MessageCodec(registry(), "std_msgs/msg/String")
+    log = tmp_path / "launch.log"
+    with running(EXAMPLES / "talker_listener" / "project.yaml", env, log), \
+            subprocess.Popen([sys.executable, "-m", "hetros", "foxglove", "--port", "0"], env=env, text=True,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE) as server:
+        try:
+            assert server.stdout is not None
+            url = re.search(r"ws://[\d.]+:\d+", server.stdout.readline())
+            assert url, server.stderr.read() if server.stderr else ""
+            with sync_client.connect(url[0], subprotocols=["foxglove.websocket.v1"], open_timeout=20) as socket_:
+                assert socket_.subprotocol == "foxglove.websocket.v1"
+                info = json.loads(socket_.recv(timeout=20))
+                assert info["op"] == "serverInfo" and "clientPublish" in info["capabilities"]
+                advertised = json.loads(socket_.recv(timeout=20))
+                chatter = next(c for c in advertised["channels"] if c["topic"] == "/chatter")
+                assert (chatter["encoding"], chatter["schemaName"], chatter["schema"]) == (
+                    "cdr", "std_msgs/msg/String", "string data\n")
+                socket_.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 3, "channelId": chatter["id"]}]}))
+                while not isinstance(frame := socket_.recv(timeout=20), bytes):
+                    pass
+                assert frame[0] == 1 and int.from_bytes(frame[1:5], "little") == 3
+                assert re.fullmatch(r"hello world \d+", codec.decode(memoryview(frame[13:])).data)
+                socket_.send(json.dumps({"op": "clientAdvertise", "channels": [
+                    {"id": 9, "topic": "/chatter", "encoding": "cdr", "schemaName": "std_msgs/msg/String"},
+                    {"id": 10, "topic": "/nowhere", "encoding": "cdr", "schemaName": "std_msgs/msg/String"}]}))
+                String = registry().get("std_msgs/msg/String")
+                socket_.send(b"\x01" + (9).to_bytes(4, "little") + bytes(codec.encode(String(data="from foxglove"))))
+                deadline = time.monotonic() + 20
+                while "I heard: [from foxglove]" not in log.read_text() and time.monotonic() < deadline:
+                    time.sleep(0.1)
+                assert log.read_text().count("I heard: [from foxglove]") == 2  # both listeners
+                statuses = []
+                while len(statuses) < 1:
+                    reply = socket_.recv(timeout=20)
+                    if isinstance(reply, str) and json.loads(reply)["op"] == "status":
+                        statuses.append(json.loads(reply)["message"])
+                assert statuses[0].startswith("client channel /nowhere: the launch has no such topic")
         finally:
             server.terminate()
             server.wait(30)

@@ -6,6 +6,7 @@ tests (test_rclpy.py, test_rospy.py)."""
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -20,9 +21,10 @@ DEMOS = DATA / "ros2_demos"
 TUTORIALS = DATA / "ros_tutorials"
 
 
-def _hetros(*argv: str, cwd: Path | None = None, timeout: float = 60) -> subprocess.CompletedProcess[str]:
+def _hetros(*argv: str, cwd: Path | None = None, timeout: float = 60,
+            env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "hetros", *argv], capture_output=True, text=True, timeout=timeout,
-                          check=False, cwd=cwd)
+                          check=False, cwd=cwd, env=env)
 
 
 def _demos_project(tmp_path: Path) -> dict[str, Any]:
@@ -35,7 +37,8 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
     chosen = {"talker": "", "listener": "", "serialized_subscriber": "", "talker_qos": "qos", "listener_qos": "qos",
               "add_two_ints_server": "", "add_two_ints_client": "", "add_two_ints_client_async": "",
               "introspection": "intro", "set_parameters_callback": "", "fibonacci_action_server": "",
-              "fibonacci_action_client": "", "qos_overrides_talker": "", "qos_overrides_listener": ""}
+              "fibonacci_action_client": "", "qos_overrides_talker": "", "qos_overrides_listener": "",
+              "deadline": "dl"}
     nodes = {key: node for key, node in project["nodes"].items() if key in chosen}
     assert sorted(nodes) == sorted(chosen), sorted(project["nodes"])
     for key, namespace in chosen.items():
@@ -43,6 +46,7 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
             nodes[key]["namespace"] = namespace
     nodes["talker_qos"]["args"] = ["--reliable", "-n", "4"]
     nodes["listener_qos"]["args"] = ["--reliable", "-n", "4"]
+    nodes["deadline"]["args"] = ["600", "--publish-for", "2000", "--pause-for", "2000"]
     project["nodes"] = nodes
     project["targets"] = {node["target"]: {"kind": "process"} for node in nodes.values()}
     project["topics"] = {"/chatter": {"history": "keep_last", "depth": 10},
@@ -57,18 +61,19 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
     path.write_text(yaml.safe_dump(project))
     checked = _hetros("check", str(path))
     assert checked.returncode == 0, checked.stdout + checked.stderr
+    env = dict(os.environ, XDG_RUNTIME_DIR=str(tmp_path))  # this launch alone, whatever else runs
     launched = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(path), "--duration", "14"],
-                                cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     try:
         # ros2 param set /set_parameters_callback param1 10.0: its pre-set callback sets param2 to 4.0
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline and _hetros("param", "get", "/set_parameters_callback", "param1",
-                                                      cwd=tmp_path).returncode != 0:
+                                                      env=env).returncode != 0:
             time.sleep(0.3)
-        assert _hetros("param", "set", "/set_parameters_callback", "param1", "10.0", cwd=tmp_path).returncode == 0
-        got = _hetros("param", "get", "/set_parameters_callback", "param2", cwd=tmp_path)
+        assert _hetros("param", "set", "/set_parameters_callback", "param1", "10.0", env=env).returncode == 0
+        got = _hetros("param", "get", "/set_parameters_callback", "param2", env=env)
         assert got.stdout.strip() == "Double value is: 4.0", got.stdout + got.stderr
-        refused = _hetros("param", "set", "/set_parameters_callback", "param3", "1", cwd=tmp_path)
+        refused = _hetros("param", "set", "/set_parameters_callback", "param3", "1", env=env)
         assert refused.returncode != 0
         _, err = launched.communicate(timeout=90)
     finally:
@@ -81,8 +86,10 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
         form = re.compile(rf"^\[INFO\] \[\d+\.\d{{9}}\] \[{re.escape(node)}\]: (.*)$")
         return [m.group(1) for line in lines if (m := form.match(line))]
 
-    assert said("talker")[:3] == [f'Publishing: "Hello World: {i}"' for i in range(3)], err
-    assert said("listener")[:3] == [f"I heard: [Hello World: {i}]" for i in range(3)], err
+    hello = [line for line in said("talker") if line.startswith("Publishing")]
+    assert hello[:3] == [f'Publishing: "Hello World: {i}"' for i in range(3)], err
+    assert [line for line in said("listener") if line.startswith("I heard")][:3] == \
+        [f"I heard: [Hello World: {i}]" for i in range(3)], err
     # listener_serialized: raw=True hands the callback the CDR bytes
     assert said("serialized_subscriber")[0] == \
         "I heard: \"b'\\x00\\x01\\x00\\x00\\x0f\\x00\\x00\\x00Hello World: 0\\x00'\"", err
@@ -99,6 +106,11 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
     assert "Result: array('i', [0, 1, 1, 2, 3, 5, 8, 13, 21, 34, 55])" in said("fibonacci_action_client"), err
     assert said("qos_overrides_talker")[0] == 'Publishing: "Hello World: 0"', err
     assert said("qos_overrides_listener")[0] == "I heard: [Hello World: 0]", err
+    # deadline 600: the QoS the code asks for (the project file sets none for the topic) is watched on both
+    # ends while the talker pauses for 2 s (the demo logs them through get_logger('talker') and ('listener'))
+    assert "Offered deadline missed - total 1 delta 1" in said("talker"), err
+    assert "Requested deadline missed - total 1 delta 1" in said("listener"), err
+    assert "Publishing: 'Talker says 4'" in said("dl.talker"), err
     assert "Traceback" not in err, err
 
 

@@ -95,3 +95,15 @@ def test_a_futures_callbacks_run_where_it_schedules_them() -> None:
     assert ran == [] and len(queued) == 1
     queued[0]()  # type: ignore[operator]
     assert ran == ["done"]
+
+
+def test_an_rclpy_profile_keeps_its_deadline_lifespan_and_liveliness() -> None:
+    from hetros.compat.rclpy.qos import LivelinessPolicy, QoSProfile, to_hetros
+    from hetros.runtime import Duration
+
+    profile = QoSProfile(depth=10, deadline=Duration(seconds=0.6), lifespan=Duration(seconds=2),
+                         liveliness=LivelinessPolicy.MANUAL_BY_TOPIC, liveliness_lease_duration=Duration(seconds=1))
+    qos = to_hetros(profile)
+    assert qos is not None
+    assert (qos.deadline, qos.lifespan, qos.liveliness, qos.lease_duration) == (0.6, 2.0, "manual_by_topic", 1.0)
+    assert to_hetros(QoSProfile(depth=5, deadline=Duration())).deadline is None  # zero: infinite, as ROS 2

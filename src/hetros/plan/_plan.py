@@ -135,6 +135,9 @@ class ChannelPlan:
     publishers: tuple[str, ...]
     subscribers: tuple[str, ...]
     service: str = ""
+    # the project file sets this topic's QoS (topics:); where it does not, an endpoint's own deadline,
+    # which shapes no transport, is the one that endpoint watches (as ROS 2 endpoints each have theirs)
+    qos_given: bool = True
 
 
 @dataclass(frozen=True)
@@ -280,7 +283,7 @@ class Plan:
                 k: ChannelPlan(
                     name=v["name"], type=v["type"], kind=v["kind"], qos=QoS(**v["qos"]),
                     publishers=tuple(v["publishers"]), subscribers=tuple(v["subscribers"]),
-                    service=v["service"],
+                    service=v["service"], qos_given=v.get("qos_given", True),
                 )
                 for k, v in raw["channels"].items()
             },

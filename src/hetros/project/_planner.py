@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .._errors import CheckError
@@ -264,11 +264,11 @@ def _add(channels: dict[str, ChannelPlan], name: str, typename: str, kind: str, 
             qos = spec if spec is not None else action_topic_qos(name) or default
         else:
             qos = SERVICE_QOS
-        existing = ChannelPlan(name, typename, kind, qos, (), (), service)  # type: ignore[arg-type]
+        existing = ChannelPlan(name, typename, kind, qos, (), (), service,  # type: ignore[arg-type]
+                               qos_given=kind != "topic" or name in project.model.topics)
     publishers = existing.publishers + ((pub,) if pub and pub not in existing.publishers else ())
     subscribers = existing.subscribers + ((sub,) if sub and sub not in existing.subscribers else ())
-    channels[name] = ChannelPlan(existing.name, existing.type, existing.kind, existing.qos,
-                                 publishers, subscribers, existing.service)
+    channels[name] = replace(existing, publishers=publishers, subscribers=subscribers)
 
 
 def plan_file(path: str | Path, types: TypeRegistry | None = None) -> Plan:

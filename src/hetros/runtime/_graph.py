@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from .._errors import UndeclaredEndpointError
@@ -226,13 +227,24 @@ class Graph:
 
     def qos_of(self, name: str, requested: QoS | None) -> QoS:
         if self.plan is not None and name in self.plan.channels:
-            declared = self.plan.channels[name].qos
+            channel = self.plan.channels[name]
+            declared = channel.qos
+            if requested is not None and not channel.qos_given:
+                requested = replace(requested, deadline=declared.deadline)  # the endpoint's own (deadline_of)
             if requested is not None and requested != declared:
                 log.warning("%s: the code asks for %s but the project file's QoS applies: %s "
                             "(change it under topics.%s)", name, requested, declared, name)
             return declared
         with self._lock:
             return self._adhoc_qos.setdefault(name, requested or DEFAULT_QOS)
+
+    def deadline_of(self, name: str, requested: QoS | None) -> float | None:
+        """The deadline an endpoint of ``name`` watches: the project file's where it sets the topic's QoS,
+        else the one the endpoint asked for (it shapes no transport: every endpoint may have its own)."""
+        channel = self.plan.channels.get(name) if self.plan is not None else None
+        if channel is not None and not channel.qos_given and requested is not None:
+            return requested.deadline
+        return self.qos_of(name, None).deadline
 
     def _declared_qos(self, name: str) -> QoS:
         """The QoS of a channel the plan declares (a ROS 1 node's topics are the ROS 1 side's)."""

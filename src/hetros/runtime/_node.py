@@ -128,8 +128,8 @@ class Node:
         writer = self.graph.open_writer(topic, self.name, typename, qos=qos)
         publisher = Publisher(self, msg_type, topic, writer)
         effective = self.graph.qos_of(topic, None)
-        publisher.deadline = watch_deadline(self, f"publisher of {topic} in {self.name}", effective.deadline,
-                                            on_deadline_missed)
+        publisher.deadline = watch_deadline(self, f"publisher of {topic} in {self.name}",
+                                            self.graph.deadline_of(topic, qos), on_deadline_missed)
         publisher.manual_liveliness = effective.liveliness == "manual_by_topic"
         if publisher.manual_liveliness:
             writer.assert_liveliness()  # alive from its creation, as a ROS 2 publisher
@@ -155,7 +155,8 @@ class Node:
             self.executor.poll_while_spinning(subscription)
         reader = self._topic_reader(subscription, typename, qos)
         effective = self.graph.qos_of(topic, None)  # after opening: the first opener's QoS is an ad-hoc topic's
-        watch = watch_deadline(self, f"subscription to {topic} in {self.name}", effective.deadline, on_deadline_missed)
+        watch = watch_deadline(self, f"subscription to {topic} in {self.name}", self.graph.deadline_of(topic, qos),
+                               on_deadline_missed)
         subscription._watch = watch
         subscription._attach(reader if watch is None else WatchedReader(reader, watch))
         if on_liveliness_changed is not None or effective.liveliness == "manual_by_topic" or \

@@ -51,12 +51,16 @@ class QoSProfile:
     def __init__(self, *, history: HistoryPolicy = HistoryPolicy.KEEP_LAST, depth: int | None = None,
                  reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE,
                  durability: DurabilityPolicy = DurabilityPolicy.VOLATILE,
-                 liveliness: LivelinessPolicy = LivelinessPolicy.SYSTEM_DEFAULT, **_ignored: Any) -> None:
+                 liveliness: LivelinessPolicy = LivelinessPolicy.SYSTEM_DEFAULT, deadline: Any = None,
+                 lifespan: Any = None, liveliness_lease_duration: Any = None, **_ignored: Any) -> None:
         self.history = HistoryPolicy(history)
         self.depth = 10 if depth is None else int(depth)
         self.reliability = ReliabilityPolicy(reliability)
         self.durability = DurabilityPolicy(durability)
         self.liveliness = LivelinessPolicy(liveliness)
+        # rclpy Durations (zero or absent: infinite, ROS 2's default)
+        self.deadline, self.lifespan = deadline, lifespan
+        self.liveliness_lease_duration = liveliness_lease_duration
 
     def __repr__(self) -> str:
         return (f"QoSProfile(history={self.history.name}, depth={self.depth}, reliability={self.reliability.name}, "
@@ -73,7 +77,19 @@ def to_hetros(profile: QoSProfile | int | None) -> QoS | None:
                history="keep_all" if profile.history == HistoryPolicy.KEEP_ALL else "keep_last",
                depth=max(profile.depth, 1),
                durability="transient_local" if profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
-               else "volatile")
+               else "volatile",
+               deadline=_seconds(getattr(profile, "deadline", None)),
+               lifespan=_seconds(getattr(profile, "lifespan", None)),
+               liveliness="manual_by_topic" if profile.liveliness == LivelinessPolicy.MANUAL_BY_TOPIC else "automatic",
+               lease_duration=_seconds(getattr(profile, "liveliness_lease_duration", None)))
+
+
+def _seconds(duration: Any) -> float | None:
+    """An rclpy Duration as hetros's seconds; zero, absent or rclpy's infinite as None (no bound)."""
+    nanoseconds = getattr(duration, "nanoseconds", None)
+    if nanoseconds is None or nanoseconds <= 0 or nanoseconds >= 2**63 - 1:
+        return None
+    return float(nanoseconds) / 1e9
 
 
 qos_profile_system_default = QoSProfile()

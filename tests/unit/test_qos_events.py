@@ -9,7 +9,7 @@ from contextlib import contextmanager
 
 import pytest
 
-from hetros import DeadlineMissedStatus, LivelinessChangedStatus, Node
+from hetros import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus, Node
 from hetros.interfaces.std_msgs.msg import Int32
 from hetros.msg import registry
 from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
@@ -166,3 +166,20 @@ def test_a_malformed_sample_on_a_hosts_edge_is_dropped_counted_and_logged(caplog
     finally:
         reader.close()
         domain.close()
+
+
+def test_messages_a_keep_last_subscription_lost_are_reported(shm_session: str, mapping: str) -> None:
+    """rclpy's message_lost event: what keep_last overwrote before the subscription took it."""
+    with _open(shm_session, QoS(history="keep_last", depth=2), mapping) as (pub_node, sub_node):
+        reports: list[tuple[int, int]] = []
+
+        def lost(status: MessageLostStatus) -> None:
+            reports.append((status.total_count, status.total_count_change))
+        heard: list[int] = []
+        sub_node.create_subscription(Int32, "/q", lambda m: heard.append(m.data), on_message_lost=lost)
+        pub = pub_node.create_publisher(Int32, "/q")
+        for i in range(10):
+            pub.publish(Int32(data=i))
+        _spin_for(sub_node, 0.5)
+        assert heard == [8, 9]
+        assert reports and reports[-1][0] == 8 and sum(change for _, change in reports) == 8, reports

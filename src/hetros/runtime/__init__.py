@@ -9,7 +9,7 @@ from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
 from ._node import NODE_TIMES_VARIABLE, Node
-from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus
+from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus
 
 if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle, uuid_message
@@ -65,6 +65,7 @@ __all__ = [
     "HandlingStats",
     "Host",
     "LivelinessChangedStatus",
+    "MessageLostStatus",
     "Node",
     "Publisher",
     "Replies",

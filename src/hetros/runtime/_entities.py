@@ -30,6 +30,7 @@ from ._executor import AdaptiveSpin
 from ._qos_events import (
     DeadlineWatch,
     LivelinessWatch,
+    MessageLostWatch,
     WatchedReader,
 )
 from ._taps import taking_tap
@@ -235,6 +236,7 @@ class Subscription(Generic[M]):
         self.stats = HandlingStats()
         self._spin = AdaptiveSpin()
         self.liveliness: LivelinessWatch | None = None  # set when its publishers' liveliness is watched
+        self.message_lost: MessageLostWatch | None = None  # set when someone listens for lost messages
         self._injected: deque[M] = deque()
         self._inject_lock = threading.Lock()
         self._plain_take: Callable[[], M | None] | None = None  # the take that injection stands in front of
@@ -389,6 +391,8 @@ class Subscription(Generic[M]):
         """Stop receiving; a closed callback no longer keeps the node spinning after its function returns."""
         if self.liveliness is not None:
             self.liveliness.stop()
+        if self.message_lost is not None:
+            self.message_lost.stop()
         if self._reader is not None:
             self._take = _nothing
             self._reader.close()

@@ -35,6 +35,8 @@ from ._qos_events import (
     DeadlineMissedStatus,
     LivelinessChangedStatus,
     LivelinessWatch,
+    MessageLostStatus,
+    MessageLostWatch,
     WatchedReader,
     watch_deadline,
 )
@@ -140,12 +142,15 @@ class Node:
                             callback: Callable[[M], object] | None = None, *,
                             qos: QoS | None = None,
                             on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None,
-                            on_liveliness_changed: Callable[[LivelinessChangedStatus], object] | None = None
+                            on_liveliness_changed: Callable[[LivelinessChangedStatus], object] | None = None,
+                            on_message_lost: Callable[[MessageLostStatus], object] | None = None
                             ) -> Subscription[M]:
         """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
         ``deadline`` and a period passed without a message for this subscription;
         ``on_liveliness_changed(status)`` when a publisher it hears from becomes alive or not
-        alive (a process that ended; a ``manual_by_topic`` publisher silent past its lease)."""
+        alive (a process that ended; a ``manual_by_topic`` publisher silent past its lease);
+        ``on_message_lost(status)`` when messages were lost to it (keep_last overwrote them, a lifespan
+        expired them, best_effort dropped them)."""
         typename = typename_of(msg_type)
         topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
@@ -163,6 +168,8 @@ class Node:
                 effective.lease_duration is not None:
             subscription.liveliness = LivelinessWatch(self, f"subscription to {topic} in {self.name}", reader,
                                                       effective.lease_duration, on_liveliness_changed)
+        if on_message_lost is not None:
+            subscription.message_lost = MessageLostWatch(self, reader, on_message_lost)
         self._closables.append(subscription)
         return subscription
 

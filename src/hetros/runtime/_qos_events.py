@@ -42,6 +42,15 @@ class LivelinessChangedStatus:
     not_alive_count_change: int = 0
 
 
+@dataclass
+class MessageLostStatus:
+    """As ROS 2's: messages this subscription lost (keep_last overwrote them before it took them, a
+    best_effort transport dropped them), in all and since the last report."""
+
+    total_count: int = 0
+    total_count_change: int = 0
+
+
 class DeadlineWatch:
     """Counts the ``deadline`` periods of one endpoint that passed without a message."""
 
@@ -124,6 +133,34 @@ class LivelinessWatch:
                 log.warning("%s: %d publisher(s) lost liveliness (%d alive)", self.what,
                             status.not_alive_count_change, alive)
         return time.monotonic() + self.period
+
+    def stop(self) -> None:
+        self._stopped = True
+
+
+class MessageLostWatch:
+    """Reports the messages a subscription lost, from its reader's ``dropped`` and ``expired`` counters,
+    looked at ten times a second from the node's executor (only while someone listens: the callback)."""
+
+    PERIOD = 0.1
+
+    def __init__(self, node: Node, reader: Reader, callback: Callable[[MessageLostStatus], object]) -> None:
+        self.reader = reader
+        self.callback = callback
+        self.status = MessageLostStatus()
+        self._stopped = False
+        node.executor.add_timer(time.monotonic() + self.PERIOD, self._check)
+
+    def _check(self) -> float | None:
+        if self._stopped:
+            return None
+        counters = self.reader.counters()
+        lost = counters.get("dropped", 0) + counters.get("expired", 0)
+        if lost > self.status.total_count:
+            self.status.total_count_change = lost - self.status.total_count
+            self.status.total_count = lost
+            self.callback(self.status)
+        return time.monotonic() + self.PERIOD
 
     def stop(self) -> None:
         self._stopped = True

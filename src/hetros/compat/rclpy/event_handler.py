@@ -2,9 +2,10 @@
 
 ``create_subscription(..., event_callbacks=SubscriptionEventCallbacks(deadline=..., liveliness=...))``
 and ``create_publisher(..., event_callbacks=PublisherEventCallbacks(deadline=...))`` run the callbacks
-in the node's executor with ROS 2's status fields. ``incompatible_qos`` never fires under hetros:
-``hetros check`` refuses a project whose publishers and subscribers of a topic cannot talk, so a launch
-never has such a pair. The events hetros does not raise (``message_lost``, ``matched``,
+in the node's executor with ROS 2's status fields; ``message_lost`` counts what keep_last overwrote, a
+lifespan expired or best_effort dropped before the subscription took it. ``incompatible_qos`` never fires
+under hetros: ``hetros check`` refuses a project whose publishers and subscribers of a topic cannot talk, so a launch
+never has such a pair. The events hetros does not raise (``matched``,
 ``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never ignored:
 ``UnsupportedEventTypeError``, as rclpy raises for a middleware without the event.
 """
@@ -16,11 +17,12 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from ..._errors import NodeError
-from ...runtime import DeadlineMissedStatus, LivelinessChangedStatus
+from ...runtime import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus
 
 QoSRequestedDeadlineMissedInfo = DeadlineMissedStatus
 QoSOfferedDeadlineMissedInfo = DeadlineMissedStatus
 QoSLivelinessChangedInfo = LivelinessChangedStatus
+QoSMessageLostInfo = MessageLostStatus
 
 
 @dataclass
@@ -48,7 +50,7 @@ class UnsupportedEventTypeError(NodeError):
     """An event this middleware does not raise (rclpy raises it for an RMW without the event)."""
 
 
-_SUPPORTED = {"deadline", "liveliness", "incompatible_qos", "use_default_callbacks"}
+_SUPPORTED = {"deadline", "liveliness", "incompatible_qos", "message_lost", "use_default_callbacks"}
 
 
 def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, where: str) -> None:
@@ -60,13 +62,14 @@ def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, w
         unsupported.append("liveliness")
     if unsupported:
         raise UnsupportedEventTypeError(f"{where}: event_callbacks {', '.join(unsupported)} are events hetros does "
-                                        "not raise; remove them (deadline and a subscription's liveliness are "
-                                        "supported)")
+                                        "not raise; remove them (deadline, message_lost and a subscription's "
+                                        "liveliness are supported)")
 
 
 __all__ = [
     "PublisherEventCallbacks",
     "QoSLivelinessChangedInfo",
+    "QoSMessageLostInfo",
     "QoSOfferedDeadlineMissedInfo",
     "QoSRequestedDeadlineMissedInfo",
     "SubscriptionEventCallbacks",

@@ -326,12 +326,13 @@ class Node:
                             event_callbacks: Any = None, qos_overriding_options: Any = None, raw: bool = False,
                             content_filter_options: Any = None, subscription_class: Any = None) -> Subscription:
         name = self.resolve_topic_name(topic)
-        deadline = liveliness = None
+        deadline = liveliness = lost = None
         if event_callbacks is not None:
             from .event_handler import supported
 
             supported(event_callbacks, f"subscription to {name}")
             deadline, liveliness = event_callbacks.deadline, event_callbacks.liveliness
+            lost = event_callbacks.message_lost
         _refuse_overrides(qos_overriding_options, subscription_class, f"subscription to {name}", qos_profile)
         if content_filter_options is not None:
             raise NodeError(f"subscription to {name}: content filters are not supported by hetros; filter in the "
@@ -345,7 +346,8 @@ class Node:
         # (docs/PERFORMANCE.md); services and actions, off the hot path, show it.
         run = guarded(self, self._hetros, callback, callback_group, entity, again=True)
         inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile),
-                                                 on_deadline_missed=deadline, on_liveliness_changed=liveliness)
+                                                 on_deadline_missed=deadline, on_liveliness_changed=liveliness,
+                                                 on_message_lost=lost)
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)
         return subscription

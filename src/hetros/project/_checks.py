@@ -7,6 +7,7 @@ import hashlib
 import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from .._errors import DefinitionError, MessageError
 from .._net import is_local_address
@@ -33,7 +34,7 @@ from ._model import Bridged, LoadedProject, NodeSpec
 from ._names import node_name_problem, topic_name_problem
 from ._probe import hardware_problems, module_findable, runnable_problems
 from ._report import CheckReport
-from ._ros_scan import PLACEHOLDER
+from ._ros_scan import PLACEHOLDER, unsupported_uses
 from ._scan import scan_file
 
 
@@ -205,8 +206,13 @@ def gather_endpoints(c: CheckContext) -> None:
 
 
 def code_runs(c: CheckContext) -> None:
-    """Each run: imports and names a function (in a probe process); hardware tools are there."""
+    """Each run: imports and names a function (in a probe process), uses no ROS API hetros lacks; hardware
+    tools are there."""
     where = c.project.where
+    for nname, spec in c.project.model.nodes.items():
+        path = _code_file(c.project, nname, spec.run)
+        for problem in unsupported_uses(path) if path is not None else ():
+            c.error(f"{where('nodes', nname, 'run')}: {problem}")
     for run, problem in runnable_problems(c.project, list(c.runnable)).items():
         for nname in c.runnable.get(run, []):
             c.error(f"{where('nodes', nname, 'run')}: {problem}")
@@ -215,6 +221,19 @@ def code_runs(c: CheckContext) -> None:
             c.error(f"{where('nodes', nname, 'hw')}: {problem}")
         else:
             c.report.warnings.append(f"{where('nodes')}: {problem}; `make install-rtl` brings the tools")
+
+
+def _code_file(project: LoadedProject, node: str, run: str) -> Path | None:
+    """The source file a node's ``run:`` names (a script, or a module found next to the project file or in
+    its python_path: folders), when it is a file there."""
+    root = Path(project.node_roots.get(node) or project.root)
+    if ":" not in run:
+        return root / run if (root / run).is_file() else None
+    for folder in (root, *project.import_folders):
+        candidate = folder.joinpath(*run.partition(":")[0].split(".")).with_suffix(".py")
+        if candidate.is_file():
+            return candidate
+    return None
 
 
 def actions_pair(c: CheckContext) -> None:

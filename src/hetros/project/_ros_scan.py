@@ -375,6 +375,35 @@ def scan_ros_script(path: Path, root: Path, base: Path, parameters: dict[str, An
     return node
 
 
+# ROS APIs with no counterpart in hetros: the name, and why and what to do instead
+UNSUPPORTED = {
+    "SubscribeListener": "hetros wires every subscriber before the nodes run and sends each message to all of "
+                         "them, so a publisher is not told of new peers and cannot publish to one (peer_publish); "
+                         "publish to all, on a transient_local topic if late subscribers need the last message",
+    "_connection_header": "hetros delivers messages without ROS 1's per-connection headers (callerid, a "
+                          "publisher's headers=); carry what the receiver needs in the message itself",
+}
+
+
+def unsupported_uses(path: Path) -> list[str]:
+    """``file:line: uses X ...`` for each use of a ROS API hetros has no counterpart for (``UNSUPPORTED``) in
+    the ROS code at ``path``: ``hetros check`` refuses the node naming the line, rather than letting it
+    fail as it runs."""
+    if not writes_ros(path):
+        return []
+    try:
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    except (OSError, SyntaxError, UnicodeDecodeError):
+        return []
+    first: dict[str, int] = {}  # each name once, at its first line
+    for node in ast.walk(tree):
+        name = node.attr if isinstance(node, ast.Attribute) else node.id if isinstance(node, ast.Name) else None
+        if name in UNSUPPORTED:
+            first[name] = min(first.get(name, 1 << 30), getattr(node, "lineno", 0))
+    return [f"{path}:{line}: uses {name}, which hetros has no counterpart for: {UNSUPPORTED[name]}"
+            for name, line in sorted(first.items(), key=lambda item: item[1])]
+
+
 def writes_ros(path: Path) -> bool:
     """Whether ``path`` is code written for rclpy or rospy."""
     try:

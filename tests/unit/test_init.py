@@ -233,3 +233,20 @@ def test_python_path_must_name_folders(tmp_path: Path) -> None:
         f"{tmp_path / 'project.yaml'}:2: python_path.1: {str(tmp_path / 'missing')!r} is not a folder; python_path "
         "lists the folders node modules are imported from, relative to the project file"]
     assert not any("found neither" in e for e in report.errors), report.errors
+
+
+def test_a_file_without_main_gives_each_ros_function_a_node(tmp_path: Path) -> None:
+    """Two rclpy functions in one file and nothing that runs on its own: two nodes (module:function), not one
+    script node that would do nothing. With a __main__ guard the file stays a script, as ROS runs it."""
+    body = ("import rclpy\nfrom std_msgs.msg import String\n\n\n"
+            "def talker():\n    rclpy.init()\n    node = rclpy.create_node('talker')\n"
+            "    node.create_publisher(String, 'chatter', 10)\n\n\n"
+            "def listener():\n    rclpy.init()\n    node = rclpy.create_node('listener')\n"
+            "    node.create_subscription(String, 'chatter', print, 10)\n\n\n"
+            "def helper(x):\n    return x + 1\n")
+    (tmp_path / "pair.py").write_text(body, encoding="utf-8")
+    project, _ = ros_template([tmp_path / "pair.py"], "p", tmp_path)
+    assert {k: n["run"] for k, n in project["nodes"].items()} == {"talker": "pair:talker", "listener": "pair:listener"}
+    (tmp_path / "script.py").write_text(body + "\n\nif __name__ == '__main__':\n    talker()\n", encoding="utf-8")
+    project, _ = ros_template([tmp_path / "script.py"], "p", tmp_path)
+    assert [n["run"] for n in project["nodes"].values()] == ["script.py"]

@@ -442,9 +442,12 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
             root = _package_root(given)
             module = ".".join(given.resolve().relative_to(root.resolve()).with_suffix("").parts)
             reader = _Reader(given, root)
-            if "main" in reader.functions:
+            mains = ["main"] if "main" in reader.functions else [] if _runs_as_script(reader.tree) else \
+                [name for name in reader.functions if _makes_a_node(reader, name)]
+            if mains:
                 imported_from.append(root)
-                nodes.append(scan_ros_entry(root, given.stem, f"{module}:main"))
+                nodes += [scan_ros_entry(root, given.stem if name == "main" else name, f"{module}:{name}")
+                          for name in mains]
             else:
                 nodes.append(scan_ros_script(given, root, base))
     project: dict[str, Any] = {"name": name, **code_folders(base, imported_from, interfaces),
@@ -470,6 +473,25 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     if not project["topics"]:
         del project["topics"]
     return project, notes
+
+
+def _runs_as_script(tree: ast.Module) -> bool:
+    """Whether a file does something when run: code under ``if __name__ == "__main__":``, or calls at its top
+    level (rospy scripts often have no guard)."""
+    for stmt in tree.body:
+        if isinstance(stmt, ast.If) and "__main__" in ast.unparse(stmt.test):
+            return True
+        if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Call):
+            return True
+    return False
+
+
+def _makes_a_node(reader: _Reader, function: str) -> bool:
+    """Whether a top-level function of a file without ``main`` is a ROS main of its own: it makes a node
+    (``rclpy.init``, ``create_node``, a ``Node`` subclass, ``rospy.init_node``) or creates endpoints."""
+    found = RosNode(function, function)
+    reader.collect(reader.functions[function], found, {function})
+    return bool(found.ros_names or any(found.endpoints.values()))
 
 
 def code_folders(base: Path, imported_from: Iterable[Path], packages: Iterable[Path]) -> dict[str, list[str]]:

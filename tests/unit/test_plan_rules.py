@@ -27,6 +27,7 @@ STRING = "std_msgs/msg/String"
 BROKEN = {
     "cpus_exist": "targets: {main: {kind: process, cpus: [4096]}}\nnodes: {a: {run: json:dumps, target: main}}",
     "bridge_names_reserved": f"nodes: {{{ROS1_BRIDGE}: {{run: json:dumps, target: main}}}}",
+    "import_folders_exist": "python_path: [no_such_folder]\nnodes: {a: {run: json:dumps, target: main}}",
     "nodes_are_well_formed": "nodes: {a: {run: json:dumps, target: nowhere}}",
     "gather_endpoints": "nodes: {a: {run: json:dumps, target: main, publish: {/x: std_msgs/msg/Nothing}}}",
     "code_runs": "nodes: {a: {run: json:nobody_here, target: main}}",

@@ -30,7 +30,6 @@ _PROBE = """
 import importlib, json, sys
 from pathlib import Path
 from hetros.compat import install
-from hetros.project._probe import import_problem
 from hetros.msg import registry
 types = registry()
 for folder in json.loads(sys.argv[2]):
@@ -42,6 +41,7 @@ for run in json.loads(sys.argv[1]):
     try:
         module = importlib.import_module(module_name)
     except BaseException as exc:
+        from hetros.project._probe import import_problem  # only when a module failed: project/ is heavy
         out[run] = import_problem(module_name, exc)
         continue
     target = getattr(module, attr, None)

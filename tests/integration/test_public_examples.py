@@ -38,7 +38,7 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
               "add_two_ints_server": "", "add_two_ints_client": "", "add_two_ints_client_async": "",
               "introspection": "intro", "set_parameters_callback": "", "fibonacci_action_server": "",
               "fibonacci_action_client": "", "qos_overrides_talker": "", "qos_overrides_listener": "",
-              "deadline": "dl"}
+              "deadline": "dl", "matched_event_detect": "", "use_logger_service": ""}
     nodes = {key: node for key, node in project["nodes"].items() if key in chosen}
     assert sorted(nodes) == sorted(chosen), sorted(project["nodes"])
     for key, namespace in chosen.items():
@@ -111,6 +111,23 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
     assert "Offered deadline missed - total 1 delta 1" in said("talker"), err
     assert "Requested deadline missed - total 1 delta 1" in said("listener"), err
     assert "Publishing: 'Talker says 4'" in said("dl.talker"), err
+    # matched_event_detect: three rclpy nodes of one process create and destroy endpoints
+    assert said("matched_event_detection_node") == [
+        "First subscription is connected.",
+        "The changed number of connected subscription is 1 and current number of connected subscription is 2",
+        "The changed number of connected subscription is -1 and current number of connected subscription is 1",
+        "Last subscription is disconnected.",
+        "First publisher is connected.",
+        "The changed number of connected publisher is 1 and current number of connected publisher is 2",
+        "The changed number of connected publisher is -1 and current number of connected publisher is 1",
+        "Last publisher is disconnected."], err
+    # use_logger_service: one node sets another's logger level through its logger service
+    levels = re.findall(r"^\[(\w+)\] \[\d+\.\d{9}\] \[LoggerServiceNode\]: Output (\d) with \w+ logger level\.$",
+                        err, re.MULTILINE)
+    assert levels == [("INFO", "1"), ("WARN", "1"), ("ERROR", "1"), ("DEBUG", "2"), ("INFO", "2"), ("WARN", "2"),
+                      ("ERROR", "2"), ("WARN", "3"), ("ERROR", "3"), ("ERROR", "4")], err
+    assert [line for line in said("TestNode") if line.startswith("Current")] == \
+        [f"Current logger level: {level}" for level in (0, 10, 30, 40)], err
     assert "Traceback" not in err, err
 
 

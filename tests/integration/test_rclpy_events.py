@@ -41,7 +41,7 @@ def lost() -> None:
     rclpy.init()
     node = rclpy.create_node("lost")
     node.create_subscription(String, "chatter", lambda msg: None, 10,
-                             event_callbacks=SubscriptionEventCallbacks(matched=print))
+                             event_callbacks=SubscriptionEventCallbacks(incompatible_type=print))
 
 
 def talker() -> None:
@@ -81,4 +81,4 @@ def test_raw_subscriptions_get_bytes_and_deadline_callbacks_run(tmp_path: Path) 
 def test_an_event_hetros_never_raises_is_refused_by_name(tmp_path: Path) -> None:
     done = _launch(tmp_path, "lost")
     assert done.returncode != 0
-    assert "subscription to /chatter: event_callbacks matched are events hetros does not raise" in done.stderr
+    assert "subscription to /chatter: event_callbacks incompatible_type are events hetros does not raise" in done.stderr

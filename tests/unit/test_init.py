@@ -250,3 +250,15 @@ def test_a_file_without_main_gives_each_ros_function_a_node(tmp_path: Path) -> N
     (tmp_path / "script.py").write_text(body + "\n\nif __name__ == '__main__':\n    talker()\n", encoding="utf-8")
     project, _ = ros_template([tmp_path / "script.py"], "p", tmp_path)
     assert [n["run"] for n in project["nodes"].values()] == ["script.py"]
+
+
+def test_a_node_with_the_logger_service_serves_its_levels_under_its_name(tmp_path: Path) -> None:
+    """rclpy's ``enable_logger_service=True`` gives the node two services, which the project must declare."""
+    (tmp_path / "levels.py").write_text(
+        "import rclpy\nfrom rclpy.node import Node\n\n\nclass Quiet(Node):\n    def __init__(self):\n"
+        "        super().__init__('quiet', enable_logger_service=True)\n\n\n"
+        "def main():\n    rclpy.init()\n    rclpy.spin(Quiet())\n", encoding="utf-8")
+    project, _ = ros_template([tmp_path / "levels.py"], "p", tmp_path)
+    assert project["nodes"]["quiet"]["services"] == {
+        "quiet/get_logger_levels": "rcl_interfaces/srv/GetLoggerLevels",
+        "quiet/set_logger_levels": "rcl_interfaces/srv/SetLoggerLevels"}

@@ -9,7 +9,7 @@ from contextlib import contextmanager
 
 import pytest
 
-from hetros import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus, Node
+from hetros import DeadlineMissedStatus, LivelinessChangedStatus, MatchedStatus, MessageLostStatus, Node
 from hetros.interfaces.std_msgs.msg import Int32
 from hetros.msg import registry
 from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
@@ -183,3 +183,32 @@ def test_messages_a_keep_last_subscription_lost_are_reported(shm_session: str, m
         _spin_for(sub_node, 0.5)
         assert heard == [8, 9]
         assert reports and reports[-1][0] == 8 and sum(change for _, change in reports) == 8, reports
+
+
+def test_matched_events_count_other_processes_from_the_start_and_this_ones_as_they_come(
+        shm_session: str, mapping: str) -> None:
+    """ROS 2's matched events: a publisher and a subscription each hear of the other once both exist (the
+    plan's endpoint in another process counts from the start), and of an endpoint of this process that
+    goes away; a second local subscription adds one to the count, as in ROS 2."""
+    with _open(shm_session, QoS(), mapping) as (pub_node, sub_node):
+        to_pub: list[MatchedStatus] = []
+        to_sub: list[MatchedStatus] = []
+        pub = pub_node.create_publisher(Int32, "/q", on_matched=to_pub.append)
+        sub = sub_node.create_subscription(Int32, "/q", lambda m: None, on_matched=to_sub.append)
+        _spin_for(pub_node, 0.05)
+        _spin_for(sub_node, 0.05)
+        assert to_pub == [MatchedStatus(1, 1, 1, 1)]
+        assert to_sub == [MatchedStatus(1, 1, 1, 1)]
+        if mapping == "inproc":
+            second = sub_node.create_subscription(Int32, "/q", lambda m: None)
+            _spin_for(pub_node, 0.05)
+            assert to_pub[-1] == MatchedStatus(2, 1, 2, 1)
+            second.close()
+            sub.close()
+            _spin_for(pub_node, 0.05)
+            assert to_pub[-1] == MatchedStatus(2, 0, 0, -2)
+        else:
+            sub.close()  # the other process' subscription: planned, so still matched
+            _spin_for(pub_node, 0.05)
+            assert len(to_pub) == 1
+        pub.close()

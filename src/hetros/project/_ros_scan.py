@@ -30,6 +30,9 @@ _ACTION_CALLS = {"ActionServer": ("actions", 1, 2), "ActionClient": ("action_cli
 # rospy: (section, index of the name, index of the type)
 _ROSPY_CALLS = {"Publisher": ("publish", 0, 1), "Subscriber": ("subscribe", 0, 1), "Service": ("services", 0, 1),
                 "ServiceProxy": ("clients", 0, 1)}
+# the services rclpy's enable_logger_service=True gives a node, under its name
+LOGGER_SERVICES = {"get_logger_levels": "rcl_interfaces/srv/GetLoggerLevels",
+                   "set_logger_levels": "rcl_interfaces/srv/SetLoggerLevels"}
 _PRESETS = {"qos_profile_sensor_data": {"reliability": "best_effort", "history": "keep_last", "depth": 5},
             "qos_profile_system_default": {"history": "keep_last", "depth": 10},
             "qos_profile_services_default": {"history": "keep_last", "depth": 10}}
@@ -163,10 +166,10 @@ class _Reader:
                 section, name_at, type_at = _ROSPY_CALLS[callee]
                 self._add(node, section, call, call.args[type_at], call.args[name_at], _keyword(call, "queue_size"),
                           names)
-            elif callee in ("init_node", "create_node") and call.args:
+            elif (callee in ("init_node", "create_node") or (callee == "__init__" and  # super().__init__('name')
+                  isinstance(call.func, ast.Attribute))) and call.args:
                 node.ros_names.append(_joined(call.args[0], names) or "")
-            elif callee == "__init__" and isinstance(call.func, ast.Attribute) and call.args:
-                node.ros_names.append(_joined(call.args[0], names) or "")  # super().__init__('name') of a Node
+                self._logger_services(node, call, node.ros_names[-1])
             elif callee in self.classes and callee not in seen:
                 cls = self.classes[callee]
                 self.collect(cls, node, seen | {callee}, _arguments(call, _init_of(cls), names))
@@ -181,6 +184,15 @@ class _Reader:
                     if found is not None:
                         init = _init_of(found) if isinstance(found, ast.ClassDef) else found
                         other.collect(found, node, seen | {callee}, _arguments(call, init, names))
+
+    @staticmethod
+    def _logger_services(node: RosNode, call: ast.Call, ros_name: str) -> None:
+        """rclpy's ``Node(name, enable_logger_service=True)`` serves its logger levels under its name."""
+        enabled = _keyword(call, "enable_logger_service")
+        if ros_name and isinstance(enabled, ast.Constant) and enabled.value is True:
+            services = node.endpoints.setdefault("services", {})
+            for service, typename in LOGGER_SERVICES.items():
+                services[f"{ros_name}/{service}"] = typename
 
     def _add(self, node: RosNode, section: str, call: ast.Call, type_expr: ast.expr, name_expr: ast.expr,
              qos: ast.expr | None, names: dict[str, str]) -> None:

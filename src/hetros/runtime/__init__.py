@@ -8,6 +8,7 @@ from ._entities import PROFILE_VARIABLE, Client, HandlingStats, Publisher, Repli
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
+from ._matched import MatchedStatus
 from ._node import NODE_TIMES_VARIABLE, Node
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus
 
@@ -65,6 +66,7 @@ __all__ = [
     "HandlingStats",
     "Host",
     "LivelinessChangedStatus",
+    "MatchedStatus",
     "MessageLostStatus",
     "Node",
     "Publisher",

@@ -27,6 +27,7 @@ from ..plan import reply_channel, request_channel
 from ..transport import Reader, Writer
 from ._endpoints import EndpointWriter
 from ._executor import AdaptiveSpin
+from ._matched import MatchedWatch
 from ._qos_events import (
     DeadlineWatch,
     LivelinessWatch,
@@ -91,6 +92,7 @@ class Publisher(Generic[M]):
         self._last_make: Callable[[], M] = msg_type
         self.deadline: DeadlineWatch | None = None  # the topic's QoS deadline, offered (``on_deadline_missed``)
         self.manual_liveliness = False  # each publish asserts liveliness (the topic's is manual_by_topic)
+        self.matched: MatchedWatch | None = None  # its matched subscriptions, while it is open
         # the topic's tap in this process: counts what is sent; sinks only while someone looks
         self._tap = node.graph.tap_point(topic, self.typename)
 
@@ -153,6 +155,9 @@ class Publisher(Generic[M]):
     def close(self) -> None:
         if self.deadline is not None:
             self.deadline.stop()
+        if self.matched is not None:
+            self.node.graph.matches.left(self.topic, "publish", self.matched)
+            self.matched = None
         self._writer.close()
 
 
@@ -237,6 +242,7 @@ class Subscription(Generic[M]):
         self._spin = AdaptiveSpin()
         self.liveliness: LivelinessWatch | None = None  # set when its publishers' liveliness is watched
         self.message_lost: MessageLostWatch | None = None  # set when someone listens for lost messages
+        self.matched: MatchedWatch | None = None  # its matched publishers, while it is open
         self._injected: deque[M] = deque()
         self._inject_lock = threading.Lock()
         self._plain_take: Callable[[], M | None] | None = None  # the take that injection stands in front of
@@ -393,6 +399,9 @@ class Subscription(Generic[M]):
             self.liveliness.stop()
         if self.message_lost is not None:
             self.message_lost.stop()
+        if self.matched is not None:
+            self.node.graph.matches.left(self.topic, "subscribe", self.matched)
+            self.matched = None
         if self._reader is not None:
             self._take = _nothing
             self._reader.close()

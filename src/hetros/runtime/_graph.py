@@ -34,6 +34,7 @@ from ..transport import (
 )
 from ._clock import Clock, SimulatedClock
 from ._endpoints import EndpointWriter, MergedReader, Relay, RetainedReader, endpoint_writer
+from ._matched import Matches
 from ._taps import TapPoint
 
 if TYPE_CHECKING:
@@ -65,6 +66,7 @@ class Graph:
         self.types = types or registry()
         self._lock = threading.Lock()
         self._adhoc_qos: dict[str, QoS] = {}
+        self._qos_told: set[str] = set()  # topics whose code asked for another QoS, told once each
         self._codecs: dict[tuple[str, bool], Codec] = {}
         self._stop_hooks: list[Callable[[], None]] = []
         self._prepared: dict[tuple[str, str], RetainedReader] = {}
@@ -76,6 +78,8 @@ class Graph:
         self.nodes: dict[str, Node] = {}
         self._taps: dict[str, TapPoint] = {}
         self._subscriber_taps: set[str] = set()
+        # the endpoints matched to each other (matched events, ``get_subscription_count``)
+        self.matches = Matches(plan, process)
 
     def transport(self, kind: str) -> Transport:
         """This process' transport for edges of ``kind``, opened (and its module imported) on first use."""
@@ -231,7 +235,12 @@ class Graph:
             declared = channel.qos
             if requested is not None and not channel.qos_given:
                 requested = replace(requested, deadline=declared.deadline)  # the endpoint's own (deadline_of)
-            if requested is not None and requested != declared:
+                if requested.history == "keep_last" and declared.history == "keep_all":
+                    # ROS code's plain depth (``create_publisher(T, name, 10)``) asks for no policy: hetros's
+                    # default keeps every message of a reliable topic, which loses nothing the code expects
+                    requested = replace(requested, history=declared.history)
+            if requested is not None and requested != declared and name not in self._qos_told:
+                self._qos_told.add(name)
                 log.warning("%s: the code asks for %s but the project file's QoS applies: %s "
                             "(change it under topics.%s)", name, requested, declared, name)
             return declared

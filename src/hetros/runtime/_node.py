@@ -31,6 +31,7 @@ from ._entities import Client, HandlingStats, Publisher, Service, Subscription, 
 from ._executor import Executor
 from ._graph import Graph
 from ._log import node_logger
+from ._matched import MatchedStatus, MatchedWatch
 from ._qos_events import (
     DeadlineMissedStatus,
     LivelinessChangedStatus,
@@ -120,10 +121,11 @@ class Node:
                             node_name or self.ros_name or self.name, planned.remap if planned is not None else None)
 
     def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None,
-                         on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None
-                         ) -> Publisher[M]:
+                         on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None,
+                         on_matched: Callable[[MatchedStatus], object] | None = None) -> Publisher[M]:
         """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
-        ``deadline`` and this publisher let a period pass without publishing."""
+        ``deadline`` and this publisher let a period pass without publishing; ``on_matched(status)``
+        when subscriptions to its topic come or go (see ``MatchedStatus``)."""
         typename = typename_of(msg_type)
         topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
@@ -135,6 +137,8 @@ class Node:
         publisher.manual_liveliness = effective.liveliness == "manual_by_topic"
         if publisher.manual_liveliness:
             writer.assert_liveliness()  # alive from its creation, as a ROS 2 publisher
+        publisher.matched = MatchedWatch(self, on_matched)
+        self.graph.matches.joined(topic, "publish", publisher.matched)
         self._closables.append(publisher)
         return publisher
 
@@ -143,14 +147,15 @@ class Node:
                             qos: QoS | None = None,
                             on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None,
                             on_liveliness_changed: Callable[[LivelinessChangedStatus], object] | None = None,
-                            on_message_lost: Callable[[MessageLostStatus], object] | None = None
-                            ) -> Subscription[M]:
+                            on_message_lost: Callable[[MessageLostStatus], object] | None = None,
+                            on_matched: Callable[[MatchedStatus], object] | None = None) -> Subscription[M]:
         """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
         ``deadline`` and a period passed without a message for this subscription;
         ``on_liveliness_changed(status)`` when a publisher it hears from becomes alive or not
         alive (a process that ended; a ``manual_by_topic`` publisher silent past its lease);
         ``on_message_lost(status)`` when messages were lost to it (keep_last overwrote them, a lifespan
-        expired them, best_effort dropped them)."""
+        expired them, best_effort dropped them); ``on_matched(status)`` when publishers of its topic
+        come or go."""
         typename = typename_of(msg_type)
         topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
@@ -170,6 +175,8 @@ class Node:
                                                       effective.lease_duration, on_liveliness_changed)
         if on_message_lost is not None:
             subscription.message_lost = MessageLostWatch(self, reader, on_message_lost)
+        subscription.matched = MatchedWatch(self, on_matched)
+        self.graph.matches.joined(topic, "subscribe", subscription.matched)
         self._closables.append(subscription)
         return subscription
 

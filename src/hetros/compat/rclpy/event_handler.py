@@ -5,9 +5,10 @@ and ``create_publisher(..., event_callbacks=PublisherEventCallbacks(deadline=...
 in the node's executor with ROS 2's status fields; ``message_lost`` counts what keep_last overwrote, a
 lifespan expired or best_effort dropped before the subscription took it. ``incompatible_qos`` never fires
 under hetros: ``hetros check`` refuses a project whose publishers and subscribers of a topic cannot talk, so a launch
-never has such a pair. The events hetros does not raise (``matched``,
-``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never ignored:
-``UnsupportedEventTypeError``, as rclpy raises for a middleware without the event.
+never has such a pair. ``matched`` reports subscriptions and publishers that come and go (the plan's
+endpoints in other processes count from the start; see ``hetros.MatchedStatus``). The events hetros does
+not raise (``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never
+ignored: ``UnsupportedEventTypeError``, as rclpy raises for a middleware without the event.
 """
 
 from __future__ import annotations
@@ -17,12 +18,14 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from ..._errors import NodeError
-from ...runtime import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus
+from ...runtime import DeadlineMissedStatus, LivelinessChangedStatus, MatchedStatus, MessageLostStatus
 
 QoSRequestedDeadlineMissedInfo = DeadlineMissedStatus
 QoSOfferedDeadlineMissedInfo = DeadlineMissedStatus
 QoSLivelinessChangedInfo = LivelinessChangedStatus
 QoSMessageLostInfo = MessageLostStatus
+QoSPublisherMatchedInfo = MatchedStatus
+QoSSubscriptionMatchedInfo = MatchedStatus
 
 
 @dataclass
@@ -50,7 +53,7 @@ class UnsupportedEventTypeError(NodeError):
     """An event this middleware does not raise (rclpy raises it for an RMW without the event)."""
 
 
-_SUPPORTED = {"deadline", "liveliness", "incompatible_qos", "message_lost", "use_default_callbacks"}
+_SUPPORTED = {"deadline", "liveliness", "incompatible_qos", "message_lost", "matched", "use_default_callbacks"}
 
 
 def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, where: str) -> None:
@@ -62,8 +65,8 @@ def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, w
         unsupported.append("liveliness")
     if unsupported:
         raise UnsupportedEventTypeError(f"{where}: event_callbacks {', '.join(unsupported)} are events hetros does "
-                                        "not raise; remove them (deadline, message_lost and a subscription's "
-                                        "liveliness are supported)")
+                                        "not raise; remove them (deadline, message_lost, matched and a "
+                                        "subscription's liveliness are supported)")
 
 
 __all__ = [
@@ -71,7 +74,9 @@ __all__ = [
     "QoSLivelinessChangedInfo",
     "QoSMessageLostInfo",
     "QoSOfferedDeadlineMissedInfo",
+    "QoSPublisherMatchedInfo",
     "QoSRequestedDeadlineMissedInfo",
+    "QoSSubscriptionMatchedInfo",
     "SubscriptionEventCallbacks",
     "UnsupportedEventTypeError",
 ]

@@ -4,6 +4,7 @@ them one at a time as well."""
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -24,17 +25,17 @@ def _running(hetros: HetrosNode) -> bool:
     return not hetros.graph.stop.is_set() and not _shut_down()
 
 
-def spin_node(hetros: HetrosNode, timeout_sec: float | None = None) -> None:
+def spin_node(hetros: HetrosNode, timeout_sec: float | None = None, ended: threading.Event | None = None) -> None:
     """Run callbacks until the graph stops (rclpy raises ExternalShutdownException then), ``rclpy.shutdown()``,
-    or ``timeout_sec``."""
+    ``timeout_sec``, or ``ended`` (an executor's ``shutdown()``)."""
     hetros.spun = True
     deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
-    while _running(hetros):
+    while _running(hetros) and not (ended is not None and ended.is_set()):
         left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             return
         hetros.executor.spin_once(0.1 if left is None else min(left, 0.1))
-    if hetros.graph.stop.is_set():
+    if hetros.graph.stop.is_set() and not (ended is not None and ended.is_set()):
         raise ExternalShutdownException("the graph is shutting down")
 
 
@@ -72,6 +73,7 @@ def spin_until_done(hetros: HetrosNode, future: Future, timeout_sec: float | Non
 class Executor:
     def __init__(self, *, context: Any = None) -> None:
         self._nodes: list[Any] = []
+        self._ended = threading.Event()  # shutdown(): spin returns
 
     def add_node(self, node: Any) -> bool:
         if node not in self._nodes:
@@ -94,12 +96,12 @@ class Executor:
         its own ``spin_once`` called in a loop, as rclpy's ``spin`` does."""
         hetros = self._hetros()
         if type(self).spin_once is Executor.spin_once:
-            spin_node(hetros)
+            spin_node(hetros, ended=self._ended)
             return
         hetros.spun = True
-        while _running(hetros):
+        while _running(hetros) and not self._ended.is_set():
             self.spin_once(timeout_sec=0.1)
-        if hetros.graph.stop.is_set():
+        if hetros.graph.stop.is_set() and not self._ended.is_set():
             raise ExternalShutdownException("the graph is shutting down")
 
     def spin_once(self, timeout_sec: float | None = None) -> None:
@@ -142,6 +144,10 @@ class Executor:
         return future
 
     def shutdown(self, timeout_sec: float | None = None) -> bool:
+        """End ``spin`` (in whichever thread runs it) within its next turn, as rclpy's does."""
+        self._ended.set()
+        if self._nodes:
+            self._hetros().executor.wake()
         return True
 
 

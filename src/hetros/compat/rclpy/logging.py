@@ -75,3 +75,21 @@ class RcutilsLogger:
 
 def get_logger(name: str) -> RcutilsLogger:
     return RcutilsLogger(name)
+
+
+def get_logger_level(name: str) -> LoggingSeverity:
+    """The level set on logger ``name`` itself (``UNSET`` where it follows its parent)."""
+    return LoggingSeverity(node_logger(name).level)
+
+
+def set_logger_level(name: str, level: LoggingSeverity | int) -> None:
+    """Set logger ``name``'s level; a level rcutils does not have is refused, as rclpy refuses it."""
+    try:
+        severity = LoggingSeverity(int(level))
+    except ValueError:
+        raise ValueError(f"level must be one of {[int(s) for s in LoggingSeverity]}, not {level!r}") from None
+    node_logger(name).setLevel(int(severity))
+
+
+def get_logging_severity_from_string(log_severity: str) -> LoggingSeverity:
+    return LoggingSeverity[log_severity.upper()]

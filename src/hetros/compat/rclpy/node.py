@@ -117,7 +117,7 @@ class Publisher:
         self._inner.publish(copy_message(msg))
 
     def get_subscription_count(self) -> int:
-        return self._node.count_subscribers(self.topic_name)
+        return self._node._hetros.graph.matches.count(self.topic_name, "subscribe")
 
     def assert_liveliness(self) -> None:
         self._inner.assert_liveliness()
@@ -136,6 +136,9 @@ class Subscription:
     @property
     def topic(self) -> str:
         return self.topic_name
+
+    def get_publisher_count(self) -> int:
+        return int(self._inner.node.graph.matches.count(self.topic_name, "publish"))
 
     def destroy(self) -> None:
         self._inner.close()
@@ -257,7 +260,8 @@ class Node:
                  namespace: str | None = None, use_global_arguments: bool = True, enable_rosout: bool = True,
                  start_parameter_services: bool = True, parameter_overrides: list[Parameter] | None = None,
                  allow_undeclared_parameters: bool = False,
-                 automatically_declare_parameters_from_overrides: bool = False, **_ignored: Any) -> None:
+                 automatically_declare_parameters_from_overrides: bool = False,
+                 enable_logger_service: bool = False, **_ignored: Any) -> None:
         self._hetros: HetrosNode = bound_node()
         # the project's name and namespace stand over the code's, as a launch file's do in ROS 2
         self._name = self._hetros.ros_name or node_name
@@ -278,6 +282,30 @@ class Node:
         if automatically_declare_parameters_from_overrides:
             for name, value in self._overrides.items():
                 self._declared[name] = Parameter(name, value=value)
+        if enable_logger_service:
+            self._serve_logger_levels()
+
+    def _serve_logger_levels(self) -> None:
+        """``~/get_logger_levels`` and ``~/set_logger_levels``, as rclpy's logger service: levels by
+        logger name (``UNSET``, 0, where a logger follows its parent)."""
+        from ...interfaces.rcl_interfaces.msg import LoggerLevel, SetLoggerLevelsResult
+        from ...interfaces.rcl_interfaces.srv import GetLoggerLevels, SetLoggerLevels
+        from .logging import get_logger_level, set_logger_level
+
+        def get_levels(request: Any, response: Any) -> Any:
+            response.levels = [LoggerLevel(name=name, level=int(get_logger_level(name))) for name in request.names]
+            return response
+
+        def set_levels(request: Any, response: Any) -> Any:
+            for wanted in request.levels:
+                try:
+                    set_logger_level(wanted.name, wanted.level)
+                    response.results.append(SetLoggerLevelsResult(successful=True))
+                except ValueError as refused:
+                    response.results.append(SetLoggerLevelsResult(successful=False, reason=str(refused)))
+            return response
+        self.create_service(GetLoggerLevels, "~/get_logger_levels", get_levels)
+        self.create_service(SetLoggerLevels, "~/set_logger_levels", set_levels)
 
     # -- names ---------------------------------------------------------------------------------
 
@@ -311,14 +339,15 @@ class Node:
                          callback_group: CallbackGroup | None = None, event_callbacks: Any = None,
                          qos_overriding_options: Any = None, publisher_class: Any = None) -> Publisher:
         name = self.resolve_topic_name(topic)
-        deadline = None
+        deadline = matched = None
         if event_callbacks is not None:
             from .event_handler import supported
 
             supported(event_callbacks, f"publisher of {name}")
-            deadline = event_callbacks.deadline
+            deadline, matched = event_callbacks.deadline, event_callbacks.matched
         _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}", qos_profile)
-        inner = self._hetros.create_publisher(msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline)
+        inner = self._hetros.create_publisher(msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline,
+                                              on_matched=matched)
         return Publisher(self, inner, msg_type, name)
 
     def create_subscription(self, msg_type: type[Any], topic: str, callback: Callable[[Any], None],
@@ -326,13 +355,13 @@ class Node:
                             event_callbacks: Any = None, qos_overriding_options: Any = None, raw: bool = False,
                             content_filter_options: Any = None, subscription_class: Any = None) -> Subscription:
         name = self.resolve_topic_name(topic)
-        deadline = liveliness = lost = None
+        deadline = liveliness = lost = matched = None
         if event_callbacks is not None:
             from .event_handler import supported
 
             supported(event_callbacks, f"subscription to {name}")
             deadline, liveliness = event_callbacks.deadline, event_callbacks.liveliness
-            lost = event_callbacks.message_lost
+            lost, matched = event_callbacks.message_lost, event_callbacks.matched
         _refuse_overrides(qos_overriding_options, subscription_class, f"subscription to {name}", qos_profile)
         if content_filter_options is not None:
             raise NodeError(f"subscription to {name}: content filters are not supported by hetros; filter in the "
@@ -347,7 +376,7 @@ class Node:
         run = guarded(self, self._hetros, callback, callback_group, entity, again=True)
         inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile),
                                                  on_deadline_missed=deadline, on_liveliness_changed=liveliness,
-                                                 on_message_lost=lost)
+                                                 on_message_lost=lost, on_matched=matched)
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)
         return subscription

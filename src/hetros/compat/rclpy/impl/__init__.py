@@ -1,0 +1,1 @@
+"""rclpy.impl: the pieces of rclpy's implementation that ROS code imports directly."""

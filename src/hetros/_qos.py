@@ -113,3 +113,26 @@ class QoS:
 
 
 DEFAULT_QOS = QoS()
+
+# the policies ROS 2 matches an offer against a request by, in the order it reports them
+MATCHED_POLICIES = ("reliability", "durability", "deadline", "liveliness", "lease_duration")
+# how strong each kind is: the offer must be at least as strong as the request
+_RANK = {"best_effort": 0, "reliable": 1, "volatile": 0, "transient_local": 1, "automatic": 0, "manual_by_topic": 1}
+_PERIODS = ("deadline", "lease_duration")  # seconds; None is infinite; the offer must be at most the request
+
+
+def offer_falls_short(policy: str, offered: object, requested: object) -> bool:
+    """Whether a publisher offering ``offered`` for ``policy`` cannot serve a subscription requesting
+    ``requested``, as ROS 2 matches them (kinds by strength, periods by length, None infinite)."""
+    if policy in _PERIODS:
+        return requested is not None and (offered is None or float(offered) > float(requested))  # type: ignore[arg-type]
+    return _RANK[str(requested)] > _RANK[str(offered)]
+
+
+def incompatible_policy(offered: QoS, requested: QoS) -> str | None:
+    """The first policy (``MATCHED_POLICIES``) by which ``offered`` cannot serve ``requested``, or None
+    when they match."""
+    for policy in MATCHED_POLICIES:
+        if offer_falls_short(policy, getattr(offered, policy), getattr(requested, policy)):
+            return policy
+    return None

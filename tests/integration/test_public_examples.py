@@ -38,7 +38,8 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
               "add_two_ints_server": "", "add_two_ints_client": "", "add_two_ints_client_async": "",
               "introspection": "intro", "set_parameters_callback": "", "fibonacci_action_server": "",
               "fibonacci_action_client": "", "qos_overrides_talker": "", "qos_overrides_listener": "",
-              "deadline": "dl", "matched_event_detect": "", "use_logger_service": ""}
+              "deadline": "dl", "matched_event_detect": "", "use_logger_service": "",
+              "incompatible_qos": "iq"}
     nodes = {key: node for key, node in project["nodes"].items() if key in chosen}
     assert sorted(nodes) == sorted(chosen), sorted(project["nodes"])
     for key, namespace in chosen.items():
@@ -47,6 +48,7 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
     nodes["talker_qos"]["args"] = ["--reliable", "-n", "4"]
     nodes["listener_qos"]["args"] = ["--reliable", "-n", "4"]
     nodes["deadline"]["args"] = ["600", "--publish-for", "2000", "--pause-for", "2000"]
+    nodes["incompatible_qos"]["args"] = ["reliability"]
     project["nodes"] = nodes
     project["targets"] = {node["target"]: {"kind": "process"} for node in nodes.values()}
     project["topics"] = {"/chatter": {"history": "keep_last", "depth": 10},
@@ -121,6 +123,13 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
         "The changed number of connected publisher is 1 and current number of connected publisher is 2",
         "The changed number of connected publisher is -1 and current number of connected publisher is 1",
         "Last publisher is disconnected."], err
+    # incompatible_qos reliability: a best_effort talker and a reliable listener of one process do not match
+    # (the demo logs through get_logger('talker') and ('listener')); the listener hears nothing
+    kind = "last_policy_kind: rmw_qos_policy_kind_t.RMW_QOS_POLICY_RELIABILITY"
+    assert f"Offered incompatible qos - total 1 delta 1 {kind}" in said("talker"), err
+    assert f"Requested incompatible qos - total 1 delta 1 {kind}" in said("listener"), err
+    assert "Publishing: 'Talker says 4'" in said("iq.talker"), err
+    assert said("iq.listener") == ["Listener starting up"], err
     # use_logger_service: one node sets another's logger level through its logger service
     levels = re.findall(r"^\[(\w+)\] \[\d+\.\d{9}\] \[LoggerServiceNode\]: Output (\d) with \w+ logger level\.$",
                         err, re.MULTILINE)

@@ -9,7 +9,14 @@ from contextlib import contextmanager
 
 import pytest
 
-from hetros import DeadlineMissedStatus, LivelinessChangedStatus, MatchedStatus, MessageLostStatus, Node
+from hetros import (
+    DeadlineMissedStatus,
+    IncompatibleQosStatus,
+    LivelinessChangedStatus,
+    MatchedStatus,
+    MessageLostStatus,
+    Node,
+)
 from hetros.interfaces.std_msgs.msg import Int32
 from hetros.msg import registry
 from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
@@ -212,3 +219,45 @@ def test_matched_events_count_other_processes_from_the_start_and_this_ones_as_th
             _spin_for(pub_node, 0.05)
             assert len(to_pub) == 1
         pub.close()
+
+
+def test_endpoints_whose_own_qos_does_not_match_are_told_and_not_delivered_to() -> None:
+    """Without a project QoS, each endpoint's own QoS decides matching, as in ROS 2: a best_effort offer to a
+    reliable request is incompatible on both sides, and the subscription hears nothing until a publisher
+    that serves it appears."""
+    node = Node("both")
+    told: list[tuple[str, IncompatibleQosStatus]] = []
+    heard: list[int] = []
+    weak = node.create_publisher(Int32, "/i", qos=QoS(reliability="best_effort"),
+                                 on_incompatible_qos=lambda s: told.append(("pub", s)))
+    node.create_subscription(Int32, "/i", lambda m: heard.append(m.data), qos=QoS(),
+                             on_incompatible_qos=lambda s: told.append(("sub", s)))
+    weak.publish(Int32(data=1))
+    _spin_for(node, 0.1)
+    assert sorted(who for who, _ in told) == ["pub", "sub"]
+    assert all(status == IncompatibleQosStatus(1, 1, "reliability") for _, status in told)
+    assert heard == []
+    strong = node.create_publisher(Int32, "/i", qos=QoS())
+    strong.publish(Int32(data=2))
+    _spin_for(node, 0.1)
+    assert heard == [2]
+    node.graph.close()
+
+
+def test_a_project_qos_makes_every_endpoint_match() -> None:
+    plan = Plan("q", "/", (), {"p1": TargetPlan("p1", "process")},
+                {"pub": NodePlan("pub", "m:f", "p1", publish={"/q": "std_msgs/msg/Int32"}),
+                 "sub": NodePlan("sub", "m:f", "p1", subscribe={"/q": "std_msgs/msg/Int32"})},
+                {"/q": ChannelPlan("/q", "std_msgs/msg/Int32", "topic", QoS(), ("pub",), ("sub",))},
+                (EdgePlan("/q", "pub", "sub", "inproc"),))
+    graph = Graph(plan, "p1", "")
+    told: list[IncompatibleQosStatus] = []
+    Node("pub", graph).create_publisher(Int32, "/q", qos=QoS(reliability="best_effort"),
+                                        on_incompatible_qos=told.append)
+    sub_node = Node("sub", graph)
+    matched: list[MatchedStatus] = []
+    sub_node.create_subscription(Int32, "/q", lambda m: None, qos=QoS(), on_incompatible_qos=told.append,
+                                 on_matched=matched.append)
+    _spin_for(sub_node, 0.05)
+    assert told == [] and matched == [MatchedStatus(1, 1, 1, 1)]
+    graph.close()

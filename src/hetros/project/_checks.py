@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .._errors import DefinitionError, MessageError
 from .._net import is_local_address
-from .._qos import QoS
+from .._qos import MATCHED_POLICIES, QoS, offer_falls_short
 from ..msg import TypeRegistry, array_fields, flat_layout, normalize_typename, registry
 from ..plan import (
     ACTION_PREFIX,
@@ -575,19 +575,6 @@ def _check_shm_budget(project: LoadedProject, types: TypeRegistry, publishers: d
             )
 
 
-# how ROS 2 matches an offer to a request, per policy: the offer must be at least as strong
-_RANK = {"best_effort": 0, "reliable": 1, "volatile": 0, "transient_local": 1, "automatic": 0, "manual_by_topic": 1}
-
-
-_PERIODS = ("deadline", "lease_duration")  # seconds; None is infinite; the offer must be at most the request
-
-
-def _offer_falls_short(policy: str, offered: object, requested: object) -> bool:
-    if policy in _PERIODS:
-        return requested is not None and (offered is None or float(offered) > float(requested))  # type: ignore[arg-type]
-    return _RANK[str(requested)] > _RANK[str(offered)]
-
-
 def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[tuple[str, str]]],
                              subscribers: dict[str, list[tuple[str, str]]], report: CheckReport) -> None:
     """A subscriber may not request more than a publisher offers, as ROS 2 matches them:
@@ -596,7 +583,7 @@ def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[
     model = project.model
     for topic, subscribed in subscribers.items():
         topic_qos = model.topics.get(topic) or QoS()
-        for policy in ("reliability", "durability", "deadline", "liveliness", "lease_duration"):
+        for policy in MATCHED_POLICIES:
             default = getattr(topic_qos, policy)
 
             def effective(node: str, section: str, policy: str = policy, default: object = default,
@@ -606,13 +593,14 @@ def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[
                 return default if value is None else value
 
             def shown(value: object, policy: str = policy) -> str:
-                return ("none" if value is None else f"{value:g} s") if policy in _PERIODS else str(value)
+                periodic = policy in ("deadline", "lease_duration")
+                return ("none" if value is None else f"{value:g} s") if periodic else str(value)
 
             for pub, _ in publishers.get(topic, []):
                 offered = effective(pub, "publish")
                 for sub, _ in subscribed:
                     requested = effective(sub, "subscribe")
-                    if _offer_falls_short(policy, offered, requested):
+                    if offer_falls_short(policy, offered, requested):
                         report.errors.append(
                             f"{project.where('nodes', sub, 'subscribe', topic)}: incompatible QoS on "
                             f"{topic}: {sub} requests {policy} {shown(requested)} but {pub} offers "

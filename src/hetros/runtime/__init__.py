@@ -8,7 +8,7 @@ from ._entities import PROFILE_VARIABLE, Client, HandlingStats, Publisher, Repli
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
-from ._matched import MatchedStatus
+from ._matched import IncompatibleQosStatus, MatchedStatus
 from ._node import NODE_TIMES_VARIABLE, Node
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus
 
@@ -65,6 +65,7 @@ __all__ = [
     "Graph",
     "HandlingStats",
     "Host",
+    "IncompatibleQosStatus",
     "LivelinessChangedStatus",
     "MatchedStatus",
     "MessageLostStatus",

@@ -246,6 +246,7 @@ class Subscription(Generic[M]):
         self._injected: deque[M] = deque()
         self._inject_lock = threading.Lock()
         self._plain_take: Callable[[], M | None] | None = None  # the take that injection stands in front of
+        self._heard_take: Callable[[], M | None] | None = None  # the take a deaf subscription drains (_deafen)
         self._watch: DeadlineWatch | None = None  # the topic's deadline, watched on this subscription's reader
 
     def _attach(self, reader: Reader) -> None:
@@ -276,6 +277,20 @@ class Subscription(Generic[M]):
                 return self._injected.popleft()
             self._take, self._plain_take = plain, None
         return plain()
+
+    def _deafen(self, deaf: bool) -> None:
+        """Every publisher of this process offers less than this subscription requests (incompatible
+        QoS): what they send is taken and dropped, as ROS 2 never delivers it; undone when one matches."""
+        if deaf and self._heard_take is None:
+            self._heard_take, self._take = self._take, self._take_deaf
+        elif not deaf and self._heard_take is not None:
+            self._take, self._heard_take = self._heard_take, None
+
+    def _take_deaf(self) -> M | None:
+        heard = self._heard_take
+        while heard is not None and heard() is not None:
+            pass
+        return None
 
     def _on_wake(self) -> None:
         if self.callback is not None:

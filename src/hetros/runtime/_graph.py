@@ -234,7 +234,10 @@ class Graph:
             channel = self.plan.channels[name]
             declared = channel.qos
             if requested is not None and not channel.qos_given:
-                requested = replace(requested, deadline=declared.deadline)  # the endpoint's own (deadline_of)
+                # the endpoint's own: a deadline it watches (deadline_of), the policies it is matched by
+                # (endpoint_qos); a stronger reliability than asked loses nothing the code expects
+                requested = replace(requested, deadline=declared.deadline, reliability=declared.reliability,
+                                    liveliness=declared.liveliness, lease_duration=declared.lease_duration)
                 if requested.history == "keep_last" and declared.history == "keep_all":
                     # ROS code's plain depth (``create_publisher(T, name, 10)``) asks for no policy: hetros's
                     # default keeps every message of a reliable topic, which loses nothing the code expects
@@ -246,6 +249,14 @@ class Graph:
             return declared
         with self._lock:
             return self._adhoc_qos.setdefault(name, requested or DEFAULT_QOS)
+
+    def endpoint_qos(self, name: str, requested: QoS | None) -> QoS:
+        """What one endpoint offers or requests, as ROS 2 matches endpoints: its code's QoS where the
+        project file gives the topic none, else the topic's (``qos_of``)."""
+        channel = self.plan.channels.get(name) if self.plan is not None else None
+        if requested is not None and (channel is None or not channel.qos_given):
+            return requested
+        return self.qos_of(name, None)
 
     def deadline_of(self, name: str, requested: QoS | None) -> float | None:
         """The deadline an endpoint of ``name`` watches: the project file's where it sets the topic's QoS,

@@ -1,4 +1,5 @@
-"""Matched events: a publisher hears when a subscription to its topic comes or goes, and the other way.
+"""Matched events: a publisher hears when a subscription to its topic comes or goes, and the other way;
+both hear when the other's QoS cannot serve theirs (incompatible QoS).
 
 ROS 2 raises these when discovery pairs two endpoints. hetros plans its graph before launch, so the
 endpoints of other processes are known from the plan and matched from the start (their transports
@@ -7,6 +8,12 @@ creates and destroys, which this process sees directly. An endpoint's matched co
 planned endpoints of other processes plus the live ones of this process, and the events report the
 changes of the second part, as ROS 2's would. Reports are coalesced until the node's executor runs
 the callback (ROS 2 hands over the changes since the last report in the same way).
+
+Where the project file gives a topic no QoS, each endpoint has the QoS its code asked for, and two of
+this process' endpoints may not match (a best_effort offer to a reliable request): they are not
+matched, each hears an incompatible-QoS event, and a subscription whose publishers here all fail it
+hears nothing from them, as in ROS 2. (Where the project gives the QoS, every endpoint has it, and
+``hetros check`` refused the project if endpoint requests disagreed.)
 """
 
 from __future__ import annotations
@@ -16,6 +23,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
+
+from .._qos import QoS, incompatible_policy
 
 if TYPE_CHECKING:
     from ..plan import Plan
@@ -35,23 +44,58 @@ class MatchedStatus:
     current_count_change: int = 0
 
 
-class MatchedWatch:
-    """One endpoint's matched count, reported to its callback from the node's executor."""
+@dataclass(frozen=True)
+class IncompatibleQosStatus:
+    """As ROS 2's: endpoints found incompatible so far and since the last report, and the policy
+    (``reliability``, ``durability``, ``deadline``, ``liveliness``, ``lease_duration``) that failed last."""
 
-    def __init__(self, node: Node, callback: Callable[[MatchedStatus], object] | None) -> None:
+    total_count: int = 0
+    total_count_change: int = 0
+    last_policy_kind: str = ""
+
+
+class MatchedWatch:
+    """One endpoint's matches and mismatches, reported to its callbacks from the node's executor."""
+
+    def __init__(self, node: Node, qos: QoS, on_matched: Callable[[MatchedStatus], object] | None,
+                 on_incompatible_qos: Callable[[IncompatibleQosStatus], object] | None = None,
+                 on_deaf: Callable[[bool], None] | None = None) -> None:
         self.node = node
-        self.callback = callback
+        self.qos = qos  # what this endpoint offers or requests
+        self.on_matched = on_matched
+        self.on_incompatible_qos = on_incompatible_qos
+        self.on_deaf = on_deaf  # a subscription told whether every publisher here fails its QoS
+        self.peers: list[MatchedWatch] = []  # matched endpoints of this process
+        self.clashes: list[MatchedWatch] = []  # incompatible endpoints of this process
         self._lock = threading.Lock()
         self.total = self.current = 0
         self._reported_total = self._reported_current = 0
+        self.incompatible_total = 0
+        self._reported_incompatible = 0
+        self.last_policy = ""
         self._due = False
+        self.deaf = False
 
     def changed(self, delta: int) -> None:
         with self._lock:
             self.current += delta
             if delta > 0:
                 self.total += delta
-            if self.callback is None or self._due:
+        self._schedule(self.on_matched is not None)
+
+    def incompatible(self, policy: str) -> None:
+        with self._lock:
+            self.incompatible_total += 1
+            self.last_policy = policy
+        self._schedule(self.on_incompatible_qos is not None)
+
+    def _schedule(self, wanted: bool) -> None:
+        deaf = bool(self.clashes) and self.current == 0
+        if deaf != self.deaf and self.on_deaf is not None:
+            self.deaf = deaf
+            self.on_deaf(deaf)
+        with self._lock:
+            if not wanted or self._due:
                 return
             self._due = True
         self.node.executor.add_timer(time.monotonic(), self._report)
@@ -59,11 +103,17 @@ class MatchedWatch:
     def _report(self) -> None:
         with self._lock:
             self._due = False
-            status = MatchedStatus(self.total, self.total - self._reported_total,
-                                   self.current, self.current - self._reported_current)
+            matched = MatchedStatus(self.total, self.total - self._reported_total,
+                                    self.current, self.current - self._reported_current)
+            incompatible = IncompatibleQosStatus(self.incompatible_total,
+                                                 self.incompatible_total - self._reported_incompatible,
+                                                 self.last_policy)
             self._reported_total, self._reported_current = self.total, self.current
-        if (status.total_count_change or status.current_count_change) and self.callback is not None:
-            self.callback(status)
+            self._reported_incompatible = self.incompatible_total
+        if incompatible.total_count_change and self.on_incompatible_qos is not None:
+            self.on_incompatible_qos(incompatible)
+        if (matched.total_count_change or matched.current_count_change) and self.on_matched is not None:
+            self.on_matched(matched)
 
 
 class Matches:
@@ -87,27 +137,38 @@ class Matches:
     def joined(self, topic: str, role: Role, watch: MatchedWatch) -> None:
         other: Role = "subscribe" if role == "publish" else "publish"
         with self._lock:
-            peers = list(self._live.get((topic, other), ()))
+            present = list(self._live.get((topic, other), ()))
             self._live.setdefault((topic, role), []).append(watch)
-        count = self._elsewhere(topic, other) + len(peers)
+            for peer in present:
+                offered, requested = (watch, peer) if role == "publish" else (peer, watch)
+                policy = incompatible_policy(offered.qos, requested.qos)
+                if policy is None:
+                    watch.peers.append(peer)
+                    peer.peers.append(watch)
+                else:
+                    watch.clashes.append(peer)
+                    peer.clashes.append(watch)
+                    peer.incompatible(policy)
+                    watch.incompatible(policy)
+        count = self._elsewhere(topic, other) + len(watch.peers)
         if count:
             watch.changed(count)
-        for peer in peers:
+        for peer in watch.peers:
             peer.changed(1)
 
     def left(self, topic: str, role: Role, watch: MatchedWatch) -> None:
-        other: Role = "subscribe" if role == "publish" else "publish"
         with self._lock:
             mine = self._live.get((topic, role), [])
             if watch not in mine:
                 return
             mine.remove(watch)
-            peers = list(self._live.get((topic, other), ()))
+            peers, watch.peers = watch.peers, []
+            for peer in peers:
+                peer.peers.remove(watch)
+            for peer in watch.clashes:
+                peer.clashes.remove(watch)
+            clashed, watch.clashes = watch.clashes, []
         for peer in peers:
             peer.changed(-1)
-
-    def count(self, topic: str, role: Role) -> int:
-        """How many ``role`` endpoints of ``topic`` there are now: planned elsewhere, live here."""
-        with self._lock:
-            here = len(self._live.get((topic, role), ()))
-        return self._elsewhere(topic, role) + here
+        for peer in clashed:
+            peer.changed(0)  # may no longer be deaf

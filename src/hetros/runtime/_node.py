@@ -31,7 +31,7 @@ from ._entities import Client, HandlingStats, Publisher, Service, Subscription, 
 from ._executor import Executor
 from ._graph import Graph
 from ._log import node_logger
-from ._matched import MatchedStatus, MatchedWatch
+from ._matched import IncompatibleQosStatus, MatchedStatus, MatchedWatch
 from ._qos_events import (
     DeadlineMissedStatus,
     LivelinessChangedStatus,
@@ -122,10 +122,13 @@ class Node:
 
     def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None,
                          on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None,
-                         on_matched: Callable[[MatchedStatus], object] | None = None) -> Publisher[M]:
+                         on_matched: Callable[[MatchedStatus], object] | None = None,
+                         on_incompatible_qos: Callable[[IncompatibleQosStatus], object] | None = None
+                         ) -> Publisher[M]:
         """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
         ``deadline`` and this publisher let a period pass without publishing; ``on_matched(status)``
-        when subscriptions to its topic come or go (see ``MatchedStatus``)."""
+        when subscriptions to its topic come or go (see ``MatchedStatus``); ``on_incompatible_qos(status)``
+        when one requests more than this publisher's ``qos`` offers."""
         typename = typename_of(msg_type)
         topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
@@ -137,7 +140,7 @@ class Node:
         publisher.manual_liveliness = effective.liveliness == "manual_by_topic"
         if publisher.manual_liveliness:
             writer.assert_liveliness()  # alive from its creation, as a ROS 2 publisher
-        publisher.matched = MatchedWatch(self, on_matched)
+        publisher.matched = MatchedWatch(self, self.graph.endpoint_qos(topic, qos), on_matched, on_incompatible_qos)
         self.graph.matches.joined(topic, "publish", publisher.matched)
         self._closables.append(publisher)
         return publisher
@@ -148,14 +151,17 @@ class Node:
                             on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None,
                             on_liveliness_changed: Callable[[LivelinessChangedStatus], object] | None = None,
                             on_message_lost: Callable[[MessageLostStatus], object] | None = None,
-                            on_matched: Callable[[MatchedStatus], object] | None = None) -> Subscription[M]:
+                            on_matched: Callable[[MatchedStatus], object] | None = None,
+                            on_incompatible_qos: Callable[[IncompatibleQosStatus], object] | None = None
+                            ) -> Subscription[M]:
         """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
         ``deadline`` and a period passed without a message for this subscription;
         ``on_liveliness_changed(status)`` when a publisher it hears from becomes alive or not
         alive (a process that ended; a ``manual_by_topic`` publisher silent past its lease);
         ``on_message_lost(status)`` when messages were lost to it (keep_last overwrote them, a lifespan
         expired them, best_effort dropped them); ``on_matched(status)`` when publishers of its topic
-        come or go."""
+        come or go; ``on_incompatible_qos(status)`` when one offers less than this subscription's ``qos``
+        requests (it hears nothing from such a publisher)."""
         typename = typename_of(msg_type)
         topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
@@ -175,7 +181,8 @@ class Node:
                                                       effective.lease_duration, on_liveliness_changed)
         if on_message_lost is not None:
             subscription.message_lost = MessageLostWatch(self, reader, on_message_lost)
-        subscription.matched = MatchedWatch(self, on_matched)
+        subscription.matched = MatchedWatch(self, self.graph.endpoint_qos(topic, qos), on_matched, on_incompatible_qos,
+                                            subscription._deafen)
         self.graph.matches.joined(topic, "subscribe", subscription.matched)
         self._closables.append(subscription)
         return subscription

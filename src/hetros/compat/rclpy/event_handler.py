@@ -1,11 +1,13 @@
-"""rclpy.event_handler: QoS event callbacks, on hetros's deadline and liveliness events.
+"""rclpy.event_handler: QoS event callbacks, on hetros's QoS, matched and liveliness events.
 
 ``create_subscription(..., event_callbacks=SubscriptionEventCallbacks(deadline=..., liveliness=...))``
 and ``create_publisher(..., event_callbacks=PublisherEventCallbacks(deadline=...))`` run the callbacks
 in the node's executor with ROS 2's status fields; ``message_lost`` counts what keep_last overwrote, a
-lifespan expired or best_effort dropped before the subscription took it. ``incompatible_qos`` never fires
-under hetros: ``hetros check`` refuses a project whose publishers and subscribers of a topic cannot talk, so a launch
-never has such a pair. ``matched`` reports subscriptions and publishers that come and go (the plan's
+lifespan expired or best_effort dropped before the subscription took it. ``incompatible_qos`` fires when
+two endpoints of one process ask, on a topic the project file gives no QoS, for QoS that does not match
+(``hetros check`` refuses such a pair where the project declares it): neither counts the other as
+matched and the subscription hears nothing from that publisher, as in ROS 2; without a callback, rclpy's
+warning is logged. ``matched`` reports subscriptions and publishers that come and go (the plan's
 endpoints in other processes count from the start; see ``hetros.MatchedStatus``). The events hetros does
 not raise (``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never
 ignored: ``UnsupportedEventTypeError``, as rclpy raises for a middleware without the event.
@@ -13,12 +15,21 @@ ignored: ``UnsupportedEventTypeError``, as rclpy raises for a middleware without
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import Any
 
 from ..._errors import NodeError
-from ...runtime import DeadlineMissedStatus, LivelinessChangedStatus, MatchedStatus, MessageLostStatus
+from ...runtime import (
+    DeadlineMissedStatus,
+    IncompatibleQosStatus,
+    LivelinessChangedStatus,
+    MatchedStatus,
+    MessageLostStatus,
+)
+from .logging import RcutilsLogger
+from .qos import QoSPolicyKind, qos_policy_name_from_kind
 
 QoSRequestedDeadlineMissedInfo = DeadlineMissedStatus
 QoSOfferedDeadlineMissedInfo = DeadlineMissedStatus
@@ -26,6 +37,43 @@ QoSLivelinessChangedInfo = LivelinessChangedStatus
 QoSMessageLostInfo = MessageLostStatus
 QoSPublisherMatchedInfo = MatchedStatus
 QoSSubscriptionMatchedInfo = MatchedStatus
+
+
+class rmw_qos_policy_kind_t(enum.IntEnum):
+    """The policy an incompatible-QoS event names; prints as rclpy's binding prints it."""
+
+    RMW_QOS_POLICY_INVALID = QoSPolicyKind.INVALID
+    RMW_QOS_POLICY_DURABILITY = QoSPolicyKind.DURABILITY
+    RMW_QOS_POLICY_DEADLINE = QoSPolicyKind.DEADLINE
+    RMW_QOS_POLICY_LIVELINESS = QoSPolicyKind.LIVELINESS
+    RMW_QOS_POLICY_RELIABILITY = QoSPolicyKind.RELIABILITY
+    RMW_QOS_POLICY_HISTORY = QoSPolicyKind.HISTORY
+    RMW_QOS_POLICY_LIFESPAN = QoSPolicyKind.LIFESPAN
+    RMW_QOS_POLICY_DEPTH = QoSPolicyKind.DEPTH
+    RMW_QOS_POLICY_LIVELINESS_LEASE_DURATION = QoSPolicyKind.LIVELINESS_LEASE_DURATION
+
+    def __str__(self) -> str:
+        return f"rmw_qos_policy_kind_t.{self.name}"
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self), spec)
+
+
+_POLICY_KINDS = {"reliability": rmw_qos_policy_kind_t.RMW_QOS_POLICY_RELIABILITY,
+                 "durability": rmw_qos_policy_kind_t.RMW_QOS_POLICY_DURABILITY,
+                 "deadline": rmw_qos_policy_kind_t.RMW_QOS_POLICY_DEADLINE,
+                 "liveliness": rmw_qos_policy_kind_t.RMW_QOS_POLICY_LIVELINESS,
+                 "lease_duration": rmw_qos_policy_kind_t.RMW_QOS_POLICY_LIVELINESS_LEASE_DURATION}
+
+
+@dataclass(frozen=True)
+class QoSRequestedIncompatibleQoSInfo:
+    total_count: int
+    total_count_change: int
+    last_policy_kind: rmw_qos_policy_kind_t
+
+
+QoSOfferedIncompatibleQoSInfo = QoSRequestedIncompatibleQoSInfo
 
 
 @dataclass
@@ -69,14 +117,42 @@ def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, w
                                         "subscription's liveliness are supported)")
 
 
+def incompatible_qos_handler(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks | None,
+                             logger: RcutilsLogger, topic: str) -> Callable[[IncompatibleQosStatus], None] | None:
+    """What runs on an incompatible-QoS event: the code's callback, else (``use_default_callbacks``, as
+    when no callbacks are given) rclpy's warning."""
+    chosen = callbacks.incompatible_qos if callbacks is not None else None
+    if chosen is None and (callbacks is None or callbacks.use_default_callbacks):
+        if isinstance(callbacks, PublisherEventCallbacks):
+            told = (f"New subscription discovered on topic '{topic}', requesting incompatible QoS. "
+                    "No messages will be sent to it. Last incompatible policy: ")
+        else:
+            told = (f"New publisher discovered on topic '{topic}', offering incompatible QoS. "
+                    "No messages will be received from it. Last incompatible policy: ")
+
+        def chosen(info: QoSRequestedIncompatibleQoSInfo) -> None:
+            logger.warn(told + qos_policy_name_from_kind(info.last_policy_kind))
+    if chosen is None:
+        return None
+    run = chosen
+
+    def report(status: IncompatibleQosStatus) -> None:
+        run(QoSRequestedIncompatibleQoSInfo(status.total_count, status.total_count_change,
+                                            _POLICY_KINDS[status.last_policy_kind]))
+    return report
+
+
 __all__ = [
     "PublisherEventCallbacks",
     "QoSLivelinessChangedInfo",
     "QoSMessageLostInfo",
     "QoSOfferedDeadlineMissedInfo",
+    "QoSOfferedIncompatibleQoSInfo",
     "QoSPublisherMatchedInfo",
     "QoSRequestedDeadlineMissedInfo",
+    "QoSRequestedIncompatibleQoSInfo",
     "QoSSubscriptionMatchedInfo",
     "SubscriptionEventCallbacks",
     "UnsupportedEventTypeError",
+    "rmw_qos_policy_kind_t",
 ]

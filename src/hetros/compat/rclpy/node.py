@@ -117,7 +117,8 @@ class Publisher:
         self._inner.publish(copy_message(msg))
 
     def get_subscription_count(self) -> int:
-        return self._node._hetros.graph.matches.count(self.topic_name, "subscribe")
+        matched = self._inner.matched
+        return 0 if matched is None else int(matched.current)
 
     def assert_liveliness(self) -> None:
         self._inner.assert_liveliness()
@@ -138,7 +139,8 @@ class Subscription:
         return self.topic_name
 
     def get_publisher_count(self) -> int:
-        return int(self._inner.node.graph.matches.count(self.topic_name, "publish"))
+        matched = self._inner.matched
+        return 0 if matched is None else int(matched.current)
 
     def destroy(self) -> None:
         self._inner.close()
@@ -339,15 +341,17 @@ class Node:
                          callback_group: CallbackGroup | None = None, event_callbacks: Any = None,
                          qos_overriding_options: Any = None, publisher_class: Any = None) -> Publisher:
         name = self.resolve_topic_name(topic)
+        from .event_handler import PublisherEventCallbacks, incompatible_qos_handler, supported
+
         deadline = matched = None
         if event_callbacks is not None:
-            from .event_handler import supported
-
             supported(event_callbacks, f"publisher of {name}")
             deadline, matched = event_callbacks.deadline, event_callbacks.matched
         _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}", qos_profile)
-        inner = self._hetros.create_publisher(msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline,
-                                              on_matched=matched)
+        inner = self._hetros.create_publisher(
+            msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline, on_matched=matched,
+            on_incompatible_qos=incompatible_qos_handler(event_callbacks or PublisherEventCallbacks(),
+                                                         self._logger, name))
         return Publisher(self, inner, msg_type, name)
 
     def create_subscription(self, msg_type: type[Any], topic: str, callback: Callable[[Any], None],
@@ -355,10 +359,10 @@ class Node:
                             event_callbacks: Any = None, qos_overriding_options: Any = None, raw: bool = False,
                             content_filter_options: Any = None, subscription_class: Any = None) -> Subscription:
         name = self.resolve_topic_name(topic)
+        from .event_handler import incompatible_qos_handler, supported
+
         deadline = liveliness = lost = matched = None
         if event_callbacks is not None:
-            from .event_handler import supported
-
             supported(event_callbacks, f"subscription to {name}")
             deadline, liveliness = event_callbacks.deadline, event_callbacks.liveliness
             lost, matched = event_callbacks.message_lost, event_callbacks.matched
@@ -376,7 +380,9 @@ class Node:
         run = guarded(self, self._hetros, callback, callback_group, entity, again=True)
         inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile),
                                                  on_deadline_missed=deadline, on_liveliness_changed=liveliness,
-                                                 on_message_lost=lost, on_matched=matched)
+                                                 on_message_lost=lost, on_matched=matched,
+                                                 on_incompatible_qos=incompatible_qos_handler(event_callbacks,
+                                                                                              self._logger, name))
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)
         return subscription

@@ -20,7 +20,7 @@ from tests.support.ros2 import free_domain
 
 PEER = Path(__file__).resolve().parent / "dds_edge_peer.py"
 # long enough for an unbounded queue to show (3 GB offered) and for the RSS to be seen settled for 20 s
-SECONDS = 60.0 if os.environ.get("HETROS_SOAK") else 18.0
+SECONDS = 60.0 if os.environ.get("HETROS_SOAK") else 12.0
 
 
 @pytest.mark.slow

@@ -39,7 +39,7 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
               "introspection": "intro", "set_parameters_callback": "", "fibonacci_action_server": "",
               "fibonacci_action_client": "", "qos_overrides_talker": "", "qos_overrides_listener": "",
               "deadline": "dl", "matched_event_detect": "", "use_logger_service": "",
-              "incompatible_qos": "iq"}
+              "incompatible_qos": "iq", "lifespan": "ls"}
     nodes = {key: node for key, node in project["nodes"].items() if key in chosen}
     assert sorted(nodes) == sorted(chosen), sorted(project["nodes"])
     for key, namespace in chosen.items():
@@ -49,11 +49,16 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
     nodes["listener_qos"]["args"] = ["--reliable", "-n", "4"]
     nodes["deadline"]["args"] = ["600", "--publish-for", "2000", "--pause-for", "2000"]
     nodes["incompatible_qos"]["args"] = ["reliability"]
+    nodes["lifespan"]["args"] = ["1000", "--subscribe-after", "2750"]
     project["nodes"] = nodes
     project["targets"] = {node["target"]: {"kind": "process"} for node in nodes.values()}
     project["topics"] = {"/chatter": {"history": "keep_last", "depth": 10},
                          "/qos/chatter": {"history": "keep_last", "depth": 10},
-                         "/qos_overrides_chatter": {"history": "keep_last", "depth": 10}}
+                         "/qos_overrides_chatter": {"history": "keep_last", "depth": 10},
+                         # what lifespan's code asks for at run time (a static plan takes it from here; the
+                         # launch warns that the project's QoS applies where it differs)
+                         "/ls/qos_lifespan_chatter": {"history": "keep_last", "depth": 10,
+                                                      "durability": "transient_local", "lifespan": 1.0}}
     return project
 
 
@@ -130,6 +135,9 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
     assert f"Requested incompatible qos - total 1 delta 1 {kind}" in said("listener"), err
     assert "Publishing: 'Talker says 4'" in said("iq.talker"), err
     assert said("iq.listener") == ["Listener starting up"], err
+    # lifespan 1000, subscribing after 2.75 s: the late listener gets the stored messages younger than 1 s
+    late = [f"Listener heard: [Talker says {i}]" for i in range(3, 10)]
+    assert said("ls.listener") == ["Listener starting up", *late], err
     # use_logger_service: one node sets another's logger level through its logger service
     levels = re.findall(r"^\[(\w+)\] \[\d+\.\d{9}\] \[LoggerServiceNode\]: Output (\d) with \w+ logger level\.$",
                         err, re.MULTILINE)

@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .._errors import AdviseError
-from ..advise import Advice, Chain, Options, advise, profile_project, verify, write, write_project
-from ..project import load_project, plan_file
+
+if TYPE_CHECKING:
+    from ..advise import Advice, Options
 
 EXIT_MISSED = 1
 
@@ -41,6 +43,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def cmd_advise(args: argparse.Namespace) -> int:
+    # imported here: every `hetros` command builds this parser, and the advisor and the project checks
+    # cost a command that does not use them 0.15 s
+    from ..advise import Chain, Options, advise, profile_project, write
+    from ..project import load_project, plan_file
+
     project = Path(args.project)
     plan = plan_file(project)
     if args.cores < 0:
@@ -84,6 +91,9 @@ def cmd_advise(args: argparse.Namespace) -> int:
 
 
 def _verify(project: Path, written: Path, advice: Advice, options: Options) -> dict[str, dict[str, float]]:
+    from ..advise import verify, write_project
+    from ..project import plan_file
+
     """Launch the shown mappings (the best as written, the others from hidden sibling files removed after)
     and the project's own; print each chain's predicted beside its measured latency."""
     chains = [c for c, _ in advice.paths]

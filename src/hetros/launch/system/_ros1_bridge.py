@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from ..._errors import ShutdownError, TransportError
 from ...msg import registry
 from ...runtime import Node
 from ...transport.tcpros import Ros1ActionType, Ros1NativeType, Ros1Peer, Ros1ServiceType, Ros1Type, ros1_store
@@ -43,7 +44,7 @@ def bridge(node: Node) -> None:
             peer.advertise_service(service, Ros1ServiceType(types, typename), client.call)
         for service, typename in import_services.items():
             node.create_service(types.get_service(typename), service,
-                                _forward(peer, service, Ros1ServiceType(types, typename)))
+                                _forward(node, peer, service, Ros1ServiceType(types, typename)))
         export_actions: dict[str, str] = node.get_parameter("export_actions", {})
         import_actions: dict[str, str] = node.get_parameter("import_actions", {})
         for action, typename in export_actions.items():
@@ -86,10 +87,16 @@ class _Rosout:
                 name=f"/{record.name}", msg=record.message, file="", function="", line=0, topics=[]))
 
 
-def _forward(peer: Ros1Peer, service: str, kind: Ros1ServiceType) -> Callable[[Any], Any]:
-    """A hetros service handler that calls the ROS 1 service of the same name."""
+def _forward(node: Node, peer: Ros1Peer, service: str, kind: Ros1ServiceType) -> Callable[[Any], Any]:
+    """A hetros service handler that calls the ROS 1 service of the same name. A call that fails as the
+    launch stops (the ROS 1 side went first) ends the bridge quietly; any other failure is the node's."""
 
     def call(request: Any) -> Any:
-        return peer.call_service(service, kind, request)
+        try:
+            return peer.call_service(service, kind, request)
+        except TransportError as exc:
+            if node.graph.stop.wait(1.0):
+                raise ShutdownError(f"ROS 1 service {service} failed as the launch stopped: {exc}") from exc
+            raise
 
     return call

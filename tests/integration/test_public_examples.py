@@ -39,7 +39,7 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
               "introspection": "intro", "set_parameters_callback": "", "fibonacci_action_server": "",
               "fibonacci_action_client": "", "qos_overrides_talker": "", "qos_overrides_listener": "",
               "deadline": "dl", "matched_event_detect": "", "use_logger_service": "",
-              "incompatible_qos": "iq", "lifespan": "ls"}
+              "incompatible_qos": "iq", "lifespan": "ls", "liveliness": "lv"}
     nodes = {key: node for key, node in project["nodes"].items() if key in chosen}
     assert sorted(nodes) == sorted(chosen), sorted(project["nodes"])
     for key, namespace in chosen.items():
@@ -50,6 +50,7 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
     nodes["deadline"]["args"] = ["600", "--publish-for", "2000", "--pause-for", "2000"]
     nodes["incompatible_qos"]["args"] = ["reliability"]
     nodes["lifespan"]["args"] = ["1000", "--subscribe-after", "2750"]
+    nodes["liveliness"]["args"] = ["1000"]
     project["nodes"] = nodes
     project["targets"] = {node["target"]: {"kind": "process"} for node in nodes.values()}
     project["topics"] = {"/chatter": {"history": "keep_last", "depth": 10},
@@ -138,6 +139,15 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
     # lifespan 1000, subscribing after 2.75 s: the late listener gets the stored messages younger than 1 s
     late = [f"Listener heard: [Talker says {i}]" for i in range(3, 10)]
     assert said("ls.listener") == ["Listener starting up", *late], err
+    # liveliness 1000 (automatic): the listener hears the talker come, and go when its node is destroyed
+    # after 3 s (the demo logs through get_logger('listener'))
+    events = [line for line in said("listener") if line.startswith(("Liveliness changed", "  "))]
+    assert events == ["Liveliness changed event:", "  alive_count: 1", "  not_alive_count: 0",
+                      "  alive_count_change: 1", "  not_alive_count_change: 0",
+                      "Liveliness changed event:", "  alive_count: 0", "  not_alive_count: 0",
+                      "  alive_count_change: -1", "  not_alive_count_change: 0"], err
+    heard = [line for line in said("lv.listener") if line.startswith("Listener heard")]
+    assert 4 <= len(heard) <= 7 and heard[0] == "Listener heard: [Talker says 0]", err
     # use_logger_service: one node sets another's logger level through its logger service
     levels = re.findall(r"^\[(\w+)\] \[\d+\.\d{9}\] \[LoggerServiceNode\]: Output (\d) with \w+ logger level\.$",
                         err, re.MULTILINE)

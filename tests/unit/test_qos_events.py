@@ -13,6 +13,7 @@ from hetros import (
     DeadlineMissedStatus,
     IncompatibleQosStatus,
     LivelinessChangedStatus,
+    LivelinessLostStatus,
     MatchedStatus,
     MessageLostStatus,
     Node,
@@ -112,6 +113,36 @@ def test_liveliness_manual_by_topic_is_lost_past_the_lease_and_regained(shm_sess
         _spin_for(sub_node, 0.3)
         assert changes[-1] == (1, 0), changes
         assert isinstance(LivelinessChangedStatus(), LivelinessChangedStatus)
+
+
+def test_a_manual_publisher_hears_each_lease_it_let_pass(shm_session: str, mapping: str) -> None:
+    """ROS 2's liveliness_lost: each silence past the lease is counted once; publishing renews the lease."""
+    qos = QoS(liveliness="manual_by_topic", lease_duration=0.2)
+    with _open(shm_session, qos, mapping) as (pub_node, _):
+        lost: list[LivelinessLostStatus] = []
+        pub = pub_node.create_publisher(Int32, "/q", on_liveliness_lost=lost.append)
+        _spin_for(pub_node, 0.5)
+        assert lost == [LivelinessLostStatus(1, 1)]
+        pub.publish(Int32(data=1))
+        _spin_for(pub_node, 0.1)
+        assert len(lost) == 1
+        _spin_for(pub_node, 0.4)
+        assert lost[-1] == LivelinessLostStatus(2, 1)
+
+
+def test_a_closed_publisher_of_the_process_is_gone_not_dead() -> None:
+    """As ROS 2 counts a deleted writer: alive goes down by one, not_alive stays."""
+    node = Node("both")
+    changes: list[tuple[int, int, int, int]] = []
+    node.create_subscription(Int32, "/g", lambda m: None, on_liveliness_changed=lambda s: changes.append(
+        (s.alive_count, s.not_alive_count, s.alive_count_change, s.not_alive_count_change)))
+    pub = node.create_publisher(Int32, "/g")
+    _spin_for(node, 0.6)
+    assert changes == [(1, 0, 1, 0)]
+    pub.close()
+    _spin_for(node, 0.6)
+    assert changes == [(1, 0, 1, 0), (0, 0, -1, 0)]
+    node.graph.close()
 
 
 def test_over_dds_lifespan_is_enforced_and_liveliness_is_cyclones() -> None:

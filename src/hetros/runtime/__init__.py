@@ -10,7 +10,7 @@ from ._host import Host, resolve
 from ._log import setup_logging
 from ._matched import IncompatibleQosStatus, MatchedStatus
 from ._node import NODE_TIMES_VARIABLE, Node
-from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, MessageLostStatus
+from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, LivelinessLostStatus, MessageLostStatus
 
 if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle, uuid_message
@@ -67,6 +67,7 @@ __all__ = [
     "Host",
     "IncompatibleQosStatus",
     "LivelinessChangedStatus",
+    "LivelinessLostStatus",
     "MatchedStatus",
     "MessageLostStatus",
     "Node",

@@ -30,6 +30,7 @@ from ._executor import AdaptiveSpin
 from ._matched import MatchedWatch
 from ._qos_events import (
     DeadlineWatch,
+    LivelinessLostWatch,
     LivelinessWatch,
     MessageLostWatch,
     WatchedReader,
@@ -92,6 +93,8 @@ class Publisher(Generic[M]):
         self._last_make: Callable[[], M] = msg_type
         self.deadline: DeadlineWatch | None = None  # the topic's QoS deadline, offered (``on_deadline_missed``)
         self.manual_liveliness = False  # each publish asserts liveliness (the topic's is manual_by_topic)
+        self.liveliness_lost: LivelinessLostWatch | None = None  # its lapses, when someone listens
+        self._closed = False
         self.matched: MatchedWatch | None = None  # its matched subscriptions, while it is open
         # the topic's tap in this process: counts what is sent; sinks only while someone looks
         self._tap = node.graph.tap_point(topic, self.typename)
@@ -109,7 +112,7 @@ class Publisher(Generic[M]):
         if self.deadline is not None:
             self.deadline.seen()
         if self.manual_liveliness:
-            self._writer.assert_liveliness()
+            self.assert_liveliness()
         if PROFILING:
             self.node.count_publish(self.topic)
 
@@ -126,6 +129,8 @@ class Publisher(Generic[M]):
     def assert_liveliness(self) -> None:
         """Say this publisher is alive without publishing (``manual_by_topic`` liveliness)."""
         self._writer.assert_liveliness()
+        if self.liveliness_lost is not None:
+            self.liveliness_lost.seen()
 
     def loan(self, **sizes: int) -> M:
         """A message to fill in place and publish without a copy.
@@ -153,8 +158,13 @@ class Publisher(Generic[M]):
         return self._writer.sends_in_place(message)
 
     def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
         if self.deadline is not None:
             self.deadline.stop()
+        if self.liveliness_lost is not None:
+            self.liveliness_lost.stop()
         if self.matched is not None:
             self.node.graph.matches.left(self.topic, "publish", self.matched)
             self.matched = None

@@ -69,6 +69,8 @@ class Graph:
         self._qos_told: set[str] = set()  # topics whose code asked for another QoS, told once each
         self._codecs: dict[tuple[str, bool], Codec] = {}
         self._stop_hooks: list[Callable[[], None]] = []
+        # set by a launch's worker: tells the launcher this process has shutdown hooks (``on_shutdown``)
+        self.announce_hooks: Callable[[], None] | None = None
         self._prepared: dict[tuple[str, str], RetainedReader] = {}
         self._transports: dict[str, Transport] = {}
         self._context = TransportContext(plan, process, session, self.stop, self.types, self._codec)
@@ -160,6 +162,15 @@ class Graph:
                 self._stop_hooks.append(hook)
         if stopped:
             hook()
+
+    def on_shutdown(self, hook: Callable[[], None]) -> None:
+        """A node's own shutdown hook (rospy's ``on_shutdown``): ``on_stop``, and the launcher is told once
+        (``hooks_announced``), so that it stops this process before the ones it publishes to, which then
+        still hear what the hook publishes."""
+        self.on_stop(hook)
+        announce, self.announce_hooks = self.announce_hooks, None
+        if announce is not None:
+            announce()
 
     def shutdown(self) -> None:
         """Stop every node of this process: set the stop flag and wake everything waiting. Each hook runs

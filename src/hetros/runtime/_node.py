@@ -35,6 +35,8 @@ from ._matched import IncompatibleQosStatus, MatchedStatus, MatchedWatch
 from ._qos_events import (
     DeadlineMissedStatus,
     LivelinessChangedStatus,
+    LivelinessLostStatus,
+    LivelinessLostWatch,
     LivelinessWatch,
     MessageLostStatus,
     MessageLostWatch,
@@ -123,12 +125,14 @@ class Node:
     def create_publisher(self, msg_type: type[M], topic: str, *, qos: QoS | None = None,
                          on_deadline_missed: Callable[[DeadlineMissedStatus], object] | None = None,
                          on_matched: Callable[[MatchedStatus], object] | None = None,
-                         on_incompatible_qos: Callable[[IncompatibleQosStatus], object] | None = None
+                         on_incompatible_qos: Callable[[IncompatibleQosStatus], object] | None = None,
+                         on_liveliness_lost: Callable[[LivelinessLostStatus], object] | None = None
                          ) -> Publisher[M]:
         """``on_deadline_missed(status)`` runs in this node's executor when the topic has a
         ``deadline`` and this publisher let a period pass without publishing; ``on_matched(status)``
         when subscriptions to its topic come or go (see ``MatchedStatus``); ``on_incompatible_qos(status)``
-        when one requests more than this publisher's ``qos`` offers."""
+        when one requests more than this publisher's ``qos`` offers; ``on_liveliness_lost(status)`` when a
+        ``manual_by_topic`` publisher let its ``lease_duration`` pass without publishing or asserting."""
         typename = typename_of(msg_type)
         topic = self.resolve_name(topic)
         self._check_declared_type(topic, typename)
@@ -137,10 +141,14 @@ class Node:
         effective = self.graph.qos_of(topic, None)
         publisher.deadline = watch_deadline(self, f"publisher of {topic} in {self.name}",
                                             self.graph.deadline_of(topic, qos), on_deadline_missed)
-        publisher.manual_liveliness = effective.liveliness == "manual_by_topic"
+        offered = self.graph.endpoint_qos(topic, qos)
+        publisher.manual_liveliness = "manual_by_topic" in (effective.liveliness, offered.liveliness)
+        if on_liveliness_lost is not None and offered.liveliness == "manual_by_topic" and \
+                offered.lease_duration is not None:
+            publisher.liveliness_lost = LivelinessLostWatch(self, offered.lease_duration, on_liveliness_lost)
         if publisher.manual_liveliness:
             writer.assert_liveliness()  # alive from its creation, as a ROS 2 publisher
-        publisher.matched = MatchedWatch(self, self.graph.endpoint_qos(topic, qos), on_matched, on_incompatible_qos)
+        publisher.matched = MatchedWatch(self, offered, on_matched, on_incompatible_qos)
         self.graph.matches.joined(topic, "publish", publisher.matched)
         self._closables.append(publisher)
         return publisher

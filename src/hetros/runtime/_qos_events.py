@@ -51,6 +51,48 @@ class MessageLostStatus:
     total_count_change: int = 0
 
 
+@dataclass
+class LivelinessLostStatus:
+    """As ROS 2's: the times this publisher let its lease pass without asserting its liveliness, in all
+    and since the last report."""
+
+    total_count: int = 0
+    total_count_change: int = 0
+
+
+class LivelinessLostWatch:
+    """Counts the leases a ``manual_by_topic`` publisher let pass without publishing or calling
+    ``assert_liveliness`` (each silence once, as ROS 2 counts them), looked at every half lease."""
+
+    def __init__(self, node: Node, lease: float, callback: Callable[[LivelinessLostStatus], object]) -> None:
+        self.node = node
+        self.lease = lease
+        self.callback = callback
+        self.status = LivelinessLostStatus()
+        self.asserted = time.monotonic()
+        self._lost = False
+        self._stopped = False
+        node.executor.add_timer(self.asserted + lease / 2, self._check)
+
+    def seen(self) -> None:
+        self.asserted = time.monotonic()
+        self._lost = False
+
+    def _check(self) -> float | None:
+        if self._stopped:
+            return None
+        now = time.monotonic()
+        if not self._lost and now - self.asserted > self.lease:
+            self._lost = True
+            self.status.total_count += 1
+            self.status.total_count_change = 1
+            self.callback(self.status)
+        return now + self.lease / 2
+
+    def stop(self) -> None:
+        self._stopped = True
+
+
 class DeadlineWatch:
     """Counts the ``deadline`` periods of one endpoint that passed without a message."""
 

@@ -129,16 +129,15 @@ class InprocTopic:
         return writer
 
     def liveliness(self) -> tuple[int, int]:
-        """In one process an ``automatic`` publisher is alive until it is closed; a
-        ``manual_by_topic`` one while it asserted within ``lease_duration``."""
+        """In one process an ``automatic`` publisher is alive until it is closed, and a closed one is
+        gone, counted neither way (as ROS 2 counts a deleted writer); a ``manual_by_topic`` one is alive
+        while it asserted within ``lease_duration``."""
         now = time.monotonic()
         lease = self.qos.lease_duration
         with self._lock:
-            writers = list(self._writers)
+            writers = [writer for writer in self._writers if not writer.closed]
         alive = 0
         for writer in writers:
-            if writer.closed:
-                continue
             if self.qos.liveliness == "manual_by_topic":
                 if writer.asserted is None or (lease is not None and now - writer.asserted > lease):
                     continue

@@ -8,9 +8,10 @@ two endpoints of one process ask, on a topic the project file gives no QoS, for 
 (``hetros check`` refuses such a pair where the project declares it): neither counts the other as
 matched and the subscription hears nothing from that publisher, as in ROS 2; without a callback, rclpy's
 warning is logged. ``matched`` reports subscriptions and publishers that come and go (the plan's
-endpoints in other processes count from the start; see ``hetros.MatchedStatus``). The events hetros does
-not raise (``incompatible_type``, a publisher's ``liveliness``) are refused with a line naming them, never
-ignored: ``UnsupportedEventTypeError``, as rclpy raises for a middleware without the event.
+endpoints in other processes count from the start; see ``hetros.MatchedStatus``); a publisher's
+``liveliness`` counts the leases a manual_by_topic publisher let pass. The event hetros does not raise
+(``incompatible_type``: hetros check refuses two types on one topic) is refused with a line naming it,
+never ignored: ``UnsupportedEventTypeError``, as rclpy raises for a middleware without the event.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from ...runtime import (
     DeadlineMissedStatus,
     IncompatibleQosStatus,
     LivelinessChangedStatus,
+    LivelinessLostStatus,
     MatchedStatus,
     MessageLostStatus,
 )
@@ -34,6 +36,7 @@ from .qos import QoSPolicyKind, qos_policy_name_from_kind
 QoSRequestedDeadlineMissedInfo = DeadlineMissedStatus
 QoSOfferedDeadlineMissedInfo = DeadlineMissedStatus
 QoSLivelinessChangedInfo = LivelinessChangedStatus
+QoSLivelinessLostInfo = LivelinessLostStatus
 QoSMessageLostInfo = MessageLostStatus
 QoSPublisherMatchedInfo = MatchedStatus
 QoSSubscriptionMatchedInfo = MatchedStatus
@@ -106,15 +109,13 @@ _SUPPORTED = {"deadline", "liveliness", "incompatible_qos", "message_lost", "mat
 
 def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, where: str) -> None:
     """Refuse the events hetros never raises, naming them (a callback that silently never runs would be
-    a lie); a publisher's liveliness_lost is one of them."""
+    a lie)."""
     unsupported = [f.name for f in fields(callbacks) if getattr(callbacks, f.name) is not None and
                    f.name not in _SUPPORTED]
-    if isinstance(callbacks, PublisherEventCallbacks) and callbacks.liveliness is not None:
-        unsupported.append("liveliness")
     if unsupported:
         raise UnsupportedEventTypeError(f"{where}: event_callbacks {', '.join(unsupported)} are events hetros does "
-                                        "not raise; remove them (deadline, message_lost, matched and a "
-                                        "subscription's liveliness are supported)")
+                                        "not raise; remove them (deadline, liveliness, message_lost, matched and "
+                                        "incompatible_qos are supported)")
 
 
 def incompatible_qos_handler(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks | None,
@@ -145,6 +146,7 @@ def incompatible_qos_handler(callbacks: SubscriptionEventCallbacks | PublisherEv
 __all__ = [
     "PublisherEventCallbacks",
     "QoSLivelinessChangedInfo",
+    "QoSLivelinessLostInfo",
     "QoSMessageLostInfo",
     "QoSOfferedDeadlineMissedInfo",
     "QoSOfferedIncompatibleQoSInfo",

@@ -12,7 +12,7 @@ import inspect
 import threading
 import time
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, TypeVar
 
 from ..._errors import NodeError, ParameterError
 from ...msg import copy as copy_message
@@ -253,6 +253,9 @@ class SetParametersResult:
         self.reason = reason
 
 
+_Owned = TypeVar("_Owned", "Publisher", "Subscription", "Timer", "Service")
+
+
 class Node:
     """rclpy's Node, as a view of the hetros node this ``main()`` runs as."""
 
@@ -280,6 +283,7 @@ class Node:
         # `hetros param set` goes through this node's callbacks, as `ros2 param set` through rclpy's service
         self._hetros.parameter_gate = self._set_from_outside
         self.default_callback_group: CallbackGroup = MutuallyExclusiveCallbackGroup()
+        self._owned: list[Publisher | Subscription | Timer | Service] = []  # closed by destroy_node
         self.executor: Any = None
         if automatically_declare_parameters_from_overrides:
             for name, value in self._overrides.items():
@@ -343,16 +347,17 @@ class Node:
         name = self.resolve_topic_name(topic)
         from .event_handler import PublisherEventCallbacks, incompatible_qos_handler, supported
 
-        deadline = matched = None
+        deadline = matched = lost = None
         if event_callbacks is not None:
             supported(event_callbacks, f"publisher of {name}")
-            deadline, matched = event_callbacks.deadline, event_callbacks.matched
+            deadline, matched, lost = event_callbacks.deadline, event_callbacks.matched, event_callbacks.liveliness
         _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}", qos_profile)
         inner = self._hetros.create_publisher(
             msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline, on_matched=matched,
+            on_liveliness_lost=lost,
             on_incompatible_qos=incompatible_qos_handler(event_callbacks or PublisherEventCallbacks(),
                                                          self._logger, name))
-        return Publisher(self, inner, msg_type, name)
+        return self._own(Publisher(self, inner, msg_type, name))
 
     def create_subscription(self, msg_type: type[Any], topic: str, callback: Callable[[Any], None],
                             qos_profile: QoSProfile | int, *, callback_group: CallbackGroup | None = None,
@@ -385,11 +390,11 @@ class Node:
                                                                                               self._logger, name))
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)
-        return subscription
+        return self._own(subscription)
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any],
                      callback_group: CallbackGroup | None = None, clock: Any = None, autostart: bool = True) -> Timer:
-        return Timer(self, float(timer_period_sec), callback, autostart, callback_group)
+        return self._own(Timer(self, float(timer_period_sec), callback, autostart, callback_group))
 
     def create_rate(self, frequency: float, clock: Any = None) -> Rate:
         return Rate(self, frequency)
@@ -400,7 +405,7 @@ class Node:
 
         def handle(request: Any) -> Any:  # rclpy hands the callback a response to fill
             return copy_message(callback(received(request), srv_type.Response()))
-        return Service(self._hetros.create_service(srv_type, name, handle), srv_type, name)
+        return self._own(Service(self._hetros.create_service(srv_type, name, handle), srv_type, name))
 
     def create_client(self, srv_type: Any, srv_name: str, *, qos_profile: Any = None,
                       callback_group: CallbackGroup | None = None) -> Client:
@@ -536,9 +541,17 @@ class Node:
 
     # -- the end ---------------------------------------------------------------------------------
 
+    def _own(self, entity: _Owned) -> _Owned:
+        self._owned.append(entity)
+        return entity
+
     def destroy_node(self) -> None:
-        """rclpy frees the node's endpoints here; in hetros they belong to the planned node, closed when its
-        thread ends."""
+        """Close what this node created, as rclpy does: its publishers (a subscription of the process hears
+        them go: liveliness, matched), subscriptions, timers and services. Clients stay: the node's clients
+        of one service are one hetros client, shared by every rclpy node of the process."""
+        owned, self._owned = self._owned, []
+        for entity in reversed(owned):
+            entity.destroy()
 
     def destroy_publisher(self, publisher: Publisher) -> bool:
         publisher.destroy()

@@ -237,7 +237,7 @@ def signal_shutdown(reason: str) -> None:
 
 
 def on_shutdown(hook: Callable[[], Any]) -> None:
-    _state().hetros.graph.on_stop(hook)
+    _state().hetros.graph.on_shutdown(hook)
 
 
 def spin() -> None:

@@ -58,6 +58,7 @@ class _Child:
     ready: bool = False
     stopping: bool = False
     reader: threading.Thread | None = None
+    hooks: bool = False  # its nodes have shutdown hooks: stopped before the others (``_shutdown``)
 
 
 class Launcher:
@@ -103,7 +104,9 @@ class Launcher:
                 event = json.loads(line)
             except json.JSONDecodeError:
                 continue
-            if isinstance(event, dict):
+            if isinstance(event, dict) and event.get("event") == "hooks":
+                child.hooks = True
+            elif isinstance(event, dict):
                 self.events.put(event)
 
     def _watch_exit(self, child: _Child) -> None:
@@ -402,9 +405,22 @@ class Launcher:
         if self.host is not None:
             self.host.graph.stop_reason = reason
         self.stop.set()
-        for child in self.children.values():
+        # processes with shutdown hooks first (rospy's on_shutdown): what a hook publishes still finds its
+        # subscribers running, as under roslaunch, which stops nodes one by one
+        hooked = [child for child in self.children.values() if child.hooks]
+        for child in hooked:
             child.stopping = True
             self._send(child, f"stop {reason}")
+        deadline = time.monotonic() + 5.0
+        for child in hooked:
+            try:
+                child.proc.wait(timeout=max(deadline - time.monotonic(), 0.1))
+            except subprocess.TimeoutExpired:
+                pass  # killed below with the rest
+        for child in self.children.values():
+            if not child.hooks:
+                child.stopping = True
+                self._send(child, f"stop {reason}")
         stuck: list[str] = []
         if self.control is not None:
             self.control.close()

@@ -104,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
             _remove_session_segments(args.session)
         return 2
     hosts.append(host)
+    host.graph.announce_hooks = lambda: report("hooks")
     from ..observe._control import ControlServer
 
     looks = ControlServer(host, session_folder(args.session), args.target)

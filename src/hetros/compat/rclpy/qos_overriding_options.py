@@ -8,25 +8,12 @@ QoS the endpoint gets, as rclpy's does (a refusal raises ``InvalidQosOverridesEr
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
 from ..._errors import NodeError
-
-
-class QoSPolicyKind(enum.IntEnum):
-    INVALID = 1 << 0
-    DURABILITY = 1 << 1
-    DEADLINE = 1 << 2
-    LIVELINESS = 1 << 3
-    RELIABILITY = 1 << 4
-    HISTORY = 1 << 5
-    LIFESPAN = 1 << 6
-    DEPTH = 1 << 7
-    LIVELINESS_LEASE_DURATION = 1 << 8
-    AVOID_ROS_NAMESPACE_CONVENTIONS = 1 << 9
+from .qos import QoSPolicyKind
 
 
 class InvalidQosOverridesError(NodeError):

@@ -111,6 +111,37 @@ def test_an_on_shutdown_hook_runs_once(tmp_path: Path) -> None:
     assert re.search(r"I heard I'm dead!$", output, re.MULTILINE), output
 
 
+def test_the_advanced_publish_tutorial(tmp_path: Path) -> None:
+    """009: publish(field values) in order and by keyword, resolve_name, get_num_connections, from its own
+    launch file; nobody subscribes, as when nobody runs `rostopic echo`."""
+    made = subprocess.run([sys.executable, "-m", "hetros", "import", "roslaunch",
+                           f"{RUN}/009_advanced_publish/advanced_publish.launch", "--package-path", str(TUTORIALS),
+                           "-o", str(tmp_path / "project.yaml")], capture_output=True, text=True, timeout=60,
+                          check=False)
+    assert made.returncode == 0, made.stderr
+    project: dict[str, Any] = yaml.safe_load((tmp_path / "project.yaml").read_text())
+    done = launch(tmp_path, project, 2.6)
+    assert done.returncode == 0, done.stderr
+    assert "To see messages, please type\n\t'rostopic echo /color'\nIn another window" in done.stdout, done.stdout
+    assert re.findall(r"^\[INFO\] \[[\d.]+\]: (.*)$", done.stderr, re.MULTILINE)[:2] == ["I have 0 subscribers"] * 2
+
+
+def test_what_hetros_has_no_counterpart_for_is_refused_naming_the_line(tmp_path: Path) -> None:
+    """004 (SubscribeListener: a publisher told of each new peer, publishing to it alone) and 007 (the
+    per-connection headers of ROS 1) are refused by hetros check at their line, with what to do instead."""
+    project = init_scripts(tmp_path, "004_listener_subscribe_notify/listener_subscribe_notify.py",
+                           "007_connection_header/listener_connection_header.py",
+                           "007_connection_header/talker_connection_header.py")
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump(project))
+    checked = subprocess.run([sys.executable, "-m", "hetros", "check", str(tmp_path / "project.yaml")],
+                             capture_output=True, text=True, timeout=120, check=False)
+    assert checked.returncode == 1
+    assert re.search(r"listener_subscribe_notify\.py:45: uses SubscribeListener, which hetros has no counterpart "
+                     r"for: .*publish to all", checked.stderr), checked.stderr
+    assert re.search(r"listener_connection_header\.py:48: uses _connection_header, which hetros has no "
+                     r"counterpart for", checked.stderr), checked.stderr
+
+
 ROSPY_NAMES = '''
 import rospy
 

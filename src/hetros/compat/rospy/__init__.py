@@ -13,6 +13,7 @@ import sys
 import threading
 import time as _time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from ..._errors import Error, ParameterError, ShutdownError
@@ -387,7 +388,15 @@ class Publisher:
         self.name = _resolve(name)
         self.data_class = data_class
         self.type = getattr(data_class, "__msgtype__", "")
-        self._inner = _state().hetros.create_publisher(data_class, self.name)
+        hetros = _state().hetros
+        # a latched topic keeps its last message for late subscribers (transient_local): where the project's
+        # QoS does not, the launch says so (queue_size is rospy's send buffer, not the topic's QoS)
+        asked = replace(hetros.graph.qos_of(self.name, None), durability="transient_local") if latch else None
+        self._inner = hetros.create_publisher(data_class, self.name, qos=asked)
+        if headers:
+            node_logger(_state().hetros.name).warning(
+                "publisher of %s: headers=%r are not sent: hetros has no per-connection headers (carry what "
+                "the subscriber needs in the message)", self.name, headers)
         self._seq = 0  # rospy's count of messages published, written into their header.seq
 
     def publish(self, *args: Any, **kwargs: Any) -> None:

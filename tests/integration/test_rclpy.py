@@ -113,22 +113,26 @@ FIBONACCI = "array('i', [0, 1, 1, 2, 3, 5, 8, 13, 21, 34, 55])"
 
 
 def test_the_minimal_action_servers_and_clients(tmp_path: Path) -> None:
-    """Four server/client pairs at once, each pair in a namespace of its own (their code names the same
-    action, 'fibonacci'): results, feedback, deferred execution and cancel, printed as ROS 2 prints them."""
+    """Six server/client pairs at once, each pair in a namespace of its own (their code names the same
+    action, 'fibonacci'): results, feedback, deferred execution, cancel, an asyncio client's two goals at once
+    against the server that keeps one goal (the first aborted) and the one that queues them, printed as ROS 2
+    prints them."""
     pairs = {"plain": ("server", "client"), "deferred": ("server_defer", "client"),
-             "functions": ("server_not_composable", "client_not_composable"), "cancel": ("server", "client_cancel")}
+             "functions": ("server_not_composable", "client_not_composable"), "cancel": ("server", "client_cancel"),
+             "single": ("server_single_goal", "client_asyncio"), "queued": ("server_queue_goals", "client_asyncio")}
     project = init(tmp_path, *(module("examples_rclpy_minimal_action_server", server) for server, _ in pairs.values()),
                    *(module("examples_rclpy_minimal_action_client", client) for _, client in pairs.values()))
     # keyed by their entry points (all four servers name their node the same), in the order given
     servers = [k for k, n in project["nodes"].items() if "minimal_action_server." in n["run"]]
     clients = [k for k, n in project["nodes"].items() if "minimal_action_client." in n["run"]]
-    assert servers == ["server", "server_defer", "server_not_composable", "server_2"], servers
-    assert len(servers) == len(clients) == 4
+    assert servers == ["server", "server_defer", "server_not_composable", "server_2", "server_single_goal",
+                       "server_queue_goals"], servers
+    assert len(servers) == len(clients) == 6
     for node in project["nodes"].values():
         assert node.get("actions", node.get("action_clients")) == {"fibonacci": ACTION}
     for namespace, server, client in zip(pairs, servers, clients, strict=True):
         project["nodes"][server]["namespace"] = project["nodes"][client]["namespace"] = namespace
-    done = launch(tmp_path, project, 13.5)
+    done = launch(tmp_path, project, 17.0)
     assert done.returncode == 0, done.stderr
     out = done.stderr
     for namespace in ("plain", "deferred", "functions"):
@@ -141,6 +145,19 @@ def test_the_minimal_action_servers_and_clients(tmp_path: Path) -> None:
     assert "[cancel.minimal_action_server]: Received cancel request" in out
     assert "[cancel.minimal_action_client]: Goal successfully canceled" in out
     assert "[cancel.minimal_action_server]: Goal canceled" in out
+    # client_asyncio sends two goals at once from an asyncio loop: the single-goal server aborts the first
+    assert "[single.minimal_action_server]: Aborting previous goal" in out, out
+    assert "[single.minimal_action_client_asyncio]: Goal failed with status: 6" in out, out
+    assert f"[single.minimal_action_client_asyncio]: Goal succeeded! Result: {FIBONACCI}" in out, out
+    assert "[minimal_action_client]: unfinished: 0" in out, out
+    # printed as rclpy prints a message: its module path, numeric sequences as lists
+    assert f"[minimal_action_client]: result example_interfaces.action.Fibonacci_Result(sequence=" \
+           f"{[0, 1, 1, 2, 3, 5, 8, 13, 21, 34, 55]}) and status flag 4" in out, out
+    assert "[minimal_action_client]: result example_interfaces.action.Fibonacci_Result(sequence=[]) and status " \
+           "flag 6" in out, out
+    # and the queueing server takes the second when the first is done
+    assert "[queued.minimal_action_server]: Goal put in the queue" in out, out
+    assert f"[queued.minimal_action_client_asyncio]: Goal succeeded! Result: {FIBONACCI}" in out, out
     assert "Traceback" not in out
 
 

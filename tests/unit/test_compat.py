@@ -25,11 +25,31 @@ def test_a_constructed_numeric_sequence_is_an_array_array_as_in_rclpy() -> None:
     assert np.array_equal(copied.sequence, [0, 1, 1])
 
 
-def test_types_without_numeric_sequences_are_served_as_they_are() -> None:
+def test_served_types_print_as_rclpy_prints_them_and_copy_into_hetros_classes() -> None:
+    """rosidl's repr: the module path, numeric sequences as lists ([] when empty), messages inside alike; a
+    copy (what publish sends) is of hetros's own class again."""
     string = registry().get("std_msgs/msg/String")
-    assert flavoured(string) is string
+    served = flavoured(string)
+    assert issubclass(served, string) and served.__slots__ == ()
+    assert repr(served(data="hi")) == "std_msgs.msg.String(data='hi')"
+    assert type(copy(served(data="hi"))) is string
     fibonacci = flavoured_action(registry().get_action("example_interfaces/action/Fibonacci"))
     assert fibonacci.Result().sequence.typecode == "i"
+    assert str(fibonacci.Result(sequence=[0, 1, 1])) == "example_interfaces.action.Fibonacci_Result(sequence=[0, 1, 1])"
+    assert str(fibonacci.Result()) == "example_interfaces.action.Fibonacci_Result(sequence=[])"
+    image = flavoured(registry().get("sensor_msgs/msg/Image"))()
+    assert repr(image).startswith("sensor_msgs.msg.Image(header=std_msgs.msg.Header(stamp=builtin_interfaces.msg."
+                                  "Time(sec=0, nanosec=0), frame_id=''), height=0,")
+
+
+def test_a_received_read_only_message_prints_as_rclpy_and_stays_read_only() -> None:
+    result_type = registry().get("example_interfaces/action/Fibonacci_Result")
+    message = freeze(result_type(sequence=np.array([0, 1, 1], dtype=np.int32)))
+    received(message)
+    assert str(message) == "example_interfaces.action.Fibonacci_Result(sequence=[0, 1, 1])"
+    assert message.is_frozen
+    with pytest.raises(ReadOnlyMessageError):
+        message.sequence = [2]
 
 
 def test_a_received_sequence_is_a_zero_copy_view_printed_as_rclpy_prints_it() -> None:

@@ -5,12 +5,14 @@ rclpy gives an unbounded or bounded numeric sequence (``int32[]``, ``float64[<=8
 numpy arrays in both. hetros keeps numpy arrays, which travel without copies. The rclpy code
 hetros runs sees rclpy's flavour where it can tell the difference:
 
-* messages it constructs are of a thin subclass (same slots, same ``__msgtype__``) that turns a
+* messages it constructs are of a thin subclass (same slots, same ``__msgtype__``) that prints as
+  rclpy's messages print (``std_msgs.msg.String(data='hi')``, numeric sequences as lists), turns a
   list assigned to a numeric sequence into an ``array.array``, and starts it as an empty one;
 * replies, goals, feedback and results it receives keep their numpy arrays, shown through
-  :class:`SequenceView`, a zero-copy view that prints as ``array.array`` does. A topic's message
-  is not shown so: on that hot path the view would cost a quarter of a small message's one-way
-  latency; its arrays are hetros's read-only numpy arrays.
+  :class:`SequenceView`, a zero-copy view that prints as ``array.array`` does, and print as
+  rclpy's. A topic's message is not shown so: on that hot path the view would cost a quarter of a
+  small message's one-way latency; its arrays are hetros's read-only numpy arrays, and it prints as
+  hetros's messages do.
 
 Outgoing messages are copied into hetros's own class first (the shim's publishers, replies and
 goals do so), so the transports only ever see hetros's classes.
@@ -75,6 +77,7 @@ def _nested(typename: str) -> dict[str, tuple[str, bool]]:
 
 
 _classes: dict[type[Any], type[Any]] = {}
+_made: set[type[Any]] = set()  # the flavoured classes themselves
 
 
 def _shown(value: Any) -> Any:
@@ -104,19 +107,42 @@ def _sequence_property(base: type[Any], name: str, code: str) -> property:
     return property(get, put)
 
 
+def rclpy_repr(message: Any) -> str:
+    """A message as rclpy's generated ``__repr__`` shows it: ``example_interfaces.action.Fibonacci_Result(
+    sequence=[0, 1, 1])``, numeric sequences as lists (``[]`` when empty), messages inside in the same form."""
+    typename = message.__msgtype__
+    numeric = _sequences(typename)
+    shown = ", ".join(f"{name}={_field_repr(getattr(message, name), name in numeric)}"
+                      for name in message.__fieldnames__)
+    return f"{typename.replace('/', '.')}({shown})"
+
+
+def _field_repr(value: Any, numeric_sequence: bool) -> str:
+    if numeric_sequence:
+        return repr(value.tolist()) if len(value) else "[]"
+    if getattr(value, "__msgtype__", None):
+        return rclpy_repr(value)
+    if isinstance(value, list) and value and getattr(value[0], "__msgtype__", None):
+        return f"[{', '.join(rclpy_repr(item) for item in value)}]"
+    return repr(value)
+
+
 def flavoured(cls: type[Any]) -> type[Any]:
-    """``cls`` as rclpy code constructs it: the same class when it has no numeric sequence. The subclass adds
-    no storage, so hetros's compiled codec copies and encodes it as ``cls`` itself."""
+    """``cls`` as rclpy code constructs it: a subclass that prints as rclpy's messages do and, for a type with
+    numeric sequences, holds them as rclpy does. The subclass adds no storage, so hetros's compiled codec
+    copies and encodes it as ``cls`` itself."""
     if cls in _classes:
         return _classes[cls]
-    sequences = _sequences(cls.__msgtype__)
-    made = cls
-    if sequences:
-        members = {name: _sequence_property(cls, name, code) for name, code in sequences.items()}
-        made = type(cls.__name__, (cls,), {"__slots__": (), "__module__": cls.__module__,
-                                           "__qualname__": cls.__qualname__, **members})
-    _classes[cls] = made
-    return made
+    members: dict[str, Any] = {name: _sequence_property(cls, name, code)
+                               for name, code in _sequences(cls.__msgtype__).items()}
+    made: Any = type(cls.__name__, (cls,), {"__slots__": (), "__module__": cls.__module__,
+                                            "__qualname__": cls.__qualname__, "__repr__": rclpy_repr,
+                                            "__str__": rclpy_repr, **members})
+    if getattr(cls, "_frozen_class", None) is cls:
+        made._frozen_class = made  # a received read-only message stays read-only (``is_frozen``)
+    _classes[cls] = _classes[made] = made
+    _made.add(made)
+    return _classes[cls]
 
 
 def flavoured_service(service: ServiceType) -> ServiceType:
@@ -176,8 +202,21 @@ def viewer(typename: str) -> Viewer | None:
 
 
 def received(message: Any) -> Any:
-    """``message`` (as a transport delivered it) shown in rclpy's flavour."""
+    """``message`` (as a transport delivered it) shown in rclpy's flavour: its numeric sequences as views, and
+    of the flavoured class (so that it prints as rclpy's messages do)."""
     show = viewer(message.__msgtype__)
     if show is not None:
         show(message)
+    _reclass(message)
     return message
+
+
+def _reclass(message: Any) -> None:
+    """Make ``message`` and the messages inside it of their flavoured classes (a read-only one stays so)."""
+    if type(message) in _made:
+        return
+    object.__setattr__(message, "__class__", flavoured(type(message)))  # a read-only one refuses plain sets
+    for name, (_, many) in _nested(message.__msgtype__).items():
+        value = getattr(message, name)
+        for item in (value if many else (value,)):
+            _reclass(item)

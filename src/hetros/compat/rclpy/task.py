@@ -7,8 +7,20 @@ from collections.abc import Callable, Coroutine
 from concurrent.futures import Future as _Concurrent
 from typing import Any
 
+from ..._errors import Error
+
 # the Future a coroutine awaits, seen by the Task that stepped it (per thread: tasks step in their node's thread)
 _awaited = threading.local()
+
+
+def _graph_stop() -> threading.Event | None:
+    """The stop event of the graph this thread's node belongs to (None outside a node's thread)."""
+    from ...runtime import bound_node
+
+    try:
+        return bound_node().graph.stop
+    except Error:
+        return None
 
 
 class Future:
@@ -99,7 +111,14 @@ class Future:
         return self._finished.wait(timeout)
 
     def __await__(self) -> Any:
+        stop = _graph_stop()
         while not self._done:
+            if stop is not None and stop.is_set():
+                from .executors import ExternalShutdownException
+
+                # what Ctrl-C does to an rclpy program awaiting in asyncio's loop: the wait ends, and main()
+                # can end (an endless yield would hold the process past the launch's end)
+                raise ExternalShutdownException("the graph stopped while this future was awaited")
             _awaited.future = self  # the Task stepping the coroutine resumes it once this is done
             yield  # a bare yield, as rclpy's: asyncio's loop, driving the coroutine instead, steps it again soon
         return self.result()

@@ -424,7 +424,7 @@ class Subscriber:
         state = _state()
 
         received = 0
-        header = getattr(data_class, "__slots__", ()) and "header" in data_class.__slots__
+        header = "header" in getattr(data_class, "__fieldnames__", ())
 
         def deliver(message: Any) -> None:
             nonlocal received

@@ -94,13 +94,20 @@ class HetrosEndpoint(Endpoint):
         self.pub = self.node.create_publisher(Image, out_topic)
         self.sub = self.node.create_subscription(Image, in_topic)
         self.loaned = loaned
+        self._written: dict[int, Any] = {}  # the plain producer's own buffer per size, reused as real ones are
 
     def send(self, stamp: int, seq: int, payload: Any) -> None:
+        # the producer writes its data once in either case, as a camera driver or a filter does: into the
+        # loan (shared memory, sent as it is), or into a buffer of its own that publish then copies
         if self.loaned:
             msg = self.pub.loan(data=len(payload))
-            np.copyto(msg.data, payload)  # the data is written, as by any real producer
+            np.copyto(msg.data, payload)
         else:
-            msg = self.Image(data=payload)
+            written = self._written.get(len(payload))
+            if written is None:
+                written = self._written[len(payload)] = np.empty(len(payload), np.uint8)
+            np.copyto(written, payload)
+            msg = self.Image(data=written)
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
         msg.height = seq & 0xFFFFFFFF
         msg.width = 1 if seq < 0 else 0

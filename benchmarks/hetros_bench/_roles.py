@@ -82,7 +82,7 @@ class HetrosEndpoint(Endpoint):
         self.node.close()
         self.node.graph.close()
 
-    def __init__(self, role: str, graph: Any, loaned: bool) -> None:
+    def __init__(self, role: str, graph: Any, loaned: bool, writes: bool = True) -> None:
         from hetros import Node, TakeTimeoutError
         from hetros.msg import registry
 
@@ -95,6 +95,9 @@ class HetrosEndpoint(Endpoint):
         self.sub = self.node.create_subscription(Image, in_topic)
         self.loaned = loaned
         self._written: dict[int, Any] = {}  # the plain producer's own buffer per size, reused as real ones are
+        # whether a plain producer writes its data in the timed section (shm); in one process (inproc) the
+        # message is handed over as it is, so the row measures the transport alone
+        self.writes = writes
 
     def send(self, stamp: int, seq: int, payload: Any) -> None:
         # the producer writes its data once in either case, as a camera driver or a filter does: into the
@@ -102,6 +105,8 @@ class HetrosEndpoint(Endpoint):
         if self.loaned:
             msg = self.pub.loan(data=len(payload))
             np.copyto(msg.data, payload)
+        elif not self.writes:
+            msg = self.Image(data=payload)
         else:
             written = self._written.get(len(payload))
             if written is None:
@@ -358,6 +363,7 @@ class RosPingEndpoint(Endpoint):
         self.flavour = flavour
         self.Image = importlib.import_module("sensor_msgs.msg").Image
         self.replies: list[Any] = []
+        self._written: dict[int, Any] = {}
         if flavour == "rclpy":
             self.rclpy = importlib.import_module("rclpy")
             self.rclpy.init()
@@ -379,7 +385,11 @@ class RosPingEndpoint(Endpoint):
         msg = self.Image()
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
         msg.height, msg.width = seq & 0xFFFFFFFF, 1 if seq < 0 else 0
-        msg.data = payload
+        written = self._written.get(len(payload))  # the producer writes its data, as HetrosEndpoint's does
+        if written is None:
+            written = self._written[len(payload)] = np.empty(len(payload), np.uint8)
+        np.copyto(written, payload)
+        msg.data = written
         self.pub.publish(msg)
 
     def recv(self, timeout: float) -> tuple[int, int, Any] | None:
@@ -598,8 +608,8 @@ def run_inproc(cfg: dict[str, Any]) -> dict[str, Any]:
 
     graph = Graph.standalone()
     # plain publish of read-only arrays: in a process they travel with zero copies
-    pinger = HetrosEndpoint("ping", graph, loaned=False)
-    echoer = HetrosEndpoint("echo", graph, loaned=False)
+    pinger = HetrosEndpoint("ping", graph, loaned=False, writes=False)
+    echoer = HetrosEndpoint("echo", graph, loaned=False, writes=False)
     result: dict[str, Any] = {}
 
     def run_echo() -> None:

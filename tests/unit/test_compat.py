@@ -127,3 +127,20 @@ def test_an_rclpy_profile_keeps_its_deadline_lifespan_and_liveliness() -> None:
     assert qos is not None
     assert (qos.deadline, qos.lifespan, qos.liveliness, qos.lease_duration) == (0.6, 2.0, "manual_by_topic", 1.0)
     assert to_hetros(QoSProfile(depth=5, deadline=Duration())).deadline is None  # zero: infinite, as ROS 2
+
+
+def test_without_a_callback_each_side_warns_of_incompatible_qos_as_rclpy_does(caplog: pytest.LogCaptureFixture) -> None:
+    from hetros import IncompatibleQosStatus
+    from hetros.compat.rclpy.event_handler import incompatible_qos_handler
+    from hetros.compat.rclpy.logging import RcutilsLogger
+
+    for publisher, told in ((True, "New subscription discovered on topic '/t', requesting incompatible QoS. No "
+                                   "messages will be sent to it. Last incompatible policy: RELIABILITY"),
+                            (False, "New publisher discovered on topic '/t', offering incompatible QoS. No "
+                                    "messages will be received from it. Last incompatible policy: DURABILITY")):
+        report = incompatible_qos_handler(None, RcutilsLogger("n"), "/t", publisher=publisher)
+        assert report is not None
+        caplog.clear()
+        with caplog.at_level("WARNING"):
+            report(IncompatibleQosStatus(1, 1, "reliability" if publisher else "durability"))
+        assert [record.getMessage() for record in caplog.records] == [told]

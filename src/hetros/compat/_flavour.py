@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import array
 import dataclasses
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -56,6 +57,7 @@ class SequenceView(np.ndarray):
     __str__ = __repr__
 
 
+@functools.cache  # asked per received service or action message (received) and per repr: read once per type
 def _sequences(typename: str) -> dict[str, str]:
     """The numeric sequence fields of ``typename`` and their type codes."""
     found = {}
@@ -65,6 +67,7 @@ def _sequences(typename: str) -> dict[str, str]:
     return found
 
 
+@functools.cache
 def _nested(typename: str) -> dict[str, tuple[str, bool]]:
     """The message-typed fields of ``typename``: name -> (type, whether a list of them)."""
     found = {}

@@ -165,7 +165,7 @@ class Graph:
 
     def on_shutdown(self, hook: Callable[[], None]) -> None:
         """A node's own shutdown hook (rospy's ``on_shutdown``): ``on_stop``, and the launcher is told once
-        (``hooks_announced``), so that it stops this process before the ones it publishes to, which then
+        (``announce_hooks``), so that it stops this process before the ones it publishes to, which then
         still hear what the hook publishes."""
         self.on_stop(hook)
         announce, self.announce_hooks = self.announce_hooks, None

@@ -74,7 +74,6 @@ class MatchedWatch:
         self._reported_incompatible = 0
         self.last_policy = ""
         self._due = False
-        self.deaf = False
 
     def changed(self, delta: int) -> None:
         with self._lock:
@@ -90,10 +89,8 @@ class MatchedWatch:
         self._schedule(self.on_incompatible_qos is not None)
 
     def _schedule(self, wanted: bool) -> None:
-        deaf = bool(self.clashes) and self.current == 0
-        if deaf != self.deaf and self.on_deaf is not None:
-            self.deaf = deaf
-            self.on_deaf(deaf)
+        if self.on_deaf is not None:  # idempotent: a subscription changes its take only when deafness changes
+            self.on_deaf(bool(self.clashes) and self.current == 0)
         with self._lock:
             if not wanted or self._due:
                 return

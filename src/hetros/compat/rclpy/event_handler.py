@@ -119,12 +119,13 @@ def supported(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks, w
 
 
 def incompatible_qos_handler(callbacks: SubscriptionEventCallbacks | PublisherEventCallbacks | None,
-                             logger: RcutilsLogger, topic: str) -> Callable[[IncompatibleQosStatus], None] | None:
-    """What runs on an incompatible-QoS event: the code's callback, else (``use_default_callbacks``, as
-    when no callbacks are given) rclpy's warning."""
+                             logger: RcutilsLogger, topic: str, *,
+                             publisher: bool) -> Callable[[IncompatibleQosStatus], None] | None:
+    """What runs on an incompatible-QoS event of a publisher (or a subscription): the code's callback, else
+    (``use_default_callbacks``, as when no callbacks are given) rclpy's warning for that side."""
     chosen = callbacks.incompatible_qos if callbacks is not None else None
     if chosen is None and (callbacks is None or callbacks.use_default_callbacks):
-        if isinstance(callbacks, PublisherEventCallbacks):
+        if publisher:
             told = (f"New subscription discovered on topic '{topic}', requesting incompatible QoS. "
                     "No messages will be sent to it. Last incompatible policy: ")
         else:

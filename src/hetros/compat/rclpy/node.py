@@ -345,7 +345,7 @@ class Node:
                          callback_group: CallbackGroup | None = None, event_callbacks: Any = None,
                          qos_overriding_options: Any = None, publisher_class: Any = None) -> Publisher:
         name = self.resolve_topic_name(topic)
-        from .event_handler import PublisherEventCallbacks, incompatible_qos_handler, supported
+        from .event_handler import incompatible_qos_handler, supported
 
         deadline = matched = lost = None
         if event_callbacks is not None:
@@ -355,8 +355,7 @@ class Node:
         inner = self._hetros.create_publisher(
             msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline, on_matched=matched,
             on_liveliness_lost=lost,
-            on_incompatible_qos=incompatible_qos_handler(event_callbacks or PublisherEventCallbacks(),
-                                                         self._logger, name))
+            on_incompatible_qos=incompatible_qos_handler(event_callbacks, self._logger, name, publisher=True))
         return self._own(Publisher(self, inner, msg_type, name))
 
     def create_subscription(self, msg_type: type[Any], topic: str, callback: Callable[[Any], None],
@@ -386,8 +385,8 @@ class Node:
         inner = self._hetros.create_subscription(msg_type, name, run, qos=to_hetros(qos_profile),
                                                  on_deadline_missed=deadline, on_liveliness_changed=liveliness,
                                                  on_message_lost=lost, on_matched=matched,
-                                                 on_incompatible_qos=incompatible_qos_handler(event_callbacks,
-                                                                                              self._logger, name))
+                                                 on_incompatible_qos=incompatible_qos_handler(
+                                                     event_callbacks, self._logger, name, publisher=False))
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)
         return self._own(subscription)

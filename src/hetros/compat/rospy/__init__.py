@@ -394,7 +394,7 @@ class Publisher:
         asked = replace(hetros.graph.qos_of(self.name, None), durability="transient_local") if latch else None
         self._inner = hetros.create_publisher(data_class, self.name, qos=asked)
         if headers:
-            node_logger(_state().hetros.name).warning(
+            node_logger(hetros.name).warning(
                 "publisher of %s: headers=%r are not sent: hetros has no per-connection headers (carry what "
                 "the subscriber needs in the message)", self.name, headers)
         self._seq = 0  # rospy's count of messages published, written into their header.seq

@@ -26,6 +26,7 @@ from amaranth.lib.wiring import In, Out
 from .._errors import HardwareError
 from ._build import port_part
 from ._bytes import bytes_in, bytes_out
+from ._lanes import Pipe, elaborate_lanes, median_network, stages_of
 from ._stream import axi_stream
 
 # bytes per pixel of the encodings whose pixels are bytes (sensor_msgs/image_encodings)
@@ -44,13 +45,28 @@ class ImageFilter3x3(wiring.Component):
     images work unchanged, wider ones are not supported. A line is the image's ``step`` bytes.
     """
 
-    def __init__(self, source: str, sink: str, data_width: int = 64, width: int = 640, channels: int = 1) -> None:
+    #: register stages of :meth:`lane_kernel` and :meth:`post_lanes` (the full-width datapath delays the rest
+    #: of a beat by as many)
+    kernel_stages = 1
+    post_stages = 0
+
+    def __init__(self, source: str, sink: str, data_width: int = 64, width: int = 640, channels: int = 1,
+                 lanes: int = 0) -> None:
         if width < 3:
             raise HardwareError(f"width must be at least 3 pixels, not {width!r}")
         if channels < 1:
             raise HardwareError(f"channels must be at least 1, not {channels!r}")
+        full = data_width // 8
+        if lanes == 0:
+            lanes = full if full >= 4 and not full & (full - 1) else 1
+        if lanes not in (1, full):
+            raise HardwareError(f"lanes must be 1 (a byte a cycle) or {full} (a whole {data_width}-bit beat a cycle), "
+                                f"not {lanes!r}")
+        if lanes > 1 and channels > lanes:
+            raise HardwareError(f"channels must be at most lanes ({lanes}) in a full-width filter, not {channels!r}: "
+                                "set lanes to 1")
         self._source, self._sink = port_part(source), port_part(sink)
-        self.data_width, self.width, self.channels = data_width, width, channels
+        self.data_width, self.width, self.channels, self.lanes = data_width, width, channels, lanes
         super().__init__({self._source: In(axi_stream(data_width)), self._sink: Out(axi_stream(data_width))})
 
     def check_message(self, topic: str, message: Any) -> None:
@@ -80,6 +96,11 @@ class ImageFilter3x3(wiring.Component):
         if height < 3 or width < 3:
             raise HardwareError(f"an image of {width}x{height} pixels is too small for a 3x3 window: send images of "
                                 "at least 3x3")
+        if step % self.lanes:
+            raise HardwareError(f"an image line of {step} bytes is not a whole number of {self.lanes}-byte beats, "
+                                f"which this full-width node takes a cycle each: send images whose step is a "
+                                f"multiple of {self.lanes}, or set the node's lanes parameter to 1 (a byte a cycle, "
+                                "any step)")
 
     def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
         """This filter in software, bit-exact (``hetros.hw.reference``): a function of an image array
@@ -109,6 +130,24 @@ class ImageFilter3x3(wiring.Component):
         """The output pixel of a window (rows top to bottom, each column left to right), 8 bits."""
         raise NotImplementedError
 
+    def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        """:meth:`kernel` in the full-width datapath, with ``kernel_stages`` registers (``pipe.reg``) on its way
+        so that it meets the clock; here one, after the whole kernel."""
+        return pipe.reg(self.kernel(top, middle, bottom), "kernel")
+
+    def post_lanes(self, m: Module, pipe: Pipe, values: list[Value]) -> list[Value]:
+        """:meth:`post` of each lane's byte, with ``post_stages`` registers; here none."""
+        return [self.post(m, value) for value in values]
+
+    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: Value, count: Value) -> None:
+        """:meth:`observe` for a beat: ``values`` before :meth:`post_lanes`, ``pixels`` high in the lanes that are
+        the image's (the others are header bytes or past its end), ``taken`` when the beat moves on and
+        ``count`` the image's bytes. Nothing here."""
+
+    def between_frames_lanes(self, m: Module, ended: Value) -> Value:
+        """:meth:`between_frames` of the full-width datapath; nothing here."""
+        return Const(0, 1)
+
     def post(self, m: Module, value: Value) -> Value:
         """What an output byte becomes after the window (its border zeros included): itself here."""
         return value
@@ -125,6 +164,9 @@ class ImageFilter3x3(wiring.Component):
         m = Module()
         source = getattr(self, self._source)
         sink = getattr(self, self._sink)
+        if self.lanes > 1:
+            elaborate_lanes(self, m, source, sink, self.data_width)
+            return m
 
         incoming = bytes_in(m, source, self.data_width)
         byte, byte_valid, byte_last, take = incoming.byte, incoming.valid, incoming.last, incoming.take
@@ -285,6 +327,17 @@ class Sobel(ImageFilter3x3):
         magnitude = Mux(gx < 0, -gx, gx) + Mux(gy < 0, -gy, gy)
         return Mux(magnitude > 255, 255, magnitude)[:8]
 
+    kernel_stages = 4
+
+    def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        right, left = [top[2], middle[2], bottom[2]], [top[0], middle[0], bottom[0]]
+        sums = [pipe.reg(_row_sum(row), "sum") for row in (right, left, bottom, top)]
+        gx = pipe.reg(_widened(sums[0]) - _widened(sums[1]), "gx")
+        gy = pipe.reg(_widened(sums[2]) - _widened(sums[3]), "gy")
+        sizes = [pipe.reg(Mux(g < 0, -g, g)[:11], "size") for g in (gx, gy)]
+        magnitude = sizes[0] + sizes[1]
+        return pipe.reg(Mux(magnitude > 255, 255, magnitude)[:8], "sobel")
+
 
 class GaussianBlur(ImageFilter3x3):
     """3x3 Gaussian ``[1 2 1; 2 4 2; 1 2 1] / 16``, rounded half up (in software:
@@ -299,6 +352,15 @@ class GaussianBlur(ImageFilter3x3):
         total = _row_sum(top) + (_row_sum(middle) << 1) + _row_sum(bottom) + 8
         return (total >> 4)[:8]
 
+    kernel_stages = 2
+
+    def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        columns = [pipe.reg(_row_sum([top[i], middle[i], bottom[i]]), "column") for i in range(3)]
+        total = columns[0] + (columns[1] << 1) + columns[2] + 8
+        return pipe.reg((total >> 4)[:8], "blur")
+
+
+_HISTOGRAM_BITS = 24  # a lane's count of one value: 16 M bytes, a 4K rgb8 frame is 3.1 M a lane
 
 # Paeth's 19 compare-exchanges that leave the median of nine in position 4
 _MEDIAN9 = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8), (0, 3), (5, 8), (4, 7),
@@ -323,11 +385,126 @@ class Compensation(ImageFilter3x3):
                 Mux(values[a] < values[b], values[b], values[a])
         return values[4]
 
+    _EVERY = 2  # compare-exchanges between two registers of the full-width median
+    kernel_stages = stages_of(_MEDIAN9, _EVERY)
+    post_stages = 2
+
+    def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
+        return median_network(pipe, [*top, *middle, *bottom], _MEDIAN9, self._EVERY)
+
+    def post_lanes(self, m: Module, pipe: Pipe, values: list[Value]) -> list[Value]:
+        """Each lane looks its byte up in its own copy of the stretch table (a block RAM read, then held)."""
+        self._tables = [Memory(shape=unsigned(8), depth=256, init=list(range(256))) for _ in values]
+        looked_up = []
+        for lane, (table, value) in enumerate(zip(self._tables, values, strict=True)):
+            m.submodules[f"stretch{lane}"] = table
+            read = table.read_port(domain="sync")
+            m.d.comb += [read.addr.eq(value), read.en.eq(pipe.advance)]
+            looked_up.append(pipe.reg(read.data, "stretched"))  # a block RAM's output is slow: held first
+        return looked_up
+
+    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: Value, count: Value) -> None:
+        """A histogram per lane, each counting a byte a cycle with a read-modify-write four cycles long (the
+        memory's output registered, then incremented, then written): the counts of the three bytes before,
+        still on their way to the memory, are forwarded to a read of the same bin."""
+        self._count_lanes = count
+        self._scanning_lanes = Signal()
+        self._level = Signal(9)
+        self._hist_reads = []
+        for lane, (value, is_pixel) in enumerate(zip(values, pixels, strict=True)):
+            histogram = Memory(shape=unsigned(_HISTOGRAM_BITS), depth=256, init=[])
+            m.submodules[f"histogram{lane}"] = histogram
+            read, write = histogram.read_port(domain="sync"), histogram.write_port()
+            read_held = Signal(_HISTOGRAM_BITS, name=f"read_held{lane}")
+            m.d.sync += read_held.eq(read.data)
+            self._hist_reads.append(read_held)
+            # (event, bin) of the byte in each cycle of its way: just taken, read back, counted, written
+            events = [Signal(name=f"event{lane}_{k}") for k in range(5)]
+            bins = [Signal(8, name=f"bin{lane}_{k}") for k in range(5)]
+            m.d.comb += [events[0].eq(taken & is_pixel), bins[0].eq(value)]
+            m.d.sync += [e.eq(events[k]) for k, e in enumerate(events[1:])]
+            m.d.sync += [b.eq(bins[k]) for k, b in enumerate(bins[1:])]
+            # while read back, whether the 1st, 2nd, 3rd byte before it counted the same bin
+            same = [Signal(name=f"same{lane}_{k}") for k in range(3)]
+            m.d.sync += [flag.eq(events[k + 2] & (bins[k + 2] == bins[1])) for k, flag in enumerate(same)]
+            counted = [Signal(_HISTOGRAM_BITS, name=f"counted{lane}_{k}") for k in range(3)]  # newest first
+            latest = Mux(same[0], counted[0], Mux(same[1], counted[1], Mux(same[2], counted[2], read_held)))
+            m.d.sync += [counted[0].eq(latest + 1), counted[1].eq(counted[0]), counted[2].eq(counted[1])]
+            with m.If(self._scanning_lanes):
+                m.d.comb += [read.addr.eq(self._level[:8]), write.addr.eq(self._level[:8]), write.data.eq(0),
+                             write.en.eq(self._level < 256)]
+            with m.Else():
+                m.d.comb += [read.addr.eq(value), write.addr.eq(bins[3]), write.data.eq(counted[0]),
+                             write.en.eq(events[3])]
+
+    def between_frames_lanes(self, m: Module, ended: Value) -> Value:
+        """Between two frames: wait for the last counts to land, sum the lanes' histograms bin by bin into
+        the percentiles (each bin cleared behind), then rebuild the stretch table, a division of a value
+        at a time by repeated subtraction (at most 511 steps: the quotient stops at 255)."""
+        settle = Signal(range(6))
+        scanning, building = self._scanning_lanes, Signal()
+        level = self._level
+        # the scan's pipeline, a bin a cycle: the lanes' counts read, held, summed in pairs, summed, added to
+        # the running total, multiplied by 100 (two stages), compared; ``stage[k]`` says which bin stage k holds
+        stage = [(Signal(name=f"scan_valid{k}"), Signal(8, name=f"scan_level{k}")) for k in range(7)]
+        pairs = [Signal(_HISTOGRAM_BITS + 1, name=f"pair{i}") for i in range(-(-len(self._hist_reads) // 2))]
+        summed, running, hundred = Signal(32), Signal(34), Signal(41)
+        sixty_four_and_thirty_two, four = Signal(41), Signal(41)
+        low, high, found_low, found_high = Signal(8), Signal(8), Signal(), Signal()
+        ninety_nine, ninety_six, three = Signal(41), Signal(41), Signal(41)  # 99 x count, in two adds too
+        m.d.sync += [ninety_six.eq((self._count_lanes << 6) + (self._count_lanes << 5)),
+                     three.eq((self._count_lanes << 1) + self._count_lanes), ninety_nine.eq(ninety_six + three)]
+        with m.If(ended):
+            m.d.sync += [settle.eq(5), running.eq(0), found_low.eq(0), found_high.eq(0)]
+        with m.Elif(settle != 0):
+            m.d.sync += settle.eq(settle - 1)
+            with m.If(settle == 1):
+                m.d.sync += [scanning.eq(1), level.eq(0)]
+        with m.If(scanning):
+            reads = self._hist_reads
+            m.d.sync += [level.eq(level + 1), stage[0][0].eq(level < 256), stage[0][1].eq(level[:8])]
+            m.d.sync += [stage[k + 1][0].eq(stage[k][0]) for k in range(6)]
+            m.d.sync += [stage[k + 1][1].eq(stage[k][1]) for k in range(6)]
+            m.d.sync += [pair.eq(reads[2 * i] + (reads[2 * i + 1] if 2 * i + 1 < len(reads) else 0))
+                         for i, pair in enumerate(pairs)]
+            m.d.sync += summed.eq(sum(pairs))
+            with m.If(stage[3][0]):
+                m.d.sync += running.eq(running + summed)
+            # 100 x running in two adds, each a stage of its own (one 48-bit product missed the clock)
+            m.d.sync += [sixty_four_and_thirty_two.eq((running << 6) + (running << 5)), four.eq(running << 2),
+                         hundred.eq(sixty_four_and_thirty_two + four)]
+            with m.If(stage[6][0]):
+                with m.If(~found_low & (hundred >= self._count_lanes)):
+                    m.d.sync += [low.eq(stage[6][1]), found_low.eq(1)]
+                with m.If(~found_high & (hundred >= ninety_nine)):
+                    m.d.sync += [high.eq(stage[6][1]), found_high.eq(1)]
+            with m.If(level == 265):
+                m.d.sync += [scanning.eq(0), building.eq(1)]
+        # the table: value v stretches to min((v - low) * 255 // span, 255), built from v = 0 up
+        value, quotient, remainder = Signal(9), Signal(9), Signal(18)
+        span = Signal(8)
+        m.d.comb += span.eq(Mux(high > low, high - low, 1))
+        for table in self._tables:
+            write = table.write_port()
+            m.d.comb += [write.addr.eq(value[:8]), write.data.eq(quotient[:8]),
+                         write.en.eq(building & ~((remainder >= span) & (quotient < 255)))]
+        with m.If(building):
+            with m.If((remainder >= span) & (quotient < 255)):
+                m.d.sync += [remainder.eq(remainder - span), quotient.eq(quotient + 1)]
+            with m.Elif(value == 255):
+                m.d.sync += [building.eq(0), value.eq(0), quotient.eq(0), remainder.eq(0)]
+            with m.Else():
+                m.d.sync += value.eq(value + 1)
+                with m.If(value >= low):
+                    m.d.sync += remainder.eq(remainder + 255)
+        return (settle != 0) | scanning | building
+
     def elaborate(self, platform: object) -> Module:
-        self._low = Signal(8, init=0)
-        self._high = Signal(8, init=255)
-        self._histogram = Memory(shape=unsigned(32), depth=256, init=[])
-        self._count = Signal(32)
+        if self.lanes == 1:
+            self._low = Signal(8, init=0)
+            self._high = Signal(8, init=255)
+            self._histogram = Memory(shape=unsigned(32), depth=256, init=[])
+            self._count = Signal(32)
         return super().elaborate(platform)
 
     def post(self, m: Module, value: Value) -> Value:

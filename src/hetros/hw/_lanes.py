@@ -1,0 +1,326 @@
+"""The full-width datapath of the 3x3 image filters: a whole beat of pixel bytes a clock cycle.
+
+``_image`` gives each filter its kernel; this module moves the message. Why it looks as it does:
+
+- **Beats stay beats.** A line is a whole number of beats (the node refuses other images in
+  software), so the rows above and below a byte are the same lane ``step / lanes`` beats back and
+  forth, whatever the byte offset at which the pixels start: the line buffers are two rings of
+  beats, and no byte of the message is shifted to another lane on its way through. Bytes before the
+  pixels in the first pixel beat leave as they came.
+- **The header is walked a 4-byte word a cycle.** Every field after ``frame_id`` that the walk needs
+  is a uint32 at a 4-aligned offset of the CDR body, and the strings are skipped a word at a time,
+  so a beat of header takes ``lanes / 4`` cycles: some 15 cycles a message, against one cycle per
+  beat of pixels.
+- **One stall signal, registered ready.** Every pipeline register moves on ``advance``; the output
+  is a two-entry skid buffer whose ready towards the pipeline is a register, so a downstream
+  node's TREADY never reaches this node's registers combinationally (chains meet their clock
+  one node at a time).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Protocol
+
+from amaranth import Array, Cat, Const, Module, Mux, Signal, signed, unsigned
+from amaranth.hdl import Value
+from amaranth.lib.memory import Memory
+
+from .._errors import HardwareError
+
+# steps between a beat coming in and the window whose bottom row it completes going out
+_LAG = 3
+# the header walk, a 4-byte word at a time
+_STAMP, _STAMP_NS, _FRAME_LEN, _FRAME, _HEIGHT, _WIDTH, _ENC_LEN, _ENC, _STEP, _DATA_LEN, _DATA = range(11)
+
+
+class Pipe:
+    """The pipeline's registers: :meth:`reg` is a value one stage later (it moves when ``advance``)."""
+
+    def __init__(self, m: Module, advance: Value) -> None:
+        self.m, self.advance = m, advance
+        self._count = 0
+
+    def reg(self, value: Value, name: str = "stage") -> Signal:
+        self._count += 1
+        held = Signal(value.shape(), name=f"{name}_{self._count}")
+        with self.m.If(self.advance):
+            self.m.d.sync += held.eq(value)
+        return held
+
+    def delay(self, value: Value, stages: int, name: str = "delayed") -> Value:
+        for _ in range(stages):
+            value = self.reg(value, name)
+        return value
+
+
+class LaneFilter(Protocol):
+    """What a filter gives this datapath: its window kernel and its per-frame hooks, lane by lane."""
+
+    channels: int
+    width: int
+    kernel_stages: int
+    post_stages: int
+
+    def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value: ...
+
+    def post_lanes(self, m: Module, pipe: Pipe, values: list[Value]) -> list[Value]: ...
+
+    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: Value,
+                      count: Value) -> None: ...
+
+    def between_frames_lanes(self, m: Module, ended: Value) -> Value: ...
+
+
+def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_width: int) -> None:
+    """Build the full-width filter of ``node`` between ``source`` and ``sink`` in ``m``."""
+    lanes = data_width // 8
+    words = lanes // 4
+    channels = node.channels
+    depth = max(1, -(-node.width * channels // lanes))
+
+    # the held input beat: the header walk reads it a word at a time; the pixels step through it
+    hold, hold_keep, hold_last, hold_full = Signal(data_width), Signal(lanes), Signal(), Signal()
+    release = Signal()
+    m.d.comb += source.tready.eq(~hold_full | release)
+    with m.If(source.tready & source.tvalid):
+        m.d.sync += [hold.eq(source.tdata), hold_keep.eq(source.tkeep), hold_last.eq(source.tlast), hold_full.eq(1)]
+    with m.Elif(release):
+        m.d.sync += hold_full.eq(0)
+
+    # output: a skid buffer of two beats; the pipeline sees ``room``, a register
+    out_valid, out_data, out_keep, out_last = Signal(), Signal(data_width), Signal(lanes), Signal()
+    extra_valid, extra_data, extra_keep, extra_last = Signal(), Signal(data_width), Signal(lanes), Signal()
+    room = Signal()
+    push, push_data, push_keep, push_last = Signal(), Signal(data_width), Signal(lanes), Signal()
+    m.d.comb += [sink.tvalid.eq(out_valid), sink.tdata.eq(out_data), sink.tkeep.eq(out_keep),
+                 sink.tlast.eq(out_last), room.eq(~extra_valid)]
+    with m.If(~out_valid | sink.tready):
+        with m.If(extra_valid):
+            m.d.sync += [out_valid.eq(1), out_data.eq(extra_data), out_keep.eq(extra_keep), out_last.eq(extra_last),
+                         extra_valid.eq(0)]
+        with m.Else():
+            m.d.sync += [out_valid.eq(push), out_data.eq(push_data), out_keep.eq(push_keep), out_last.eq(push_last)]
+    with m.Elif(push):
+        m.d.sync += [extra_valid.eq(1), extra_data.eq(push_data), extra_keep.eq(push_keep), extra_last.eq(push_last)]
+
+    # --- the header walk ---------------------------------------------------------------------------------
+    bits = (node.width * channels + 2 * lanes).bit_length() + 1  # a line's bytes and then some
+    until_window = Signal(bits)  # steps of this message before the first that fills a window
+    state = Signal(range(11))
+    in_pixels = Signal()  # state is _DATA, as one register
+    unit = Signal(range(max(2, words)))
+    remaining = Signal(32)
+    step, data_len = Signal(32), Signal(32)
+    start = Signal(range(lanes))  # the byte of the first pixel beat at which the pixels begin
+    # a word is read in two cycles: picked out of the beat and held, then walked (the walk's decisions then
+    # start from registers, which keeps this small state machine off the design's critical path)
+    word, word_zero, phase = Signal(32), Signal(), Signal()
+    busy = Signal()  # the last message's pixels are still on their way (or the node works between frames)
+    picking = Signal()
+    m.d.comb += picking.eq(hold_full & (state != _DATA) & ~busy & ~phase)
+    with m.If(picking):
+        picked = Array(hold.word_select(i, 32) for i in range(words))[unit]
+        m.d.sync += [word.eq(picked), word_zero.eq(picked == 0), phase.eq(1)]
+    last_unit = unit == words - 1
+    pixels_here = (state == _DATA_LEN) & ~last_unit & ~word_zero  # the pixels begin inside this beat
+    beat_read = last_unit | pixels_here
+    header_leaves = Signal()
+    walking = Signal()
+    m.d.comb += [walking.eq(phase & (~beat_read | pixels_here | room)),
+                 header_leaves.eq(walking & beat_read & ~pixels_here)]
+    with m.If(walking):
+        m.d.sync += phase.eq(0)
+    with m.If(walking):
+        m.d.sync += unit.eq(Mux(beat_read, 0, unit + 1))
+        with m.Switch(state):
+            with m.Case(_STAMP):
+                m.d.sync += state.eq(_STAMP_NS)
+            with m.Case(_STAMP_NS):
+                m.d.sync += state.eq(_FRAME_LEN)
+            with m.Case(_FRAME_LEN, _ENC_LEN):
+                # words of the string; the encoding's hold is_bigendian too
+                skip = (word + Mux(state == _ENC_LEN, 4, 3)) >> 2
+                m.d.sync += [remaining.eq(skip), state.eq(Mux(state == _FRAME_LEN, Mux(skip == 0, _HEIGHT, _FRAME),
+                                                              _ENC))]
+            with m.Case(_FRAME, _ENC):
+                m.d.sync += remaining.eq(remaining - 1)
+                with m.If(remaining <= 1):
+                    m.d.sync += state.eq(Mux(state == _FRAME, _HEIGHT, _STEP))
+            with m.Case(_HEIGHT):
+                m.d.sync += state.eq(_WIDTH)
+            with m.Case(_WIDTH):
+                m.d.sync += state.eq(_ENC_LEN)
+            with m.Case(_STEP):
+                m.d.sync += [step.eq(word), state.eq(_DATA_LEN)]
+            with m.Case(_DATA_LEN):
+                m.d.sync += [data_len.eq(word), state.eq(Mux(word_zero, _STAMP, _DATA)), in_pixels.eq(~word_zero),
+                             start.eq(Mux(pixels_here, (unit + 1) << 2, 0))]
+                m.d.sync += until_window.eq((step >> _log2(lanes)) + _LAG)
+    with m.If(header_leaves & hold_last):  # a message that ends in its header (no pixels)
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), phase.eq(0)]
+
+    # --- the pixels: a step per beat, through two rings of beats -----------------------------------------
+    advance = Signal()
+    pipe = Pipe(m, advance)
+    shift = _log2(lanes)
+    lines = Signal(bits)  # beats a line (the node refuses images whose step is not whole beats)
+    m.d.comb += lines.eq(step >> shift)
+    ring_bits = max(1, (depth - 1).bit_length())
+    pointer = Signal(ring_bits)
+    rings = [Memory(shape=unsigned(data_width), depth=depth, init=[]) for _ in range(2)]
+    m.submodules.ring_older, m.submodules.ring_newer = rings
+    writes = [r.write_port() for r in rings]
+    reads = [r.read_port(domain="sync") for r in rings]  # read-first: a ring gives the beat it replaces
+    stepping = Signal()
+    flushing = Signal()
+    flush_left = Signal(bits)
+    real_beats = Signal(24)  # pixel beats stepped in this message
+    owed_last = Signal()  # the message's last beat has stepped
+    last_keep = Signal(lanes)
+    windows = Signal()  # every step after the first that fills a window fills one
+    centre = Signal(24)  # the pixel beat whose window the registers hold
+    incoming = Signal(data_width)
+    m.d.comb += incoming.eq(Mux(flushing, 0, hold))
+    m.d.comb += [reads[0].addr.eq(pointer), reads[1].addr.eq(pointer), reads[0].en.eq(stepping),
+                 reads[1].en.eq(stepping), writes[0].addr.eq(pointer), writes[1].addr.eq(pointer),
+                 writes[0].data.eq(incoming), writes[1].data.eq(reads[0].data),
+                 writes[0].en.eq(stepping), writes[1].en.eq(stepping)]
+    # the bottom row (a), the middle (b) and the top (c): after step n, a[k] is beat n - k of the stream
+    a = [Signal(data_width, name=f"a{i}") for i in range(5)]
+    b = [Signal(data_width, name=f"b{i}") for i in range(5)]
+    c = [Signal(data_width, name=f"c{i}") for i in range(4)]
+    window_fresh = Signal()  # the registers hold a window the pipeline has not taken yet
+    first_window = ~windows & (until_window == 0)
+    later_window = windows
+    m.d.comb += stepping.eq(in_pixels & (flushing | hold_full & ~owed_last) & (~window_fresh | advance))
+    with m.If(stepping):
+        m.d.sync += [a[0].eq(incoming), *(a[k + 1].eq(a[k]) for k in range(4)),
+                     b[1].eq(reads[0].data), *(b[k + 1].eq(b[k]) for k in range(1, 4)),
+                     c[1].eq(reads[1].data), *(c[k + 1].eq(c[k]) for k in range(1, 3)),
+                     pointer.eq(Mux(pointer + 1 >= lines, 0, pointer + 1)),
+                     window_fresh.eq(first_window | later_window)]
+        with m.If(until_window != 0):
+            m.d.sync += until_window.eq(until_window - 1)
+        with m.If(first_window):
+            m.d.sync += [centre.eq(0), windows.eq(1)]
+        with m.Elif(later_window):
+            m.d.sync += centre.eq(centre + 1)
+        with m.If(~flushing):
+            m.d.sync += real_beats.eq(real_beats + 1)
+            with m.If(hold_last):
+                m.d.sync += [flushing.eq(1), flush_left.eq(lines + _LAG), owed_last.eq(1), last_keep.eq(hold_keep)]
+        with m.Else():
+            m.d.sync += flush_left.eq(flush_left - 1)
+            with m.If(flush_left == 1):
+                m.d.sync += flushing.eq(0)
+    with m.Elif(advance):
+        m.d.sync += window_fresh.eq(0)
+    m.d.comb += release.eq(header_leaves | (stepping & ~flushing))
+    # the window of the middle beat b[3]: rows c (top), b, a (bottom); beats [4] before, [3], [2] after (c one
+    # index less: its ring is a step behind); every ring's output is registered before the kernels use it
+    top_row, middle_row, bottom_row = (c[3], c[2], c[1]), (b[4], b[3], b[2]), (a[4], a[3], a[2])
+
+    def lane_bytes(row: tuple[Value, Value, Value], lane: int) -> list[Value]:
+        before, this, after = row
+        picked = []
+        for offset in (-channels, 0, channels):
+            index = lane + offset
+            beat = before if index < 0 else after if index >= lanes else this
+            picked.append(beat.word_select(index % lanes, 8))
+        return picked
+
+    # where each lane of the middle beat sits: its column, its row + 1 (row 0 is the header before the pixels),
+    # and how many of the message's pixel bytes lie beyond lane 0 (so the last row needs no height: a memory
+    # node's synthetic header gives none)
+    right = Signal(bits)
+    m.d.comb += right.eq(step - channels)
+    beyond = Signal(signed(34))  # pixel bytes from lane 0 of the middle beat to the end
+    below = Signal(signed(34))  # the same, less the last row
+    with m.If(stepping & first_window):
+        m.d.sync += [beyond.eq(data_len + start), below.eq(data_len + start - step)]
+    with m.Elif(stepping & later_window):
+        m.d.sync += [beyond.eq(beyond - lanes), below.eq(below - lanes)]
+    interior, pixel, header = [], [], []
+    for lane in range(lanes):
+        column, row = Signal(bits, name=f"column{lane}"), Signal(2, name=f"row{lane}")  # row: 0, 1, 2 = 2 or more
+        with m.If(stepping & first_window):
+            with m.If(start == 0):
+                m.d.sync += [column.eq(lane), row.eq(1)]
+            with m.Elif(lane < start):
+                m.d.sync += [column.eq(step - start + lane), row.eq(0)]
+            with m.Else():
+                m.d.sync += [column.eq(lane - start), row.eq(1)]
+        with m.Elif(stepping & later_window):
+            wrapped = Signal(bits + 1, name=f"wrapped{lane}")
+            m.d.comb += wrapped.eq(column + lanes - step[:bits])
+            with m.If(wrapped[-1]):
+                m.d.sync += column.eq(column + lanes)
+            with m.Else():
+                m.d.sync += [column.eq(wrapped[:bits]), row.eq(Mux(row == 2, 2, row + 1))]
+        in_image = beyond > lane
+        above_last_row = below > lane
+        interior.append((row == 2) & above_last_row & (column >= channels) & (column < right))
+        pixel.append((row != 0) & in_image)
+        header.append(row == 0)
+    last_centre = owed_last & (centre + 1 == real_beats)
+
+    # the kernel, lane by lane, then the node's own stages after it
+    valids: list[Value] = [window_fresh]
+    kernels = [node.lane_kernel(pipe, lane_bytes(top_row, lane), lane_bytes(middle_row, lane),
+                                lane_bytes(bottom_row, lane)) for lane in range(lanes)]
+    stages = node.kernel_stages
+    masks = [pipe.delay(Cat(interior[i], pixel[i], header[i]), stages, f"mask{i}") for i in range(lanes)]
+    raw = pipe.delay(b[3], stages, "raw")
+    last_flag = pipe.delay(last_centre, stages, "last")
+    for _ in range(stages):
+        valids.append(pipe.reg(valids[-1], "valid"))
+    shaped = [Mux(masks[i][0], kernels[i], 0)[:8] for i in range(lanes)]
+    node.observe_lanes(m, shaped, [masks[i][1] for i in range(lanes)], advance & valids[-1], data_len)
+    posted = node.post_lanes(m, pipe, shaped)
+    after = node.post_stages
+    masks = [pipe.delay(mask, after, f"postmask{i}") for i, mask in enumerate(masks)]
+    raw = pipe.delay(raw, after, "postraw")
+    last_flag = pipe.delay(last_flag, after, "postlast")
+    for _ in range(after):
+        valids.append(pipe.reg(valids[-1], "postvalid"))
+    out_bytes = [Mux(masks[i][2], raw.word_select(i, 8), Mux(masks[i][1], posted[i], 0)) for i in range(lanes)]
+    m.d.comb += advance.eq(~valids[-1] | room)
+    ended = Signal()
+    with m.If(header_leaves):
+        m.d.comb += [push.eq(1), push_data.eq(hold), push_keep.eq(hold_keep), push_last.eq(hold_last)]
+    with m.Elif(valids[-1] & room):
+        m.d.comb += [push.eq(1), push_data.eq(Cat(*out_bytes)),
+                     push_keep.eq(Mux(last_flag, last_keep, Const((1 << lanes) - 1, lanes))),
+                     push_last.eq(last_flag), ended.eq(last_flag)]
+    with m.If(ended):
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), windows.eq(0), real_beats.eq(0), owed_last.eq(0),
+                     pointer.eq(0), in_pixels.eq(0)]
+    waiting = Signal()
+    m.d.comb += waiting.eq(node.between_frames_lanes(m, ended))
+    m.d.comb += busy.eq(waiting)
+
+
+def _log2(value: int) -> int:
+    if value < 4 or value & (value - 1):
+        raise HardwareError(f"a full-width filter needs a power-of-two data_width of at least 32 bits, not "
+                            f"{value * 8!r}: set the node's lanes parameter to 1 (a byte a cycle)")
+    return value.bit_length() - 1
+
+
+def median_network(pipe: Pipe, values: Sequence[Value], pairs: Sequence[tuple[int, int]], every: int) -> Value:
+    """Compare-exchange ``values`` by ``pairs``, a register stage after each ``every`` of them."""
+    held = list(values)
+    for index, (x, y) in enumerate(pairs):
+        low = Mux(held[x] < held[y], held[x], held[y])
+        high = Mux(held[x] < held[y], held[y], held[x])
+        held[x], held[y] = low, high
+        if (index + 1) % every == 0 or index == len(pairs) - 1:
+            held = [pipe.reg(v, "median") for v in held]
+    return held[len(held) // 2]
+
+
+def stages_of(pairs: Sequence[Any], every: int) -> int:
+    return -(-len(pairs) // every)
+
+

@@ -39,6 +39,21 @@ def test_the_memory_sobel_is_pixel_exact_with_no_cpu_copy(tmp_path: Path) -> Non
     assert 640 * 480 // 8 <= cycles < 2 * 640 * 480 // 8  # a beat of pixels a cycle, as the streaming Sobel
 
 
+def test_the_memory_sobel_runs_on_a_board_target_through_pynqs_surface(tmp_path: Path) -> None:
+    """project_mem.yaml with board: set: the gateway takes the board's path (PYNQ's allocate and DMAs, the
+    simulated overlay here), the node reads and writes contiguous buffers by physical address, pixel-exact."""
+    text = (EXAMPLE / "project_mem.yaml").read_text().replace("part: xczu7ev-ffvc1156-2-e}", "board: zcu104}")
+    assert "board: zcu104" in text
+    text = text.replace("height: 480, width: 640", "height: 48, width: 64").replace("width: 640}", "width: 64}")
+    (tmp_path / "project.yaml").write_text(text)
+    (tmp_path / "nodes.py").write_text((EXAMPLE / "nodes.py").read_text())
+    done = subprocess.run([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"), "--duration",
+                           "120"], capture_output=True, text=True, timeout=240, check=False, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "4 frames, every pixel equal to the software filters" in done.stderr
+    assert re.search(r"fpga target fpga on board zcu104 through SimulatedOverlay \(\d+ DMA channels\)", done.stderr)
+
+
 def _small_plan(tmp_path: Path) -> object:
     text = (EXAMPLE / "project_mem.yaml").read_text().replace("height: 480, width: 640", "height: 12, width: 16")
     (tmp_path / "project.yaml").write_text(text.replace("width: 640}", "width: 16}"))
@@ -67,15 +82,21 @@ def test_the_hardware_reaches_only_the_arrays_it_was_given(tmp_path: Path) -> No
     try:
         image = np.random.default_rng(1).integers(0, 256, (12, 16), dtype=np.uint8)
         edges = np.zeros_like(image)
-        top.allow(image.ctypes.data, image.nbytes, False)  # type: ignore[union-attr]
-        top.allow(edges.ctypes.data, edges.nbytes, True)  # type: ignore[union-attr]
-        _run_one(top, [image.ctypes.data, image.nbytes, edges.ctypes.data, edges.nbytes])
+        source = top.allow(image.ctypes.data, image.nbytes, False)  # type: ignore[union-attr]
+        target = top.allow(edges.ctypes.data, edges.nbytes, True)  # type: ignore[union-attr]
+        # physical addresses, as on a board: page-aligned in the simulated DDR, not this process' pointers
+        assert source % 4096 == target % 4096 == 0 and source != image.ctypes.data and 0x4000_0000 <= source
+        _run_one(top, [source, image.nbytes, target, edges.nbytes])
         assert np.array_equal(edges, sobel(image))
         stray = np.zeros_like(image)  # never allowed: the hardware must not write here
         with pytest.raises(HardwareError, match=r"hardware node sobel's memory port \(mem\): wrote at 0x[0-9a-f]+, "
                                                 r"outside the messages it was given"):
-            _run_one(top, [image.ctypes.data, image.nbytes, stray.ctypes.data, stray.nbytes])
+            _run_one(top, [source, image.nbytes, stray.ctypes.data, stray.nbytes])
         assert not stray.any()
+        # the process' own pointer of an allowed array is no address the hardware can use
+        top.forbid(target)  # type: ignore[union-attr]
+        with pytest.raises(HardwareError, match=r"outside the messages it was given"):
+            _run_one(top, [source, image.nbytes, edges.ctypes.data, edges.nbytes])
     finally:
         simulation.close()
 

@@ -22,8 +22,9 @@ struct OutPort {
   uint64_t messages = 0, beats = 0, busy = 0, started = 0;
   bool held = false; uint8_t held_data[PER_BEAT]; uint8_t held_keep[KEEP_BYTES]; int held_last = 0;
 };
-// an AXI4 slave whose memory is this process' own: the windows Python allowed (the messages' arrays)
-struct Window { uint64_t start, end; bool writable; };
+// an AXI4 slave over a simulated physical address space: each window Python allowed is a message's array,
+// placed at a physical address (what the hardware sees) and held at a host address (where its bytes are)
+struct Window { uint64_t start, end; bool writable; uint8_t* host; };
 struct MemPort {
   bool ar_busy = false; uint64_t ar_addr = 0; int ar_left = 0; int ar_wait = 0;
   bool aw_busy = false; uint64_t aw_addr = 0; int aw_left = 0; bool b_pending = false;
@@ -37,11 +38,13 @@ struct Sim {
   uint64_t cycle = 0; std::string error;
 };
 
-// bytes from ``address`` (up to ``n``) inside one allowed window, 0 when none holds it
-static size_t reachable(Sim* s, uint64_t address, size_t n, bool write) {
+// bytes from physical ``address`` (up to ``n``) inside one allowed window, 0 when none holds it; ``*host``
+// is where the first of them is
+static size_t reachable(Sim* s, uint64_t address, size_t n, bool write, uint8_t** host) {
   for (const Window& w : s->windows)
-    if (address >= w.start && address < w.end && (!write || w.writable))
-      return (size_t)(w.end - address) < n ? (size_t)(w.end - address) : n;
+    if (address >= w.start && address < w.end && (!write || w.writable)) {
+      *host = w.host + (address - w.start);
+      return (size_t)(w.end - address) < n ? (size_t)(w.end - address) : n; }
   return 0;
 }
 static std::string hex(uint64_t v) {
@@ -116,8 +119,8 @@ void* hs_new() {
   RESET;
   return s;
 }
-void hs_allow(void* h, uint64_t start, size_t size, int writable) {
-  ((Sim*)h)->windows.push_back(Window{start, start + size, writable != 0}); }
+void hs_allow(void* h, uint64_t physical, uint8_t* host, size_t size, int writable) {
+  ((Sim*)h)->windows.push_back(Window{physical, physical + size, writable != 0, host}); }
 void hs_forbid(void* h, uint64_t start) {
   std::vector<Window>& w = ((Sim*)h)->windows;
   for (size_t i = w.size(); i-- > 0;) if (w[i].start == start) w.erase(w.begin() + i); }

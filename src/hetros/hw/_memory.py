@@ -8,8 +8,10 @@ for the answer (its arrays as long as the input's, its other fields copied); eac
 master port ``mem`` and, when the answer is written, sends one beat on its ``out`` port; the
 gateway then publishes the loaned message. Images go from the camera's shared-memory slot to
 the hardware and from the hardware to the display's with no CPU copy: in co-simulation the
-memory model behind ``mem`` *is* those slots (``_verilator``), and accesses outside the
-descriptor's arrays stop the launch with an error naming the node.
+memory model behind ``mem`` serves those slots at the physical addresses the gateway placed them
+at (``_verilator.PhysicalSpace``), and accesses outside the descriptor's arrays stop the launch
+with an error naming the node. On a ``board:`` target the arrays go through PYNQ's contiguous
+buffers instead (``launch.system._gateway._BoardMemory``).
 """
 
 from __future__ import annotations

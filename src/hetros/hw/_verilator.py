@@ -25,7 +25,39 @@ from pathlib import Path
 from .._errors import HardwareError
 
 # bumped when the harness text changes in a way its hash would not show (compiler flags)
-_HARNESS_VERSION = "5"
+_HARNESS_VERSION = "6"
+
+
+class PhysicalSpace:
+    """The simulated physical address space of a co-simulated board: where the gateway places the buffers a
+    memory node reads and writes, as PYNQ's ``allocate`` places them in contiguous memory (CMA) on a board,
+    so the hardware sees physical addresses and never this process' virtual ones. First fit, each buffer
+    on its own 4 KiB pages, above ``BASE`` (the low DDR of a Zynq UltraScale+ ends at 2 GiB; hetros uses
+    the gigabyte below that)."""
+
+    BASE = 0x4000_0000
+    SIZE = 0x4000_0000
+    PAGE = 4096
+
+    def __init__(self) -> None:
+        self._placed: dict[int, int] = {}  # physical address -> bytes, whole pages
+
+    def place(self, size: int) -> int:
+        needed = max(self.PAGE, -(-size // self.PAGE) * self.PAGE)
+        candidate = self.BASE
+        for start, length in sorted(self._placed.items()):
+            if start - candidate >= needed:
+                break
+            candidate = max(candidate, start + length)
+        if candidate + needed > self.BASE + self.SIZE:
+            raise HardwareError(f"the simulated physical memory ({self.SIZE >> 20} MiB) cannot place {size} more "
+                                f"bytes beside {len(self._placed)} buffers the hardware holds: does a memory node "
+                                "never complete its messages?")
+        self._placed[candidate] = needed
+        return candidate
+
+    def release(self, physical: int) -> None:
+        self._placed.pop(physical, None)
 
 
 @dataclass(frozen=True)
@@ -107,9 +139,9 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
         lines += [f"  {{ MemPort& q = s->mem[{j}]; TOP* t = s->top; bool rv = q.ar_busy && q.ar_wait == 0;",
                   f"    t->{p}_arready = !q.ar_busy; t->{p}_rvalid = rv; t->{p}_rlast = rv && q.ar_left == 1;",
                   f"    t->{p}_rresp = 0; std::memset(data, 0, PER_BEAT);",
-                  "    if (rv) { size_t n = reachable(s, q.ar_addr, PER_BEAT, false);",
+                  "    if (rv) { uint8_t* host = nullptr; size_t n = reachable(s, q.ar_addr, PER_BEAT, false, &host);",
                   "      if (!n) q.bad = \"read at \" + hex(q.ar_addr) + \", outside the messages it was given\";",
-                  "      else std::memcpy(data, (const void*)q.ar_addr, n); }",
+                  "      else std::memcpy(data, host, n); }",
                   f"    put(t->{p}_rdata, data, PER_BEAT);",
                   f"    t->{p}_awready = !q.aw_busy; t->{p}_wready = q.aw_busy && !q.b_pending && q.aw_left > 0;",
                   f"    t->{p}_bvalid = q.b_pending; t->{p}_bresp = 0; }}"]
@@ -126,11 +158,11 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
                   "\"a write burst must be INCR of data-width beats\"); }",
                   f"    else if (q.aw_busy && !q.b_pending && q.aw_left > 0 && t->{p}_wvalid) {{",
                   f"      get(t->{p}_wdata, data, PER_BEAT); get(t->{p}_wstrb, keep, KEEP_BYTES);",
-                  "      size_t n = reachable(s, q.aw_addr, PER_BEAT, true);",
+                  "      uint8_t* host = nullptr; size_t n = reachable(s, q.aw_addr, PER_BEAT, true, &host);",
                   "      for (int b = 0; b < PER_BEAT; ++b) if (keep[b / 8] >> (b % 8) & 1) {",
                   "        if ((size_t)b >= n) { what |= fail(s, label, (\"wrote at \" + hex(q.aw_addr + b) + "
                   "\", outside the messages it was given\").c_str()); break; }",
-                  "        ((uint8_t*)q.aw_addr)[b] = data[b]; }",
+                  "        host[b] = data[b]; }",
                   f"      q.aw_addr += PER_BEAT; ++q.writes; what |= 1; int last = t->{p}_wlast ? 1 : 0;",
                   "      if (--q.aw_left == 0) { q.b_pending = true; if (!last) what |= fail(s, label, "
                   "\"WLAST missing on a burst's last beat\"); }",
@@ -240,6 +272,7 @@ class VerilatedTop:
     """One instance of a compiled top: push messages into input ports, run cycles, pop output messages."""
 
     def __init__(self, library: Path, ports: list[StreamPort]) -> None:
+        self._physical = PhysicalSpace()
         self._lib = ctypes.CDLL(str(library))
         lib = self._lib
         lib.hs_new.restype = ctypes.c_void_p
@@ -264,7 +297,7 @@ class VerilatedTop:
         lib.hs_error.restype = ctypes.c_char_p
         lib.hs_stats.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_int, ctypes.POINTER(ctypes.c_uint64)]
         lib.hs_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64]
-        lib.hs_allow.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_size_t, ctypes.c_int]
+        lib.hs_allow.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
         lib.hs_forbid.argtypes = [ctypes.c_void_p, ctypes.c_uint64]
         lib.hs_mem_stats.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.POINTER(ctypes.c_uint64)]
         self.inputs = [p for p in ports if p.feeds_design]
@@ -338,14 +371,18 @@ class VerilatedTop:
             raise HardwareError(self._lib.hs_error(self._h()).decode())
         return events
 
-    def allow(self, address: int, size: int, writable: bool) -> None:
-        """Let the hardware's memory ports reach ``size`` bytes at ``address`` (of this process), to read, or to
-        read and write; anything else they touch stops the run with an error."""
-        self._lib.hs_allow(self._h(), address, size, int(writable))
+    def allow(self, address: int, size: int, writable: bool) -> int:
+        """Place ``size`` bytes at ``address`` (of this process) in the simulated physical address space, where
+        the hardware's memory ports may reach them, to read, or to read and write (anything else they touch
+        stops the run with an error); the physical address, which the hardware is given."""
+        physical = self._physical.place(size)
+        self._lib.hs_allow(self._h(), physical, address, size, int(writable))
+        return physical
 
-    def forbid(self, address: int) -> None:
-        """Take back the window starting at ``address``."""
-        self._lib.hs_forbid(self._h(), address)
+    def forbid(self, physical: int) -> None:
+        """Take back the window placed at ``physical``."""
+        self._lib.hs_forbid(self._h(), physical)
+        self._physical.release(physical)
 
     def memory_stats(self, port: int) -> tuple[int, int]:
         """``(beats read, beats written)`` through memory port ``port``."""

@@ -262,13 +262,10 @@ class _InMemory:
         written = [np.asarray(get_path(answer, path)) for path in self.arrays]
         windows, words = [], []
         for array, writable in [(a, False) for a in arrays] + [(a, True) for a in written]:
-            address = array.ctypes.data
-            if address % 8:
-                raise HardwareError(f"{self.port.topic}: an array at {address:#x} is not 8-byte aligned; a hardware "
-                                    "node reading it in memory needs aligned arrays")
-            self.top.allow(address, array.nbytes, writable)
-            windows.append(address)
-            words += [address, array.nbytes]
+            # the hardware gets the physical address the simulated board placed the slot's array at
+            physical = self.top.allow(array.ctypes.data, array.nbytes, writable)
+            windows.append(physical)
+            words += [physical, array.nbytes]
         descriptor = np.array(words, "<u8").tobytes()
         top.loan_input(self.port.index, len(descriptor))[:] = descriptor
         self.pending.append((message, answer, windows, sum(a.nbytes for a in written)))
@@ -279,13 +276,99 @@ class _InMemory:
             raise HardwareError(f"{self.port.port.label}: the hardware completed a message nobody gave it")
         message, answer, windows, nbytes = self.pending.popleft()
         self.cycles += self.top.cycle - self._started.popleft()
-        for address in windows:
-            self.top.forbid(address)
+        for physical in windows:
+            self.top.forbid(physical)
         if not self.publisher.sends_in_place(answer):
             self.copied_bytes += nbytes  # a loan below the slot threshold: its arrays are copied into the slot
         self.publisher.publish(answer)
         self.messages += 1
         del message
+
+
+class _BoardMemory:
+    """A hardware node that reads one topic's messages and writes another's in memory, on a board: each
+    message's arrays are copied into buffers PYNQ's ``allocate`` placed in contiguous memory (CMA), the node
+    gets their physical addresses in a descriptor (``hw._memory``), and its completion copies the answer's
+    arrays out into a loaned message. One message at a time: the buffers are reused. In co-simulation the
+    same code runs against the simulated overlay, whose buffers sit in a simulated physical address space."""
+
+    def __init__(self, node: Node, read: GatewayPort, write: GatewayPort, types: TypeRegistry,
+                 overlay: Any) -> None:
+        from ...msg import array_fields
+
+        self.port, self.overlay = read, overlay
+        cls = types.get(read.type)
+        self.take = node.create_subscription(cls, read.topic).try_take
+        self.publisher = node.create_publisher(cls, write.topic)
+        self.arrays = [f.path for f in array_fields(types, read.type) if f.length is None]
+        tops = {path[0] for path in self.arrays}
+        self.plain = [name for name in cls.__fieldnames__ if name not in tops]
+        self.buffers: list[tuple[Any, Any]] = []  # (in, out) per array, grown as messages need
+        self.pending: deque[tuple[Any, list[int]]] = deque()
+        self.copied_bytes = 0
+        self.messages = 0
+
+    def _buffer(self, index: int, size: int) -> tuple[Any, Any]:
+        from .board import allocate, release
+
+        while len(self.buffers) <= index:
+            self.buffers.append((allocate(8, overlay=self.overlay), allocate(8, overlay=self.overlay)))
+        given, answer = self.buffers[index]
+        if len(given) < size:
+            for old in (given, answer):
+                release(old, self.overlay)
+            given, answer = allocate(size, overlay=self.overlay), allocate(size, overlay=self.overlay)
+            self.buffers[index] = (given, answer)
+        return given, answer
+
+    def next_message(self) -> bytes:
+        """The descriptor of the next message's arrays and of the answer's (LookupError when none waits, or
+        while the hardware still works on the last one)."""
+        from ...msg import get_path
+
+        if self.pending:
+            raise LookupError
+        message = self.take()
+        if message is None:
+            raise LookupError
+        arrays = [np.ascontiguousarray(get_path(message, path)).view(np.uint8).reshape(-1) for path in self.arrays]
+        words: list[int] = []
+        answers = []
+        for index, array in enumerate(arrays):
+            given, answer = self._buffer(index, max(8, array.nbytes))
+            given[:array.nbytes] = array
+            given.flush()
+            words += [given.physical_address, array.nbytes]
+            answers.append(answer)
+            self.copied_bytes += array.nbytes
+        for array, answer in zip(arrays, answers, strict=True):
+            words += [answer.physical_address, array.nbytes]
+        self.pending.append((message, [a.nbytes for a in arrays]))
+        return np.array(words, "<u8").tobytes()
+
+    def ready(self) -> bool:
+        return self.publisher.has_room()
+
+    def send(self, _completion: memoryview) -> None:
+        """The node's completion: the answer's arrays copied out of their buffers into a loaned message."""
+        from ...msg import copy, get_path
+
+        if not self.pending:
+            raise HardwareError(f"{self.port.port.label}: the hardware completed a message nobody gave it")
+        message, sizes = self.pending.popleft()
+        elements = [len(np.asarray(get_path(message, path))) for path in self.arrays]
+        answer = self.publisher.loan(**{"__".join(path): n for path, n in zip(self.arrays, elements, strict=True)})
+        for name in self.plain:
+            value = getattr(message, name)
+            setattr(answer, name, copy(value) if hasattr(value, "__msgtype__") else value)
+        for index, (path, size) in enumerate(zip(self.arrays, sizes, strict=True)):
+            out = self.buffers[index][1]
+            out.invalidate()
+            target = np.asarray(get_path(answer, path)).view(np.uint8).reshape(-1)
+            target[:] = out[:size]
+            self.copied_bytes += size
+        self.publisher.publish(answer)
+        self.messages += 1
 
 
 class _Completions:
@@ -481,9 +564,6 @@ def _run_board(node: Node, plan: Plan, target: str, simulation: TargetSimulation
     if any(p.ros1 for p in (*simulation.inputs, *simulation.outputs)):
         raise HardwareError(f"fpga target {target}: hardware TCPROS runs under co-simulation only; remove board: "
                             "or leave its ROS 1 topics to the bridge")
-    if any(p.memory_node for p in simulation.inputs):
-        raise HardwareError(f"fpga target {target}: nodes reading messages in memory (memory:) run under "
-                            "co-simulation only; remove board: or stream the topics")
     exported = Path(plan.root) / "hw" / target / f"{top_name(target)}.board.json"  # `hetros hw export -o hw/<t>`
     manifest = exported
     if not exported.exists():
@@ -492,17 +572,22 @@ def _run_board(node: Node, plan: Plan, target: str, simulation: TargetSimulation
         manifest = folder / exported.name
     overlay = open_overlay(manifest, simulation)
     ports = {p.port.prefix: p for p in (*simulation.inputs, *simulation.outputs)}
-    inputs = {p.port.prefix: _Input(node, p, types) for p in simulation.inputs}
-    asked = {i.port.service: i.asked for i in inputs.values() if i.port.service}
-    sends: list[tuple[Any, _Input, list[Any]]] = []
-    receives: list[tuple[Any, _Output, Any]] = []
+    answers = {o.memory_node: o for o in simulation.outputs if o.memory_node}
+    in_memory = {p.port.prefix: _BoardMemory(node, p, answers[p.memory_node], types, overlay)
+                 for p in simulation.inputs if p.memory_node}
+    completing = {answers[m.port.memory_node].port.prefix: m for m in in_memory.values()}
+    inputs: dict[str, _Input | _BoardMemory] = {
+        p.port.prefix: in_memory.get(p.port.prefix) or _Input(node, p, types) for p in simulation.inputs}
+    asked = {i.port.service: i.asked for i in inputs.values() if isinstance(i, _Input) and i.port.service}
+    sends: list[tuple[Any, _Input | _BoardMemory, list[Any]]] = []
+    receives: list[tuple[Any, _Output | _BoardMemory, Any]] = []
     for entry in read_manifest(manifest)["dmas"]:
         dma = getattr(overlay, entry["name"])
         if entry["channel"] == "sendchannel":
             sends.append((dma.sendchannel, inputs[entry["interface"]], [allocate(4096)]))
         else:
             port = ports[entry["interface"]]
-            out = _Output(node, port, types, asked.get(port.service, deque()))
+            out = completing.get(entry["interface"]) or _Output(node, port, types, asked.get(port.service, deque()))
             buffer = allocate(_RECEIVE_BYTES)
             dma.recvchannel.transfer(buffer)
             receives.append((dma.recvchannel, out, buffer))
@@ -520,6 +605,14 @@ def _run_board(node: Node, plan: Plan, target: str, simulation: TargetSimulation
                 try:
                     message = source.next_message()
                 except LookupError:
+                    continue
+                if isinstance(source, _BoardMemory):  # a descriptor of buffers the node reads and writes
+                    size = len(message)
+                    held[0][:size] = np.frombuffer(message, np.uint8)
+                    held[0].flush()
+                    channel.transfer(held[0], 0, size)
+                    in_flight += 1
+                    moved = True
                     continue
                 size = source.codec.size(message)
                 if size > len(held[0]):

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..._errors import HardwareError
 
-__all__ = ["SimulatedOverlay", "allocate", "open_overlay", "read_manifest"]
+__all__ = ["SimulatedOverlay", "allocate", "open_overlay", "read_manifest", "release"]
 
 
 def read_manifest(path: Path) -> dict[str, Any]:
@@ -48,15 +48,31 @@ class _Buffer(np.ndarray):
         """The cache dropped so the DMA's writes show (nothing to do where the simulator writes it)."""
 
 
-def allocate(shape: int | tuple[int, ...], dtype: Any = np.uint8) -> Any:
-    """A buffer for DMA transfers: PYNQ's ``allocate`` on a board, host memory with its address here."""
+def allocate(shape: int | tuple[int, ...], dtype: Any = np.uint8, overlay: Any = None) -> Any:
+    """A buffer the hardware can reach, physically contiguous: PYNQ's ``allocate`` (CMA) on a board. Here, host
+    memory that the simulated ``overlay``'s target places in its simulated physical address space (where its
+    memory nodes reach it, by that address, as on a board); without an overlay, a DMA buffer that the
+    simulated DMAs read and write directly."""
     if _on_board():
         import pynq  # type: ignore[import-not-found]
 
         return pynq.allocate(shape, dtype)
     buffer = np.zeros(shape, dtype).view(_Buffer)
-    buffer.physical_address = buffer.ctypes.data
+    if isinstance(overlay, SimulatedOverlay):
+        buffer.physical_address = overlay.top.allow(buffer.ctypes.data, buffer.nbytes, True)
+        overlay.placed.append(buffer)
+    else:
+        buffer.physical_address = buffer.ctypes.data
     return buffer
+
+
+def release(buffer: Any, overlay: Any = None) -> None:
+    """Give a buffer from :func:`allocate` back (PYNQ's ``freebuffer``; here, out of the simulated memory)."""
+    if _on_board():
+        buffer.freebuffer()
+    elif isinstance(overlay, SimulatedOverlay) and any(b is buffer for b in overlay.placed):
+        overlay.top.forbid(buffer.physical_address)
+        overlay.placed = [b for b in overlay.placed if b is not buffer]
 
 
 def _on_board() -> bool:
@@ -146,6 +162,7 @@ class SimulatedOverlay:
         self.simulation = simulation
         self.top = simulation.top
         self.cycles_run = 0
+        self.placed: list[Any] = []  # buffers allocated in the simulated physical memory
         by_prefix = {p.port.prefix: p for p in (*simulation.inputs, *simulation.outputs)}
         self.ip_dict: dict[str, dict[str, Any]] = {}
         for entry in manifest["dmas"]:

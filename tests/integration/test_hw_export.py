@@ -83,7 +83,7 @@ def test_export_writes_a_vivado_project_the_open_tools_accept(project: str, boar
 
 
 def test_the_open_flow_makes_an_ecp5_bitstream_and_reports_fmax(tmp_path: Path) -> None:
-    from hetros.hw._bitstream import available
+    from hetros.hw.flow._bitstream import available
 
     if not available():
         pytest.skip("YoWASP's nextpnr-ecp5 and ecppack are not installed (pip install 'hetros[rtl]')")
@@ -114,7 +114,7 @@ def _fresh_hetros_cache(folder: Path) -> Path:
 def test_a_design_that_misses_its_clock_fails_the_bitstream_and_slows_its_figures(tmp_path: Path) -> None:
     """Timing is a check: at 400 MHz the topic networks of examples/hw_topics miss their clock on an ECP5;
     `hw bitstream` exits 1 naming the critical path, and the target's figures then use the Fmax achieved."""
-    from hetros.hw._bitstream import available
+    from hetros.hw.flow._bitstream import available
 
     if not available():
         pytest.skip("YoWASP's nextpnr-ecp5 and ecppack are not installed (pip install 'hetros[rtl]')")

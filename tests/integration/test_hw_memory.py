@@ -62,7 +62,7 @@ def _small_plan(tmp_path: Path) -> object:
 
 
 def _run_one(top: object, descriptor: list[int]) -> None:
-    from hetros.hw._verilator import VerilatedTop
+    from hetros.hw.sim._verilator import VerilatedTop
 
     assert isinstance(top, VerilatedTop)
     top.push(0, np.array(descriptor, "<u8").tobytes())
@@ -75,7 +75,7 @@ def _run_one(top: object, descriptor: list[int]) -> None:
 
 
 def test_the_hardware_reaches_only_the_arrays_it_was_given(tmp_path: Path) -> None:
-    from hetros.hw._cosim import TargetSimulation
+    from hetros.hw.sim._cosim import TargetSimulation
 
     simulation = TargetSimulation(_small_plan(tmp_path), "fpga", registry())  # type: ignore[arg-type]
     top = simulation.top

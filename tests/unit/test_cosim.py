@@ -15,8 +15,8 @@ import pytest
 pytest.importorskip("amaranth")
 
 from hetros import HardwareError
-from hetros.hw._cosim import TargetSimulation
 from hetros.hw.reference import gaussian_blur, sobel
+from hetros.hw.sim._cosim import TargetSimulation
 from hetros.msg import registry
 from hetros.plan import Plan, gateway_node
 from hetros.project import load_project, plan
@@ -247,8 +247,8 @@ def test_a_node_on_an_fpga_target_without_hardware_is_named(tmp_path: Path) -> N
 
 def test_amaranths_simulator_agrees_with_verilator_on_the_sobel_node() -> None:
     """The slow reference simulator, cycle for cycle in Python, gives the same pixels (and the twin's)."""
-    from hetros.hw._sim import simulate
     from hetros.hw.nodes import NodeUnderTest, Sobel
+    from hetros.hw.sim._sim import simulate
 
     codec = registry().codec(IMAGE)
     image = np.random.default_rng(7).integers(0, 256, (6, 12), dtype=np.uint8)
@@ -393,14 +393,14 @@ def test_a_verilog_nodes_port_widths_are_elaborated_with_its_parameters(tmp_path
 @pytest.mark.parametrize(("text", "value"), [("W-1", 63), ("W/8-1", 7), ("$clog2(W)", 6), ("8'd16 * 2", 32),
                                              ("(W << 1) - 1", 127), ("-1 + W % 5", 3), ("8'hFF", 255)])
 def test_verilog_constant_expressions_evaluate_as_elaboration_would(text: str, value: int) -> None:
-    from hetros.hw._verilog_node import constant
+    from hetros.hw.designs._verilog_node import constant
 
     assert constant(text, {"W": 64}) == value
 
 
 def test_a_range_hetros_cannot_evaluate_is_named() -> None:
     from hetros import HardwareError
-    from hetros.hw._verilog_node import constant
+    from hetros.hw.designs._verilog_node import constant
 
     with pytest.raises(HardwareError, match="uses DEPTH, which hetros cannot evaluate"):
         constant("DEPTH-1", {"W": 64})
@@ -411,7 +411,7 @@ def test_a_range_hetros_cannot_evaluate_is_named() -> None:
 def test_the_execution_models_of_a_chain_time_dataflow_against_sequential() -> None:
     """Blur -> Sobel: dataflow overlaps the two (about one frame's cycles), sequential adds them up and
     crosses the CPU twice more."""
-    from hetros.hw._models import execution_models, sample_message
+    from hetros.hw.sim._models import execution_models, sample_message
 
     planned = plan(load_project(Path(__file__).resolve().parents[2] / "examples" / "sobel_hw" /
                                 "project_chain_fpga.yaml"))
@@ -428,8 +428,8 @@ def test_the_vehicles_models_take_rgb8_and_check_each_output_against_the_twins()
     """`hw report --models` on the vehicle: an rgb8 frame (what its nodes are built for, channels: 3), and
     the hardware's every output held to the software twins; a twin that disagrees fails the timing."""
     from hetros import HardwareError
-    from hetros.hw import _image
-    from hetros.hw._models import channels_of, execution_models, sample_message
+    from hetros.hw.designs import _image
+    from hetros.hw.sim._models import channels_of, execution_models, sample_message
 
     planned = plan(load_project(Path(__file__).resolve().parents[2] / "examples" / "lane_following" /
                                 "project_fpga.yaml"))

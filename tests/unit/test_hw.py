@@ -16,8 +16,8 @@ import pytest
 
 from hetros import CheckError, HardwareError, LaunchError
 from hetros.hw import BeatCodec, Beats, from_beats, to_beats
-from hetros.hw._sim import check_delivery, simulate
-from hetros.hw._stream import StreamFifo, TopicNetwork
+from hetros.hw.sim._sim import check_delivery, simulate
+from hetros.hw.streams._axi import StreamFifo, TopicNetwork
 from hetros.launch import launch
 from hetros.msg import registry
 from hetros.project import load_project, plan
@@ -213,7 +213,7 @@ needs_icarus = pytest.mark.skipif(shutil.which("iverilog") is None,
 @pytest.mark.parametrize(("publishers", "subscribers", "fifo"), [(1, 1, None), (2, 3, None), (2, 3, 4), (4, 4, 3)])
 def test_the_exported_verilog_passes_the_same_scoreboard_in_the_same_cycles(
         publishers: int, subscribers: int, fifo: int | None) -> None:
-    from hetros.hw._rtl import simulate_verilog
+    from hetros.hw.sim._rtl import simulate_verilog
 
     sent = _messages(publishers, 10, seed=publishers + 7 * subscribers)
     amaranth = simulate(TopicNetwork(publishers, subscribers, 64, fifo), sent, idle=0.3, stall=0.4, seed=11)
@@ -226,7 +226,7 @@ def test_the_exported_verilog_passes_the_same_scoreboard_in_the_same_cycles(
 @pytest.mark.rtl
 @needs_icarus
 def test_transfer_time_is_simulated_a_beat_per_cycle_in_both_simulators() -> None:
-    from hetros.hw._report import transfer_cycles
+    from hetros.hw.sim._report import transfer_cycles
 
     for size in (1, 8, 9, 3072):
         beats = -(-size // 8)
@@ -239,7 +239,7 @@ def test_transfer_time_is_simulated_a_beat_per_cycle_in_both_simulators() -> Non
 
 @pytest.mark.rtl
 def test_yosys_estimates_a_fifo_in_block_ram_and_wiring_as_nothing() -> None:
-    from hetros.hw._report import synthesize
+    from hetros.hw.sim._report import synthesize
 
     wiring = synthesize(1, 1, 64, None)
     assert wiring.luts == 0 and wiring.ffs == 0 and wiring.bram36 == 0

@@ -19,9 +19,9 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from hetros.hw import BeatCodec
-from hetros.hw._sim import simulate
-from hetros.hw._stream import axi_stream
 from hetros.hw.nodes import Echo, NodeUnderTest, port_problems
+from hetros.hw.sim._sim import simulate
+from hetros.hw.streams._axi import axi_stream
 from hetros.msg import registry
 from hetros.project import check, load_project, plan
 from hetros.runtime import Graph, Node

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from hetros import HardwareError
-from hetros.hw._sim import simulate
-from hetros.hw._tcpros import Ros1Deframer, Ros1Framer, ros1_program, run_program
+from hetros.hw.designs._tcpros import Ros1Deframer, Ros1Framer, ros1_program, run_program
 from hetros.hw.nodes import NodeUnderTest
+from hetros.hw.sim._sim import simulate
 from hetros.msg import registry
 from hetros.transport.tcpros import Ros1Type
 

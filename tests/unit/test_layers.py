@@ -139,6 +139,54 @@ def test_msg_has_no_import_circle() -> None:
         visit(module, [])
 
 
+# hw's sub-packages, lowest first: each imports only those before it (nodes.py and reference.py, the
+# public faces of the designs, sit with them)
+HW_ORDER = ["streams", "designs", "top", "sim", "flow"]
+
+
+def _hw_package(path_or_module: str) -> str | None:
+    parts = path_or_module.split(".")
+    if parts[:2] != ["hetros", "hw"] or len(parts) < 3:
+        return None
+    return "designs" if parts[2] in ("nodes", "reference") else parts[2] if parts[2] in HW_ORDER else None
+
+
+def test_hw_sub_packages_import_one_way_and_hw_has_no_import_circle() -> None:
+    """streams <- designs <- top <- sim <- flow, counting imports inside functions; and no circle between
+    hw's modules (the builder and the nodes once imported each other through five files)."""
+    offending = []
+    graph: dict[str, set[str]] = {}
+    for path in _files("hw"):
+        me = ".".join(path.relative_to(SRC.parent).with_suffix("").parts)
+        mine = _hw_package(me)
+        graph[me] = set()
+        for module, line, where in _imports(path):
+            theirs = _hw_package(module)
+            if where == "typing" or theirs is None:
+                continue
+            if mine is not None and HW_ORDER.index(theirs) > HW_ORDER.index(mine):
+                offending.append(f"{path.relative_to(SRC)}:{line}: {mine} imports {module} ({theirs})")
+            target = module if (SRC.parent / (module.replace(".", "/") + ".py")).exists() else \
+                module.rsplit(".", 1)[0]
+            if (SRC.parent / (target.replace(".", "/") + ".py")).exists() and target != me:
+                graph[me].add(target)
+    assert not offending, "hw's sub-packages import upward:\n" + "\n".join(offending)
+    done: set[str] = set()
+
+    def visit(module: str, trail: list[str]) -> None:
+        if module in trail:
+            raise AssertionError("import circle: " + " -> ".join([*trail[trail.index(module):], module]))
+        if module in done:
+            return
+        for other in graph.get(module, ()):
+            visit(other, [*trail, module])
+        done.add(module)
+
+    for module in graph:
+        if not module.endswith("__init__"):
+            visit(module, [])
+
+
 _WORKER = textwrap.dedent('''
     import json, sys, threading
     import hetros.launch.launcher._worker

@@ -1,5 +1,5 @@
 """Timing is a check: nextpnr's critical path named, a missed clock an error, and the figures of a design
-that misses its clock given at the Fmax it achieves (``hetros.hw._bitstream``, ``hetros.hw._clock``)."""
+that misses its clock given at the Fmax it achieves (``hetros.hw.flow._bitstream``, ``hetros.hw.top._clock``)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from hetros.hw._bitstream import Bitstream, critical_path
-from hetros.hw._clock import record_fmax, target_clock
+from hetros.hw.flow._bitstream import Bitstream, critical_path
+from hetros.hw.top._clock import record_fmax, target_clock
 from hetros.plan import Plan, TargetPlan
 
 pytest.importorskip("amaranth")

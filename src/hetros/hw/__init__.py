@@ -11,23 +11,21 @@ from typing import TYPE_CHECKING
 from .._lazy import lazy_exports
 from ..msg import TypeRegistry
 from ..plan import Plan
-from ._beats import BeatCodec, Beats, amaranth_layout, field_name, from_beats, to_beats
+from .streams._beats import BeatCodec, Beats, amaranth_layout, field_name, from_beats, to_beats
 
 
 def build_target(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path, Path]:
     """Write the Verilog top and JSON manifest of ``target``'s topic network into ``out``."""
-    from ._build import build
+    from .top._build import build
 
     return build(plan, target, out, types)
 
 if TYPE_CHECKING:
-    from ._bitstream import available, bitstreams, build_bitstream, format_bitstreams
-    from ._build import hardware_topics, top_name
-    from ._clock import TargetClock, target_clock
-    from ._cosim import GatewayPort, SimulatedTop, TargetSimulation
-    from ._export import export
-    from ._models import channels_of, execution_models, format_models, one_message_through, sample_message
-    from ._report import (
+    from .flow._bitstream import available, bitstreams, build_bitstream, format_bitstreams
+    from .flow._export import export
+    from .sim._cosim import GatewayPort, SimulatedTop, TargetSimulation
+    from .sim._models import channels_of, execution_models, format_models, one_message_through, sample_message
+    from .sim._report import (
         TABLE_I_PAPER_MS,
         TABLE_I_SIZES,
         Resources,
@@ -41,46 +39,48 @@ if TYPE_CHECKING:
         transfer_cycles,
         transfer_report,
     )
-    from ._rtl import topic_verilog
-    from ._sim import simulate
-    from ._verilator import IDLE, VerilatedTop
+    from .sim._rtl import topic_verilog
+    from .sim._sim import simulate
+    from .sim._verilator import IDLE, VerilatedTop
+    from .top._build import hardware_topics, top_name
+    from .top._clock import TargetClock, target_clock
 
 
 # shared with other packages, loaded on first use (a worker must not pay for what it does not run)
 _LAZY = {
-    "GatewayPort": "._cosim",
-    "IDLE": "._verilator",
-    "Resources": "._report",
-    "SimulatedTop": "._cosim",
-    "TABLE_I_PAPER_MS": "._report",
-    "TABLE_I_SIZES": "._report",
-    "TargetClock": "._clock",
-    "TargetSimulation": "._cosim",
-    "VerilatedTop": "._verilator",
-    "available": "._bitstream",
-    "bitstreams": "._bitstream",
-    "build_bitstream": "._bitstream",
-    "channels_of": "._models",
-    "execution_models": "._models",
-    "export": "._export",
-    "format_bitstreams": "._bitstream",
-    "format_models": "._models",
-    "format_resources": "._report",
-    "format_synth": "._report",
-    "format_transfers": "._report",
-    "hardware_topics": "._build",
-    "part_of": "._report",
-    "one_message_through": "._models",
-    "sample_message": "._models",
-    "simulate": "._sim",
-    "synth_report": "._report",
-    "synthesize": "._report",
-    "synthesize_node": "._report",
-    "target_clock": "._clock",
-    "top_name": "._build",
-    "topic_verilog": "._rtl",
-    "transfer_cycles": "._report",
-    "transfer_report": "._report",
+    "GatewayPort": ".sim._cosim",
+    "IDLE": ".sim._verilator",
+    "Resources": ".sim._report",
+    "SimulatedTop": ".sim._cosim",
+    "TABLE_I_PAPER_MS": ".sim._report",
+    "TABLE_I_SIZES": ".sim._report",
+    "TargetClock": ".top._clock",
+    "TargetSimulation": ".sim._cosim",
+    "VerilatedTop": ".sim._verilator",
+    "available": ".flow._bitstream",
+    "bitstreams": ".flow._bitstream",
+    "build_bitstream": ".flow._bitstream",
+    "channels_of": ".sim._models",
+    "execution_models": ".sim._models",
+    "export": ".flow._export",
+    "format_bitstreams": ".flow._bitstream",
+    "format_models": ".sim._models",
+    "format_resources": ".sim._report",
+    "format_synth": ".sim._report",
+    "format_transfers": ".sim._report",
+    "hardware_topics": ".top._build",
+    "part_of": ".sim._report",
+    "one_message_through": ".sim._models",
+    "sample_message": ".sim._models",
+    "simulate": ".sim._sim",
+    "synth_report": ".sim._report",
+    "synthesize": ".sim._report",
+    "synthesize_node": ".sim._report",
+    "target_clock": ".top._clock",
+    "top_name": ".top._build",
+    "topic_verilog": ".sim._rtl",
+    "transfer_cycles": ".sim._report",
+    "transfer_report": ".sim._report",
 }
 
 

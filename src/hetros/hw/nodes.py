@@ -25,12 +25,12 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from .._errors import HardwareError
-from ._build import port_part, service_ports
-from ._image import Compensation, GaussianBlur, ImageFilter3x3, Sobel
-from ._memory import MemorySobel, axi4_memory
-from ._sort import Sorter
-from ._stream import axi_stream
-from ._verilog_node import VerilogNode, is_verilog, make_verilog_node
+from .designs._image import Compensation, GaussianBlur, ImageFilter3x3, Sobel
+from .designs._memory import MemorySobel, axi4_memory
+from .designs._sort import Sorter
+from .designs._verilog_node import VerilogNode, is_verilog, make_verilog_node
+from .streams._axi import axi_stream
+from .streams._ports import port_part, service_ports
 
 __all__ = ["AddTwoInts", "Compensation", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "MemorySobel",
            "NodeUnderTest", "Sobel", "Sorter", "VerilogNode", "axi4_memory", "axi_stream", "make_hardware_node",
@@ -39,7 +39,7 @@ __all__ = ["AddTwoInts", "Compensation", "Echo", "FixedServer", "GaussianBlur", 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:
     """The component ``hw`` names, elaborated for ``data_width`` and the node's parameters (a ``file.v:module``
-    is a Verilog module, see ``hetros.hw._verilog_node``)."""
+    is a Verilog module, see ``hetros.hw.designs._verilog_node``)."""
     if is_verilog(hw):
         return make_verilog_node(hw, root, data_width, parameters)
     module_name, _, attr = hw.partition(":")
@@ -74,7 +74,7 @@ def port_problems(component: wiring.Component, publish: list[str], subscribe: li
     members = dict(component.signature.members.items())
     problems = []
     if memory:
-        from ._memory import MEMORY_PORT, axi4_memory
+        from .designs._memory import MEMORY_PORT, axi4_memory
 
         member = members.pop(MEMORY_PORT, None)
         if member is None or member != Out(axi4_memory(data_width)):

@@ -2,7 +2,7 @@
 
 The planner gives each fpga target whose topics or services cross to software a gateway node
 (``plan.gateway_node``) in a process of the target's own. That node builds the target's top
-module and has Verilator compile it (``hetros.hw._cosim``) while the process starts, then
+module and has Verilator compile it (``hetros.hw.sim._cosim``) while the process starts, then
 moves messages between the graph and the simulated ports: what software publishes to the
 hardware arrives through the gateway's ordinary subscriptions (shared memory from the other
 processes of the host) and is pushed into the top's ``s_axis`` port as its CDR body; what
@@ -225,7 +225,7 @@ class _FramesToRos1:
 
 
 class _InMemory:
-    """A hardware node that reads one topic's messages and writes another's in memory (``hw._memory``): each
+    """A hardware node that reads one topic's messages and writes another's in memory (``hw.designs._memory``): each
     message in goes as a descriptor of its arrays and of a loaned answer's; the node's completion publishes
     the answer. The arrays are the shared-memory slots themselves: the CPU copies none of their bytes."""
 
@@ -288,7 +288,7 @@ class _InMemory:
 class _BoardMemory:
     """A hardware node that reads one topic's messages and writes another's in memory, on a board: each
     message's arrays are copied into buffers PYNQ's ``allocate`` placed in contiguous memory (CMA), the node
-    gets their physical addresses in a descriptor (``hw._memory``), and its completion copies the answer's
+    gets their physical addresses in a descriptor (``hw.designs._memory``), and its completion copies the answer's
     arrays out into a loaned message. One message at a time: the buffers are reused. In co-simulation the
     same code runs against the simulated overlay, whose buffers sit in a simulated physical address space."""
 

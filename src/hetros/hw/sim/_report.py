@@ -18,13 +18,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._errors import HardwareError
-from ..plan import Plan
-from ._build import hardware_topics
-from ._clock import target_clock
+from ..._errors import HardwareError
+from ...plan import Plan
+from ..streams._axi import TopicNetwork
+from ..top._build import hardware_topics
+from ..top._clock import target_clock
 from ._rtl import icarus_available, simulate_verilog, topic_verilog
 from ._sim import simulate
-from ._stream import TopicNetwork
 
 # fpgaDDS's Table I: images of 3 * n * n bytes, n = 32 ... 1024, named as the paper names them
 TABLE_I_SIZES = {"3 kB": 3 * 32 * 32, "12 kB": 3 * 64 * 64, "50 kB": 3 * 128 * 128, "196 kB": 3 * 256 * 256,
@@ -191,7 +191,7 @@ def synthesize_node(component: Any, family: str = "xcup") -> Resources:
     """One hardware node's resources, alone, its stream ports the design's ports."""
     from amaranth.back import verilog
 
-    from ._verilog_node import verilog_sources
+    from ..designs._verilog_node import verilog_sources
 
     return yosys_resources(verilog.convert(component, name="hetros_node"), "hetros_node", family,
                            verilog_sources({"node": component}))
@@ -206,7 +206,7 @@ class SynthRow:
 
 def synth_report(plan: Plan, target: str) -> list[SynthRow]:
     """Each hardware node and each topic network of ``target``, synthesized on its own."""
-    from ._build import hardware_nodes
+    from ..top._build import hardware_nodes
 
     spec = plan.targets[target]
     part = part_of(spec.part)

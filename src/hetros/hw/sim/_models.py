@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import HardwareError
-from ..msg import TypeRegistry, array_fields
-from ..plan import Plan
+from ..._errors import HardwareError
+from ...msg import TypeRegistry, array_fields
+from ...plan import Plan
 from ._cosim import TargetSimulation
 
 

@@ -26,7 +26,7 @@ from amaranth import Array, Cat, Const, Module, Mux, Signal, signed, unsigned
 from amaranth.hdl import Value
 from amaranth.lib.memory import Memory
 
-from .._errors import HardwareError
+from ..._errors import HardwareError
 
 # steps between a beat coming in and the window whose bottom row it completes going out
 _LAG = 3
@@ -247,7 +247,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
         with m.If(stepping & first_window):
             with m.If(start == 0):
                 m.d.sync += [column.eq(lane), row.eq(1)]
-            with m.Elif(lane < start):
+            with m.Elif(start > lane if lane < lanes - 4 else Const(0, 1)):  # the pixels begin at 4k < lanes
                 m.d.sync += [column.eq(step - start + lane), row.eq(0)]
             with m.Else():
                 m.d.sync += [column.eq(lane - start), row.eq(1)]

@@ -11,14 +11,14 @@ import re
 import time
 from dataclasses import dataclass
 
-from .._errors import HardwareError
-from ..msg import TypeRegistry
-from ..plan import Plan, gateway_node
+from ..._errors import HardwareError
+from ...msg import TypeRegistry
+from ...plan import Plan, gateway_node
+from ..designs._verilog_node import verilog_sources
+from ..top._build import TCPROS, FpgaTop, framing_programs, hardware_nodes, hardware_topics, top_name
+from ..top._clock import design_key, target_clock
 from ._amaranth_top import AmaranthTop
-from ._build import TCPROS, FpgaTop, framing_programs, hardware_nodes, hardware_topics, top_name
-from ._clock import design_key, target_clock
 from ._verilator import MemoryPort, StreamPort, VerilatedTop, compile_simulator
-from ._verilog_node import verilog_sources
 
 
 @dataclass(frozen=True)

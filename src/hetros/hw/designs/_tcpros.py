@@ -27,10 +27,10 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 from rosbags.interfaces import Nodetype
 
-from .._errors import HardwareError
-from ..msg import TypeRegistry, ros1_store
-from ._bytes import ByteSource, bytes_in, bytes_out
-from ._stream import axi_stream
+from ..._errors import HardwareError
+from ...msg import TypeRegistry, ros1_store
+from ..streams._axi import axi_stream
+from ..streams._bytes import ByteSource, bytes_in, bytes_out
 
 # what one step of a program does with the CDR side (C) and the ROS 1 side (R)
 OpKind = Literal[

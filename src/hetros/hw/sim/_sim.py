@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import HardwareError
-from ._beats import Beats, from_beats, to_beats
-from ._stream import TopicNetwork
+from ..._errors import HardwareError
+from ..streams._axi import TopicNetwork
+from ..streams._beats import Beats, from_beats, to_beats
 
 
 @dataclass

@@ -19,10 +19,10 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .._errors import HardwareError
-from ._build import port_part
-from ._bytes import bytes_in, bytes_out
-from ._stream import axi_stream
+from ..._errors import HardwareError
+from ..streams._axi import axi_stream
+from ..streams._bytes import bytes_in, bytes_out
+from ..streams._ports import port_part
 
 # the walk over UInt32MultiArray's CDR body, then the sort and the answer
 (_DIMS, _LABEL_LEN, _LABEL, _PAD, _SIZE, _STRIDE, _OFFSET, _LENGTH, _DATA, _PAIR, _MERGE, _SEND,

@@ -23,8 +23,8 @@ from amaranth import ClockSignal, Instance, Module, ResetSignal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .._errors import HardwareError
-from ._stream import axi_stream
+from ..._errors import HardwareError
+from ..streams._axi import axi_stream
 
 _FIELDS = ("tdata", "tkeep", "tlast", "tvalid", "tready")
 _CLOCKS = ("clk", "ap_clk", "aclk")

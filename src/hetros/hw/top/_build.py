@@ -20,11 +20,12 @@ from amaranth.back import verilog
 from amaranth.hdl import Elaboratable
 from amaranth.lib import wiring
 
-from .._errors import HardwareError
-from ..msg import TypeRegistry, flat_layout
-from ..plan import Plan, gateway_node
-from ._stream import TopicNetwork
-from ._verilog_node import verilog_sources
+from ..._errors import HardwareError
+from ...msg import TypeRegistry, flat_layout
+from ...plan import Plan, gateway_node
+from ..designs._verilog_node import verilog_sources
+from ..streams._axi import TopicNetwork
+from ..streams._ports import port_part, service_ports
 
 _FIELDS = (("tdata", None), ("tkeep", None), ("tlast", 1), ("tvalid", 1), ("tready", 1))
 # the endpoint of a topic the target frames for ROS 1 itself (hardware TCPROS, ``_tcpros``): its port
@@ -52,16 +53,6 @@ class HardwareTopic:
         if self.service:
             return service_ports(self.service)[1 if self.response else 0]
         return port_part(self.name)
-
-
-def service_ports(service: str) -> tuple[str, str]:
-    """A hardware server's two ports for ``service``: requests in, responses out, one for each, in order."""
-    return f"{port_part(service)}_request", f"{port_part(service)}_response"
-
-
-def port_part(topic: str) -> str:
-    """``/camera/image`` -> ``camera_image``: the part of a port name that names the topic."""
-    return re.sub(r"[^A-Za-z0-9_]", "_", topic.strip("/"))
 
 
 def hardware_topics(plan: Plan, target: str, only: set[str] | None = None) -> list[HardwareTopic]:
@@ -166,7 +157,7 @@ class FpgaTop(Elaboratable):
             raise HardwareError(f"co-simulation watches at most 64 hardware node outputs, not {len(self.monitored)}")
         self.violations = Signal(max(1, len(self.monitored)), name="hw_violations")
         # hardware nodes reading messages in memory: their AXI4 port ``mem`` as the top's ``m_axi_<node>_*``
-        from ._memory import MEMORY_PORT
+        from ..designs._memory import MEMORY_PORT
 
         self.memory_ports: dict[str, dict[str, Any]] = {}
         for node, component in self.hardware_nodes.items():
@@ -214,7 +205,7 @@ class FpgaTop(Elaboratable):
         for node, component in self.hardware_nodes.items():
             m.submodules[f"node_{node}"] = component
         for node, signals in self.memory_ports.items():
-            from ._memory import MEMORY_PORT
+            from ..designs._memory import MEMORY_PORT
 
             port = getattr(self.hardware_nodes[node], MEMORY_PORT)
             flows = dict(self.hardware_nodes[node].signature.members[MEMORY_PORT].signature.members.items())
@@ -239,7 +230,7 @@ class FpgaTop(Elaboratable):
     def _framer(self, m: Module, topic: HardwareTopic, role: str, stream: Any) -> tuple[Any, Signal]:
         """Put a TCPROS framer (to ROS 1) or deframer (from it) between ``stream`` and the port; the
         stream the port now meets, and the unit's ``malformed``."""
-        from ._tcpros import Ros1Deframer, Ros1Framer
+        from ..designs._tcpros import Ros1Deframer, Ros1Framer
 
         program = self.framing[topic.name]
         if role == "pub":  # frames from a ROS 1 publisher into the network
@@ -267,7 +258,7 @@ def _held_stream_broken(m: Module, port: Any) -> Signal:
 def hardware_nodes(plan: Plan, target: str, only: set[str] | None = None) -> dict[str, Elaboratable]:
     """The hardware implementations of ``target``'s nodes that have one (of ``only``, when given), elaborated
     and their ports checked against the node's topics."""
-    from .nodes import make_hardware_node, port_problems
+    from ..nodes import make_hardware_node, port_problems
 
     made: dict[str, Elaboratable] = {}
     width = plan.targets[target].data_width
@@ -286,7 +277,7 @@ def hardware_nodes(plan: Plan, target: str, only: set[str] | None = None) -> dic
 
 def framing_programs(topics: list[HardwareTopic], types: TypeRegistry) -> dict[str, Any]:
     """The hardware TCPROS program (``_tcpros.Ros1Program``) of each topic with a TCPROS endpoint."""
-    from ._tcpros import ros1_program
+    from ..designs._tcpros import ros1_program
 
     return {t.name: ros1_program(types, t.type) for t in topics if TCPROS in (*t.publishers, *t.subscribers)}
 
@@ -318,7 +309,7 @@ def build(plan: Plan, target: str, out: Path, types: TypeRegistry) -> tuple[Path
     described["verilog_sources"] = [source.name for source in verilog_sources(components)]
     described["memory_masters"] = [{"interface": f"m_axi_{node}", "node": node} for node in top.memory_ports]
     for node, signals in top.memory_ports.items():  # the AXI4 masters of nodes reading messages in memory
-        from ._memory import MEMORY_PORT
+        from ..designs._memory import MEMORY_PORT
 
         flows = components[node].signature.members[MEMORY_PORT].signature.members
         described["ports"] += [{"name": f"m_axi_{node}_{name}", "width": len(signal), "node": node,

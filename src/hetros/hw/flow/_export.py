@@ -26,10 +26,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._errors import HardwareError
-from ..msg import TypeRegistry
-from ..plan import Plan, gateway_node
-from ._build import build, top_name
+from ..._errors import HardwareError
+from ...msg import TypeRegistry
+from ...plan import Plan, gateway_node
+from ..top._build import build, top_name
 
 
 @dataclass(frozen=True)

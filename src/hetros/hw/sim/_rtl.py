@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 from amaranth.back import verilog
 
-from .._errors import HardwareError
-from ._beats import Beats, from_beats, to_beats
-from ._build import FpgaTop, HardwareTopic
+from ..._errors import HardwareError
+from ..streams._beats import Beats, from_beats, to_beats
+from ..top._build import FpgaTop, HardwareTopic
 from ._sim import SimResult
 
 TOP = "hetros_topic"

@@ -13,7 +13,7 @@ from amaranth import Cat, Module, Mux, Signal
 from amaranth.lib import fifo, wiring
 from amaranth.lib.wiring import In, Out
 
-from .._errors import HardwareError
+from ..._errors import HardwareError
 
 
 def axi_stream(data_width: int) -> wiring.Signature:

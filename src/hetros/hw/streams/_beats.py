@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import HardwareError, SerializationError
-from ..msg import TypeRegistry, normalize_typename
+from ..._errors import HardwareError, SerializationError
+from ...msg import TypeRegistry, normalize_typename
 
 _ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian
 
@@ -114,7 +114,7 @@ def amaranth_layout(types: TypeRegistry, typename: str) -> Any:
     from amaranth import signed, unsigned
     from amaranth.lib import data
 
-    from ..msg import flat_layout
+    from ...msg import flat_layout
 
     fields: dict[str, Any] = {}
     cursor = 0

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from ..plan import Plan
+    from ...plan import Plan
     from ._build import HardwareTopic
 
 
@@ -39,7 +39,9 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
 
     spec = plan.targets[target]
     parts = [amaranth.__version__, str(spec.data_width), repr(topics)]
-    files = sorted(Path(__file__).parent.glob("*.py")) + sorted(Path(plan.root).rglob("*.py")) + sources
+    hardware = Path(__file__).parents[1]  # every module of hetros.hw, and the simulator's C++ harness
+    files = sorted(hardware.rglob("*.py")) + sorted(hardware.rglob("*.cpp")) + sorted(Path(plan.root).rglob("*.py")) \
+        + sources
     for name, node in sorted(plan.nodes.items()):
         if node.target == target and plan.in_hardware(name):
             parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}:{node.memory}")
@@ -57,8 +59,8 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
 def target_key(plan: Plan, target: str) -> str:
     """:func:`design_key` of the whole target, without building its nodes (their Verilog files are read
     from the plan, as ``verilog_sources`` would list them)."""
+    from ..designs._verilog_node import is_verilog
     from ._build import hardware_topics
-    from ._verilog_node import is_verilog
 
     sources = sorted({(Path(plan.root) / node.hw.partition(":")[0]).resolve() for name, node in plan.nodes.items()
                       if node.target == target and node.hw and plan.in_hardware(name) and is_verilog(node.hw)})

@@ -23,7 +23,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .._errors import HardwareError
+from ..._errors import HardwareError
 
 # ECP5 devices nextpnr knows, smallest first: (nextpnr flag, package, LUT4s)
 _DEVICES = (("--25k", "CABGA381", 24_288), ("--45k", "CABGA381", 43_848), ("--85k", "CABGA756", 83_640))
@@ -215,12 +215,12 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
     and each topic network alone ("parts" or "all"), each in a folder of its own under ``out``."""
     from amaranth.back import verilog as amaranth_verilog
 
-    from ..msg import TypeRegistry
-    from ..plan import Plan
-    from ._build import build, hardware_nodes, hardware_topics, top_name
-    from ._clock import record_fmax, target_key
-    from ._rtl import topic_verilog
-    from ._verilog_node import verilog_sources
+    from ...msg import TypeRegistry
+    from ...plan import Plan
+    from ..designs._verilog_node import verilog_sources
+    from ..sim._rtl import topic_verilog
+    from ..top._build import build, hardware_nodes, hardware_topics, top_name
+    from ..top._clock import record_fmax, target_key
 
     assert isinstance(plan, Plan) and isinstance(types, TypeRegistry)
     spec = plan.targets[target]

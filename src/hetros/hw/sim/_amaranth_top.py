@@ -15,7 +15,7 @@ from typing import Any
 
 from amaranth import ClockDomain, Module
 
-from .._errors import HardwareError
+from ..._errors import HardwareError
 from ._verilator import BEAT, IDLE, INPUT_DRY, OUTPUT_ENDED, VIOLATION, StreamPort
 
 _PERIOD = 1e-8

@@ -23,11 +23,11 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .._errors import HardwareError
-from ._build import port_part
-from ._bytes import bytes_in, bytes_out
+from ..._errors import HardwareError
+from ..streams._axi import axi_stream
+from ..streams._bytes import bytes_in, bytes_out
+from ..streams._ports import port_part
 from ._lanes import Pipe, elaborate_lanes, median_network, stages_of
-from ._stream import axi_stream
 
 # bytes per pixel of the encodings whose pixels are bytes (sensor_msgs/image_encodings)
 _BYTES_PER_PIXEL = {"mono8": 1, "8UC1": 1, "8SC1": 1, "rgb8": 3, "bgr8": 3, "8UC3": 3, "rgba8": 4, "bgra8": 4,
@@ -316,7 +316,7 @@ class Sobel(ImageFilter3x3):
     """Edges: ``min(|Gx| + |Gy|, 255)`` with the 3x3 Sobel kernels (``hetros.hw.reference.sobel`` in software)."""
 
     def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
-        from .reference import sobel
+        from ..reference import sobel
 
         return sobel
 
@@ -344,7 +344,7 @@ class GaussianBlur(ImageFilter3x3):
     ``hetros.hw.reference.gaussian_blur``)."""
 
     def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
-        from .reference import gaussian_blur
+        from ..reference import gaussian_blur
 
         return gaussian_blur
 
@@ -374,7 +374,7 @@ class Compensation(ImageFilter3x3):
     needed; the first frame is not stretched). ``hetros.hw.reference.Compensation`` in software."""
 
     def reference(self) -> Callable[[np.ndarray[Any, Any]], np.ndarray[Any, Any]] | None:
-        from .reference import Compensation as Twin
+        from ..reference import Compensation as Twin
 
         return Twin()
 

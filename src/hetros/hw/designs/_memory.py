@@ -20,10 +20,10 @@ from amaranth import Cat, Const, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .._errors import HardwareError
-from ._build import port_part
+from ..._errors import HardwareError
+from ..streams._axi import axi_stream
+from ..streams._ports import port_part
 from ._image import Sobel
-from ._stream import axi_stream
 
 MEMORY_PORT = "mem"
 ADDRESS_BITS = 64

@@ -64,6 +64,15 @@ def _through(simulation: TargetSimulation, messages: list[Any], typename: str = 
     return out
 
 
+def _through_target(planned: Plan, messages: list[Any]) -> list[Any]:
+    """:func:`_through` on a fresh simulation of the plan's fpga target, closed after."""
+    simulation = TargetSimulation(planned, "fpga", registry())
+    try:
+        return _through(simulation, messages)
+    finally:
+        simulation.close()
+
+
 @pytest.mark.parametrize(("component", "twin", "data_width", "lanes"), [
     ("hetros.hw.nodes:Sobel", sobel, 64, 1),
     ("hetros.hw.nodes:Sobel", sobel, 8, 1),
@@ -155,11 +164,7 @@ def test_the_guides_threshold_is_a_full_width_filter_in_a_few_lines(tmp_path: Pa
     images = [rng.integers(0, 256, shape, dtype=np.uint8) for shape in ((6, 16), (20, 64), (3, 8))]
     messages = [cls(height=i.shape[0], width=i.shape[1], encoding="mono8", step=i.shape[1], data=i.reshape(-1))
                 for i in images]
-    simulation = TargetSimulation(planned, "fpga", registry())
-    try:
-        outputs = _through(simulation, messages)
-    finally:
-        simulation.close()
+    outputs = _through_target(planned, messages)
     for image, output in zip(images, outputs, strict=True):
         expected = np.where(image >= 100, 255, 0).astype(np.uint8)
         expected[0, :] = expected[-1, :] = expected[:, 0] = expected[:, -1] = 0
@@ -477,11 +482,7 @@ def test_rgb_filters_and_the_stateful_compensation_match_their_twins_frame_after
         message = cls(height=height, width=width, encoding="rgb8", step=width * 3, data=image.reshape(-1))
         message.header.frame_id = "c" * index
         messages.append(message)
-    simulation = TargetSimulation(planned, "fpga", registry())
-    try:
-        outputs = _through(simulation, messages)
-    finally:
-        simulation.close()
+    outputs = _through_target(planned, messages)
     for image, output in zip(images, outputs, strict=True):
         np.testing.assert_array_equal(np.asarray(output.data).reshape(image.shape), apply(image))
 

@@ -111,6 +111,23 @@ def test_no_package_reaches_into_another_packages_private_modules() -> None:
         "\n".join(sorted(offending))
 
 
+def _assert_no_circle(graph: dict[str, set[str]], starts: list[str]) -> None:
+    """Fails naming the first import circle found from ``starts`` in ``graph`` (module -> what it imports)."""
+    done: set[str] = set()
+
+    def visit(module: str, trail: list[str]) -> None:
+        if module in trail:
+            raise AssertionError("import circle: " + " -> ".join([*trail[trail.index(module):], module]))
+        if module in done:
+            return
+        for other in graph.get(module, ()):
+            visit(other, [*trail, module])
+        done.add(module)
+
+    for module in starts:
+        visit(module, [])
+
+
 def test_msg_has_no_import_circle() -> None:
     """Imports between msg's modules form no cycle, counting those inside functions (loaded on first use, so
     that a worker does not pay for the .msg parser or rosbags' type system): lazy is for cost, never a way
@@ -124,19 +141,7 @@ def test_msg_has_no_import_circle() -> None:
             if parts[:2] == ["hetros", "msg"] and len(parts) > 2 and (SRC / "msg" / f"{parts[2]}.py").exists():
                 if where in ("module", "function"):
                     graph[me].add(parts[2])
-    done: set[str] = set()
-
-    def visit(module: str, trail: list[str]) -> None:
-        if module in trail:
-            raise AssertionError("import circle: " + " -> ".join([*trail[trail.index(module):], module]))
-        if module in done:
-            return
-        for other in graph.get(module, ()):
-            visit(other, [*trail, module])
-        done.add(module)
-
-    for module in graph:
-        visit(module, [])
+    _assert_no_circle(graph, list(graph))
 
 
 # hw's sub-packages, lowest first: each imports only those before it (nodes.py and reference.py, the
@@ -171,20 +176,7 @@ def test_hw_sub_packages_import_one_way_and_hw_has_no_import_circle() -> None:
             if (SRC.parent / (target.replace(".", "/") + ".py")).exists() and target != me:
                 graph[me].add(target)
     assert not offending, "hw's sub-packages import upward:\n" + "\n".join(offending)
-    done: set[str] = set()
-
-    def visit(module: str, trail: list[str]) -> None:
-        if module in trail:
-            raise AssertionError("import circle: " + " -> ".join([*trail[trail.index(module):], module]))
-        if module in done:
-            return
-        for other in graph.get(module, ()):
-            visit(other, [*trail, module])
-        done.add(module)
-
-    for module in graph:
-        if not module.endswith("__init__"):
-            visit(module, [])
+    _assert_no_circle(graph, [m for m in graph if not m.endswith("__init__")])
 
 
 _WORKER = textwrap.dedent('''

@@ -88,7 +88,9 @@ def test_the_fpga_is_a_ros1_node_publishing_and_subscribing_in_hardware(tmp_path
         assert peers[0].returncode == 0, roscpp + logged
         assert roscpp.count("I heard: [hello world") == 5, roscpp
         assert 'data: "hello world' in echoed, echoed + logged
-        assert "MISMATCH" not in frames and "checked {'/chatter': 5, '/points': 5}" in frames, frames
+        # each topic at least 5 frames, all as sent (one may run ahead while the other reaches 5)
+        counts = re.search(r"checked \{'/chatter': (\d+), '/points': (\d+)\}", frames)
+        assert "MISMATCH" not in frames and counts is not None and min(map(int, counts.groups())) >= 5, frames
         # which frames the checker prints first depends on when it connected: each must be frame N's values
         points = re.findall(r'frame_id: "frame (\d+)" point:    x: ([-\d.]+)   y: ([-\d.]+)   z: 3.25', frames)
         assert points and "seq: 0" in frames, frames

@@ -224,24 +224,33 @@ class _FramesToRos1:
         self.publication.publish_frame(frame)
 
 
-class _InMemory:
+class _ArraysInMemory:
+    """What both ways of giving a memory node its messages keep: the port, the read topic's subscription,
+    the written topic's publisher, the paths of the type's arrays and its other fields."""
+
+    def __init__(self, node: Node, read: GatewayPort, write: GatewayPort, types: TypeRegistry) -> None:
+        from ...msg import array_fields
+
+        cls = types.get(read.type)
+        self.port = read
+        self.take: Callable[[], Any] = node.create_subscription(cls, read.topic).try_take
+        self.publisher = node.create_publisher(cls, write.topic)
+        self.arrays = [f.path for f in array_fields(types, read.type) if f.length is None]
+        tops = {path[0] for path in self.arrays}
+        self.plain = [name for name in cls.__fieldnames__ if name not in tops]
+
+
+class _InMemory(_ArraysInMemory):
     """A hardware node that reads one topic's messages and writes another's in memory (``hw.designs._memory``): each
     message in goes as a descriptor of its arrays and of a loaned answer's; the node's completion publishes
     the answer. The arrays are the shared-memory slots themselves: the CPU copies none of their bytes."""
 
     def __init__(self, node: Node, read: GatewayPort, write: GatewayPort, types: TypeRegistry,
                  top: SimulatedTop) -> None:
-        from ...msg import array_fields
-
         if not isinstance(top, VerilatedTop):
             raise HardwareError(f"{read.topic}: a hardware node reading messages in memory runs in Verilator only")
-        self.port, self.top = read, top
-        cls = types.get(read.type)
-        self.take = node.create_subscription(cls, read.topic).try_take
-        self.publisher = node.create_publisher(cls, write.topic)
-        self.arrays = [f.path for f in array_fields(types, read.type) if f.length is None]
-        tops = {path[0] for path in self.arrays}
-        self.plain = [name for name in cls.__fieldnames__ if name not in tops]
+        super().__init__(node, read, write, types)
+        self.top = top
         self.pending: deque[tuple[Any, Any, list[int], int]] = deque()
         self.copied_bytes = 0  # array bytes the CPU copied (a loan too small for a slot is copied once)
         self.messages = 0
@@ -285,7 +294,7 @@ class _InMemory:
         del message
 
 
-class _BoardMemory:
+class _BoardMemory(_ArraysInMemory):
     """A hardware node that reads one topic's messages and writes another's in memory, on a board: each
     message's arrays are copied into buffers PYNQ's ``allocate`` placed in contiguous memory (CMA), the node
     gets their physical addresses in a descriptor (``hw.designs._memory``), and its completion copies the answer's
@@ -294,15 +303,8 @@ class _BoardMemory:
 
     def __init__(self, node: Node, read: GatewayPort, write: GatewayPort, types: TypeRegistry,
                  overlay: Any) -> None:
-        from ...msg import array_fields
-
-        self.port, self.overlay = read, overlay
-        cls = types.get(read.type)
-        self.take = node.create_subscription(cls, read.topic).try_take
-        self.publisher = node.create_publisher(cls, write.topic)
-        self.arrays = [f.path for f in array_fields(types, read.type) if f.length is None]
-        tops = {path[0] for path in self.arrays}
-        self.plain = [name for name in cls.__fieldnames__ if name not in tops]
+        super().__init__(node, read, write, types)
+        self.overlay = overlay
         self.buffers: list[tuple[Any, Any]] = []  # (in, out) per array, grown as messages need
         self.pending: deque[tuple[Any, list[int]]] = deque()
         self.copied_bytes = 0

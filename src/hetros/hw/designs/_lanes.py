@@ -116,7 +116,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # a word is read in two cycles: picked out of the beat and held, then walked (the walk's decisions then
     # start from registers, which keeps this small state machine off the design's critical path)
     word, word_zero, phase = Signal(32), Signal(), Signal()
-    busy = Signal()  # the last message's pixels are still on their way (or the node works between frames)
+    busy = Signal()  # the node works between two frames (its between_frames_lanes), so the next one waits
     picking = Signal()
     m.d.comb += picking.eq(hold_full & (state != _DATA) & ~busy & ~phase)
     with m.If(picking):

@@ -239,6 +239,16 @@ class _ArraysInMemory:
         tops = {path[0] for path in self.arrays}
         self.plain = [name for name in cls.__fieldnames__ if name not in tops]
 
+    def loan_answer(self, message: Any, elements: list[int]) -> Any:
+        """A loaned answer to ``message``: its arrays ``elements`` long, its other fields copied."""
+        from ...msg import copy
+
+        answer = self.publisher.loan(**{"__".join(path): n for path, n in zip(self.arrays, elements, strict=True)})
+        for name in self.plain:
+            value = getattr(message, name)
+            setattr(answer, name, copy(value) if hasattr(value, "__msgtype__") else value)
+        return answer
+
 
 class _InMemory(_ArraysInMemory):
     """A hardware node that reads one topic's messages and writes another's in memory (``hw.designs._memory``): each
@@ -258,16 +268,13 @@ class _InMemory(_ArraysInMemory):
         self._started: deque[int] = deque()
 
     def feed(self, top: SimulatedTop) -> None:
-        from ...msg import copy, get_path
+        from ...msg import get_path
 
         message = self.take()
         if message is None:
             raise LookupError
         arrays = [np.asarray(get_path(message, path)) for path in self.arrays]
-        answer = self.publisher.loan(**{"__".join(path): len(a) for path, a in zip(self.arrays, arrays, strict=True)})
-        for name in self.plain:
-            value = getattr(message, name)
-            setattr(answer, name, copy(value) if hasattr(value, "__msgtype__") else value)
+        answer = self.loan_answer(message, [len(a) for a in arrays])
         written = [np.asarray(get_path(answer, path)) for path in self.arrays]
         windows, words = [], []
         for array, writable in [(a, False) for a in arrays] + [(a, True) for a in written]:
@@ -353,16 +360,12 @@ class _BoardMemory(_ArraysInMemory):
 
     def send(self, _completion: memoryview) -> None:
         """The node's completion: the answer's arrays copied out of their buffers into a loaned message."""
-        from ...msg import copy, get_path
+        from ...msg import get_path
 
         if not self.pending:
             raise HardwareError(f"{self.port.port.label}: the hardware completed a message nobody gave it")
         message, sizes = self.pending.popleft()
-        elements = [len(np.asarray(get_path(message, path))) for path in self.arrays]
-        answer = self.publisher.loan(**{"__".join(path): n for path, n in zip(self.arrays, elements, strict=True)})
-        for name in self.plain:
-            value = getattr(message, name)
-            setattr(answer, name, copy(value) if hasattr(value, "__msgtype__") else value)
+        answer = self.loan_answer(message, [len(np.asarray(get_path(message, path))) for path in self.arrays])
         for index, (path, size) in enumerate(zip(self.arrays, sizes, strict=True)):
             out = self.buffers[index][1]
             out.invalidate()

@@ -13,8 +13,8 @@
   beat of pixels.
 - **One stall signal, registered ready.** Every pipeline register moves on ``advance``; the output
   is a two-entry skid buffer whose ready towards the pipeline is a register, so a downstream
-  node's TREADY never reaches this node's registers combinationally (chains meet their clock
-  one node at a time).
+  node's TREADY never reaches this node's registers combinationally, and the input is a register
+  slice, so this node's TREADY is a register too (chains meet their clock one node at a time).
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from amaranth.hdl import Value
 from amaranth.lib.memory import Memory
 
 from ..._errors import HardwareError
+from ..streams._axi import register_slice, skid_buffer
 
 # steps between a beat coming in and the window whose bottom row it completes going out
 _LAG = 3
@@ -74,6 +75,7 @@ class LaneFilter(Protocol):
 
 def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_width: int) -> None:
     """Build the full-width filter of ``node`` between ``source`` and ``sink`` in ``m``."""
+    source = register_slice(m, source, data_width)
     lanes = data_width // 8
     words = lanes // 4
     channels = node.channels
@@ -89,26 +91,15 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
         m.d.sync += hold_full.eq(0)
 
     # output: a skid buffer of two beats; the pipeline sees ``room``, a register
-    out_valid, out_data, out_keep, out_last = Signal(), Signal(data_width), Signal(lanes), Signal()
-    extra_valid, extra_data, extra_keep, extra_last = Signal(), Signal(data_width), Signal(lanes), Signal()
-    room = Signal()
-    push, push_data, push_keep, push_last = Signal(), Signal(data_width), Signal(lanes), Signal()
-    m.d.comb += [sink.tvalid.eq(out_valid), sink.tdata.eq(out_data), sink.tkeep.eq(out_keep),
-                 sink.tlast.eq(out_last), room.eq(~extra_valid)]
-    with m.If(~out_valid | sink.tready):
-        with m.If(extra_valid):
-            m.d.sync += [out_valid.eq(1), out_data.eq(extra_data), out_keep.eq(extra_keep), out_last.eq(extra_last),
-                         extra_valid.eq(0)]
-        with m.Else():
-            m.d.sync += [out_valid.eq(push), out_data.eq(push_data), out_keep.eq(push_keep), out_last.eq(push_last)]
-    with m.Elif(push):
-        m.d.sync += [extra_valid.eq(1), extra_data.eq(push_data), extra_keep.eq(push_keep), extra_last.eq(push_last)]
+    skid = skid_buffer(m, sink, data_width)
+    room, push, push_data, push_keep, push_last = skid.room, skid.push, skid.data, skid.keep, skid.last
 
     # --- the header walk ---------------------------------------------------------------------------------
     bits = (node.width * channels + 2 * lanes).bit_length() + 1  # a line's bytes and then some
     until_window = Signal(bits)  # steps of this message before the first that fills a window
     state = Signal(range(11))
     in_pixels = Signal()  # state is _DATA, as one register
+    at_data_len = Signal()  # state is _DATA_LEN, as one register (the beat's end is decided from it)
     unit = Signal(range(max(2, words)))
     remaining = Signal(32)
     step, data_len = Signal(32), Signal(32)
@@ -117,13 +108,14 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # start from registers, which keeps this small state machine off the design's critical path)
     word, word_zero, phase = Signal(32), Signal(), Signal()
     busy = Signal()  # the node works between two frames (its between_frames_lanes), so the next one waits
+    header_ended = Signal()  # the last message ended in its header: the walk starts over
     picking = Signal()
-    m.d.comb += picking.eq(hold_full & (state != _DATA) & ~busy & ~phase)
+    m.d.comb += picking.eq(hold_full & ~in_pixels & ~busy & ~phase & ~header_ended)
     with m.If(picking):
         picked = Array(hold.word_select(i, 32) for i in range(words))[unit]
         m.d.sync += [word.eq(picked), word_zero.eq(picked == 0), phase.eq(1)]
     last_unit = unit == words - 1
-    pixels_here = (state == _DATA_LEN) & ~last_unit & ~word_zero  # the pixels begin inside this beat
+    pixels_here = at_data_len & ~last_unit & ~word_zero  # the pixels begin inside this beat
     beat_read = last_unit | pixels_here
     header_leaves = Signal()
     walking = Signal()
@@ -138,11 +130,10 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
                 m.d.sync += state.eq(_STAMP_NS)
             with m.Case(_STAMP_NS):
                 m.d.sync += state.eq(_FRAME_LEN)
-            with m.Case(_FRAME_LEN, _ENC_LEN):
-                # words of the string; the encoding's hold is_bigendian too
-                skip = (word + Mux(state == _ENC_LEN, 4, 3)) >> 2
-                m.d.sync += [remaining.eq(skip), state.eq(Mux(state == _FRAME_LEN, Mux(skip == 0, _HEIGHT, _FRAME),
-                                                              _ENC))]
+            with m.Case(_FRAME_LEN):  # words of the string (none only for a length of zero)
+                m.d.sync += [remaining.eq((word + 3) >> 2), state.eq(Mux(word_zero, _HEIGHT, _FRAME))]
+            with m.Case(_ENC_LEN):  # the encoding's words hold is_bigendian too
+                m.d.sync += [remaining.eq((word + 4) >> 2), state.eq(_ENC)]
             with m.Case(_FRAME, _ENC):
                 m.d.sync += remaining.eq(remaining - 1)
                 with m.If(remaining <= 1):
@@ -152,13 +143,17 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
             with m.Case(_WIDTH):
                 m.d.sync += state.eq(_ENC_LEN)
             with m.Case(_STEP):
-                m.d.sync += [step.eq(word), state.eq(_DATA_LEN)]
+                m.d.sync += [step.eq(word), state.eq(_DATA_LEN), at_data_len.eq(1)]
             with m.Case(_DATA_LEN):
                 m.d.sync += [data_len.eq(word), state.eq(Mux(word_zero, _STAMP, _DATA)), in_pixels.eq(~word_zero),
+                             at_data_len.eq(0),
                              start.eq(Mux(pixels_here, (unit + 1) << 2, 0))]
                 m.d.sync += until_window.eq((step >> _log2(lanes)) + _LAG)
-    with m.If(header_leaves & hold_last):  # a message that ends in its header (no pixels)
-        m.d.sync += [state.eq(_STAMP), unit.eq(0), phase.eq(0)]
+    # a message that ends in its header (no pixels): the walk starts over a cycle later, from a register
+    # (not from the decision that let the beat go), and picks no word meanwhile
+    m.d.sync += header_ended.eq(header_leaves & hold_last)
+    with m.If(header_ended):
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), phase.eq(0), at_data_len.eq(0)]
 
     # --- the pixels: a step per beat, through two rings of beats -----------------------------------------
     advance = Signal()

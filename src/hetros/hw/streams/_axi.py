@@ -9,6 +9,9 @@ edge; once TVALID is high, TVALID and TDATA hold until that happens.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 from amaranth import Cat, Module, Mux, Signal
 from amaranth.lib import fifo, wiring
 from amaranth.lib.wiring import In, Out
@@ -31,6 +34,54 @@ def axi_stream(data_width: int) -> wiring.Signature:
 
 def _payload(stream: wiring.PureInterface) -> list[Signal]:
     return [stream.tdata, stream.tkeep, stream.tlast]
+
+
+@dataclass(frozen=True)
+class SkidInput:
+    """The pipeline's side of a skid buffer: ``push`` a beat (``data``, ``keep``, ``last``) in a cycle
+    only while ``room`` (a register) is high."""
+
+    push: Signal
+    data: Signal
+    keep: Signal
+    last: Signal
+    room: Signal
+
+
+def skid_buffer(m: Module, sink: Any, data_width: int) -> SkidInput:
+    """Two beats in front of ``sink`` (an ``Out(axi_stream)`` port, seen from inside), so that the
+    sink's TREADY reaches no register of the pipeline behind it: a node ending in one meets its
+    clock on its own, whatever it is connected to."""
+    lanes = data_width // 8
+    out_valid, out_data, out_keep, out_last = Signal(), Signal(data_width), Signal(lanes), Signal()
+    extra_valid, extra_data, extra_keep, extra_last = Signal(), Signal(data_width), Signal(lanes), Signal()
+    given = SkidInput(Signal(name="push"), Signal(data_width, name="push_data"), Signal(lanes, name="push_keep"),
+                      Signal(name="push_last"), Signal(name="room"))
+    m.d.comb += [sink.tvalid.eq(out_valid), sink.tdata.eq(out_data), sink.tkeep.eq(out_keep),
+                 sink.tlast.eq(out_last), given.room.eq(~extra_valid)]
+    with m.If(~out_valid | sink.tready):
+        with m.If(extra_valid):
+            m.d.sync += [out_valid.eq(1), out_data.eq(extra_data), out_keep.eq(extra_keep), out_last.eq(extra_last),
+                         extra_valid.eq(0)]
+        with m.Else():
+            m.d.sync += [out_valid.eq(given.push), out_data.eq(given.data), out_keep.eq(given.keep),
+                         out_last.eq(given.last)]
+    with m.Elif(given.push):
+        m.d.sync += [extra_valid.eq(1), extra_data.eq(given.data), extra_keep.eq(given.keep),
+                     extra_last.eq(given.last)]
+    return given
+
+
+def register_slice(m: Module, source: Any, data_width: int) -> wiring.PureInterface:
+    """``source`` (an ``In(axi_stream)`` port, seen from inside) behind a skid buffer of two beats: the
+    stream the node reads instead, while ``source``'s TREADY is a register. A node whose input starts
+    with one never makes its publisher's timing depend on its own decisions (with a skid buffer at each
+    output too, every node-to-node path in a target starts and ends at a register)."""
+    inner = axi_stream(data_width).create(path=("slice",))
+    given = skid_buffer(m, inner, data_width)
+    m.d.comb += [given.push.eq(source.tvalid & given.room), given.data.eq(source.tdata), given.keep.eq(source.tkeep),
+                 given.last.eq(source.tlast), source.tready.eq(given.room)]
+    return inner
 
 
 class RoundRobinArbiter(wiring.Component):

@@ -52,14 +52,20 @@ def axi4_memory(data_width: int) -> wiring.Signature:
     })
 
 
-def _burst_beats(m: Module, address: Signal, left: Signal, per_beat: int) -> Signal:
-    """Beats of the next burst from ``address`` with ``left`` beats to go: at most BURST, never across 4 KiB."""
+def _burst_beats(m: Module, address: Signal, left: Signal, per_beat: int) -> tuple[Signal, Signal]:
+    """Beats of the next burst from ``address`` with ``left`` beats to go: at most BURST, never across 4 KiB.
+
+    The count is a register, a cycle behind ``address`` and ``left`` (so no 64-bit address adder feeds
+    it in the cycle it is used); ``settled`` says it is of their present values: a caller that changes
+    either clears it (``m.d.sync += settled.eq(0)``, after this call) and asks for no burst until it is
+    set again."""
     to_boundary = Signal(range(4096 // per_beat + 1))
     m.d.comb += to_boundary.eq((4096 - address[:12]) >> (per_beat.bit_length() - 1))
     beats = Signal(range(BURST + 1))
-    m.d.comb += beats.eq(Mux(left < BURST, Mux(left < to_boundary, left, to_boundary),
-                             Mux(to_boundary < BURST, to_boundary, BURST)))
-    return beats
+    settled = Signal()
+    m.d.sync += [beats.eq(Mux(left < BURST, Mux(left < to_boundary, left, to_boundary),
+                              Mux(to_boundary < BURST, to_boundary, BURST))), settled.eq(1)]
+    return beats, settled
 
 
 class MemorySobel(wiring.Component):
@@ -111,12 +117,12 @@ class MemorySobel(wiring.Component):
         read_left = Signal(40)  # beats not yet asked for
         read_address = Signal(64)
         reading = Signal()  # a burst asked for and not finished
-        delivered = Signal(40)
-        read_beats = _burst_beats(m, read_address, read_left, 8)
+        read_beats, read_settled = _burst_beats(m, read_address, read_left, 8)
+        pixels_left = Signal(40)  # beats not yet delivered
         m.d.comb += [mem.arsize.eq(3), mem.arburst.eq(1), mem.awsize.eq(3), mem.awburst.eq(1)]
         with m.If(kick):
             m.d.sync += [feeding.eq(1), header_beat.eq(0), read_left.eq(total_beats), read_address.eq(src),
-                         delivered.eq(0)]
+                         pixels_left.eq(total_beats), read_settled.eq(0)]
         with m.If(feeding == 1):
             with m.Switch(header_beat):
                 for index, value in enumerate(header):
@@ -127,18 +133,18 @@ class MemorySobel(wiring.Component):
                 m.d.sync += header_beat.eq(header_beat + 1)
                 with m.If(header_beat == len(header) - 1):
                     m.d.sync += feeding.eq(2)
-        with m.If((feeding == 2) & ~reading & (read_left != 0)):
+        with m.If((feeding == 2) & ~reading & (read_left != 0) & read_settled):
             m.d.comb += [mem.arvalid.eq(1), mem.araddr.eq(read_address), mem.arlen.eq(read_beats - 1)]
             with m.If(mem.arready):
                 m.d.sync += [reading.eq(1), read_left.eq(read_left - read_beats),
-                             read_address.eq(read_address + (read_beats << 3))]
-        last_pixels = delivered == total_beats - 1
+                             read_address.eq(read_address + (read_beats << 3)), read_settled.eq(0)]
+        last_pixels = pixels_left == 1
         with m.If(feeding == 2):
             m.d.comb += [pixels_in.tdata.eq(mem.rdata), pixels_in.tvalid.eq(mem.rvalid),
                          mem.rready.eq(pixels_in.tready), pixels_in.tlast.eq(last_pixels),
                          pixels_in.tkeep.eq(Mux(last_pixels, (Const(1, 9) << tail) - 1, 0xFF))]
             with m.If(mem.rvalid & mem.rready):
-                m.d.sync += delivered.eq(delivered + 1)
+                m.d.sync += pixels_left.eq(pixels_left - 1)
                 with m.If(mem.rlast):
                     m.d.sync += reading.eq(0)
                 with m.If(last_pixels):
@@ -152,20 +158,20 @@ class MemorySobel(wiring.Component):
         waiting_b = Signal()
         written_all = Signal()
         started = Signal()
-        write_beats = _burst_beats(m, write_address, write_left, 8)
+        write_beats, write_settled = _burst_beats(m, write_address, write_left, 8)
         with m.If(kick):
             m.d.sync += [started.eq(1), dropped.eq(0), write_left.eq((dst_len + 7) >> 3), write_address.eq(dst),
-                         written_all.eq(0)]
+                         written_all.eq(0), write_settled.eq(0)]
         with m.If(started & (dropped < len(header))):
             m.d.comb += pixels_out.tready.eq(1)
             with m.If(pixels_out.tvalid):
                 m.d.sync += dropped.eq(dropped + 1)
         with m.Elif(started & ~written_all):
-            with m.If((in_burst == 0) & ~waiting_b & (write_left != 0)):
+            with m.If((in_burst == 0) & ~waiting_b & (write_left != 0) & write_settled):
                 m.d.comb += [mem.awvalid.eq(1), mem.awaddr.eq(write_address), mem.awlen.eq(write_beats - 1)]
                 with m.If(mem.awready):
                     m.d.sync += [in_burst.eq(write_beats), write_left.eq(write_left - write_beats),
-                                 write_address.eq(write_address + (write_beats << 3))]
+                                 write_address.eq(write_address + (write_beats << 3)), write_settled.eq(0)]
             with m.If(in_burst != 0):
                 m.d.comb += [mem.wvalid.eq(pixels_out.tvalid), mem.wdata.eq(pixels_out.tdata),
                              mem.wstrb.eq(pixels_out.tkeep), mem.wlast.eq(in_burst == 1),

@@ -35,7 +35,17 @@ def _messages() -> dict[str, list[Any]]:
             "sensor_msgs/msg/Image": [camera, image()], "sensor_msgs/msg/LaserScan": [ranges],
             "geometry_msgs/msg/Point": [point(x=1.0), point(z=2.0)],
             "std_msgs/msg/Empty": [TYPES.get("std_msgs/msg/Empty")()],
-            "sensor_msgs/msg/Imu": [TYPES.get("sensor_msgs/msg/Imu")()]}
+            "sensor_msgs/msg/Imu": [TYPES.get("sensor_msgs/msg/Imu")()],
+            "sensor_msgs/msg/NavSatFix": [_fix("gps"), _fix("")]}
+
+
+def _fix(frame_id: str) -> Any:
+    """A NavSatFix: its only variable field (``frame_id``) comes first, 100 fixed bytes after it."""
+    fix = TYPES.get("sensor_msgs/msg/NavSatFix")(latitude=52.5, longitude=13.4, altitude=34.0,
+                                                 position_covariance=np.arange(9, dtype=np.float64))
+    fix.header.frame_id = frame_id
+    fix.status.status = 2
+    return fix
 
 
 @pytest.mark.parametrize("typename", sorted(_messages()))
@@ -95,3 +105,24 @@ def test_the_rtl_framer_and_deframer_match_the_reference(typename: str, data_wid
     read = simulate(NodeUnderTest(Ros1Deframer(program, data_width), ["frame"], ["cdr"], data_width),
                     [frames], idle=0.3, stall=0.3, seed=2, max_cycles=50_000)
     assert read.received[0] == bodies
+
+
+def test_a_large_image_streams_with_only_its_header_held() -> None:
+    """The framer holds the ROS 1 bytes before ``data`` (a header, a few dozen bytes), then streams: a
+    5,000-pixel image frames through a 64-byte store. A frame whose held part is longer than the store
+    is dropped (reported by the engine's ``malformed``), and the next one goes through."""
+    typename = "sensor_msgs/msg/Image"
+    program = ros1_program(TYPES, typename)
+    image = TYPES.get(typename)
+    pixels = np.random.default_rng(3).integers(0, 256, 5000, dtype=np.uint8)
+    large = image(height=50, width=100, encoding="mono8", step=100, data=pixels)
+    large.header.frame_id = "camera"
+    too_long = image(height=1, width=3, encoding="mono8", step=3, data=np.arange(3, dtype=np.uint8))
+    too_long.header.frame_id = "f" * 80
+    bodies = [_body(typename, m) for m in (large, too_long, large)]
+    framed = simulate(NodeUnderTest(Ros1Framer(program, 64, 64), ["cdr"], ["frame"], 64), [bodies[:1]],
+                      stall=0.2, seed=4, max_cycles=200_000)
+    assert framed.received[0] == [run_program(program, bodies[0], to_ros1=True)]
+    with pytest.raises(HardwareError, match="moved 2 of 3 messages"):  # the middle one never comes out
+        simulate(NodeUnderTest(Ros1Framer(program, 64, 64), ["cdr"], ["frame"], 64), [bodies], seed=4,
+                 max_cycles=60_000)

@@ -68,9 +68,10 @@ class TargetSpec(_Strict):
         "no compiler, thousands of cycles a second, for small designs)")
     host: str | None = Field(default=None, description="the machine it runs on, a name under hosts: (absent: the "
                              "first host, or this machine without hosts:)")
-    tcpros_frame_bytes: int = Field(default=4096, ge=16, le=1 << 26, description="fpga: the longest ROS 1 frame "
-                                    "its hardware TCPROS framer holds (a type of variable size is stored whole "
-                                    "before its length goes out); a longer message is refused loudly")
+    tcpros_frame_bytes: int = Field(default=4096, ge=16, le=1 << 26, description="fpga: the ROS 1 bytes its "
+                                    "hardware TCPROS framer holds for a type of variable size: those before the "
+                                    "type's last string or sequence (the rest streams); a message whose held part "
+                                    "is longer is refused loudly")
     board: Literal["zcu104", "pynq-z2", "ultra96"] | None = Field(
         default=None, description="fpga: the board; `hetros launch` then drives the target through the board "
         "gateway (PYNQ's Overlay, allocate and DMA channels; `pip install hetros[board]` on the board, the "

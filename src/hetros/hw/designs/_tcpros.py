@@ -12,8 +12,11 @@ does only the registration phase and moves the frames' bytes unchanged (``launch
 it to rosbags' ROS 1 serialization of the same message.
 
 The engines move a byte a cycle. A frame's length comes before its bytes: for a type whose ROS 1
-size is fixed the framer knows it at elaboration and streams; otherwise it stores the frame
-(``max_frame`` bytes of block RAM) and sends it once the message has ended.
+size is fixed the framer knows it at elaboration and streams; otherwise it is known once the
+length of the type's last string or sequence has been read (every field after it is of fixed
+size), so the framer holds only the ROS 1 bytes before that field (``max_frame`` bytes of block
+RAM at most: an ``Image``'s header, not its pixels), sends the length and them, and streams the
+rest.
 """
 
 from __future__ import annotations
@@ -71,6 +74,16 @@ class Ros1Program:
             return None
         return sum(op.size for op in self.ops if op.kind in ("copy", "ros1"))
 
+    @property
+    def length_known_at(self) -> tuple[int, int] | None:
+        """For a type of variable size, where its frame's length becomes known: the step of its last
+        string or sequence (once that step's length is read, every ROS 1 byte still to come is counted)
+        and the ROS 1 bytes of the fixed steps after it. None for a fixed size."""
+        variable = [index for index, op in enumerate(self.ops) if op.kind in ("string", "sequence")]
+        if not variable:
+            return None
+        return variable[-1], sum(op.size for op in self.ops[variable[-1] + 1:] if op.kind in ("copy", "ros1"))
+
     def describe(self) -> str:
         return "\n".join(f"{op.kind:<9} {op.size:>5}  {op.field}" for op in self.ops)
 
@@ -97,8 +110,9 @@ class _Walk:
         if size == 1:
             return
         if self.known is None:
+            # aligned to ``size`` at run time: the offset mod 8 is known again only after an 8-byte alignment
             self.add("align", size, field)
-            self.known = 0
+            self.known = 0 if size == 8 else None
             return
         pad = -self.known % size
         if pad:
@@ -277,6 +291,7 @@ class _Engine:
         ops = program.ops
         steps = len(ops)
         pc = Signal(range(steps + 1), init=steps)  # idle until ``start``
+        self.pc = pc
         kind = Signal(range(len(_KINDS)))
         size = Signal(range(max(8, *(op.size for op in ops)) + 1))
         with m.Switch(pc):
@@ -337,6 +352,14 @@ class _Engine:
 
         def copy() -> None:
             m.d.comb += [self.valid.eq(source.valid), self.byte.eq(source.byte), take.eq(self.ready)]
+
+        # a string's or sequence's length has been read and its ROS 1 length is about to go out: the ROS 1
+        # bytes of its characters or elements (``out_word`` counts them, elements of ``size`` bytes)
+        self.length_read = Signal()
+        self.variable_bytes = Signal(35)
+        m.d.comb += [self.length_read.eq(self.running & loaded & (code["string"] | code["sequence"]) & (phase == 1)
+                                         & (count == 4)),
+                     self.variable_bytes.eq(Mux(code["string"], out_word, out_word << shift))]
 
         with m.If(self.running):
             with m.If(~loaded):
@@ -446,14 +469,16 @@ class Ros1Framer(wiring.Component):
         source = bytes_in(m, self.cdr, self.data_width)
         sink = bytes_out(m, self.frame, self.data_width)
         fixed = self.program.fixed_ros1_size
+        known_at = self.program.length_known_at
         # idle -> (prefix while streaming a fixed size) -> program -> (prefix, then stored bytes)
-        state = Signal(2)  # 0 idle, 1 program, 2 length, 3 stored bytes
+        state = Signal(3)  # 0 idle, 1 program (held), 2 length, 3 held bytes, 4 dropping
         start = Signal()
         engine = _Engine(m, self.program, True, source, start)
         sent = Signal(range(max(self.max_frame, 4) + 1))
         m.d.comb += self.malformed.eq(engine.malformed)
-        if fixed is not None:
+        if known_at is None or fixed is not None:
             # the length is known: it leads, then the program's bytes stream through
+            fixed = fixed or 0
             prefix = Const(fixed, 32)
             with m.Switch(state):
                 with m.Case(0):
@@ -471,46 +496,62 @@ class Ros1Framer(wiring.Component):
                     with m.If(_one_byte_behind(m, engine, sink)):
                         m.d.sync += state.eq(0)
             return m
+        # a variable size: the ROS 1 bytes before the last string or sequence are held (``max_frame`` bytes
+        # of block RAM at most) until that field's length is read; then the frame's length goes out, the
+        # held bytes after it, and the rest streams
+        last_variable, tail_bytes = known_at
         store = Memory(shape=unsigned(8), depth=self.max_frame, init=[])
         m.submodules.store = store
         write = store.write_port()
         read = store.read_port(domain="sync", transparent_for=(write,))
-        stored = Signal(32)  # bytes of the frame in the store: its length once the program has ended
+        stored = Signal(range(self.max_frame + 1))  # ROS 1 bytes held
+        length = Signal(32)
         overflow = Signal()
         advance = Signal()
         m.d.comb += [write.addr.eq(stored), write.data.eq(engine.byte)]
         m.d.comb += read.addr.eq(Mux(state == 3, sent + advance, 0))
-        with m.Switch(state):
-            with m.Case(0):
-                with m.If(source.valid):
-                    m.d.comb += start.eq(1)
-                    m.d.sync += [state.eq(1), stored.eq(0), overflow.eq(0)]
-            with m.Case(1):
-                m.d.comb += engine.ready.eq(1)
-                with m.If(engine.valid):
-                    with m.If(stored < self.max_frame):
-                        m.d.comb += write.en.eq(1)
-                        m.d.sync += stored.eq(stored + 1)
-                    with m.Else():
-                        m.d.sync += overflow.eq(1)
-                with m.If(~engine.running):  # (the engine shows bytes only while it runs)
-                    m.d.sync += [state.eq(2), sent.eq(0)]
-                    with m.If(overflow):
-                        m.d.comb += self.malformed.eq(1)  # too long for the store: dropped, reported
+        length_known = engine.length_read & (engine.pc == last_variable)
+        streaming = Signal()  # the held bytes are out: the engine's go to the frame
+        with m.If(streaming):
+            with m.If(_one_byte_behind(m, engine, sink)):
+                m.d.sync += streaming.eq(0)
+        with m.Else():
+            with m.Switch(state):
+                with m.Case(0):
+                    with m.If(source.valid):
+                        m.d.comb += start.eq(1)
+                        m.d.sync += [state.eq(1), stored.eq(0), overflow.eq(0)]
+                with m.Case(1):
+                    m.d.comb += engine.ready.eq(~length_known)
+                    with m.If(engine.valid & ~length_known):
+                        with m.If(stored < self.max_frame):
+                            m.d.comb += write.en.eq(1)
+                            m.d.sync += stored.eq(stored + 1)
+                        with m.Else():
+                            m.d.sync += overflow.eq(1)
+                    with m.If(length_known):
+                        m.d.sync += [length.eq(stored + 4 + engine.variable_bytes + tail_bytes), state.eq(2),
+                                     sent.eq(0)]
+                        with m.If(overflow):  # too long to hold: dropped (its bytes run out), reported
+                            m.d.comb += self.malformed.eq(1)
+                            m.d.sync += state.eq(4)
+                    with m.If(~engine.running):  # the message ended early (the engine reported it): dropped
                         m.d.sync += state.eq(0)
-            with m.Case(2):
-                m.d.comb += [sink.valid.eq(1), sink.byte.eq(stored.word_select(sent[:2], 8)),
-                             sink.last.eq((sent == 3) & (stored == 0))]
-                with m.If(sink.ready):
-                    m.d.sync += sent.eq(sent + 1)
-                    with m.If(sent == 3):
-                        m.d.sync += [state.eq(Mux(stored == 0, 0, 3)), sent.eq(0)]
-            with m.Case(3):
-                m.d.comb += [sink.valid.eq(1), sink.byte.eq(read.data), sink.last.eq(sent == stored - 1),
-                             advance.eq(sink.ready)]
-                with m.If(sink.ready):
-                    m.d.sync += sent.eq(sent + 1)
-                    with m.If(sent == stored - 1):
+                with m.Case(2):
+                    m.d.comb += [sink.valid.eq(1), sink.byte.eq(length.word_select(sent[:2], 8))]
+                    with m.If(sink.ready):
+                        m.d.sync += sent.eq(sent + 1)
+                        with m.If(sent == 3):
+                            m.d.sync += [sent.eq(0), state.eq(Mux(stored == 0, 0, 3)), streaming.eq(stored == 0)]
+                with m.Case(3):
+                    m.d.comb += [sink.valid.eq(1), sink.byte.eq(read.data), advance.eq(sink.ready)]
+                    with m.If(sink.ready):
+                        m.d.sync += sent.eq(sent + 1)
+                        with m.If(sent == stored - 1):
+                            m.d.sync += [state.eq(0), streaming.eq(1)]
+                with m.Case(4):  # dropping
+                    m.d.comb += engine.ready.eq(1)
+                    with m.If(~engine.running):
                         m.d.sync += state.eq(0)
         return m
 

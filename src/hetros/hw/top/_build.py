@@ -149,7 +149,8 @@ class FpgaTop(Elaboratable):
                 if TCPROS in nodes and topic.name not in self.framing:
                     raise HardwareError(f"{topic.name} is framed for ROS 1 in hardware, but no program was given")
                 if TCPROS in nodes and monitor:
-                    longer = f" (or was longer than {max_frame} bytes: raise the target's tcpros_frame_bytes)"
+                    longer = (f" (or held more than {max_frame} bytes before its last string or sequence: raise the "
+                              "target's tcpros_frame_bytes)")
                     self.monitored.append((
                         f"hardware TCPROS of {topic.name} ({'from' if role == 'pub' else 'to'} ROS 1)",
                         "a message did not fit its type" + (longer if role == "sub" else "")))

@@ -63,6 +63,20 @@ def test_a_design_that_misses_its_clock_says_by_how_much_and_where() -> None:
     assert Bitstream("fpga", "x", Path("x.bit"), 100.0, 100.0, 1, 1, 1.0).meets_clock
 
 
+def test_a_router_that_runs_out_of_time_is_named_and_the_table_says_which_routed(tmp_path: Path) -> None:
+    """nextpnr's first router may not finish a congested design; the flow stops it at its time limit (a
+    real process here) and routes with router2, and the table says so."""
+    from hetros import HardwareError
+    from hetros.hw.flow._bitstream import _run, format_bitstreams
+
+    with pytest.raises(HardwareError, match=r"sleep ran past 0.2 s"):
+        _run(["sleep", "5"], tmp_path, "sleep", timeout=0.2)
+    (tmp_path / "fpga.bit").write_bytes(b"x" * 2048)
+    row = Bitstream("fpga", "LFE5U-25KF-CABGA381", tmp_path / "fpga.bit", 103.0, 100.0, 900, 800, 3.0,
+                    router="router2")
+    assert "| 103.0 MHz, router2 | 100 MHz | fpga.bit (2 KiB) |" in format_bitstreams([row])
+
+
 def test_figures_use_the_achieved_clock_where_it_is_below_clock_mhz(tmp_path: Path,
                                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))

@@ -482,8 +482,8 @@ class Compensation(ImageFilter3x3):
                 m.d.sync += [scanning.eq(0), building.eq(1)]
         # the table: value v stretches to min((v - low) * 255 // span, 255), built from v = 0 up
         value, quotient, remainder = Signal(9), Signal(9), Signal(18)
-        span = Signal(8)
-        m.d.comb += span.eq(Mux(high > low, high - low, 1))
+        span = Signal(8)  # a register: the percentiles are found cycles before the table is built
+        m.d.sync += span.eq(Mux(high > low, high - low, 1))
         for table in self._tables:
             write = table.write_port()
             m.d.comb += [write.addr.eq(value[:8]), write.data.eq(quotient[:8]),

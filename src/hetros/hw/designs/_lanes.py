@@ -11,10 +11,11 @@
   is a uint32 at a 4-aligned offset of the CDR body, and the strings are skipped a word at a time,
   so a beat of header takes ``lanes / 4`` cycles: some 15 cycles a message, against one cycle per
   beat of pixels.
-- **One stall signal, registered ready.** Every pipeline register moves on ``advance``; the output
-  is a two-entry skid buffer whose ready towards the pipeline is a register, so a downstream
-  node's TREADY never reaches this node's registers combinationally, and the input is a register
-  slice, so this node's TREADY is a register too (chains meet their clock one node at a time).
+- **No stall inside, registered ready at both ends.** The pipeline's registers move every cycle
+  (no enable fans out to thousands of them): a beat is let in only while the output FIFO has room
+  for it and every beat already on its way (credits counted from the step that makes a beat to
+  the FIFO giving it away), so a downstream node's TREADY reaches only the FIFO; the input is a
+  register slice, so this node's TREADY is a register (chains meet their clock one node at a time).
 """
 
 from __future__ import annotations
@@ -24,10 +25,11 @@ from typing import Any, Protocol
 
 from amaranth import Array, Cat, Const, Module, Mux, Signal, signed, unsigned
 from amaranth.hdl import Value
+from amaranth.lib import fifo
 from amaranth.lib.memory import Memory
 
 from ..._errors import HardwareError
-from ..streams._axi import register_slice, skid_buffer
+from ..streams._axi import register_slice
 
 # steps between a beat coming in and the window whose bottom row it completes going out
 _LAG = 3
@@ -36,17 +38,18 @@ _STAMP, _STAMP_NS, _FRAME_LEN, _FRAME, _HEIGHT, _WIDTH, _ENC_LEN, _ENC, _STEP, _
 
 
 class Pipe:
-    """The pipeline's registers: :meth:`reg` is a value one stage later (it moves when ``advance``)."""
+    """The pipeline's registers: :meth:`reg` is a value one stage later. They move every cycle (the
+    datapath takes a beat in only when there is room for it at the end), so ``advance`` is always high;
+    a kernel that drives a block RAM's read enable from it stays right if that changes."""
 
-    def __init__(self, m: Module, advance: Value) -> None:
-        self.m, self.advance = m, advance
+    def __init__(self, m: Module) -> None:
+        self.m, self.advance = m, Const(1, 1)
         self._count = 0
 
     def reg(self, value: Value, name: str = "stage") -> Signal:
         self._count += 1
         held = Signal(value.shape(), name=f"{name}_{self._count}")
-        with self.m.If(self.advance):
-            self.m.d.sync += held.eq(value)
+        self.m.d.sync += held.eq(value)
         return held
 
     def delay(self, value: Value, stages: int, name: str = "delayed") -> Value:
@@ -90,9 +93,21 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     with m.Elif(release):
         m.d.sync += hold_full.eq(0)
 
-    # output: a skid buffer of two beats; the pipeline sees ``room``, a register
-    skid = skid_buffer(m, sink, data_width)
-    room, push, push_data, push_keep, push_last = skid.room, skid.push, skid.data, skid.keep, skid.last
+    # output: a FIFO deep enough for every beat the pipeline may hold; a beat is counted (``outstanding``)
+    # from the step that makes it until the FIFO gives it away, and a step is taken only while one more
+    # fits, so the pipeline never stalls: its registers have no enable, and no stall signal fans out to
+    # thousands of them (the lane-following target's critical path was that net)
+    out_depth = node.kernel_stages + node.post_stages + 4
+    m.submodules.out_fifo = out_fifo = fifo.SyncFIFOBuffered(width=data_width + lanes + 1, depth=out_depth)
+    push, push_data, push_keep, push_last = Signal(), Signal(data_width), Signal(lanes), Signal()
+    m.d.comb += [out_fifo.w_en.eq(push), out_fifo.w_data.eq(Cat(push_data, push_keep, push_last)),
+                 sink.tvalid.eq(out_fifo.r_rdy), Cat(sink.tdata, sink.tkeep, sink.tlast).eq(out_fifo.r_data),
+                 out_fifo.r_en.eq(sink.tready)]
+    outstanding = Signal(range(out_depth + 2))
+    reserved = Signal()
+    m.d.sync += outstanding.eq(outstanding + reserved - (out_fifo.r_rdy & sink.tready))
+    room = Signal()
+    m.d.comb += room.eq(outstanding < out_depth)
 
     # --- the header walk ---------------------------------------------------------------------------------
     bits = (node.width * channels + 2 * lanes).bit_length() + 1  # a line's bytes and then some
@@ -114,7 +129,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     with m.If(picking):
         picked = Array(hold.word_select(i, 32) for i in range(words))[unit]
         m.d.sync += [word.eq(picked), word_zero.eq(picked == 0), phase.eq(1)]
-    last_unit = unit == words - 1
+    last_unit = Signal(init=words == 1)  # unit is the beat's last word, as a register
     pixels_here = at_data_len & ~last_unit & ~word_zero  # the pixels begin inside this beat
     beat_read = last_unit | pixels_here
     header_leaves = Signal()
@@ -124,7 +139,8 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     with m.If(walking):
         m.d.sync += phase.eq(0)
     with m.If(walking):
-        m.d.sync += unit.eq(Mux(beat_read, 0, unit + 1))
+        m.d.sync += [unit.eq(Mux(beat_read, 0, unit + 1)),
+                     last_unit.eq(Mux(beat_read, words == 1, unit + 1 == words - 1))]
         with m.Switch(state):
             with m.Case(_STAMP):
                 m.d.sync += state.eq(_STAMP_NS)
@@ -153,11 +169,10 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # (not from the decision that let the beat go), and picks no word meanwhile
     m.d.sync += header_ended.eq(header_leaves & hold_last)
     with m.If(header_ended):
-        m.d.sync += [state.eq(_STAMP), unit.eq(0), phase.eq(0), at_data_len.eq(0)]
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), last_unit.eq(words == 1), phase.eq(0), at_data_len.eq(0)]
 
     # --- the pixels: a step per beat, through two rings of beats -----------------------------------------
-    advance = Signal()
-    pipe = Pipe(m, advance)
+    pipe = Pipe(m)
     shift = _log2(lanes)
     lines = Signal(bits)  # beats a line (the node refuses images whose step is not whole beats)
     m.d.comb += lines.eq(step >> shift)
@@ -188,7 +203,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     window_fresh = Signal()  # the registers hold a window the pipeline has not taken yet
     first_window = ~windows & (until_window == 0)
     later_window = windows
-    m.d.comb += stepping.eq(in_pixels & (flushing | hold_full & ~owed_last) & (~window_fresh | advance))
+    m.d.comb += stepping.eq(in_pixels & (flushing | hold_full & ~owed_last) & room)
     with m.If(stepping):
         m.d.sync += [a[0].eq(incoming), *(a[k + 1].eq(a[k]) for k in range(4)),
                      b[1].eq(reads[0].data), *(b[k + 1].eq(b[k]) for k in range(1, 4)),
@@ -209,7 +224,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
             m.d.sync += flush_left.eq(flush_left - 1)
             with m.If(flush_left == 1):
                 m.d.sync += flushing.eq(0)
-    with m.Elif(advance):
+    with m.Else():
         m.d.sync += window_fresh.eq(0)
     m.d.comb += release.eq(header_leaves | (stepping & ~flushing))
     # the window of the middle beat b[3]: rows c (top), b, a (bottom); beats [4] before, [3], [2] after (c one
@@ -271,7 +286,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     for _ in range(stages):
         valids.append(pipe.reg(valids[-1], "valid"))
     shaped = [Mux(masks[i][0], kernels[i], 0)[:8] for i in range(lanes)]
-    node.observe_lanes(m, shaped, [masks[i][1] for i in range(lanes)], advance & valids[-1], data_len)
+    node.observe_lanes(m, shaped, [masks[i][1] for i in range(lanes)], valids[-1], data_len)
     posted = node.post_lanes(m, pipe, shaped)
     after = node.post_stages
     masks = [pipe.delay(mask, after, f"postmask{i}") for i, mask in enumerate(masks)]
@@ -280,17 +295,18 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     for _ in range(after):
         valids.append(pipe.reg(valids[-1], "postvalid"))
     out_bytes = [Mux(masks[i][2], raw.word_select(i, 8), Mux(masks[i][1], posted[i], 0)) for i in range(lanes)]
-    m.d.comb += advance.eq(~valids[-1] | room)
-    ended = Signal()
+    m.d.comb += reserved.eq(header_leaves | (stepping & (first_window | later_window)))
+    ended = Signal()  # the frame's last beat went out last cycle: the walk starts over (from a register)
     with m.If(header_leaves):
         m.d.comb += [push.eq(1), push_data.eq(hold), push_keep.eq(hold_keep), push_last.eq(hold_last)]
-    with m.Elif(valids[-1] & room):
+    with m.Elif(valids[-1]):
         m.d.comb += [push.eq(1), push_data.eq(Cat(*out_bytes)),
                      push_keep.eq(Mux(last_flag, last_keep, Const((1 << lanes) - 1, lanes))),
-                     push_last.eq(last_flag), ended.eq(last_flag)]
+                     push_last.eq(last_flag)]
+    m.d.sync += ended.eq(~header_leaves & valids[-1] & last_flag)
     with m.If(ended):
-        m.d.sync += [state.eq(_STAMP), unit.eq(0), windows.eq(0), real_beats.eq(0), owed_last.eq(0),
-                     pointer.eq(0), in_pixels.eq(0)]
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), last_unit.eq(words == 1), windows.eq(0), real_beats.eq(0),
+                     owed_last.eq(0), pointer.eq(0), in_pixels.eq(0)]
     waiting = Signal()
     m.d.comb += waiting.eq(node.between_frames_lanes(m, ended))
     m.d.comb += busy.eq(waiting)

@@ -29,12 +29,13 @@ from .designs._image import Compensation, GaussianBlur, ImageFilter3x3, Sobel
 from .designs._memory import MemorySobel, axi4_memory
 from .designs._sort import Sorter
 from .designs._verilog_node import VerilogNode, is_verilog, make_verilog_node
+from .designs._walker import FieldWalker, label_bytes
 from .streams._axi import axi_stream
 from .streams._ports import port_part, service_ports
 
-__all__ = ["AddTwoInts", "Compensation", "Echo", "FixedServer", "GaussianBlur", "ImageFilter3x3", "MemorySobel",
-           "NodeUnderTest", "Sobel", "Sorter", "VerilogNode", "axi4_memory", "axi_stream", "make_hardware_node",
-           "port_problems"]
+__all__ = ["AddTwoInts", "Compensation", "Echo", "FieldWalker", "FixedServer", "GaussianBlur", "ImageFilter3x3",
+           "MemorySobel", "NodeUnderTest", "Sobel", "Sorter", "VerilogNode", "axi4_memory", "axi_stream",
+           "label_bytes", "make_hardware_node", "port_problems"]
 
 
 def make_hardware_node(hw: str, root: str, data_width: int, parameters: dict[str, Any]) -> wiring.Component:

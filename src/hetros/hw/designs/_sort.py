@@ -398,13 +398,15 @@ class _Run:
                              self.segment_end.eq(Mux(self.next_stop < kept, self.next_stop, kept))]
             with m.Else():
                 m.d.sync += self.fetch.eq(self.fetch + 1)
-        stay = self.buffered - takes
+        # both next buffers are made from registers while the comparison runs; ``takes`` (its outcome) only
+        # chooses between them, one multiplexer before each flip-flop
         landing = self.flight[-1]
         for index in range(_PREFETCH):
             following_entry = self.entries[index + 1] if index + 1 < _PREFETCH else self.entries[index]
-            stays = Mux(takes, following_entry, self.entries[index])
-            m.d.sync += self.entries[index].eq(Mux(landing & (stay == index), self.arrived, stays))
-        m.d.sync += self.buffered.eq(stay + landing)
+            if_taken = Mux(landing & (self.buffered == index + 1), self.arrived, following_entry)
+            if_kept = Mux(landing & (self.buffered == index), self.arrived, self.entries[index])
+            m.d.sync += self.entries[index].eq(Mux(takes, if_taken, if_kept))
+        m.d.sync += self.buffered.eq(Mux(takes, self.buffered - 1 + landing, self.buffered + landing))
         with m.If(takes):
             m.d.sync += self.take.eq(self.take - 1)
 

@@ -503,13 +503,19 @@ class Ros1Framer(wiring.Component):
         store = Memory(shape=unsigned(8), depth=self.max_frame, init=[])
         m.submodules.store = store
         write = store.write_port()
-        read = store.read_port(domain="sync", transparent_for=(write,))
+        read = store.read_port(domain="sync")
         stored = Signal(range(self.max_frame + 1))  # ROS 1 bytes held
         length = Signal(32)
         overflow = Signal()
-        advance = Signal()
-        m.d.comb += [write.addr.eq(stored), write.data.eq(engine.byte)]
-        m.d.comb += read.addr.eq(Mux(state == 3, sent + advance, 0))
+        # the held bytes go out through two stages that move together: the read port (which holds its byte
+        # while not enabled) and a register, so neither the block RAM's output nor the sink's ready decides
+        # an address in the cycle it arrives
+        fetch = Signal.like(stored)  # the next byte to read
+        fetched, shown = Signal(), Signal()  # the read port holds a byte; ``shown_byte`` holds one
+        shown_byte = Signal(8)
+        replaying = Signal()
+        m.d.comb += [write.addr.eq(stored), write.data.eq(engine.byte), read.addr.eq(fetch),
+                     read.en.eq(~replaying | ~shown | sink.ready)]
         length_known = engine.length_read & (engine.pc == last_variable)
         streaming = Signal()  # the held bytes are out: the engine's go to the frame
         with m.If(streaming):
@@ -542,10 +548,15 @@ class Ros1Framer(wiring.Component):
                     with m.If(sink.ready):
                         m.d.sync += sent.eq(sent + 1)
                         with m.If(sent == 3):
-                            m.d.sync += [sent.eq(0), state.eq(Mux(stored == 0, 0, 3)), streaming.eq(stored == 0)]
+                            m.d.sync += [sent.eq(0), state.eq(Mux(stored == 0, 0, 3)), streaming.eq(stored == 0),
+                                         fetch.eq(0), fetched.eq(0), shown.eq(0)]
                 with m.Case(3):
-                    m.d.comb += [sink.valid.eq(1), sink.byte.eq(read.data), advance.eq(sink.ready)]
-                    with m.If(sink.ready):
+                    m.d.comb += [replaying.eq(1), sink.valid.eq(shown), sink.byte.eq(shown_byte)]
+                    with m.If(~shown | sink.ready):
+                        m.d.sync += [shown.eq(fetched), shown_byte.eq(read.data), fetched.eq(fetch < stored)]
+                        with m.If(fetch < stored):
+                            m.d.sync += fetch.eq(fetch + 1)
+                    with m.If(shown & sink.ready):
                         m.d.sync += sent.eq(sent + 1)
                         with m.If(sent == stored - 1):
                             m.d.sync += [state.eq(0), streaming.eq(1)]

@@ -52,26 +52,50 @@ def bytes_in(m: Module, source: Any, data_width: int) -> ByteSource:
 
 
 def bytes_out(m: Module, sink: Any, data_width: int) -> ByteSink:
-    """Bytes packed into beats on ``sink`` (an ``Out(axi_stream)`` port, seen from inside)."""
+    """Bytes packed into beats on ``sink`` (an ``Out(axi_stream)`` port, seen from inside).
+
+    Two bytes wait in front of the packing, so ``ready`` is a register: neither the sink's TREADY nor
+    the packing reaches the node's decisions in the cycle it changes (a byte-serial node's walk is
+    long enough as it is)."""
     per_beat = data_width // 8
+    valid, byte, last = Signal(), Signal(8), Signal()
+    ready = Signal()
+    waiting = [(Signal(name=f"waiting{i}"), Signal(8, name=f"waiting_byte{i}"), Signal(name=f"waiting_last{i}"))
+               for i in range(2)]
+    (first_full, first_byte, first_last), (second_full, second_byte, second_last) = waiting
+    m.d.comb += ready.eq(~second_full)
+
     packing = Signal(data_width)
     packed = Signal(range(per_beat))
-    valid, byte, last = Signal(), Signal(8), Signal()
     beat_data = Signal(data_width)
     beat_keep = Signal(per_beat)
     beat_last, beat_valid = Signal(), Signal()
     m.d.comb += [sink.tdata.eq(beat_data), sink.tkeep.eq(beat_keep), sink.tlast.eq(beat_last),
                  sink.tvalid.eq(beat_valid)]
     can_move = ~beat_valid | sink.tready
-    completes = (packed == per_beat - 1) | last
-    ready = ~completes | can_move
+    completes = (packed == per_beat - 1) | first_last
+    packs = first_full & (~completes | can_move)
     with m.If(beat_valid & sink.tready):
         m.d.sync += beat_valid.eq(0)
-    with m.If(valid & ready):
-        merged = packing | (byte << (packed * 8))
+    with m.If(packs):
+        merged = packing | (first_byte << (packed * 8))
         with m.If(completes):
             m.d.sync += [beat_data.eq(merged), beat_keep.eq((Const(2, per_beat + 1) << packed) - 1),
-                         beat_last.eq(last), beat_valid.eq(1), packing.eq(0), packed.eq(0)]
+                         beat_last.eq(first_last), beat_valid.eq(1), packing.eq(0), packed.eq(0)]
         with m.Else():
             m.d.sync += [packing.eq(merged), packed.eq(packed + 1)]
+
+    pushes = valid & ready
+    with m.If(packs):
+        with m.If(second_full):
+            m.d.sync += [first_byte.eq(second_byte), first_last.eq(second_last), second_full.eq(0)]
+        with m.Elif(pushes):
+            m.d.sync += [first_byte.eq(byte), first_last.eq(last)]
+        with m.Else():
+            m.d.sync += first_full.eq(0)
+    with m.Elif(pushes):
+        with m.If(first_full):
+            m.d.sync += [second_full.eq(1), second_byte.eq(byte), second_last.eq(last)]
+        with m.Else():
+            m.d.sync += [first_full.eq(1), first_byte.eq(byte), first_last.eq(last)]
     return ByteSink(valid, byte, last, ready)

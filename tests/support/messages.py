@@ -67,3 +67,11 @@ def _value(types: TypeRegistry, desc: Any, rnd: random.Random, depth: int) -> An
     if sub[0] == Nodetype.BASE and sub[1][0] != "string":
         return _array(sub[1][0], count, rnd)
     return [_value(types, sub, rnd, depth + 1) for _ in range(count)]
+
+
+def cdr_body(types: TypeRegistry, typename: str, message: Any) -> bytes:
+    """``message``'s CDR body, as a hardware stream carries it."""
+    codec = types.codec(typename)
+    buffer = bytearray(codec.size(message))
+    codec.encode(message, memoryview(buffer))
+    return bytes(buffer)

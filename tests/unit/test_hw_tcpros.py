@@ -13,15 +13,13 @@ from hetros.hw.nodes import NodeUnderTest
 from hetros.hw.sim._sim import simulate
 from hetros.msg import registry
 from hetros.transport.tcpros import Ros1Type
+from tests.support.messages import cdr_body
 
 TYPES = registry()
 
 
 def _body(typename: str, message: Any) -> bytes:
-    codec = TYPES.codec(typename)
-    buffer = bytearray(codec.size(message))
-    codec.encode(message, memoryview(buffer))
-    return bytes(buffer)
+    return cdr_body(TYPES, typename, message)
 
 
 def _messages() -> dict[str, list[Any]]:

@@ -19,15 +19,13 @@ from hetros import HardwareError
 from hetros.hw.nodes import FieldWalker, NodeUnderTest, axi_stream, label_bytes
 from hetros.hw.sim._sim import simulate
 from hetros.msg import registry
+from tests.support.messages import cdr_body
 
 TYPES = registry()
 
 
 def _body(typename: str, message: Any) -> bytes:
-    codec = TYPES.codec(typename)
-    buffer = bytearray(codec.size(message))
-    codec.encode(message, memoryview(buffer))
-    return bytes(buffer)
+    return cdr_body(TYPES, typename, message)
 
 
 def _walk(typename: str) -> Any:

@@ -34,6 +34,7 @@ from ..._errors import HardwareError
 from ...msg import TypeRegistry, ros1_store
 from ..streams._axi import axi_stream
 from ..streams._bytes import ByteSource, bytes_in, bytes_out
+from ._walker import PRIMITIVE_SIZES, CdrOffset
 
 # what one step of a program does with the CDR side (C) and the ROS 1 side (R)
 OpKind = Literal[
@@ -46,8 +47,6 @@ OpKind = Literal[
     "sequence",  # a uint32 count, then count elements of n bytes (C aligns them to n if count > 0)
 ]
 _KINDS: tuple[OpKind, ...] = ("pad", "align", "copy", "ros1", "cdr", "string", "sequence")
-_SIZES = {"bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4,
-          "uint32": 4, "int64": 8, "uint64": 8, "float32": 4, "float64": 8}
 # a program longer than this (a large fixed array of messages, unrolled) is refused
 MAX_STEPS = 1024
 _PLACEHOLDER = "structure_needs_at_least_one_member"
@@ -89,12 +88,12 @@ class Ros1Program:
 
 
 class _Walk:
-    """Generation state: the CDR position modulo 8 while it is known."""
+    """Generation state: the steps so far and where the CDR side is."""
 
     def __init__(self, typename: str) -> None:
         self.typename = typename
         self.ops: list[Op] = []
-        self.known: int | None = 0  # CDR offset mod 8, None after a string or sequence
+        self.offset = CdrOffset()
 
     def add(self, kind: OpKind, size: int, field: str) -> None:
         if len(self.ops) >= MAX_STEPS:
@@ -107,21 +106,8 @@ class _Walk:
             self.ops.append(Op(kind, size, field))
 
     def align(self, size: int, field: str) -> None:
-        if size == 1:
-            return
-        if self.known is None:
-            # aligned to ``size`` at run time: the offset mod 8 is known again only after an 8-byte alignment
-            self.add("align", size, field)
-            self.known = 0 if size == 8 else None
-            return
-        pad = -self.known % size
-        if pad:
-            self.add("pad", pad, field)
-        self.known = (self.known + pad) % 8
-
-    def advance(self, size: int) -> None:
-        if self.known is not None:
-            self.known = (self.known + size) % 8
+        if (step := self.offset.align(size)) is not None:
+            self.add(step[0], step[1], field)
 
 
 def ros1_program(types: TypeRegistry, typename: str) -> Ros1Program:
@@ -153,7 +139,7 @@ def _message(types: TypeRegistry, store: Any, typename: str, where: str, walk: _
                                                         strict=True)}
     if any(name == _PLACEHOLDER for name, _ in ros2):
         walk.add("cdr", 1, f"{where}.{_PLACEHOLDER}")
-        walk.advance(1)
+        walk.offset.advance(1)
     for name, desc in ros1.items():
         path = f"{where}.{name}"
         if name in ros2_by_ros1:
@@ -167,7 +153,7 @@ def _ros1_only_size(store: Any, desc: Any, path: str) -> int:
     4-byte zero count)."""
     kind, arg = desc
     if kind == Nodetype.BASE:
-        return 4 if arg[0] == "string" else _SIZES[arg[0]]
+        return 4 if arg[0] == "string" else PRIMITIVE_SIZES[arg[0]]
     if kind == Nodetype.NAME:
         return sum(_ros1_only_size(store, sub, f"{path}.{n}") for n, sub in store.fielddefs[arg][1])
     if kind == Nodetype.SEQUENCE:
@@ -185,24 +171,24 @@ def _field(types: TypeRegistry, store: Any, desc: Any, path: str, walk: _Walk) -
         if arg[0] == "string":
             walk.align(4, path)
             walk.add("string", 0, path)
-            walk.known = None
+            walk.offset.lose()
             return
-        size = _SIZES[arg[0]]
+        size = PRIMITIVE_SIZES[arg[0]]
         walk.align(size, path)
         walk.add("copy", size, path)
-        walk.advance(size)
+        walk.offset.advance(size)
         return
     element, count = arg
     if element[0] == Nodetype.BASE and element[1][0] != "string":
-        size = _SIZES[element[1][0]]
+        size = PRIMITIVE_SIZES[element[1][0]]
         if kind == Nodetype.ARRAY:
             walk.align(size, path)
             walk.add("copy", size * count, path)
-            walk.advance(size * count)
+            walk.offset.advance(size * count)
             return
         walk.align(4, path)
         walk.add("sequence", size, path)
-        walk.known = None
+        walk.offset.lose()
         return
     if kind == Nodetype.ARRAY:
         for index in range(count):

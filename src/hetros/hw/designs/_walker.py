@@ -31,8 +31,8 @@ from ..streams._bytes import bytes_in, bytes_out
 
 StepKind = Literal["pad", "align", "bytes", "string", "sequence"]
 _KINDS: tuple[StepKind, ...] = ("pad", "align", "bytes", "string", "sequence")
-_SIZES = {"bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4,
-          "uint32": 4, "int64": 8, "uint64": 8, "float32": 4, "float64": 8}
+PRIMITIVE_SIZES = {"bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4,
+                   "uint32": 4, "int64": 8, "uint64": 8, "float32": 4, "float64": 8}
 MAX_STEPS = 1024
 PADDING = "(padding)"  # the field of alignment bytes and of bytes past the message's last field
 
@@ -62,12 +62,40 @@ class Walk:
         return self.fields.index(name)
 
 
+class CdrOffset:
+    """Where a walk over a type is in its CDR body, modulo 8, while that is known at generation: after a
+    string or a sequence it is known only at run time, and again after an 8-byte alignment."""
+
+    def __init__(self) -> None:
+        self.known: int | None = 0
+
+    def align(self, size: int) -> tuple[Literal["pad", "align"], int] | None:
+        """What aligning to ``size`` takes: ``("pad", n)`` bytes known now, ``("align", size)`` at run
+        time, or nothing."""
+        if size == 1:
+            return None
+        if self.known is None:
+            self.known = 0 if size == 8 else None
+            return "align", size
+        pad = -self.known % size
+        self.known = (self.known + pad) % 8
+        return ("pad", pad) if pad else None
+
+    def advance(self, size: int) -> None:
+        if self.known is not None:
+            self.known = (self.known + size) % 8
+
+    def lose(self) -> None:
+        """A string or a sequence went by: the offset is known only at run time."""
+        self.known = None
+
+
 class _Builder:
     def __init__(self, typename: str) -> None:
         self.typename = typename
         self.fields: list[str] = [PADDING]
         self.steps: list[Step] = []
-        self.known: int | None = 0  # the CDR offset mod 8 while it is known
+        self.offset = CdrOffset()
 
     def add(self, kind: StepKind, size: int, field: str = PADDING) -> None:
         if len(self.steps) >= MAX_STEPS:
@@ -78,20 +106,8 @@ class _Builder:
         self.steps.append(Step(kind, size, self.fields.index(field)))
 
     def align(self, size: int) -> None:
-        if size == 1:
-            return
-        if self.known is None:
-            self.add("align", size)
-            self.known = 0 if size == 8 else None  # known again only after an 8-byte alignment
-            return
-        pad = -self.known % size
-        if pad:
-            self.add("pad", pad)
-        self.known = (self.known + pad) % 8
-
-    def advance(self, size: int) -> None:
-        if self.known is not None:
-            self.known = (self.known + size) % 8
+        if (step := self.offset.align(size)) is not None:
+            self.add(*step)
 
 
 def walk_steps(types: TypeRegistry, typename: str) -> Walk:
@@ -116,23 +132,23 @@ def _field(types: TypeRegistry, desc: Any, path: str, builder: _Builder) -> None
         if arg[0] == "string":
             builder.align(4)
             builder.add("string", 0, path)
-            builder.known = None
+            builder.offset.lose()
             return
-        size = _SIZES[arg[0]]
+        size = PRIMITIVE_SIZES[arg[0]]
         builder.align(size)
         builder.add("bytes", size, path)
-        builder.advance(size)
+        builder.offset.advance(size)
         return
     element, count = arg
     if element[0] == Nodetype.BASE and element[1][0] != "string":
-        size = _SIZES[element[1][0]]
+        size = PRIMITIVE_SIZES[element[1][0]]
         builder.align(size if kind == Nodetype.ARRAY else 4)
         if kind == Nodetype.ARRAY:
             builder.add("bytes", size * count, path)
-            builder.advance(size * count)
+            builder.offset.advance(size * count)
         else:
             builder.add("sequence", size, path)
-            builder.known = None
+            builder.offset.lose()
         return
     if kind == Nodetype.ARRAY:
         for index in range(count):

@@ -338,7 +338,7 @@ class _Answer:
 class _Run:
     """One of the two runs of every pair in a merge pass: numbers ``[start, start + width)`` of every
     ``2 * width``, from ``offset`` on (0 for the left runs, ``width`` for the right), fetched ahead into a
-    buffer of ``_PREFETCH`` so that ``head`` is a register. The fetch runs on into the next pair's run
+    buffer of ``_PREFETCH`` (``head``, a register, and a ring behind it). The fetch runs on into the next pair's run
     while this pair is merged: a pass is one stream, with no gap between pairs."""
 
     def __init__(self, m: Module, name: str, count_bits: int, lanes: int) -> None:
@@ -347,17 +347,25 @@ class _Run:
         self.next_stop = Signal(count_bits, name=f"{name}_next_stop")  # (before clipping at the end)
         self.segment_end = Signal(count_bits, name=f"{name}_segment_end")
         self.take = Signal(count_bits, name=f"{name}_take")  # numbers of this pair not yet taken from it
-        self.buffered = Signal(range(_PREFETCH + 1), name=f"{name}_buffered")
+        self.buffered = Signal(range(_PREFETCH + 1), name=f"{name}_buffered")  # head and ring
         self.flight = [Signal(name=f"{name}_flight{i}") for i in range(_READ_LATENCY)]  # reads 1, 2 cycles old
         self.banks = [Signal(range(lanes), name=f"{name}_bank{i}") for i in range(_READ_LATENCY)]  # of each read
         self.bank = self.banks[-1]
         self.arrived = Signal(32, name=f"{name}_arrived")  # the read two cycles old, from its bank's register
-        self.entries = [Signal(32, name=f"{name}_entry{i}") for i in range(_PREFETCH)]
-        self.head = self.entries[0]
+        # the head, a register of its own, and a ring behind it that every arrival enters (so the ring's
+        # writes do not wait for the comparison): a take reloads the head and moves ``first`` on, some forty
+        # flip-flops a run where a shifting buffer had a hundred and thirty
+        self.head = Signal(32, name=f"{name}_head")
+        self.head_valid = Signal(name=f"{name}_head_valid")
+        self.ring = [Signal(32, name=f"{name}_ring{i}") for i in range(_PREFETCH - 1)]
+        self.first = Signal(range(_PREFETCH - 1), name=f"{name}_first")
+        self.free = Signal(range(_PREFETCH - 1), name=f"{name}_free")
+        self.in_ring = Signal(range(_PREFETCH), name=f"{name}_in_ring")
         self.done = Signal(name=f"{name}_done")
         self.ready = Signal(name=f"{name}_ready")
         self.issue = Signal(name=f"{name}_issue")
-        m.d.comb += [self.done.eq(self.take == 0), self.ready.eq(self.buffered != 0)]
+        m.d.comb += [self.done.eq(self.take == 0), self.ready.eq(self.head_valid),
+                     self.buffered.eq(self.head_valid + self.in_ring)]
 
     def connect(self, m: Module, ports: list[list[Any]], source_memory: Signal, shift: int) -> None:
         """Drive both memories' read ports of this run (while merging) and register what arrives."""
@@ -378,8 +386,8 @@ class _Run:
         else:
             end = take = Mux(width < kept, width, kept)
             bounds = [self.fetch.eq(0), self.next_start.eq(twice), self.next_stop.eq(twice + width)]
-        m.d.sync += [*bounds, self.segment_end.eq(end), self.take.eq(take), self.buffered.eq(0),
-                     *(flight.eq(0) for flight in self.flight)]
+        m.d.sync += [*bounds, self.segment_end.eq(end), self.take.eq(take), self.head_valid.eq(0),
+                     self.in_ring.eq(0), self.first.eq(0), self.free.eq(0), *(flight.eq(0) for flight in self.flight)]
 
     def step(self, m: Module, takes: Any, width: Signal, kept: Signal) -> None:
         """A merge cycle: read ahead while the buffer (and what is in flight) has room; take the head when
@@ -398,15 +406,19 @@ class _Run:
                              self.segment_end.eq(Mux(self.next_stop < kept, self.next_stop, kept))]
             with m.Else():
                 m.d.sync += self.fetch.eq(self.fetch + 1)
-        # both next buffers are made from registers while the comparison runs; ``takes`` (its outcome) only
-        # chooses between them, one multiplexer before each flip-flop
         landing = self.flight[-1]
-        for index in range(_PREFETCH):
-            following_entry = self.entries[index + 1] if index + 1 < _PREFETCH else self.entries[index]
-            if_taken = Mux(landing & (self.buffered == index + 1), self.arrived, following_entry)
-            if_kept = Mux(landing & (self.buffered == index), self.arrived, self.entries[index])
-            m.d.sync += self.entries[index].eq(Mux(takes, if_taken, if_kept))
-        m.d.sync += self.buffered.eq(Mux(takes, self.buffered - 1 + landing, self.buffered + landing))
+        last = _PREFETCH - 2
+        with m.If(landing):
+            m.d.sync += [Array(self.ring)[self.free].eq(self.arrived),
+                         self.free.eq(Mux(self.free == last, 0, self.free + 1))]
+        refill = takes | ~self.head_valid  # the head is taken or empty: the ring's first (or what lands) moves up
+        moves_up = refill & ((self.in_ring != 0) | landing)
+        with m.If(refill):
+            m.d.sync += [self.head.eq(Mux(self.in_ring != 0, Array(self.ring)[self.first], self.arrived)),
+                         self.head_valid.eq(moves_up)]
+        with m.If(moves_up):
+            m.d.sync += self.first.eq(Mux(self.first == last, 0, self.first + 1))
+        m.d.sync += self.in_ring.eq(self.in_ring + landing - moves_up)
         with m.If(takes):
             m.d.sync += self.take.eq(self.take - 1)
 
@@ -417,3 +429,4 @@ def _registered(m: Module, value: Any) -> Signal:
     register = Signal.like(value)
     m.d.sync += register.eq(value)
     return register
+

@@ -1,5 +1,5 @@
 """A node module written for ROS 2 that uses a piece hetros does not provide (a check case)."""
-from rclpy.parameter_client import AsyncParameterClient  # noqa: F401
+from rclpy.time_source import TimeSource  # noqa: F401
 
 
 def main() -> None:

@@ -141,7 +141,18 @@ def test_a_service_is_called_and_bad_requests_are_refused(tmp_path: Path, env: d
     del data["targets"]["client_proc"]
     project.write_text(yaml.safe_dump(data))
     with running(project, env, tmp_path / "launch.log"):
-        assert hetros(env, "service", "list", "-t").stdout == "/add_two_ints [example_interfaces/srv/AddTwoInts]\n"
+        # as `ros2 service list -t`: the node's parameter services beside its own
+        parameter_services = ["describe_parameters [rcl_interfaces/srv/DescribeParameters]",
+                              "get_parameter_types [rcl_interfaces/srv/GetParameterTypes]",
+                              "get_parameters [rcl_interfaces/srv/GetParameters]",
+                              "list_parameters [rcl_interfaces/srv/ListParameters]",
+                              "set_parameters [rcl_interfaces/srv/SetParameters]",
+                              "set_parameters_atomically [rcl_interfaces/srv/SetParametersAtomically]"]
+        assert hetros(env, "service", "list", "-t").stdout.splitlines() == [
+            "/add_two_ints [example_interfaces/srv/AddTwoInts]", *(f"/server/{s}" for s in parameter_services)]
+        got = hetros(env, "service", "call", "/server/get_parameter_types", "rcl_interfaces/srv/GetParameterTypes",
+                     "{names: [nonexistent]}")
+        assert "GetParameterTypes_Response(types=" in got.stdout
         called = hetros(env, "service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts", "{a: 2, b: 40}")
         assert called.stdout == ("requester: making request: example_interfaces.srv.AddTwoInts_Request(a=2, b=40)\n\n"
                                  "response:\nexample_interfaces.srv.AddTwoInts_Response(sum=42)\n\n")
@@ -149,7 +160,7 @@ def test_a_service_is_called_and_bad_requests_are_refused(tmp_path: Path, env: d
                        check=False)
         assert wrong.returncode == 1 and "has no field 'c'; its fields are a, b" in wrong.stderr
         typo = hetros(env, "service", "call", "/add_two_int", "example_interfaces/srv/AddTwoInts", check=False)
-        assert "has no service /add_two_int (its services: /add_two_ints)" in typo.stderr
+        assert "has no service /add_two_int (did you mean /add_two_ints?)" in typo.stderr
         off_range = hetros(env, "service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts",
                            "{a: 99999999999999999999}", check=False)
         assert off_range.returncode == 1 and "AddTwoInts_Request.a" in off_range.stderr

@@ -158,6 +158,63 @@ def test_the_ros2_demos_python_packages(tmp_path: Path) -> None:
     assert "Traceback" not in err, err
 
 
+# demo_nodes_cpp's parameter_blackboard, which the async_param_client demo talks to, is C++: this is it in
+# rclpy (a node that takes any parameter)
+_BLACKBOARD = """\
+import rclpy
+from rclpy.node import Node
+
+
+def main():
+    rclpy.init()
+    node = Node('parameter_blackboard', allow_undeclared_parameters=True,
+                automatically_declare_parameters_from_overrides=True)
+    rclpy.spin(node)
+"""
+
+
+def test_async_param_client_against_a_parameter_blackboard(tmp_path: Path) -> None:
+    """demo_nodes_py's async_param_client, unchanged: rclpy.parameter_client over the blackboard's parameter
+    services (planned by `hetros init` from the code), ament_index_python for its parameter file."""
+    (tmp_path / "parameter_blackboard.py").write_text(_BLACKBOARD)
+    made = _hetros("init", str(DEMOS / "demo_nodes_py"), str(tmp_path / "parameter_blackboard.py"), "-o",
+                   str(tmp_path / "all.yaml"), "--name", "params", cwd=tmp_path)
+    assert made.returncode == 0, made.stderr
+    project: dict[str, Any] = yaml.safe_load((tmp_path / "all.yaml").read_text())
+    project["nodes"] = {k: v for k, v in project["nodes"].items() if k in ("async_param_client",
+                                                                         "parameter_blackboard")}
+    assert sorted(project["nodes"]["async_param_client"]["clients"]) == [
+        f"parameter_blackboard/{s}" for s in ("describe_parameters", "get_parameter_types", "get_parameters",
+                                              "list_parameters", "set_parameters", "set_parameters_atomically")]
+    project["targets"] = {node["target"]: {"kind": "process"} for node in project["nodes"].values()}
+    project.pop("topics", None)
+    path = tmp_path / "project.yaml"
+    path.write_text(yaml.safe_dump(project))
+    checked = _hetros("check", str(path))
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    env = dict(os.environ, XDG_RUNTIME_DIR=str(tmp_path))
+    launched = _hetros("launch", str(path), "--duration", "8", cwd=tmp_path, env=env)
+    said = re.findall(r"^\[INFO\] \[\d+\.\d{9}\] \[async_param_client\]: (.*)$", launched.stderr, re.MULTILINE)
+    assert said == [
+        "Setting parameters:", "    int_parameter:", "        successful: True", "    bool_parameter:",
+        "        successful: True", "    string_parameter:", "        successful: True",
+        "Listing Parameters:", "    - int_parameter", "    - bool_parameter", "    - string_parameter",
+        "Getting parameters:", "    - int_parameter: 10", "    - bool_parameter: False",
+        "    - string_parameter: Fee Fi Fo Fum",
+        "Loading parameters: ",
+        "    other_int_parameter:", "        successful: True", "        value: 0",
+        "    int_parameter:", "        successful: True", "        value: 12",
+        "    string_parameter:", "        successful: True", "        value: I smell the blood of an Englishman",
+        "    other_string_parameter:", "        successful: True",
+        "        value: One fish, two fish, Red fish, blue fish",
+        "    bool_parameter:", "        successful: True", "        value: False",
+        "Deleting parameters: ",
+        "    other_int_parameter:", "        successful: True", "        reason: ",
+        "    other_string_parameter:", "        successful: True", "        reason: ",
+        "    string_parameter:", "        successful: True", "        reason: "], launched.stderr
+    assert "Traceback" not in launched.stderr and not list(tmp_path.glob("hetros-share-*")), launched.stderr
+
+
 def test_rospy_tutorials_from_their_launch_files(tmp_path: Path) -> None:
     """002_headers (header.seq, stamp.to_sec()), 006_parameters (parameters in nested groups, a topic
     named by a private parameter, get_param of a namespace) and 010_publish_pointcloud2

@@ -308,9 +308,8 @@ def cmd_node_info(args: argparse.Namespace) -> int:
 
 def cmd_service_list(args: argparse.Namespace) -> int:
     launch = _launch(args)
-    types = {s: t for node in launch.plan.nodes.values() for s, t in node.services.items()}
     for name in launch.services():
-        print(f"{name} [{types[name]}]" if args.show_types else name)
+        print(f"{name} [{launch.server_of(name)[1]}]" if args.show_types else name)
     return 0
 
 

@@ -14,6 +14,7 @@ from functools import cached_property
 from typing import Any, Literal
 
 from .._qos import QoS
+from ._names import join_namespace
 
 # inproc: one process; shm: one host; dds: between hosts; hw: an fpga target's topic network;
 # tcpros: every endpoint of a `kind: ros1` node (its peers are the ROS 1 master's, not edges)
@@ -178,6 +179,19 @@ class Plan:
     # folders node modules are imported from after the project file's own (its python_path:), absolute
     python_path: tuple[str, ...] = ()
 
+    def full_name(self, node: str) -> str:
+        spec = self.nodes[node]
+        return full_node_name(node, spec.namespace, spec.ros_name)
+
+    def parameter_servers(self) -> dict[str, tuple[str, str]]:
+        """Every parameter service of the graph: service -> (node, type). Each node whose Python runs has
+        them (as every ROS 2 node does); the system nodes the planner adds have none."""
+        servers: dict[str, tuple[str, str]] = {}
+        for node, spec in self.nodes.items():
+            if spec.run not in SYSTEM_NODES.values() and not self.in_hardware(node) and not self.speaks_ros1(node):
+                servers.update({s: (node, t) for s, t in parameter_services(self.full_name(node)).items()})
+        return servers
+
     def process_of(self, node: str) -> str:
         """Threads share their host's launcher process (called 'launcher'); others run alone."""
         target = self.targets[self.nodes[node].target]
@@ -338,6 +352,26 @@ def action_topic_qos(topic: str) -> QoS | None:
     """The default QoS of an action's feedback or status topic (None for any other topic)."""
     _, sep, part = topic.rpartition(ACTION_PREFIX)
     return ACTION_TOPIC_QOS.get(part) if sep else None
+
+
+# the services through which ROS 2 tools and parameter clients read and set a node's parameters, each
+# under the node's full name (``/ns/talker/get_parameters``)
+PARAMETER_SERVICES = {"describe_parameters": "rcl_interfaces/srv/DescribeParameters",
+                      "get_parameter_types": "rcl_interfaces/srv/GetParameterTypes",
+                      "get_parameters": "rcl_interfaces/srv/GetParameters",
+                      "list_parameters": "rcl_interfaces/srv/ListParameters",
+                      "set_parameters": "rcl_interfaces/srv/SetParameters",
+                      "set_parameters_atomically": "rcl_interfaces/srv/SetParametersAtomically"}
+
+
+def full_node_name(key: str, namespace: str = "", ros_name: str = "") -> str:
+    """A node's full ROS name (``/r2/talker``): its namespace, then its ROS name (else its key)."""
+    return join_namespace(namespace, ros_name or key) or f"/{key}"
+
+
+def parameter_services(full_name: str) -> dict[str, str]:
+    """The parameter services of the node called ``full_name``: service -> type."""
+    return {f"{full_name}/{service}": typename for service, typename in PARAMETER_SERVICES.items()}
 
 
 def service_of(channel: str) -> tuple[str, str]:

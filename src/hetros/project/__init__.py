@@ -9,7 +9,7 @@ from ._launch_import import import_launch
 from ._model import LoadedProject, Project, load_project
 from ._planner import plan, plan_file
 from ._report import CheckReport
-from ._ros_scan import ros_template, writes_ros
+from ._ros_scan import data_files, ros_template, writes_ros
 from ._scan import scan_file
 from ._template import template_from_sources
 
@@ -34,6 +34,7 @@ __all__ = [
     "LoadedProject",
     "Project",
     "check",
+    "data_files",
     "describe",
     "import_launch",
     "import_reconros",

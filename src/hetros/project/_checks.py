@@ -203,6 +203,9 @@ def gather_endpoints(c: CheckContext) -> None:
                     c.error(f"{where('nodes', nname, section, endpoint)}: {exc}")
                     full = typename
                 table.setdefault(endpoint, []).append((nname, full))
+        for service, typename in c.project.parameter_services_called(nname).items():
+            if service not in spec.services:
+                c.servers.setdefault(service, []).append((nname, typename))
 
 
 def code_runs(c: CheckContext) -> None:

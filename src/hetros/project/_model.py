@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
+from functools import cached_property
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -13,7 +14,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 from .._errors import MessageError, ProjectError
 from .._qos import QoS
 from ..msg import normalize_typename
-from ..plan import ACTION_PREFIX, LAUNCHER, action_endpoints
+from ..plan import ACTION_PREFIX, LAUNCHER, action_endpoints, full_node_name, parameter_services
 from ._expand import declared_args, expand, substitute
 from ._names import plain_name_problem
 
@@ -446,6 +447,25 @@ class LoadedProject:
         self.import_folders = (self.root.resolve(), *((self.root / p).resolve() for p in model.python_path))
         # topics a recording feeds (``hetros play --launch``): subscribing to them needs no publisher
         self.replayed: frozenset[str] = frozenset()
+
+    @cached_property
+    def _parameter_services_called(self) -> dict[str, dict[str, str]]:
+        called = {service for spec in self.model.nodes.values() for service in spec.clients}
+        found: dict[str, dict[str, str]] = {}
+        for key, spec in self.model.nodes.items():
+            target = self.model.targets.get(spec.target)
+            if target is not None and target.kind in ("fpga", "ros1"):
+                continue
+            for service, typename in parameter_services(full_node_name(key, spec.namespace, spec.name or "")).items():
+                if service in called:
+                    found.setdefault(key, {})[service] = typename
+        return found
+
+    def parameter_services_called(self, node: str) -> dict[str, str]:
+        """The parameter services of ``node`` some node of the project calls (an rclpy
+        ``AsyncParameterClient``): the node serves them on the graph's transports. Every node answers
+        the command line's parameter requests whatever the project says."""
+        return dict(self._parameter_services_called.get(node, {}))
 
     def where(self, *yaml_path: str | int) -> str:
         """``file:line: a.b.c`` for a YAML path (the line of the nearest known ancestor)."""

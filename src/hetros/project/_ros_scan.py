@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..plan import PARAMETER_SERVICES
+
 # placeholders start with this: not a ROS name, so the checks refuse them with their own message
 PLACEHOLDER = "?"
 
@@ -55,12 +57,7 @@ def entry_points(package: Path) -> dict[str, str]:
     found: dict[str, str] = {}
     setup_py = package / "setup.py"
     if setup_py.is_file():
-        tree = ast.parse(setup_py.read_text(encoding="utf-8"), filename=str(setup_py))
-        names: dict[str, str] = {}  # package_name = '...': what setup.py's strings are built from
-        for stmt in tree.body:
-            if isinstance(stmt, ast.Assign) and len(stmt.targets) == 1 and isinstance(stmt.targets[0], ast.Name):
-                if (text := _joined(stmt.value, names)) is not None:
-                    names[stmt.targets[0].id] = text
+        tree, names = _setup_py(setup_py)
         for table in ast.walk(tree):
             if not isinstance(table, ast.Dict):
                 continue
@@ -79,6 +76,42 @@ def entry_points(package: Path) -> dict[str, str]:
                 name, sep, target = line.partition("=")
                 if sep:
                     found[name.strip()] = target.strip()
+    return found
+
+
+def _setup_py(setup_py: Path) -> tuple[ast.Module, dict[str, str]]:
+    """setup.py's syntax tree, and its module-level names bound to strings (``package_name = '...'``):
+    what its other strings are built from."""
+    tree = ast.parse(setup_py.read_text(encoding="utf-8"), filename=str(setup_py))
+    names: dict[str, str] = {}
+    for stmt in tree.body:
+        if isinstance(stmt, ast.Assign) and len(stmt.targets) == 1 and isinstance(stmt.targets[0], ast.Name):
+            if (text := _joined(stmt.value, names)) is not None:
+                names[stmt.targets[0].id] = text
+    return tree, names
+
+
+def data_files(package: Path) -> list[tuple[str, list[str]]]:
+    """setup.py's ``data_files``: (folder under the install prefix, [files relative to the package]), as
+    far as they are literal (what ``get_package_share_directory`` lays out)."""
+    setup_py = package / "setup.py"
+    if not setup_py.is_file():
+        return []
+    tree, names = _setup_py(setup_py)
+    found: list[tuple[str, list[str]]] = []
+    for call in ast.walk(tree):
+        if not isinstance(call, ast.Call):
+            continue
+        for keyword in call.keywords:
+            if keyword.arg != "data_files" or not isinstance(keyword.value, ast.List | ast.Tuple):
+                continue
+            for entry in keyword.value.elts:
+                if isinstance(entry, ast.Tuple) and len(entry.elts) == 2 and \
+                        isinstance(files := entry.elts[1], ast.List | ast.Tuple):
+                    folder = _joined(entry.elts[0], names)
+                    listed = [text for item in files.elts if (text := _joined(item, names)) is not None]
+                    if folder is not None:
+                        found.append((folder, listed))
     return found
 
 
@@ -162,6 +195,8 @@ class _Reader:
             elif callee in _ACTION_CALLS and len(call.args) >= 3:
                 section, type_at, name_at = _ACTION_CALLS[callee]
                 self._add(node, section, call, call.args[type_at], call.args[name_at], None, names)
+            elif callee == "AsyncParameterClient" and len(call.args) >= 2:
+                self._parameter_client(node, call, names)
             elif callee in _ROSPY_CALLS and _is_rospy(call.func) and len(call.args) >= 2:
                 section, name_at, type_at = _ROSPY_CALLS[callee]
                 self._add(node, section, call, call.args[type_at], call.args[name_at], _keyword(call, "queue_size"),
@@ -193,6 +228,20 @@ class _Reader:
             services = node.endpoints.setdefault("services", {})
             for service, typename in LOGGER_SERVICES.items():
                 services[f"{ros_name}/{service}"] = typename
+
+    def _parameter_client(self, node: RosNode, call: ast.Call, names: dict[str, str]) -> None:
+        """rclpy's ``AsyncParameterClient(node, 'other')`` calls the six parameter services of ``other``."""
+        remote = _joined(call.args[1], names)
+        clients = node.endpoints.setdefault("clients", {})
+        if remote is None:
+            place = self.where(call)
+            clients[f"{PLACEHOLDER}{ast.unparse(call.args[1])} at {place}"] = "rcl_interfaces/srv/GetParameters"
+            node.notes.append(f"{place}: AsyncParameterClient names the node whose parameters it reaches at run "
+                              "time; replace the placeholder under nodes.{node}.clients with that node's six "
+                              "parameter services (<name>/get_parameters and the rest)")
+            return
+        for service, typename in PARAMETER_SERVICES.items():
+            clients[f"{remote}/{service}"] = typename
 
     def _add(self, node: RosNode, section: str, call: ast.Call, type_expr: ast.expr, name_expr: ast.expr,
              qos: ast.expr | None, names: dict[str, str]) -> None:

@@ -10,6 +10,15 @@ from ._host import Host, resolve
 from ._log import setup_logging
 from ._matched import IncompatibleQosStatus, MatchedStatus
 from ._node import NODE_TIMES_VARIABLE, Node
+from ._parameters import (
+    ParameterAccess,
+    ProjectParameters,
+    from_value_message,
+    kind_of,
+    listed,
+    to_value_message,
+    type_change_problem,
+)
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, LivelinessLostStatus, MessageLostStatus
 
 if TYPE_CHECKING:
@@ -71,6 +80,8 @@ __all__ = [
     "MatchedStatus",
     "MessageLostStatus",
     "Node",
+    "ParameterAccess",
+    "ProjectParameters",
     "Publisher",
     "Replies",
     "ServerGoalHandle",
@@ -83,6 +94,9 @@ __all__ = [
     "Timer",
     "bound_node",
     "check_rate",
+    "from_value_message",
+    "kind_of",
+    "listed",
     "log_to_file",
     "mark_shut_down",
     "node_logger",
@@ -91,5 +105,7 @@ __all__ = [
     "setup_logging",
     "shut_down",
     "stop_logging_to",
+    "to_value_message",
+    "type_change_problem",
     "uuid_message",
 ]

@@ -176,8 +176,11 @@ class Executor:
         self.wake()
 
     def spin_once(self, timeout: float | None) -> bool:
-        """Run at most one callback; return False when nothing ran before ``timeout``."""
+        """Run at most one callback; return False when nothing ran before ``timeout``, or as soon as
+        something arrived outside the callback queue (a reply, an action's answer: see ``arrived``), so
+        that a loop of ``spin_once`` and ``future.done()`` sees it at once."""
         deadline = None if timeout is None else time.monotonic() + timeout
+        arrivals = self.arrivals
         while True:
             with self._lock:
                 if self._stop.is_set():
@@ -216,6 +219,8 @@ class Executor:
                 return True
             if spun is _NOTHING:
                 self.wait(seen, wait)
+            if self.arrivals != arrivals:
+                return False
 
     def _spin_for_work(self, seen: int, wait: float | None) -> object:
         """On a hot stream, poll awake for a while instead of blocking: ``_DISPATCHED`` when it

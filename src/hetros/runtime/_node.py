@@ -23,7 +23,7 @@ from .._errors import (
     TopicTypeError,
 )
 from .._qos import QoS
-from ..msg import ActionKind, Message, ServiceKind, service_type
+from ..msg import ActionKind, Message, ServiceKind, ServiceType, service_type
 from ..plan import ROS1_TRANSPORT, NodePlan, request_channel, resolve_name
 from ._clock import Clock, SimulatedTimer, Ticker
 from ._endpoints import Relay, TopicReaders
@@ -32,6 +32,7 @@ from ._executor import Executor
 from ._graph import Graph
 from ._log import node_logger
 from ._matched import IncompatibleQosStatus, MatchedStatus, MatchedWatch
+from ._parameters import ParameterAccess, ParameterServices, ProjectParameters, type_change_problem
 from ._qos_events import (
     DeadlineMissedStatus,
     LivelinessChangedStatus,
@@ -68,8 +69,9 @@ class Node:
         self._parameters = dict(parameters or {})
         if self.graph.plan is not None and name in self.graph.plan.nodes and parameters is None:
             self._parameters = dict(self.graph.plan.nodes[name].parameters)
-        # what `hetros param set` goes through when the node's API has its own rules (rclpy's callbacks)
-        self.parameter_gate: Callable[[str, Any], None] | None = None
+        # what the node's parameter services read and set: an rclpy node puts its own in (its callbacks)
+        self.parameter_access: ParameterAccess = ProjectParameters(self)
+        self._parameter_services: ParameterServices | None = None
         self._closables: list[Publisher[Any] | Subscription[Any] | Service | Client | ActionServer
                               | ActionClient] = []
         self.clients: dict[str, Client] = {}
@@ -94,6 +96,10 @@ class Node:
         self.action_clients: dict[str, ActionClient] = {}
         # what the node's own figures are for ``hetros top`` (a gateway's cycles per message), when it has any
         self.figures: Callable[[], dict[str, Any]] | None = None
+        planned_services = planned.services if (planned := self._planned()) is not None else {}
+        for service, (srv_type, handler) in self.parameter_services.items():
+            if service in planned_services:
+                self.create_service(srv_type, service, handler)  # another node's parameter client calls it
         self.graph.node_started(self)
 
     # -- endpoints -------------------------------------------------------------------------
@@ -381,26 +387,21 @@ class Node:
     def parameters(self) -> dict[str, Any]:
         return dict(self._parameters)
 
-    def set_parameter_from_outside(self, name: str, value: Any) -> None:
-        """``hetros param set``: through the node's own gate where its API has one (rclpy's parameter
-        callbacks may change, refuse or react to the value), else straight in."""
-        if self.parameter_gate is not None:
-            self.parameter_gate(name, value)
-        else:
-            self.set_parameter(name, value)
-
     def set_parameter(self, name: str, value: Any) -> None:
         """Change a parameter while the node runs (``hetros param set``); ``get_parameter`` returns the
         new value from then on. A parameter keeps its type, as ROS 2's do: an integer may become a
         float, nothing else changes kind."""
         if name in self._parameters:
             old = self._parameters[name]
-            widened = isinstance(old, float) and isinstance(value, int) and not isinstance(value, bool)
-            if type(old) is not type(value) and not widened and old is not None:
-                raise ParameterError(f"parameter {name!r} of node {self.name!r} is a {type(old).__name__}, not a "
-                                     f"{type(value).__name__} ({value!r}): give a value of its type")
-            if widened:
+            if problem := type_change_problem(self.name, name, old, value):
+                raise ParameterError(f"{problem} ({value!r}): give a value of its type")
+            if isinstance(old, float):
                 value = float(value)
+        self._parameters = {**self._parameters, name: value}
+
+    def store_parameter(self, name: str, value: Any) -> None:
+        """Set a parameter whatever its type was: for an API whose own rules have passed the change (an
+        rclpy parameter declared dynamically typed)."""
         self._parameters = {**self._parameters, name: value}
 
     def delete_parameter(self, name: str) -> None:
@@ -411,6 +412,16 @@ class Node:
         self._parameters = {k: v for k, v in self._parameters.items() if k != name}
 
     # -- what a look from outside finds (``hetros node info``, ``top``, ``service call``) ----
+
+    @property
+    def parameter_services(self) -> dict[str, tuple[ServiceType, Callable[[Any], Any]]]:
+        """This node's parameter services: name -> (srv type, handler), under its full ROS name."""
+        if self._parameter_services is None:
+            plan = self.graph.plan
+            planned = plan is not None and self.name in plan.nodes
+            full_name = plan.full_name(self.name) if plan is not None and planned else f"/{self.name}"
+            self._parameter_services = ParameterServices(self, full_name)
+        return dict(self._parameter_services.handlers)
 
     def entities(self) -> list[Any]:
         """The node's publishers, subscriptions, services, clients and actions, as created."""

@@ -17,7 +17,7 @@ from typing import Any, TypeVar
 from ..._errors import NodeError, ParameterError
 from ...msg import copy as copy_message
 from ...plan import join_namespace
-from ...runtime import Clock, Ticker, bound_node
+from ...runtime import Clock, Ticker, bound_node, listed, type_change_problem
 from ...runtime import Node as HetrosNode
 from .._flavour import received
 from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
@@ -280,8 +280,10 @@ class Node:
         self._on_set: list[Callable[[list[Parameter]], Any]] = []
         self._pre_set: list[Callable[[list[Parameter]], list[Parameter]]] = []
         self._post_set: list[Callable[[list[Parameter]], Any]] = []
-        # `hetros param set` goes through this node's callbacks, as `ros2 param set` through rclpy's service
-        self._hetros.parameter_gate = self._set_from_outside
+        # the parameters declared dynamically typed (set while undeclared ones are allowed)
+        self._dynamic: set[str] = set()
+        # the node's parameter services (`ros2 param`, parameter clients) go through rclpy's rules and callbacks
+        self._hetros.parameter_access = self
         self.default_callback_group: CallbackGroup = MutuallyExclusiveCallbackGroup()
         self._owned: list[Publisher | Subscription | Timer | Service] = []  # closed by destroy_node
         self.executor: Any = None
@@ -470,8 +472,9 @@ class Node:
             return Parameter(name, value=live)
         if self._allow_undeclared:
             return Parameter(name, value=self._overrides.get(name))
-        raise ParameterError(f"node {self._name!r}: parameter {name!r} is not declared; call "
-                             f"declare_parameter({name!r}, default) first (as rclpy requires)")
+        from .exceptions import ParameterNotDeclaredException
+
+        raise ParameterNotDeclaredException(name)
 
     def get_parameter_or(self, name: str, alternative_value: Parameter | None = None) -> Parameter:
         if name in self._declared:
@@ -481,13 +484,47 @@ class Node:
     def get_parameters(self, names: Iterable[str]) -> list[Parameter]:
         return [self.get_parameter(name) for name in names]
 
+    def get_parameter_type(self, name: str) -> int:
+        return int(self.get_parameter(name).type_)
+
+    def get_parameter_types(self, names: Iterable[str]) -> list[int]:
+        return [self.get_parameter_type(name) for name in names]
+
+    def describe_parameter(self, name: str) -> Any:
+        from ...interfaces.rcl_interfaces.msg import ParameterDescriptor
+
+        return ParameterDescriptor(name=name, type=self.get_parameter_type(name),
+                                   dynamic_typing=name in self._dynamic)
+
+    def describe_parameters(self, names: Iterable[str]) -> list[Any]:
+        return [self.describe_parameter(name) for name in names]
+
+    def list_parameters(self, prefixes: list[str], depth: int) -> Any:
+        from ...interfaces.rcl_interfaces.msg import ListParametersResult
+
+        if depth < 0:
+            raise ValueError("The depth must be greater than or equal to zero")
+        names, found_prefixes = listed(list(self._declared), list(prefixes), depth)
+        return ListParametersResult(names=names, prefixes=found_prefixes)
+
     def set_parameters(self, parameters: list[Parameter]) -> list[SetParametersResult]:
         """rclpy's order: the pre-set callbacks may change the list; then each parameter on its own is
         validated (on-set), stored, and announced (post-set)."""
-        return [self._set_atomically([parameter]) for parameter in self._pre_setting(parameters)]
+        parameters = self._pre_setting(parameters)
+        self._check_declared(parameters)
+        return [self._set_atomically([parameter]) for parameter in parameters]
 
     def set_parameters_atomically(self, parameters: list[Parameter]) -> SetParametersResult:
-        return self._set_atomically(self._pre_setting(parameters))
+        parameters = self._pre_setting(parameters)
+        self._check_declared(parameters)
+        return self._set_atomically(parameters)
+
+    def _check_declared(self, parameters: list[Parameter]) -> None:
+        undeclared = [p.name for p in parameters if p.name not in self._declared]
+        if undeclared and not self._allow_undeclared:
+            from .exceptions import ParameterNotDeclaredException
+
+            raise ParameterNotDeclaredException(undeclared)
 
     def _pre_setting(self, parameters: list[Parameter]) -> list[Parameter]:
         for callback in self._pre_set:
@@ -498,24 +535,50 @@ class Node:
         return parameters
 
     def _set_atomically(self, parameters: list[Parameter]) -> SetParametersResult:
+        """rclpy's common path: a parameter keeps its type unless declared dynamically typed (one set
+        while undeclared ones are allowed is); the on-set callbacks may refuse; a parameter set to
+        NOT_SET is undeclared."""
+        for parameter in parameters:
+            old = self._declared.get(parameter.name)
+            if old is not None and parameter.name not in self._dynamic and \
+                    (problem := type_change_problem(self._name, parameter.name, old.value, parameter.value)):
+                return SetParametersResult(False, problem)
         for callback in self._on_set:
             verdict = callback(parameters)
             if verdict is not None and not getattr(verdict, "successful", True):
                 return SetParametersResult(False, getattr(verdict, "reason", ""))
         for parameter in parameters:
+            if parameter.type_ == Parameter.Type.NOT_SET and parameter.name in self._declared:
+                del self._declared[parameter.name]
+                self._dynamic.discard(parameter.name)
+                if parameter.name in self._hetros.parameters:
+                    self._hetros.delete_parameter(parameter.name)
+                continue
+            if parameter.name not in self._declared and self._allow_undeclared:
+                self._dynamic.add(parameter.name)
             self._declared[parameter.name] = parameter
             if parameter.value is not None:
-                self._hetros.set_parameter(parameter.name, parameter.value)
+                self._hetros.store_parameter(parameter.name, parameter.value)
         for post in self._post_set:
             post(parameters)
         return SetParametersResult(True)
 
-    def _set_from_outside(self, name: str, value: Any) -> None:
-        """``hetros param set``: through the callbacks; a refusal reaches the command as an error."""
-        for result in self.set_parameters([Parameter(name, value=value)]):
-            if not result.successful:
-                reason = result.reason or "no reason given"
-                raise ParameterError(f"node {self._name!r} refused {name}={value!r}: {reason}")
+    # what the node's parameter services (``ros2 param``, ``hetros param``, parameter clients) read and set
+
+    def parameter_names(self) -> list[str]:
+        return list(self._declared)
+
+    def parameter_value(self, name: str) -> Any:
+        return self.get_parameter(name).value
+
+    def set_parameters_as_one(self, changes: list[tuple[str, Any]]) -> tuple[bool, str]:
+        from .exceptions import ParameterNotDeclaredException
+
+        try:
+            result = self.set_parameters_atomically([Parameter(name, value=value) for name, value in changes])
+        except ParameterNotDeclaredException as refused:
+            return False, str(refused)
+        return result.successful, result.reason
 
     def add_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], Any]) -> None:
         self._on_set.append(callback)
@@ -537,6 +600,7 @@ class Node:
 
     def undeclare_parameter(self, name: str) -> None:
         self._declared.pop(name, None)
+        self._dynamic.discard(name)
 
     # -- the end ---------------------------------------------------------------------------------
 

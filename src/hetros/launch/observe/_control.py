@@ -20,16 +20,17 @@ import socket
 import struct
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..._errors import InspectError
 from ..._log import get_logger
-from ...runtime import TapSink, check_rate
+from ...runtime import ProjectParameters, TapSink, check_rate
 from ...transport import MessageCodec
 
 if TYPE_CHECKING:
+    from ...msg import ServiceType
     from ...runtime import Host, Node
 
 log = get_logger("hetros.launch")
@@ -262,19 +263,28 @@ class ControlServer:
                 time.sleep(0.0002)
         send_frame(connection, {"ok": True, "subscriptions": [s.node.name for s in reached]})
 
-    def _service(self, name: str) -> tuple[Node, Any]:
-        for node in list(self.graph.nodes.values()):
+    def _service(self, name: str) -> tuple[Node, ServiceType, Callable[[Any], Any], bool]:
+        """(node, type, handler, whether it runs in the node's executor) of the server of ``name`` here: a
+        service a node created, else a node's parameter service (every node answers those; the project
+        file's parameters are answered at once, even by a node that does not spin, while an rclpy node's
+        parameters go through its callbacks, between its other callbacks)."""
+        nodes = list(self.graph.nodes.values())
+        for node in nodes:
             for entity in node.entities():
                 if getattr(entity, "name", None) == name and hasattr(entity, "handler"):
-                    return node, entity
+                    return node, entity.srv_type, entity.handle, True
+        for node in nodes:
+            if (found := node.parameter_services.get(name)) is not None:
+                return node, *found, not isinstance(node.parameter_access, ProjectParameters)
         raise InspectError(f"no server of {name} runs in {self.process} (yet)")
 
     def _op_call(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        node, service = self._service(_text(request, "service"))
+        node, srv_type, handle, in_executor = self._service(_text(request, "service"))
         timeout = _number(request, "timeout", 10.0, 1e-3, 3600.0)
-        request_message = self._codec(f"{service.srv_type.name}_Request").decode(memoryview(payload))
-        response = node.call_in_executor(lambda: service.handle(request_message), timeout)
-        send_frame(connection, {"ok": True}, self._codec(f"{service.srv_type.name}_Response").encode(response))
+        request_message = self._codec(f"{srv_type.name}_Request").decode(memoryview(payload))
+        response = (node.call_in_executor(lambda: handle(request_message), timeout) if in_executor
+                    else handle(request_message))
+        send_frame(connection, {"ok": True}, self._codec(f"{srv_type.name}_Response").encode(response))
 
     def _op_send_goal(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
         action = _text(request, "action")
@@ -311,20 +321,6 @@ class ControlServer:
         result = handle.result if handle.result is not None else server.type.Result()
         send_frame(connection, {"status": int(handle.status)}, self._codec(f"{server.type.name}_Result").encode(result))
 
-    def _node(self, name: str) -> Node:
-        node = self.graph.nodes.get(name)
-        if node is None:
-            raise InspectError(f"node {name} is not running in {self.process}")
-        return node
-
-    def _op_params(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        send_frame(connection, {"ok": True, "parameters": _jsonable(self._node(_text(request, "node")).parameters)})
-
-    def _op_set_param(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
-        node = self._node(_text(request, "node"))
-        node.set_parameter_from_outside(_text(request, "name"), request.get("value"))
-        send_frame(connection, {"ok": True})
-
 
 def _text(request: dict[str, Any], key: str) -> str:
     """A name field of a control request: refused, to the client, unless it is short text."""
@@ -341,13 +337,3 @@ def _number(request: dict[str, Any], key: str, default: float, low: float, high:
     if isinstance(value, bool) or not isinstance(value, int | float) or not low <= value <= high:
         raise InspectError(f"control request field {key!r} must be a number in {low:g}..{high:g}, not {value!r:.80}")
     return float(value)
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if hasattr(value, "tolist"):
-        return value.tolist()
-    return value

@@ -8,13 +8,14 @@ sockets answer for what only a running process knows (messages, rates, parameter
 from __future__ import annotations
 
 import contextlib
+import difflib
 import queue
 import socket
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from ..._errors import InspectError, LaunchError
 from ...msg import Message, TypeRegistry, registry
@@ -220,11 +221,17 @@ class RunningLaunch:
                     raise InspectError(f"{service} is served in hardware (node {name} on fpga target {node.target}); "
                                        "the command line calls software servers: call it from a node")
                 return name, node.services[service]
-        known = ", ".join(self.services()) or "none"
-        raise InspectError(f"launch {self.record.session} has no service {service} (its services: {known})")
+        if (parameters := self.plan.parameter_servers().get(service)) is not None:
+            return parameters
+        known = self.services()
+        near = difflib.get_close_matches(service, known, n=3)
+        hint = f"did you mean {' or '.join(near)}?" if near else f"its services: {', '.join(known) or 'none'}"
+        raise InspectError(f"launch {self.record.session} has no service {service} ({hint})")
 
     def services(self) -> list[str]:
-        return sorted({s for node in self.plan.nodes.values() for s in node.services if "/_action/" not in s})
+        """Every service of the launch, each node's parameter services among them (as ``ros2 service list``)."""
+        return sorted({s for node in self.plan.nodes.values() for s in node.services if "/_action/" not in s}
+                      | set(self.plan.parameter_servers()))
 
     def call(self, service: str, request: Message, timeout: float = 10.0) -> Message:
         node, typename = self.server_of(service)
@@ -276,12 +283,29 @@ class RunningLaunch:
         return self.plan.process_of(node)
 
     def parameters(self, node: str) -> dict[str, Any]:
-        answer, _ = self.ask(self.node_process(node), {"op": "params", "node": node})
-        parameters: dict[str, Any] = answer["parameters"]
-        return parameters
+        """``node``'s parameters, name -> value, read through its parameter services."""
+        from ...interfaces.rcl_interfaces.srv import GetParameters, ListParameters
+        from ...runtime import from_value_message
+
+        base = self.plan.full_name(node)
+        self.node_process(node)
+        listed: Any = self.call(f"{base}/list_parameters", ListParameters.Request())
+        names = list(listed.result.names)
+        values = cast(Any, self.call(f"{base}/get_parameters", GetParameters.Request(names=names))).values
+        return {name: from_value_message(value) for name, value in zip(names, values, strict=True)}
 
     def set_parameter(self, node: str, name: str, value: Any) -> None:
-        self.ask(self.node_process(node), {"op": "set_param", "node": node, "name": name, "value": value})
+        """Set ``node``'s parameter ``name`` through its parameter service: its callbacks (rclpy's) may
+        refuse it, and the reason comes back as an :class:`InspectError`."""
+        from ...interfaces.rcl_interfaces.msg import Parameter
+        from ...interfaces.rcl_interfaces.srv import SetParameters
+        from ...runtime import to_value_message
+
+        self.node_process(node)
+        request = SetParameters.Request(parameters=[Parameter(name=name, value=to_value_message(value))])
+        result = cast(Any, self.call(f"{self.plan.full_name(node)}/set_parameters", request)).results[0]
+        if not result.successful:
+            raise InspectError(result.reason or f"node {node} refused {name}={value!r} without a reason")
 
     def stats(self) -> list[dict[str, Any]]:
         """Each process' counters (``hetros top``); a process that does not answer is left out."""

@@ -97,6 +97,10 @@ class _State:
             hetros = self.hetros
             hetros.spun = True
 
+            # the node's main thread runs beside its callbacks (and waits for what they hand it): a hot
+            # spin here hands the GIL over at every poll, as when another thread of the process feeds it
+            hetros.executor.yield_every = 1
+
             def run() -> None:
                 with _ros_main(hetros):  # callbacks call rospy too: this thread runs as the node
                     try:

@@ -244,3 +244,23 @@ def test_a_profile_survives_its_file_and_knows_where_it_was_taken(tmp_path: Path
 
     warnings = again.fits(plan_file(ROOT / "examples/lane_following/project.yaml"))
     assert any("another graph" in w for w in warnings) and any("another machine" in w for w in warnings)
+
+
+def test_a_tapped_message_reaches_the_hardware_as_its_body() -> None:
+    """A tap gives the wire's bytes (encapsulation, then the body, padded); a hardware port takes the body
+    alone. Fed the wire's bytes, the vehicle's filters read the encapsulation as the stamp and took four
+    times the cycles of a frame."""
+    import numpy as np
+
+    from hetros.advise._hardware import _body
+    from hetros.msg import registry
+    from hetros.transport import MessageCodec
+
+    types = registry()
+    image = types.get("sensor_msgs/msg/Image")(height=2, width=3, encoding="rgb8", step=9,
+                                                  data=np.arange(18, dtype=np.uint8))
+    image.header.frame_id = "frame7"
+    wire = bytes(MessageCodec(types, "sensor_msgs/msg/Image").encode(image)) + b"\0\0"
+    body = _body(types, "sensor_msgs/msg/Image", wire)
+    assert body == wire[4:-2]
+    assert body[8:12] == (7).to_bytes(4, "little") and body[12:18] == b"frame7"  # frame_id right after the stamp

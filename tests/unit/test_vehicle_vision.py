@@ -1,4 +1,4 @@
-"""The lane-following vehicle's light detection, fast, held to its direct float32 formula."""
+"""The lane-following vehicle's light detection and bird's-eye warp, fast, held to their direct formulas."""
 
 from __future__ import annotations
 
@@ -43,3 +43,14 @@ def test_light_pixels_counts_what_the_direct_formula_counts(vision: Any) -> None
     for image in frames:
         for colour in ("red", "green"):
             assert vision.light_pixels(image, colour) == direct(image, colour, vision.HORIZON)
+
+
+def test_the_warp_gives_the_bytes_of_its_float_reference(vision: Any) -> None:
+    rng = np.random.default_rng(4)
+    frames = [vision.render(frame)[0] for frame in range(0, 180, 30)]
+    frames += [rng.integers(0, 256, (480, 640, 3), dtype=np.uint8) for _ in range(2)]
+    frames += [np.full((480, 640, 3), value, np.uint8) for value in (0, 1, 2, 254, 255)]
+    for image in frames:
+        warped = vision.project(image)
+        assert warped.dtype == np.uint8 and warped.shape == (vision.BEV_H, vision.BEV_W)
+        assert np.array_equal(warped, vision.project_reference(image))

@@ -15,6 +15,7 @@ from ._model import Placement
 from ._profile import Profile
 
 if TYPE_CHECKING:
+    from ..msg import TypeRegistry
     from ._observe import Observation
 
 MAX_CYCLES = 200_000_000
@@ -64,7 +65,7 @@ def hardware_profile(plan: Plan, project: Path, profile: Profile, observation: O
                 if sample is None:
                     raise AdviseError(f"node {node}: no message on {topic} while profiling, so its hardware cannot "
                                       "be timed on real input; run longer (--duration)")
-                inputs[topic] = sample
+                inputs[topic] = _body(types, variant.channels[topic].type, sample)
             alone = TargetSimulation(variant, target, types, only={node})
             try:
                 cycles, _ = one_message_through(alone, inputs, MAX_CYCLES)
@@ -81,6 +82,19 @@ def hardware_profile(plan: Plan, project: Path, profile: Profile, observation: O
         raise AdviseError(f"co-simulating the hardware nodes for the profile failed: {exc}") from None
     finally:
         remove()
+
+
+def _body(types: TypeRegistry, typename: str, sample: bytes) -> bytes:
+    """The CDR body a hardware port takes (no encapsulation header, no padding after it) of a message
+    as a tap gives it (the wire's bytes: encapsulation first). Fed the wire's bytes, a filter reads the
+    encapsulation as the header's stamp and the image that follows at the wrong offsets."""
+    from ..transport import MessageCodec
+
+    codec = types.codec(typename)
+    message = MessageCodec(types, typename).decode(memoryview(sample))
+    body = bytearray(codec.size(message))
+    codec.encode(message, memoryview(body))
+    return bytes(body)
 
 
 def _all_in_hardware(plan: Plan, project: Path, nodes: list[str], target: str) -> tuple[Plan, Callable[[], None]]:

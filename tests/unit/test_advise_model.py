@@ -264,3 +264,58 @@ def test_a_tapped_message_reaches_the_hardware_as_its_body() -> None:
     body = _body(types, "sensor_msgs/msg/Image", wire)
     assert body == wire[4:-2]
     assert body[8:12] == (7).to_bytes(4, "little") and body[12:18] == b"frame7"  # frame_id right after the stamp
+
+
+def test_a_chain_through_hardware_is_placed_in_co_simulated_time(tmp_path: Path) -> None:
+    """source -> /a -> echo (hardware) -> /b -> soft -> /c; a software branch /a -> side -> /e; join /c, /e ->
+    /f. The co-simulation kept /b a whole millisecond in wall time; its gateway counted 50 µs simulated and
+    10 µs of copies, and a hop into it costs 20 µs. So /b is at 80 µs, /c at 80 + 300 = 380 µs (soft's
+    measured 0.3 ms), /e at 500 µs (wall: no hardware on the way), /f at max(380, 500) + 100 = 600 µs."""
+    from hetros.advise._chains import HardwareSpan, cosimulated_latency
+    from hetros.project import plan_file
+
+    header = "std_msgs/msg/Header"
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump({
+        "name": "cosim", "targets": {"io": {"kind": "process"}, "fpga": {"kind": "fpga", "data_width": 32}},
+        "nodes": {
+            "source": {"run": "json:dumps", "target": "io", "publish": {"/a": header}},
+            "echo": {"run": "json:dumps", "hw": "hetros.hw.nodes:Echo", "target": "fpga",
+                     "parameters": {"source": "/a", "sink": "/b"}, "subscribe": {"/a": header},
+                     "publish": {"/b": header}},
+            "soft": {"run": "json:dumps", "target": "io", "subscribe": {"/b": header}, "publish": {"/c": header}},
+            "side": {"run": "json:dumps", "target": "io", "subscribe": {"/a": header}, "publish": {"/e": header}},
+            "join": {"run": "json:dumps", "target": "io", "subscribe": {"/c": header, "/e": header},
+                     "publish": {"/f": header}}}}))
+    plan = plan_file(tmp_path / "project.yaml")
+    stamp = 7_000_000_123
+    at = {"/a": 0, "/b": 1_000_000, "/c": 1_300_000, "/e": 500_000, "/f": 1_400_000}
+    published = {topic: [Published(time_ns, 64, stamp)] for topic, time_ns in at.items()}
+    published["/a"].append(Published(9_000_000, 64, stamp + 1))  # a message that never went through
+    spans = {("/b", stamp): HardwareSpan(sim_ns=50_000, cpu_ns=10_000)}
+    chain = Chain("f", "/a", "/f")
+    found = cosimulated_latency(plan, chain, published, spans, lambda _topic, _size: 20_000.0)
+    assert found is not None and found.samples == 1
+    assert found.p50_ms == pytest.approx(0.6)
+    through = cosimulated_latency(plan, Chain("c", "/a", "/c"), published, spans, lambda _t, _s: 20_000.0)
+    assert through is not None and through.p50_ms == pytest.approx(0.38)
+    assert cosimulated_latency(plan, chain, published, {}, lambda _t, _s: 20_000.0) is None  # no span: not placed
+
+
+def test_a_gateway_counts_each_stamped_message_in_simulated_time() -> None:
+    """At 100 MHz (10 ns a cycle): in at cycle 1000, out at 1500: 5 µs. The next went in at 1200, while the
+    hardware still sent the first: it counts from 1500 (a real target, fed at the real rate, would not have
+    queued it), out at 1900: 4 µs. Copies add up; an unstamped message is not timed."""
+    from hetros.launch.system._gateway import CoSimulatedTimes
+    from hetros.msg import registry
+
+    stamped = registry().get("geometry_msgs/msg/PointStamped")
+    first, second = stamped(), stamped()
+    first.header.stamp.sec, second.header.stamp.sec = 1, 2
+    times = CoSimulatedTimes(100.0)
+    times.entered(first, 1000, 5)
+    times.entered(second, 1200, 6)
+    times.entered(registry().get("std_msgs/msg/Empty")(), 1300, 1)
+    times.left("/out", first, 1500, 7)
+    times.left("/out", second, 1900, 8)
+    assert times.spans() == [{"stamp": 1_000_000_000, "topic": "/out", "sim_ns": 5000, "cpu_ns": 12},
+                             {"stamp": 2_000_000_000, "topic": "/out", "sim_ns": 4000, "cpu_ns": 14}]

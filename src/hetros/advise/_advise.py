@@ -10,10 +10,10 @@ from pathlib import Path
 from .._errors import AdviseError
 from ..plan import Plan
 from ._calibrate import Calibration, calibration
-from ._chains import Chain, ChainLatency
+from ._chains import Chain, ChainLatency, HardwareSpan, cosimulated_latency
 from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budget
 from ._model import Mapping, Placement, predict, wake_scale
-from ._observe import observe
+from ._observe import Observation, observe
 from ._profile import Profile, build, chain_latencies, graph_key
 from ._report import plot_timeline, table, write_project
 from ._search import Candidate, Limits, search
@@ -174,10 +174,35 @@ def write(project: Path, advice: Advice, out: Path) -> tuple[Path, Path]:
 
 def verify(projects: dict[str, Path], plans: dict[str, Plan], chains: list[Chain], options: Options
            ) -> dict[str, dict[str, ChainLatency | None]]:
-    """Launch each project (not profiling) and measure its chains."""
+    """Launch each project (not profiling) and measure its chains: in wall time, except that a chain through
+    an fpga target is measured with its hardware in co-simulated time (``cosimulated_latency``), since a
+    co-simulation is slower than the hardware it stands for."""
     found = {}
     for label, project in projects.items():
-        seen = observe(project, plans[label], duration=options.duration, warmup=options.warmup, profiling=False,
+        plan = plans[label]
+        seen = observe(project, plan, duration=options.duration, warmup=options.warmup, profiling=False,
                        log=options.out / f"verify-{label.strip('#').replace(' ', '-')}.log")
         found[label] = chain_latencies(seen, chains)
+        if any(plan.in_hardware(n) for n in plan.nodes):
+            hop = _shm_hop(calibration()[0])
+            spans = hardware_spans(seen)
+            for chain in chains:
+                if any(plan.in_hardware(n) for n in chain.check(plan)):
+                    found[label][chain.name] = cosimulated_latency(plan, chain, seen.published, spans, hop)
     return found
+
+
+def _shm_hop(costs: Calibration) -> Callable[[str, int], float]:
+    """A shared-memory hop to a sleeping subscriber (the gateway), in ns, as the model costs it."""
+    return lambda _topic, size: costs.hop_ms("shm", size) * 1e6
+
+
+def hardware_spans(seen: Observation) -> dict[tuple[str, int], HardwareSpan]:
+    """Each gateway's co-simulated spans, by (output topic, stamp), from the figures read at the run's end."""
+    spans: dict[tuple[str, int], HardwareSpan] = {}
+    for process in seen.late.values():
+        for figures in (node.get("figures", {}) for node in process.get("nodes", {}).values()):
+            for span in figures.get("spans", ()):
+                spans[(str(span["topic"]), int(span["stamp"]))] = HardwareSpan(float(span["sim_ns"]),
+                                                                               float(span["cpu_ns"]))
+    return spans

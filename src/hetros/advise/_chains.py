@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import bisect
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from .._errors import AdviseError
-from ..plan import Plan
+from ..plan import SYSTEM_NODES, Plan
 
 _CHAIN = re.compile(r"(?:(?P<name>[A-Za-z_][\w-]*)=)?(?P<first>/?[^:@\s]+):(?P<last>/?[^:@\s]+)"
                     r"(?:@(?P<deadline>[0-9.]+)\s*ms)?")
@@ -136,3 +137,79 @@ def measure(first: list[Published], last: list[Published]) -> ChainLatency | Non
     array = np.asarray(values)
     return ChainLatency(float(np.percentile(array, 50)), float(np.percentile(array, 99)), len(values), matched_by,
                         tuple(values))
+
+
+@dataclass(frozen=True)
+class HardwareSpan:
+    """One message's time in an fpga target, as its gateway counted it (``CoSimulatedTimes``): in simulated
+    time at the target's clock, and the CPU time the gateway spent copying it in and out."""
+
+    sim_ns: float
+    cpu_ns: float
+
+
+def cosimulated_latency(plan: Plan, chain: Chain, published: dict[str, list[Published]],
+                        spans: dict[tuple[str, int], HardwareSpan], hop_ns: Callable[[str, int], float]
+                        ) -> ChainLatency | None:
+    """The chain's latency with its hardware in co-simulated time, per header stamp.
+
+    A co-simulation runs slower than the hardware would, so in wall time messages wait for the simulator.
+    Here each topic's publish is placed in co-simulated time along the chain: a hardware node's output at
+    the latest of its target's inputs, plus a shared-memory hop into the gateway (``hop_ns(topic, size)``),
+    the gateway's copies and the simulated span; a software node's output at the latest of its inputs, plus
+    what it took in wall time (from its last input's publish to its own: the hop and its work, measured).
+    Stamps that did not reach every topic on the way are left out. None when no stamp went through.
+    """
+    gateway = SYSTEM_NODES["gateway"]
+    nodes = [n for n in chain.check(plan) if plan.nodes[n].run != gateway]  # its hardware nodes stand for it
+    times: dict[str, dict[int, Published]] = {}
+    for topic, events in published.items():
+        by_stamp: dict[int, Published] = {}
+        for event in events:
+            if event.stamp:
+                by_stamp.setdefault(event.stamp, event)
+        times[topic] = by_stamp
+    reachable = {chain.first} | {t for n in nodes for t in plan.nodes[n].publish}
+    gateway_inputs = {t for spec in plan.nodes.values() if spec.run == gateway for t in spec.subscribe}
+    values: list[float] = []
+    for stamp in times.get(chain.first, {}):
+        placed: dict[str, float] = {chain.first: 0.0}
+        waiting = list(nodes)
+        while waiting:  # a node is placed once every input of it this stamp reached is (the graph is acyclic)
+            ready = [n for n in waiting if all(t in placed for t in plan.nodes[n].subscribe
+                                               if t in reachable and stamp in times.get(t, {}))]
+            if not ready:
+                break
+            for node in ready:
+                waiting.remove(node)
+                _place(plan, node, stamp, times, placed, spans, gateway_inputs, hop_ns)
+        if chain.last in placed and chain.last != chain.first:
+            values.append(placed[chain.last] / 1e6)
+    if not values:
+        return None
+    array = np.asarray(values)
+    return ChainLatency(float(np.percentile(array, 50)), float(np.percentile(array, 99)), len(values),
+                        "header stamp; hardware in co-simulated time", tuple(values))
+
+
+def _place(plan: Plan, node: str, stamp: int, times: dict[str, dict[int, Published]], placed: dict[str, float],
+           spans: dict[tuple[str, int], HardwareSpan], gateway_inputs: set[str],
+           hop_ns: Callable[[str, int], float]) -> None:
+    """Place ``node``'s outputs of ``stamp`` in co-simulated time (ns after the chain's first publish)."""
+    spec = plan.nodes[node]
+    inputs = [t for t in spec.subscribe if t in placed and stamp in times.get(t, {})]
+    if not inputs:
+        return
+    for topic in spec.publish:
+        out = times.get(topic, {}).get(stamp)
+        if out is None or topic in placed:
+            continue
+        if plan.in_hardware(node):
+            span = spans.get((topic, stamp))
+            entering = [t for t in placed if t in gateway_inputs and stamp in times.get(t, {})]
+            if span is not None and entering:
+                placed[topic] = max(placed[t] + hop_ns(t, times[t][stamp].size) for t in entering) \
+                    + span.cpu_ns + span.sim_ns
+        else:
+            latest = max(inputs, key=lambda t: times[t][stamp].time_ns)
+            placed[topic] = max(placed[t] for t in inputs) + (out.time_ns - times[latest][stamp].time_ns)

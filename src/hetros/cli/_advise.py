@@ -113,6 +113,7 @@ def _verify(project: Path, written: Path, advice: Advice, options: Options) -> d
     print(f"\nverified (each launched for {options.duration:g} s, the first {options.warmup:g} s not counted):")
     print(f"{'mapping':<9} {'chain':<16} {'predicted p50/p99 ms':>21} {'measured p50/p99 ms':>20} {'p50 error':>9}")
     found: dict[str, dict[str, float]] = {}
+    any_cosimulated = False
     candidates = [*zip(projects, [*advice.ranked, advice.original], strict=True)]
     for label, candidate in candidates:
         for chain in chains:
@@ -123,7 +124,12 @@ def _verify(project: Path, written: Path, advice: Advice, options: Options) -> d
                       f"{'(no message went through)':>20}")
                 continue
             error = (predicted.p50_ms - latency.p50_ms) / latency.p50_ms if latency.p50_ms else 0.0
+            cosimulated = "co-simulated" in latency.matched_by
             print(f"{label:<9} {chain.name:<16} {predicted.p50_ms:>10.1f}/{predicted.p99_ms:<10.1f} "
-                  f"{latency.p50_ms:>9.1f}/{latency.p99_ms:<10.1f} {error:>+8.0%}")
+                  f"{latency.p50_ms:>9.1f}/{latency.p99_ms:<10.1f} {error:>+8.0%}" + (" *" if cosimulated else ""))
             found.setdefault(label, {})[chain.name] = latency.p50_ms
+            any_cosimulated = any_cosimulated or cosimulated
+    if any_cosimulated:
+        print("* through an fpga target: its hardware in co-simulated time at the target's clock (the gateway's "
+              "cycles and copies), the software as measured")
     return found

@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from ._executor import AdaptiveSpin
     from ._log import RCLPY_CONSOLE, ROSPY_CONSOLE, log_to_file, node_logger, stop_logging_to
     from ._ros_main import bound_node, mark_shut_down, ros_main, shut_down
-    from ._taps import TapSink, check_rate
+    from ._taps import TapSink, check_rate, header_stamp
 
 
 # shared with other packages, loaded on first use (a worker must not pay for what it does not run)
@@ -41,6 +41,7 @@ _LAZY = {
     "RCLPY_CONSOLE": "._log",
     "ROSPY_CONSOLE": "._log",
     "TapSink": "._taps",
+    "header_stamp": "._taps",
     "Ticker": "._clock",
     "bound_node": "._ros_main",
     "mark_shut_down": "._ros_main",
@@ -95,6 +96,7 @@ __all__ = [
     "bound_node",
     "check_rate",
     "from_value_message",
+    "header_stamp",
     "kind_of",
     "listed",
     "log_to_file",

@@ -27,6 +27,7 @@ one thread never waits on a subscriber, so one slow reader cannot stop the targe
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from collections import deque
@@ -41,7 +42,7 @@ from ..._log import get_logger
 from ...hw import IDLE, GatewayPort, SimulatedTop, TargetSimulation, VerilatedTop
 from ...msg import TypeRegistry
 from ...plan import Plan
-from ...runtime import Node, Replies
+from ...runtime import Node, Replies, header_stamp
 from ...transport.tcpros import Ros1Peer, Ros1Type, receive_frames
 
 log = get_logger("hetros.cosim")
@@ -63,6 +64,10 @@ _IDLE_CYCLES = 20_000
 # while more messages went into the hardware than came out, it is working (a sort, a frame's flush) even
 # with its ports quiet: the clock runs on, up to this many cycles since a message last went in or out
 _IN_FLIGHT_CYCLES = 50_000_000
+# set to a nice value (19: the lowest priority), the simulator's thread takes the CPU only when software does
+# not want it: what `hetros advise --verify` measures software with, beside a co-simulation that would
+# otherwise take a core from it (the hardware's own time is counted in cycles, not in wall time)
+SIMULATOR_NICE_VARIABLE = "HETROS_SIMULATOR_NICE"
 # simulations built while the process started (``gateway.prepare``), by gateway node
 _PREPARED: dict[str, TargetSimulation] = {}
 
@@ -77,8 +82,9 @@ class _Input:
     """Where one input port's messages come from: a subscription, or a service's request channel."""
 
     def __init__(self, node: Node, port: GatewayPort, types: TypeRegistry,
-                 components: dict[str, Any] | None = None) -> None:
+                 components: dict[str, Any] | None = None, times: CoSimulatedTimes | None = None) -> None:
         self.port = port
+        self.times = times
         self.codec = types.codec(port.type)
         # what the port's hardware nodes can take, checked before a message goes in (a wider image than a
         # node's line buffers would give wrong pixels with no word); requests are not refused (the asker waits)
@@ -111,9 +117,12 @@ class _Input:
         item = self.next_message()
         while not self._fits(item):
             item = self.next_message()
+        started = time.thread_time_ns()  # the CPU the copy takes, not the waits of a low-priority thread
         size = self.codec.size(item)
         self.codec.encode(item, top.loan_input(self.port.index, size))
         self.copied_bytes += size
+        if self.times is not None:
+            self.times.entered(item, top.cycle, time.thread_time_ns() - started)
 
 
     def _fits(self, item: Any) -> bool:
@@ -132,10 +141,12 @@ class _Input:
 class _Output:
     """Where one output port's messages go: a publisher, or the clients of a service."""
 
-    def __init__(self, node: Node, port: GatewayPort, types: TypeRegistry, asked: deque[tuple[int, str]]) -> None:
+    def __init__(self, node: Node, port: GatewayPort, types: TypeRegistry, asked: deque[tuple[int, str]],
+                 times: CoSimulatedTimes | None = None) -> None:
         self.port = port
         self.codec = types.codec(port.type)
         self.asked = asked
+        self.times = times
         self.replies = Replies(node, port.service, port.type) if port.service else None
         self.publisher = None if port.service else node.create_publisher(types.get(port.type), port.topic)
         self.copied_bytes = 0  # what the CPU copied: each message's bytes, out of the simulator into the graph
@@ -145,9 +156,11 @@ class _Output:
         messages stay in the simulator, whose output takes TREADY low), never the whole target."""
         return self.publisher is None or self.publisher.has_room()
 
-    def send(self, body: memoryview) -> None:
+    def send(self, body: memoryview, cycle: int = 0) -> None:
         """Publish a message decoded in place from the simulator's memory: its arrays are views there, and
-        the transport's send is their one copy (the gateway's process has no other node to keep them)."""
+        the transport's send is their one copy (the gateway's process has no other node to keep them).
+        ``cycle``: when its last beat left the hardware."""
+        started = time.thread_time_ns()
         try:
             message = self.codec.decode(body)
         except SerializationError as exc:
@@ -162,12 +175,55 @@ class _Output:
         if self.replies is None:
             assert self.publisher is not None
             self.publisher.publish(message)
+            if self.times is not None:
+                self.times.left(self.port.topic, message, cycle, time.thread_time_ns() - started)
             return
         if not self.asked:
             raise HardwareError(f"{self.port.port.label}: the hardware answered a request nobody made (a server "
                                 "gives one response per request, in order)")
         request_id, client = self.asked.popleft()
         self.replies.send(request_id, client, message)
+
+
+class CoSimulatedTimes:
+    """Each stamped message's time in the hardware, in simulated time: from the cycle it went in (or, when
+    the hardware was still sending the previous message of that output, from then on) to the cycle its
+    answer on an output left, at the target's clock; and the CPU time the gateway spent copying it in and
+    out. A co-simulation runs slower than the hardware would, so messages wait for the simulator in wall
+    time; these spans are what ``hetros advise --verify`` puts in their place (``cosimulated_latency``).
+    Matched by header stamp (what image filters pass on); unstamped messages are not timed."""
+
+    KEPT = 512
+
+    def __init__(self, clock_mhz: float) -> None:
+        self.ns_per_cycle = 1000.0 / clock_mhz
+        self._entered: dict[int, tuple[int, int]] = {}  # stamp -> (cycle, CPU ns copying it in)
+        self._last_out: dict[str, int] = {}  # output topic -> the cycle its last message left
+        self._spans: deque[dict[str, Any]] = deque(maxlen=self.KEPT)
+        self._lock = threading.Lock()
+
+    def entered(self, message: Any, cycle: int, cpu_ns: int) -> None:
+        stamp = header_stamp(message)
+        if stamp is None:
+            return
+        self._entered[stamp] = (cycle, cpu_ns)
+        if len(self._entered) > 4 * self.KEPT:
+            del self._entered[next(iter(self._entered))]
+
+    def left(self, topic: str, message: Any, cycle: int, cpu_ns: int) -> None:
+        stamp = header_stamp(message)
+        went_in = self._entered.get(stamp) if stamp is not None else None
+        begin = max(went_in[0], self._last_out.get(topic, 0)) if went_in is not None else 0
+        self._last_out[topic] = cycle
+        if went_in is None:
+            return
+        with self._lock:
+            self._spans.append({"stamp": stamp, "topic": topic, "sim_ns": round((cycle - begin) * self.ns_per_cycle),
+                                "cpu_ns": went_in[1] + cpu_ns})
+
+    def spans(self) -> list[dict[str, Any]]:
+        with self._lock:
+            return list(self._spans)
 
 
 class _FramesFromRos1:
@@ -436,26 +492,34 @@ def gateway(node: Node) -> None:
         _run_board(node, plan, target, simulation, types)
         return
     top = simulation.top
+    nice = os.environ.get(SIMULATOR_NICE_VARIABLE, "")
+    if nice:
+        try:
+            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), int(nice))
+        except (ValueError, OSError) as exc:
+            raise HardwareError(f"{SIMULATOR_NICE_VARIABLE} must be a nice value this user may set (0..19), not "
+                                f"{nice!r}: {exc}") from None
     log.info("fpga target %s in %s (%d gateway ports; built in %.1f s)", target, simulation.simulator,
              len(top.inputs) + len(top.outputs), simulation.compile_seconds)
     # Amaranth's simulator runs thousands of cycles a second, not millions: it idles after fewer
     idle_cycles = _IDLE_CYCLES if simulation.simulator == "verilator" else _QUIET_AFTER_TRAFFIC
     peer = _ros1_peer(node, plan, target)
     answers = {o.memory_node: o for o in simulation.outputs if o.memory_node}
+    times = CoSimulatedTimes(simulation.clock_mhz)
     in_memory = {p.memory_node: _InMemory(node, p, answers[p.memory_node], types, top)
                  for p in simulation.inputs if p.memory_node}
     inputs: list[_Input | _FramesFromRos1 | _InMemory] = [
         in_memory[port.memory_node] if port.memory_node else
         _FramesFromRos1(node, peer, port, types) if peer is not None and port.ros1
-        else _Input(node, port, types, simulation.components) for port in simulation.inputs]
+        else _Input(node, port, types, simulation.components, times) for port in simulation.inputs]
     asked = {i.port.service: i.asked for i in inputs if isinstance(i, _Input) and i.port.service}
     latched = {t for t, q in plan.ros1_qos.items() if q.keeps_history} | {
         c.name for c in plan.channels.values() if c.qos.keeps_history}
     outputs: list[_Output | _FramesToRos1 | _Completions] = [
         _Completions(port, in_memory[port.memory_node]) if port.memory_node else
         _FramesToRos1(peer, port, types, port.topic in latched) if peer is not None and port.ros1
-        else _Output(node, port, types, asked.get(port.service, deque())) for port in simulation.outputs]
-    node.figures = lambda: _figures(simulation, in_memory)
+        else _Output(node, port, types, asked.get(port.service, deque()), times) for port in simulation.outputs]
+    node.figures = lambda: {**_figures(simulation, in_memory), "spans": times.spans()}
     stop = node.graph.stop
     wall = 0.0
     pushed = popped = last_moved = 0
@@ -485,7 +549,10 @@ def gateway(node: Node) -> None:
                         held = True
                         break
                     try:
-                        out.send(produced)
+                        if isinstance(out, _Output):
+                            out.send(produced, top.cycle)
+                        else:
+                            out.send(produced)
                     finally:
                         del produced
                         top.drop(out.port.index)

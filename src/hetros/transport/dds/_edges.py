@@ -199,8 +199,9 @@ class DdsEdgeReader(Reader):
         return self._codec.decode(memoryview(data)[_HEAD:_HEAD + size])
 
     def pending(self) -> bool:
-        # an empty queue may only mean the waiting thread has not moved what arrived yet: look
-        return bool(self._queue) or self._fill()
+        # an empty queue may only mean the waiting thread has not moved what arrived yet: look, and only
+        # then ask the queue (a fill in that thread holds the lock until what it took is in the queue)
+        return self._fill() or bool(self._queue)
 
     def matched(self) -> int:
         return sum(len(r.get_matched_publications()) for r in self.readers)

@@ -13,6 +13,7 @@ in ``hetros.hw.reference``, the bit-exact specification the tests hold the hardw
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from typing import Any
 
@@ -444,11 +445,17 @@ class Compensation(ImageFilter3x3):
         settle = Signal(range(6))
         scanning, building = self._scanning_lanes, Signal()
         level = self._level
-        # the scan's pipeline, a bin a cycle: the lanes' counts read, held, summed in pairs, summed, added to
-        # the running total, multiplied by 100 (two stages), compared; ``stage[k]`` says which bin stage k holds
-        stage = [(Signal(name=f"scan_valid{k}"), Signal(8, name=f"scan_level{k}")) for k in range(7)]
+        # the scan's pipeline, a bin a cycle: the lanes' counts read, held, summed in pairs, summed four at a
+        # time a stage until one is left (one stage up to eight lanes, three at 64), added to the running
+        # total, multiplied by 100 (two stages), compared; ``stage[k]`` says which bin stage k holds
         pairs = [Signal(_HISTOGRAM_BITS + 1, name=f"pair{i}") for i in range(-(-len(self._hist_reads) // 2))]
-        summed, running, hundred = Signal(32), Signal(34), Signal(41)
+        sums = [pairs]
+        while len(sums[-1]) > 1 or len(sums) == 1:
+            sums.append([Signal(32, name=f"sum{len(sums)}_{i}") for i in range(-(-len(sums[-1]) // 4))])
+        extra = len(sums) - 2  # tree stages past the one a pair-and-sum scan has
+        stage = [(Signal(name=f"scan_valid{k}"), Signal(8, name=f"scan_level{k}")) for k in range(7 + extra)]
+        (summed,) = sums[-1]
+        running, hundred = Signal(34), Signal(41)
         sixty_four_and_thirty_two, four = Signal(41), Signal(41)
         low, high, found_low, found_high = Signal(8), Signal(8), Signal(), Signal()
         ninety_nine, ninety_six, three = Signal(41), Signal(41), Signal(41)  # 99 x count, in two adds too
@@ -463,22 +470,23 @@ class Compensation(ImageFilter3x3):
         with m.If(scanning):
             reads = self._hist_reads
             m.d.sync += [level.eq(level + 1), stage[0][0].eq(level < 256), stage[0][1].eq(level[:8])]
-            m.d.sync += [stage[k + 1][0].eq(stage[k][0]) for k in range(6)]
-            m.d.sync += [stage[k + 1][1].eq(stage[k][1]) for k in range(6)]
+            m.d.sync += [stage[k + 1][0].eq(stage[k][0]) for k in range(len(stage) - 1)]
+            m.d.sync += [stage[k + 1][1].eq(stage[k][1]) for k in range(len(stage) - 1)]
             m.d.sync += [pair.eq(reads[2 * i] + (reads[2 * i + 1] if 2 * i + 1 < len(reads) else 0))
                          for i, pair in enumerate(pairs)]
-            m.d.sync += summed.eq(sum(pairs))
-            with m.If(stage[3][0]):
+            for below, above in itertools.pairwise(sums):
+                m.d.sync += [total.eq(sum(below[4 * i:4 * i + 4])) for i, total in enumerate(above)]
+            with m.If(stage[3 + extra][0]):
                 m.d.sync += running.eq(running + summed)
             # 100 x running in two adds, each a stage of its own (one 48-bit product missed the clock)
             m.d.sync += [sixty_four_and_thirty_two.eq((running << 6) + (running << 5)), four.eq(running << 2),
                          hundred.eq(sixty_four_and_thirty_two + four)]
-            with m.If(stage[6][0]):
+            with m.If(stage[-1][0]):
                 with m.If(~found_low & (hundred >= self._count_lanes)):
-                    m.d.sync += [low.eq(stage[6][1]), found_low.eq(1)]
+                    m.d.sync += [low.eq(stage[-1][1]), found_low.eq(1)]
                 with m.If(~found_high & (hundred >= ninety_nine)):
-                    m.d.sync += [high.eq(stage[6][1]), found_high.eq(1)]
-            with m.If(level == 265):
+                    m.d.sync += [high.eq(stage[-1][1]), found_high.eq(1)]
+            with m.If(level == 265 + extra):
                 m.d.sync += [scanning.eq(0), building.eq(1)]
         # the table: value v stretches to min((v - low) * 255 // span, 255), built from v = 0 up
         value, quotient, remainder = Signal(9), Signal(9), Signal(18)

@@ -50,11 +50,13 @@ def observe(project: Path, plan: Plan, *, duration: float, warmup: float, profil
     """Launch ``project`` for ``duration`` s (``warmup`` s of it not counted) and watch it; keep one
     message of each topic in ``samples`` (encoded). A co-simulation in it runs at the lowest priority, so
     that the software beside it is measured as it would run beside real hardware."""
+    from ..launch import SIMULATOR_NICE_VARIABLE
+
     if not 0 <= warmup < duration:
         raise AdviseError(f"the warm-up must be shorter than the run: {warmup:g} s of {duration:g} s")
     env = dict(os.environ)
     env[PROFILE_VARIABLE] = "1" if profiling else "0"
-    env["HETROS_SIMULATOR_NICE"] = "19"
+    env[SIMULATOR_NICE_VARIABLE] = "19"
     log.parent.mkdir(parents=True, exist_ok=True)
     command = [sys.executable, "-m", "hetros", "launch", str(project), "--duration", f"{duration:g}",
                "--start-timeout", f"{start_timeout:g}"]

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from .observe._foxglove import FoxgloveView
     from .observe._inspect import RunningLaunch, TapEvent
     from .observe._logs import LaunchLogs
+    from .system._gateway import SIMULATOR_NICE_VARIABLE
 
 _WHERE = {
     "Launcher": ".launcher._launcher", "LaunchResult": ".launcher._launcher", "launch": ".launcher._launcher",
@@ -32,6 +33,7 @@ _WHERE = {
     "record": ".observe._bag", "recordable": ".observe._bag", "recording_info": ".observe._bag",
     "FoxgloveView": ".observe._foxglove",
     "RunningLaunch": ".observe._inspect", "TapEvent": ".observe._inspect", "LaunchLogs": ".observe._logs",
+    "SIMULATOR_NICE_VARIABLE": ".system._gateway",
 }
 
 
@@ -40,6 +42,7 @@ __getattr__ = lazy_exports(__name__, _WHERE)
 
 
 __all__ = [
+    "SIMULATOR_NICE_VARIABLE",
     "FoxgloveView",
     "LaunchLogs",
     "LaunchResult",

@@ -99,28 +99,24 @@ def _sobel_plan(width: int, height: int, project: str = "project_fpga.yaml") -> 
 PAPER_CHAIN_SPEEDUP = 13.34
 
 
-def table_chain(quick: bool) -> list[dict[str, Any]]:
+def table_chain(quick: bool, place: bool = True) -> list[dict[str, Any]]:
     """Chain alpha of examples/lane_following (compensation -> blur, rgb8 640x480), all in this run: the
-    software twins (numpy, the vehicle's own stages) timed on >= 30 frames; the target placed and routed
-    (when the open flow is installed) so that the hardware figures use the clock the design achieves; the
-    two execution models co-simulated, every output held to the twins, with the gateways' CPU copies of
-    a frame, timed on this machine, added."""
+    software twins (numpy, the vehicle's own stages) timed on >= 30 frames; then for each stream width the
+    vehicle ships (project_fpga.yaml, 64 bits; project_fpga_wide.yaml, 512) the target placed and routed
+    (when the open flow is installed) so that the hardware figures use the clock that design achieves, and
+    the two execution models co-simulated, every output held to the twins, with the gateways' CPU copies
+    of a frame, timed on this machine, added. Without ``place`` each design's clock is the one its last
+    ``hetros hw bitstream`` recorded (the table's clock column says which)."""
     import statistics
     import sys
-    import tempfile
     import time
 
-    from hetros.hw import available, bitstreams, execution_models, target_clock
     from hetros.hw.reference import Compensation, gaussian_blur
-    from hetros.msg import registry
-    from hetros.project import load_project, plan
 
     example = Path(__file__).resolve().parents[2] / "examples" / "lane_following"
     sys.path.insert(0, str(example))
     vision: Any = importlib.import_module("vision")  # the vehicle's renderer: the frames the camera publishes
 
-    types = registry()
-    cls = types.get("sensor_msgs/msg/Image")
     frames = [vision.render(frame)[0] for frame in range(30)]
     compensate = Compensation()
     software = []
@@ -128,37 +124,81 @@ def table_chain(quick: bool) -> list[dict[str, Any]]:
         started = time.perf_counter()
         gaussian_blur(compensate(image))
         software.append((time.perf_counter() - started) * 1e6)
-    planned = plan(load_project(example / "project_fpga.yaml"))
-    fmax = None
-    if available():
-        folder = Path(tempfile.mkdtemp(prefix="hetros-chain-"))
-        (whole,) = bitstreams(planned, "fpga", folder, types, "target")
-        fmax = whole.fmax_mhz
-        print(f"[bench] chain alpha's target placed and routed: Fmax {fmax:.1f} MHz on {whole.device}")
-    clock = target_clock(planned, "fpga")
     copy_us = _copy_us(frames[0].nbytes)
-    dataflow, sequential = [], []
-    modelled = frames[:2] if quick else frames[:5]
-    for image in modelled:
-        sample = cls(width=640, height=480, encoding="rgb8", step=640 * 3, data=image.reshape(-1))
-        rows = execution_models(planned, "fpga", types, {"/image_raw": sample})
-        dataflow.append(rows[0].microseconds + rows[0].cpu_copies * copy_us)
-        sequential.append(rows[1].microseconds + rows[1].cpu_copies * copy_us)
-        print(f"[bench] chain alpha frame: dataflow {rows[0].cycles:,} cycles, sequential {rows[1].cycles:,}, at "
-              f"{rows[0].clock_mhz:g} MHz")
+    measured: list[_Measured] = [("software (numpy twins, measured)", software, 0, None, None, None)]
+    for project in ("project_fpga.yaml", "project_fpga_wide.yaml"):
+        measured += _chain_in_hardware(example / project, frames[:2] if quick else frames[:5], copy_us, place)
     software_median = statistics.median(software)
     result = []
-    for name, values, copies in (("software (numpy twins, measured)", software, 0),
-                                 ("sequential hardware (co-simulated)", sequential, 4),
-                                 ("dataflow hardware (co-simulated)", dataflow, 2)):
+    for name, values, copies, clock, fmax, width in measured:
         median = statistics.median(values)
         mean = statistics.fmean(values)
         result.append({"version": name, "median_us": median, "mean_us": mean, "frames": len(values),
                        "sigma_over_mean": statistics.pstdev(values) / mean if mean else 0.0,
-                       "speedup_vs_software": software_median / median, "clock_mhz": clock.mhz,
-                       "clock_source": clock.source, "fmax_mhz": fmax, "cpu_copies": copies, "copy_us": copy_us})
+                       "speedup_vs_software": software_median / median,
+                       "clock_mhz": clock.mhz if clock else None, "clock_source": clock.source if clock else "",
+                       "data_width": width,
+                       "fmax_mhz": fmax, "cpu_copies": copies, "copy_us": copy_us})
         print(f"[bench] chain alpha, {name}: {median:,.0f} µs per frame (median of {len(values)})")
     return result
+
+
+# a version of chain alpha: name, µs per frame, CPU copies, the clock it ran at, the Fmax measured, the
+# stream width (the last three None for the software)
+_Measured = tuple[str, list[float], int, Any, float | None, int | None]
+
+
+def _chain_in_hardware(project: Path, frames: list[Any], copy_us: float, place: bool) -> list[_Measured]:
+    """Chain alpha on one of the vehicle's fpga targets: placed and routed first (where the open flow is
+    installed), then each frame co-simulated in both execution models at the clock the design achieves.
+    A target that does not place as one design (the 512-bit one needs more logic cells than the largest
+    ECP5 has) is placed as its parts, each node alone, and runs at the slowest node's Fmax (or
+    ``clock_mhz`` where that is lower): the clock is then an upper bound, and the table says so."""
+    import tempfile
+
+    from hetros import HardwareError
+    from hetros.hw import TargetClock, available, bitstreams, execution_models, target_clock
+    from hetros.msg import registry
+    from hetros.project import load_project, plan
+
+    types = registry()
+    cls = types.get("sensor_msgs/msg/Image")
+    planned = plan(load_project(project))
+    spec = planned.targets["fpga"]
+    fmax = None
+    clock = target_clock(planned, "fpga")
+    if place and available():
+        folder = Path(tempfile.mkdtemp(prefix="hetros-chain-"))
+        try:
+            (whole,) = bitstreams(planned, "fpga", folder, types, "target")
+        except HardwareError as error:
+            said = [line for line in str(error).splitlines() if line.startswith("ERROR")] or [str(error)]
+            reason = said[0].removeprefix("ERROR: ")
+            print(f"[bench] chain alpha's {spec.data_width}-bit target does not place as one design ({reason}): "
+                  "placing each node alone")
+            parts = bitstreams(planned, "fpga", folder, types, "parts")
+            nodes = [row for row in parts if row.design.startswith("node")]
+            slowest = min(nodes, key=lambda row: row.fmax_mhz)
+            fmax = slowest.fmax_mhz
+            clock = TargetClock(min(spec.clock_mhz, fmax), "the slowest node placed alone ("
+                                f"{'; '.join(f'{row.design} {row.fmax_mhz:.1f} MHz on {row.device}' for row in nodes)}"
+                                f"): the whole target needs more logic than the largest ECP5 has ({reason})")
+        else:
+            fmax = whole.fmax_mhz
+            clock = target_clock(planned, "fpga")
+            print(f"[bench] chain alpha's {spec.data_width}-bit target placed and routed: Fmax {fmax:.1f} MHz on "
+                  f"{whole.device} ({whole.router}, {whole.seconds:.0f} s)")
+    dataflow, sequential = [], []
+    for image in frames:
+        sample = cls(width=640, height=480, encoding="rgb8", step=640 * 3, data=image.reshape(-1))
+        rows = execution_models(planned, "fpga", types, {"/image_raw": sample})
+        dataflow.append(rows[0].cycles / clock.mhz + rows[0].cpu_copies * copy_us)
+        sequential.append(rows[1].cycles / clock.mhz + rows[1].cpu_copies * copy_us)
+        print(f"[bench] chain alpha frame, {spec.data_width}-bit: dataflow {rows[0].cycles:,} cycles, sequential "
+              f"{rows[1].cycles:,}, at {clock.mhz:g} MHz")
+    return [(f"sequential hardware, {spec.data_width}-bit (co-simulated)", sequential, 4, clock, fmax,
+             spec.data_width),
+            (f"dataflow hardware, {spec.data_width}-bit (co-simulated)", dataflow, 2, clock, fmax, spec.data_width)]
 
 
 def _copy_us(size: int) -> float:
@@ -334,22 +374,23 @@ def markdown(one: list[dict[str, Any]], two: list[dict[str, Any]], cosim: list[d
         lines.append(f"| {row['simulator']} | {row['frame']} | {row['cycles']:,} | {row['simulated_us']:.0f} µs | "
                      f"{row['wall_ms']:.1f} ms | {row['cycles_per_s'] / 1e6:.2f} M | "
                      f"{'yes' if row['bit_exact'] else 'NO'} |")
-    clock = chain[0]["clock_mhz"] if chain else CLOCK_MHZ
-    lines += ["", "### Chain alpha (fpgaDDS Table III's shape): the vehicle's compensation -> blur, 640x480 rgb8, "
-              f"at {clock:g} MHz", "",
-              "| version | per frame (median) | frames | sigma/mean | CPU copies | speed-up vs software | "
-              "fpgaDDS chain alpha (paper) |", "|---|---|---|---|---|---|---|"]
+    lines += ["", "### Chain alpha (fpgaDDS Table III's shape): the vehicle's compensation -> blur, 640x480 rgb8", "",
+              "| version | clock | per frame (median) | frames | sigma/mean | CPU copies | speed-up vs software | "
+              "fpgaDDS chain alpha (paper) |", "|---|---|---|---|---|---|---|---|"]
     for row in chain:
         paper = f"{PAPER_CHAIN_SPEEDUP}x" if row["version"].startswith("dataflow") else "-"
-        lines.append(f"| {row['version']} | {row['median_us']:,.0f} µs | {row['frames']} | "
+        clock = f"{row['clock_mhz']:g} MHz" if row["clock_mhz"] else "-"
+        lines.append(f"| {row['version']} | {clock} | {row['median_us']:,.0f} µs | {row['frames']} | "
                      f"{row['sigma_over_mean']:.3f} | {row['cpu_copies']} | {row['speedup_vs_software']:.2f}x | "
                      f"{paper} |")
     if chain:
-        lines += ["", f"The clock: {chain[0]['clock_source']}. Software is this machine's numpy on one core (the "
+        clocks = sorted({f"{row['data_width']} bits, {row['clock_source']}" for row in chain if row["clock_mhz"]})
+        lines += ["", f"The clocks: {'; '.join(clocks)}. Software is this machine's numpy on one core (the "
                   "vehicle's own stages, the twins the hardware is held to bit for bit); hardware is co-simulated "
-                  "cycles at that clock, a whole 64-bit beat (8 bytes of rgb8) a cycle, plus the gateways' CPU "
-                  f"copies of a frame at {chain[0]['copy_us']:.0f} µs each, timed here. The paper's chain alpha adds "
-                  "the projection and runs on a ZCU104's Cortex-A53: a shape to compare, not the same work."]
+                  "cycles at that clock, a whole beat (8 bytes of rgb8 at 64 bits, 64 at 512) a cycle, plus the "
+                  f"gateways' CPU copies of a frame at {chain[0]['copy_us']:.0f} µs each, timed here. The paper's "
+                  "chain alpha adds the projection and runs on a ZCU104's Cortex-A53: a shape to compare, not the "
+                  "same work."]
     if memory:
         lines += ["", "### The Sobel node streamed or reading in memory (640x480 mono8, 100 MHz, co-simulated)", "",
                   "| version | cycles per frame | vs streaming | CPU copies per frame | bytes copied per frame |",
@@ -406,6 +447,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="sizes up to 196 kB, two networks")
     parser.add_argument("--out", default="out/bench", help="folder for hw.md, hw.json, hw.png")
+    parser.add_argument("--recorded-clock", action="store_true",
+                        help="chain alpha at the Fmax each target's last `hetros hw bitstream` recorded, rather than "
+                             "placing and routing it again (the 512-bit target takes most of an hour)")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -414,7 +458,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     one, two, cosim = table_one(args.quick), table_two(args.quick), table_cosim(args.quick)
     fmax = table_fmax(args.quick)
-    chain = table_chain(args.quick)
+    chain = table_chain(args.quick, place=not args.recorded_clock)
     memory = table_memory(args.quick)
     text = markdown(one, two, cosim, chain, fmax, memory)
     print("\n" + text)

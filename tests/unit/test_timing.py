@@ -92,3 +92,17 @@ def test_figures_use_the_achieved_clock_where_it_is_below_clock_mhz(tmp_path: Pa
     assert fast.mhz == 100.0 and "which place and route met" in fast.source and "187.0 MHz" in fast.source
     (tmp_path / "hetros" / "fmax" / "k3.json").write_text("{not json")
     assert target_clock(plan, "fpga", "k3").mhz == 100.0  # a damaged record is no figure
+
+
+def test_a_design_too_big_for_the_device_is_named_by_the_cells_nextpnr_lacks() -> None:
+    """nextpnr's utilisation table of the 512-bit lane-following target (Yosys counted 44,367 LUT4s, so the
+    flow chose an LFE5U-85F; carry chains and lone flip-flops take the rest): only what overflows counts."""
+    from hetros.hw.flow._bitstream import overfull
+
+    log = ("Info: \t        ECLKBRIDGECS:       0/      2     0%\n"
+           "Info: \t          TRELLIS_FF:   75721/  83640    90%\n"
+           "Info: \t        TRELLIS_COMB:   85029/  83640   101%\n"
+           "Info: \t        TRELLIS_RAMW:    1314/  10455    12%\n"
+           "ERROR: Unable to find legal placement for all cells, design is probably at utilisation limit.\n")
+    assert overfull(log) == [("TRELLIS_COMB", 85029, 83640)]
+    assert overfull("Info: TRELLIS_FF: 10/ 20 50%") == []

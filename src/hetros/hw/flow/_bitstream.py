@@ -189,9 +189,38 @@ def build_bitstream(verilog: str, top: str, out: Path, clock_mhz: float, design:
     stat = (out / "stat.txt").read_text()
     luts = sum(int(n) for n in re.findall(r"^\s*(\d+)\s+LUT4\s*$", stat, re.MULTILINE))
     ffs = sum(int(n) for n in re.findall(r"^\s*(\d+)\s+TRELLIS_FF\s*$", stat, re.MULTILINE))
-    flag, package, capacity = next(((f, p, c) for f, p, c in _DEVICES if luts <= 0.8 * c), _DEVICES[-1])
-    if luts > capacity:
-        raise HardwareError(f"{design} needs {luts} LUT4s, more than the largest ECP5 ({capacity})")
+    first = next((i for i, (_f, _p, c) in enumerate(_DEVICES) if luts <= 0.8 * c), len(_DEVICES) - 1)
+    if luts > _DEVICES[-1][2]:
+        raise HardwareError(f"{design} needs {luts} LUT4s, more than the largest ECP5 ({_DEVICES[-1][2]})")
+    for flag, package, _capacity in _DEVICES[first:]:
+        device = f"LFE5U{flag.replace('--', '-').upper()}F-{package}"
+        try:
+            router = _place_and_route(nextpnr, flag, package, clock_mhz, seed, out)
+            break
+        except HardwareError as error:
+            if "legal placement" not in str(error):
+                raise
+            if flag != _DEVICES[-1][0]:
+                continue  # the next device up may take it
+            over = overfull(str(error))
+            needs = "; ".join(f"{used:,} {cell} of its {have:,}" for cell, used, have in over) or "more than it has"
+            raise HardwareError(f"{design} does not fit {device}, the largest ECP5 this flow knows, though synthesis "
+                                f"counted {luts:,} LUT4s: nextpnr needs {needs} (the files are in {out}); narrow "
+                                "the target's data_width, or place its nodes one at a time (`hetros hw bitstream "
+                                "--parts parts`)") from error
+    bitstream = out / (re.sub(r"[^A-Za-z0-9_.-]+", "_", design).strip("_") + ".bit")
+    _run([ecppack, "design.config", bitstream.name], out, "ecppack")
+    report = json.loads((out / "report.json").read_text())
+    clocks = report.get("fmax", {})
+    if not clocks:
+        raise HardwareError(f"nextpnr reported no clock for {design}: the design has no clocked logic")
+    fmax = min(float(c["achieved"]) for c in clocks.values())
+    return Bitstream(design, device, bitstream, fmax, clock_mhz, luts, ffs, time.perf_counter() - started,
+                     critical_path(report), router)
+
+
+def _place_and_route(nextpnr: str, flag: str, package: str, clock_mhz: float, seed: int, out: Path) -> str:
+    """nextpnr on the netlist in ``out`` for one device; which router finished."""
     placed = [nextpnr, flag, "--package", package, "--json", "netlist.json", "--textcfg", "design.config",
               "--freq", f"{clock_mhz:g}", "--report", "report.json", "--seed", str(seed), "--timing-allow-fail"]
     if package in _CLOCK_PINS:
@@ -202,21 +231,20 @@ def build_bitstream(verilog: str, top: str, out: Path, clock_mhz: float, design:
     # nextpnr's first router gives the better Fmax (Compensation alone: 108.0 MHz against 97.3), but on a
     # congested design it may not finish: the lane-following target (two filters, a hardware topic,
     # gateways: 53,000 arcs) ran 40 minutes without finishing on a 2-CPU machine; router2 routes it in one
-    router = "router1"
     try:
-        _run([*placed, "--router", router], out, "nextpnr-ecp5", timeout=ROUTER1_SECONDS)
+        _run([*placed, "--router", "router1"], out, "nextpnr-ecp5", timeout=ROUTER1_SECONDS)
     except _TimedOut:
-        router = "router2"
-        _run([*placed, "--router", router], out, "nextpnr-ecp5")
-    bitstream = out / (re.sub(r"[^A-Za-z0-9_.-]+", "_", design).strip("_") + ".bit")
-    _run([ecppack, "design.config", bitstream.name], out, "ecppack")
-    report = json.loads((out / "report.json").read_text())
-    clocks = report.get("fmax", {})
-    if not clocks:
-        raise HardwareError(f"nextpnr reported no clock for {design}: the design has no clocked logic")
-    fmax = min(float(c["achieved"]) for c in clocks.values())
-    return Bitstream(design, f"LFE5U{flag.replace('--', '-').upper()}F-{package}", bitstream, fmax, clock_mhz,
-                     luts, ffs, time.perf_counter() - started, critical_path(report), router)
+        _run([*placed, "--router", "router2"], out, "nextpnr-ecp5")
+        return "router2"
+    return "router1"
+
+
+def overfull(log: str) -> list[tuple[str, int, int]]:
+    """The cells of nextpnr's utilisation table (``TRELLIS_COMB:  85029/ 83640   101%``) a design needs more of
+    than the device has: Yosys's LUT4 count leaves out carry chains and the flip-flops no LUT shares a slice
+    with, so a design it counts as fitting can still be too big."""
+    found = re.findall(r"(\w+):\s+(\d+)/\s*(\d+)\s+\d+%", log)
+    return [(cell, int(used), int(have)) for cell, used, have in found if int(used) > int(have)]
 
 
 class _TimedOut(HardwareError):

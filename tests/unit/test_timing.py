@@ -106,3 +106,19 @@ def test_a_design_too_big_for_the_device_is_named_by_the_cells_nextpnr_lacks() -
            "ERROR: Unable to find legal placement for all cells, design is probably at utilisation limit.\n")
     assert overfull(log) == [("TRELLIS_COMB", 85029, 83640)]
     assert overfull("Info: TRELLIS_FF: 10/ 20 50%") == []
+
+
+def test_the_device_is_chosen_by_logic_cells_and_block_rams_not_lut4s_alone() -> None:
+    """Yosys's stat of the 512-bit lane-following target and of its compensation alone: by LUT4s they
+    would take an LFE5U-85F at 53 % and an LFE5U-45F; flip-flops and carry cells fill them, and the
+    compensation's 128 block RAMs fit only the 85F's 208. A small design still takes the smallest part."""
+    from hetros.hw.flow._bitstream import logic_cells, smallest_device
+
+    target = ("   136305 cells\n    11972   CCU2C\n      128   DP16KD\n    44367   LUT4\n     2767   PFUMX\n"
+              "     1314   TRELLIS_DPR16X4\n    75721   TRELLIS_FF\n")
+    assert logic_cells(target) == 75721
+    assert smallest_device(target) == 2
+    compensation = "     5000   CCU2C\n      128   DP16KD\n    30000   LUT4\n    20000   TRELLIS_FF\n"
+    assert logic_cells(compensation) == 40000 and smallest_device(compensation) == 2
+    small = "      120   CCU2C\n        4   DP16KD\n     2400   LUT4\n     2200   TRELLIS_FF\n"
+    assert logic_cells(small) == 2640 and smallest_device(small) == 0

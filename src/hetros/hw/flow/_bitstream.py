@@ -25,8 +25,8 @@ from pathlib import Path
 
 from ..._errors import HardwareError
 
-# ECP5 devices nextpnr knows, smallest first: (nextpnr flag, package, LUT4s)
-_DEVICES = (("--25k", "CABGA381", 24_288), ("--45k", "CABGA381", 43_848), ("--85k", "CABGA756", 83_640))
+# ECP5 devices nextpnr knows, smallest first: (nextpnr flag, package, logic cells, block RAMs)
+_DEVICES = (("--25k", "CABGA381", 24_288, 56), ("--45k", "CABGA381", 43_848, 108), ("--85k", "CABGA756", 83_640, 208))
 HARNESS_TOP = "hetros_fmax"
 ROUTER1_SECONDS = 600.0  # then router2 takes over (see build_bitstream)
 _CLOCK_PINS = {"CABGA381": "G2"}  # a PCLK input of every ECP5 in this package (ULX3S's 25 MHz clock pin)
@@ -187,18 +187,17 @@ def build_bitstream(verilog: str, top: str, out: Path, clock_mhz: float, design:
               "tee -q -o stat.txt stat")
     _run([yosys, "-q", "-p", script], out, "Yosys (synth_ecp5)")
     stat = (out / "stat.txt").read_text()
-    luts = sum(int(n) for n in re.findall(r"^\s*(\d+)\s+LUT4\s*$", stat, re.MULTILINE))
-    ffs = sum(int(n) for n in re.findall(r"^\s*(\d+)\s+TRELLIS_FF\s*$", stat, re.MULTILINE))
-    first = next((i for i, (_f, _p, c) in enumerate(_DEVICES) if luts <= 0.8 * c), len(_DEVICES) - 1)
+    luts, ffs = _count(stat, "LUT4"), _count(stat, "TRELLIS_FF")
+    first = smallest_device(stat)
     if luts > _DEVICES[-1][2]:
         raise HardwareError(f"{design} needs {luts} LUT4s, more than the largest ECP5 ({_DEVICES[-1][2]})")
-    for flag, package, _capacity in _DEVICES[first:]:
+    for flag, package, _cells, _brams in _DEVICES[first:]:
         device = f"LFE5U{flag.replace('--', '-').upper()}F-{package}"
         try:
             router = _place_and_route(nextpnr, flag, package, clock_mhz, seed, out)
             break
         except HardwareError as error:
-            if "legal placement" not in str(error):
+            if "legal placement" not in str(error) and "Unable to place cell" not in str(error):
                 raise
             if flag != _DEVICES[-1][0]:
                 continue  # the next device up may take it
@@ -237,6 +236,26 @@ def _place_and_route(nextpnr: str, flag: str, package: str, clock_mhz: float, se
         _run([*placed, "--router", "router2"], out, "nextpnr-ecp5")
         return "router2"
     return "router1"
+
+
+def _count(stat: str, cell: str) -> int:
+    return sum(int(n) for n in re.findall(rf"^\s*(\d+)\s+{cell}\s*$", stat, re.MULTILINE))
+
+
+def smallest_device(stat: str) -> int:
+    """The index in ``_DEVICES`` of the smallest ECP5 whose logic cells a Yosys ``stat`` fills to at most
+    80 % and whose block RAMs it fits (the largest where none does: nextpnr then says what is short)."""
+    cells, brams = logic_cells(stat), _count(stat, "DP16KD")
+    return next((i for i, (_f, _p, have, rams) in enumerate(_DEVICES) if cells <= 0.8 * have and brams <= rams),
+                len(_DEVICES) - 1)
+
+
+def logic_cells(stat: str) -> int:
+    """What a Yosys ``stat`` of an ECP5 netlist will take of a device's logic cells, to choose the device:
+    a LUT4 each, two for a carry cell (CCU2C) and a distributed RAM (TRELLIS_DPR16X4), and at least one
+    for each flip-flop (a slice pairs them; a flip-flop with no LUT still takes one's place)."""
+    luts = _count(stat, "LUT4") + 2 * (_count(stat, "CCU2C") + _count(stat, "TRELLIS_DPR16X4"))
+    return max(luts, _count(stat, "TRELLIS_FF"))
 
 
 def overfull(log: str) -> list[tuple[str, int, int]]:

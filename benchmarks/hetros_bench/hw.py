@@ -189,16 +189,19 @@ def _chain_in_hardware(project: Path, frames: list[Any], copy_us: float, place: 
             print(f"[bench] chain alpha's {spec.data_width}-bit target placed and routed: Fmax {fmax:.1f} MHz on "
                   f"{whole.device} ({whole.router}, {whole.seconds:.0f} s)")
     dataflow, sequential = [], []
+    copies = (0, 0)
     for image in frames:
         sample = cls(width=640, height=480, encoding="rgb8", step=640 * 3, data=image.reshape(-1))
         rows = execution_models(planned, "fpga", types, {"/image_raw": sample})
         dataflow.append(rows[0].cycles / clock.mhz + rows[0].cpu_copies * copy_us)
         sequential.append(rows[1].cycles / clock.mhz + rows[1].cpu_copies * copy_us)
+        copies = (rows[1].cpu_copies, rows[0].cpu_copies)
         print(f"[bench] chain alpha frame, {spec.data_width}-bit: dataflow {rows[0].cycles:,} cycles, sequential "
               f"{rows[1].cycles:,}, at {clock.mhz:g} MHz")
-    return [(f"sequential hardware, {spec.data_width}-bit (co-simulated)", sequential, 4, clock, fmax,
+    return [(f"sequential hardware, {spec.data_width}-bit (co-simulated)", sequential, copies[0], clock, fmax,
              spec.data_width),
-            (f"dataflow hardware, {spec.data_width}-bit (co-simulated)", dataflow, 2, clock, fmax, spec.data_width)]
+            (f"dataflow hardware, {spec.data_width}-bit (co-simulated)", dataflow, copies[1], clock, fmax,
+             spec.data_width)]
 
 
 def _copy_us(size: int) -> float:

@@ -28,7 +28,7 @@ from ..._errors import HardwareError
 from ..streams._axi import axi_stream
 from ..streams._bytes import bytes_in, bytes_out
 from ..streams._ports import port_part
-from ._lanes import Pipe, elaborate_lanes, median_network, stages_of
+from ._lanes import Pipe, elaborate_lanes, exchange, median_network, stages_of
 
 # bytes per pixel of the encodings whose pixels are bytes (sensor_msgs/image_encodings)
 _BYTES_PER_PIXEL = {"mono8": 1, "8UC1": 1, "8SC1": 1, "rgb8": 3, "bgr8": 3, "8UC3": 3, "rgba8": 4, "bgra8": 4,
@@ -308,6 +308,11 @@ def _row_sum(row: list[Value]) -> Value:
     return row[0] + (row[1] << 1) + row[2]
 
 
+def _column_sum(pipe: Pipe, column: list[Value]) -> Value:
+    """``_row_sum`` of a window's column, a stage later (the lanes that share the column share this)."""
+    return pipe.shared("column sum", column, lambda: pipe.reg(_row_sum(column), "column"))
+
+
 def _widened(value: Value) -> Value:
     """An unsigned sum as a signed value of one more bit, so differences keep their sign."""
     return Cat(value, Const(0, 1)).as_signed()
@@ -356,16 +361,18 @@ class GaussianBlur(ImageFilter3x3):
     kernel_stages = 2
 
     def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
-        columns = [pipe.reg(_row_sum([top[i], middle[i], bottom[i]]), "column") for i in range(3)]
+        columns = [_column_sum(pipe, [top[i], middle[i], bottom[i]]) for i in range(3)]
         total = columns[0] + (columns[1] << 1) + columns[2] + 8
         return pipe.reg((total >> 4)[:8], "blur")
 
 
 _HISTOGRAM_BITS = 24  # a lane's count of one value: 16 M bytes, a 4K rgb8 frame is 3.1 M a lane
 
-# Paeth's 19 compare-exchanges that leave the median of nine in position 4
+# Paeth's 19 compare-exchanges that leave the median of nine in position 4: the first nine sort each triple,
+# the last ten take the median of three sorted triples (lows at 0, 3, 6; middles 1, 4, 7; highs 2, 5, 8)
 _MEDIAN9 = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8), (0, 3), (5, 8), (4, 7),
             (3, 6), (1, 4), (2, 5), (4, 7), (4, 2), (6, 4), (4, 2))
+_MEDIAN9_OF_SORTED_TRIPLES = _MEDIAN9[9:]
 
 
 class Compensation(ImageFilter3x3):
@@ -386,12 +393,32 @@ class Compensation(ImageFilter3x3):
                 Mux(values[a] < values[b], values[b], values[a])
         return values[4]
 
-    _EVERY = 2  # compare-exchanges between two registers of the full-width median
-    kernel_stages = stages_of(_MEDIAN9, _EVERY)
+    # Two compare-exchanges in series between registers. A lane's window shares its byte columns with the
+    # lanes a pixel to each side, so each column of the beat is sorted once (three exchanges, two stages)
+    # and each lane runs Paeth's last ten on its three sorted columns: the median of nine is the same
+    # whether the rows or the columns are sorted first, and only the columns are shared.
+    _EVERY = 2
+    kernel_stages = 2 + stages_of(_MEDIAN9_OF_SORTED_TRIPLES, _EVERY, 9)
     post_stages = 2
 
     def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
-        return median_network(pipe, [*top, *middle, *bottom], _MEDIAN9, self._EVERY)
+        columns = [self._sorted_column(pipe, [top[i], middle[i], bottom[i]]) for i in range(3)]
+        return median_network(pipe, [v for column in columns for v in column], _MEDIAN9_OF_SORTED_TRIPLES,
+                              self._EVERY, keep=4)
+
+    @staticmethod
+    def _sorted_column(pipe: Pipe, column: list[Value]) -> list[Value]:
+        """``column`` low to high, two stages later (the lanes that share it share this)."""
+
+        def sort() -> list[Value]:
+            low, middle, high = column
+            middle, high = exchange(middle, high)
+            low, middle = exchange(low, middle)
+            low, middle, high = (pipe.reg(v, "column") for v in (low, middle, high))
+            middle, high = exchange(middle, high)
+            return [pipe.reg(v, "column") for v in (low, middle, high)]
+
+        return pipe.shared("sorted column", column, sort)
 
     def post_lanes(self, m: Module, pipe: Pipe, values: list[Value]) -> list[Value]:
         """Each lane looks its byte up in its own copy of the stretch table (a block RAM read, then held)."""

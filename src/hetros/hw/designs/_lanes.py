@@ -20,8 +20,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any, Protocol
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol, TypeVar
 
 from amaranth import Array, Cat, Const, Module, Mux, Signal, signed, unsigned
 from amaranth.hdl import Value
@@ -30,6 +30,8 @@ from amaranth.lib.memory import Memory
 
 from ..._errors import HardwareError
 from ..streams._axi import register_slice
+
+_Made = TypeVar("_Made")
 
 # steps between a beat coming in and the window whose bottom row it completes going out
 _LAG = 3
@@ -45,6 +47,16 @@ class Pipe:
     def __init__(self, m: Module) -> None:
         self.m, self.advance = m, Const(1, 1)
         self._count = 0
+        self._shared: dict[tuple[object, ...], Any] = {}
+
+    def shared(self, what: str, values: Sequence[Value], make: Callable[[], _Made]) -> _Made:
+        """``make()`` once for ``what`` on the same bytes of the same beat: a lane's window shares its
+        columns with the lanes a pixel to each side, and so does the work done on a column alone."""
+        key = (what, *((id(getattr(v, "value", v)), getattr(v, "start", 0), getattr(v, "stop", 0)) for v in values))
+        if key not in self._shared:
+            self._shared[key] = make()
+        made: _Made = self._shared[key]
+        return made
 
     def reg(self, value: Value, name: str = "stage") -> Signal:
         self._count += 1
@@ -268,8 +280,8 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
                 m.d.sync += column.eq(column + lanes)
             with m.Else():
                 m.d.sync += [column.eq(wrapped[:bits]), row.eq(Mux(row == 2, 2, row + 1))]
-        in_image = beyond > lane
-        above_last_row = below > lane
+        in_image = _exceeds(beyond, lane, shift)
+        above_last_row = _exceeds(below, lane, shift)
         interior.append((row == 2) & above_last_row & (column >= channels) & (column < right))
         pixel.append((row != 0) & in_image)
         header.append(row == 0)
@@ -312,6 +324,13 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     m.d.comb += busy.eq(waiting)
 
 
+def _exceeds(count: Value, lane: int, shift: int) -> Value:
+    """``count > lane`` for a lane of the beat (``lane < 2 ** shift``), from the count's low bits and one test
+    of its high ones, which the lanes share: a wide comparison a lane was a carry chain a lane."""
+    sign = count[-1]
+    return ~sign & ((count[shift:-1] != 0) | (count[:shift] > lane))
+
+
 def _log2(value: int) -> int:
     if value < 4 or value & (value - 1):
         raise HardwareError(f"a full-width filter needs a power-of-two data_width of at least 32 bits, not "
@@ -319,19 +338,34 @@ def _log2(value: int) -> int:
     return value.bit_length() - 1
 
 
-def median_network(pipe: Pipe, values: Sequence[Value], pairs: Sequence[tuple[int, int]], every: int) -> Value:
-    """Compare-exchange ``values`` by ``pairs``, a register stage after each ``every`` of them."""
+def exchange(a: Value, b: Value) -> tuple[Value, Value]:
+    """``a`` and ``b``, the lower first."""
+    return Mux(a < b, a, b), Mux(a < b, b, a)
+
+
+def median_network(pipe: Pipe, values: Sequence[Value], pairs: Sequence[tuple[int, int]], every: int,
+                   keep: int) -> Value:
+    """Compare-exchange ``values`` by ``pairs`` (each puts the lower value at its first index) and give the
+    value left at ``keep``, with a register stage after each ``every`` levels of the network (exchanges that
+    run side by side make a level). Only the values a later pair or ``keep`` reads are registered: the
+    synthesizer would remove the others, at a cost in netlist size and time."""
     held = list(values)
+    level = [0] * len(held)
     for index, (x, y) in enumerate(pairs):
-        low = Mux(held[x] < held[y], held[x], held[y])
-        high = Mux(held[x] < held[y], held[y], held[x])
-        held[x], held[y] = low, high
-        if (index + 1) % every == 0 or index == len(pairs) - 1:
-            held = [pipe.reg(v, "median") for v in held]
-    return held[len(held) // 2]
+        if max(level[x], level[y]) == every:
+            live = {i for pair in pairs[index:] for i in pair} | {keep}
+            held = [pipe.reg(v, "median") if i in live else v for i, v in enumerate(held)]
+            level = [0] * len(held)
+        held[x], held[y] = exchange(held[x], held[y])
+        level[x] = level[y] = max(level[x], level[y]) + 1
+    return pipe.reg(held[keep], "median")
 
 
-def stages_of(pairs: Sequence[Any], every: int) -> int:
-    return -(-len(pairs) // every)
-
-
+def stages_of(pairs: Sequence[tuple[int, int]], every: int, width: int) -> int:
+    """The register stages :func:`median_network` puts into ``pairs`` on ``width`` values."""
+    level, stages = [0] * width, 1
+    for x, y in pairs:
+        if max(level[x], level[y]) == every:
+            level, stages = [0] * width, stages + 1
+        level[x] = level[y] = max(level[x], level[y]) + 1
+    return stages

@@ -94,6 +94,25 @@ def test_figures_use_the_achieved_clock_where_it_is_below_clock_mhz(tmp_path: Pa
     assert target_clock(plan, "fpga", "k3").mhz == 100.0  # a damaged record is no figure
 
 
+def test_a_target_placed_node_by_node_is_bounded_by_its_slowest_node(tmp_path: Path,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--parts parts`` (or a target too big for any ECP5) records its slowest node alone as an upper bound,
+    said as such, and never in place of a record of the whole target."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    plan = Plan(name="p", root=str(tmp_path), message_paths=(), nodes={}, channels={}, edges=(),
+                targets={"fpga": TargetPlan(name="fpga", kind="fpga", clock_mhz=100.0)})
+    record_fmax("k1", 91.5, "LFE5U-85KF-CABGA756", "node blur: a -> b", nodes_alone=True)
+    bound = target_clock(plan, "fpga", "k1")
+    assert bound.mhz == 91.5
+    assert "its slowest node placed alone on LFE5U-85KF-CABGA756" in bound.source and "upper bound" in bound.source
+    record_fmax("k1", 104.0, "LFE5U-85KF-CABGA756", "", nodes_alone=True)
+    assert target_clock(plan, "fpga", "k1").mhz == 100.0 and "upper bound" in target_clock(plan, "fpga", "k1").source
+    record_fmax("k1", 87.0, "LFE5U-85KF-CABGA756", "a -> b")
+    record_fmax("k1", 99.0, "LFE5U-85KF-CABGA756", "node blur", nodes_alone=True)
+    whole = target_clock(plan, "fpga", "k1")
+    assert whole.mhz == 87.0 and "upper bound" not in whole.source
+
+
 def test_a_design_too_big_for_the_device_is_named_by_the_cells_nextpnr_lacks() -> None:
     """nextpnr's utilisation table of the 512-bit lane-following target (Yosys counted 44,367 LUT4s, so the
     flow chose an LFE5U-85F; carry chains and lone flip-flops take the rest): only what overflows counts."""

@@ -305,10 +305,19 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
                     whole.critical.describe() if whole.critical else "")
         made.append(whole)
     if parts in ("parts", "all"):
+        nodes = []
         for name, component in hardware_nodes(plan, target).items():
             text = amaranth_verilog.convert(component, name="hetros_node")
-            made.append(build_bitstream(text, "hetros_node", out / f"node_{name}", spec.clock_mhz, f"node {name}",
-                                        verilog_sources({name: component})))
+            nodes.append(build_bitstream(text, "hetros_node", out / f"node_{name}", spec.clock_mhz, f"node {name}",
+                                         verilog_sources({name: component})))
+        if nodes:
+            # the target's clock can be no faster than its slowest node alone: where the whole target is not
+            # placed (too big for any ECP5, or --parts parts), that bound is the figure to use
+            slowest = min(nodes, key=lambda row: row.fmax_mhz)
+            record_fmax(target_key(plan, target), slowest.fmax_mhz, slowest.device,
+                        f"{slowest.design}: " + (slowest.critical.describe() if slowest.critical else ""),
+                        nodes_alone=True)
+        made += nodes
         for topic in hardware_topics(plan, target):
             text, _top = topic_verilog(len(topic.publishers), len(topic.subscribers), spec.data_width,
                                        topic.fifo_depth)

@@ -39,9 +39,12 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
 
     spec = plan.targets[target]
     parts = [amaranth.__version__, str(spec.data_width), repr(topics)]
-    hardware = Path(__file__).parents[1]  # every module of hetros.hw, and the simulator's C++ harness
-    files = sorted(hardware.rglob("*.py")) + sorted(hardware.rglob("*.cpp")) + sorted(Path(plan.root).rglob("*.py")) \
-        + sources
+    # every module of hetros.hw that shapes a design or its simulator (its C++ harness too); not the flow that
+    # places it nor this record of what placing gave, so that improving those keeps the figures
+    hardware = Path(__file__).parents[1]
+    shaping = [path for path in sorted(hardware.rglob("*.py")) + sorted(hardware.rglob("*.cpp"))
+               if "flow" not in path.relative_to(hardware).parts and path.resolve() != Path(__file__).resolve()]
+    files = shaping + sorted(Path(plan.root).rglob("*.py")) + sources
     for name, node in sorted(plan.nodes.items()):
         if node.target == target and plan.in_hardware(name):
             parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}:{node.memory}")
@@ -72,11 +75,18 @@ def _fmax_file(key: str) -> Path:
     return Path(base) / "hetros" / "fmax" / f"{key}.json"
 
 
-def record_fmax(key: str, fmax_mhz: float, device: str, critical_path: str) -> None:
-    """Remember what place and route achieved for the design ``key`` (``hetros hw bitstream``)."""
+def record_fmax(key: str, fmax_mhz: float, device: str, critical_path: str, nodes_alone: bool = False) -> None:
+    """Remember what place and route achieved for the design ``key`` (``hetros hw bitstream``).
+
+    ``nodes_alone``: the figure is the slowest of the target's nodes placed one at a time (``--parts
+    parts``, or a target too big for any ECP5), an upper bound of the whole target's clock. It never
+    replaces the record of the whole target placed as one design, which is the better figure."""
     path = _fmax_file(key)
+    if nodes_alone and _read_record(key).get("scope") == "target":
+        return
     path.parent.mkdir(parents=True, exist_ok=True)
     record = {"fmax_mhz": fmax_mhz, "device": device, "critical_path": critical_path,
+              "scope": "nodes alone" if nodes_alone else "target",
               "measured": time.strftime("%Y-%m-%d %H:%M", time.localtime())}
     temporary = path.with_suffix(f".{os.getpid()}.tmp")
     temporary.write_text(json.dumps(record), encoding="utf-8")
@@ -86,15 +96,29 @@ def record_fmax(key: str, fmax_mhz: float, device: str, critical_path: str) -> N
 def target_clock(plan: Plan, target: str, key: str | None = None) -> TargetClock:
     """The lower of the target's ``clock_mhz`` and the Fmax last measured for this very design."""
     wanted = plan.targets[target].clock_mhz
+    record = _read_record(key or target_key(plan, target))
     try:
-        record = json.loads(_fmax_file(key or target_key(plan, target)).read_text(encoding="utf-8"))
-        fmax = float(record["fmax_mhz"])
+        fmax = float(str(record["fmax_mhz"]))
         measured, device = str(record.get("measured", "")), str(record.get("device", "ECP5"))
-    except (OSError, ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError):
         return TargetClock(wanted, "clock_mhz; no `hetros hw bitstream` of this design yet")
     if not fmax > 0:
         return TargetClock(wanted, "clock_mhz; the recorded Fmax is not a clock")
+    alone = record.get("scope") == "nodes alone"
+    where = f"its slowest node placed alone on {device}" if alone else device
+    bound = ("; an upper bound: the whole target has not been placed as one design (`hetros hw bitstream` without "
+             "--parts)") if alone else ""
     if fmax < wanted:
-        return TargetClock(fmax, f"the Fmax place and route achieved on {device} ({measured}), below clock_mhz "
-                                 f"{wanted:g}")
-    return TargetClock(wanted, f"clock_mhz, which place and route met on {device} ({measured}: {fmax:.1f} MHz)")
+        return TargetClock(fmax, f"the Fmax place and route achieved on {where} ({measured}), below clock_mhz "
+                                 f"{wanted:g}{bound}")
+    return TargetClock(wanted, f"clock_mhz, which place and route met on {where} ({measured}: {fmax:.1f} MHz)"
+                               f"{bound}")
+
+
+def _read_record(key: str) -> dict[str, object]:
+    """The record of ``key``; empty where there is none or it is damaged (then it is no figure)."""
+    try:
+        record = json.loads(_fmax_file(key).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return record if isinstance(record, dict) else {}

@@ -182,6 +182,19 @@ def test_measured_chains_match_by_stamp_or_by_the_newest_message() -> None:
     assert measure(first, []) is None
 
 
+def test_a_mapping_launched_several_times_is_the_median_of_its_launches() -> None:
+    from hetros.advise._chains import ChainLatency, over_launches
+
+    launches = [ChainLatency(0.4, 0.9, 500, "header stamp"), None, ChainLatency(0.8, 1.6, 480, "header stamp"),
+                ChainLatency(0.5, 1.1, 490, "header stamp")]
+    combined = over_launches(launches)
+    assert combined is not None
+    assert (combined.p50_ms, combined.p99_ms, combined.samples) == (0.5, 1.1, 1470)
+    assert combined.launch_p50s_ms == (0.4, 0.8, 0.5) and combined.as_dict()["launch_p50s_ms"] == [0.4, 0.8, 0.5]
+    assert over_launches([launches[0]]) is launches[0] and "launch_p50s_ms" not in launches[0].as_dict()
+    assert over_launches([None, None]) is None
+
+
 @pytest.mark.parametrize(("text", "problem"), [
     ("/x", "must be written"), ("/x:/y@-3ms", "must be written"), ("/x:/y@0ms", "positive"),
 ])

@@ -10,7 +10,7 @@ from pathlib import Path
 from .._errors import AdviseError
 from ..plan import Plan
 from ._calibrate import Calibration, calibration
-from ._chains import Chain, ChainLatency, HardwareSpan, cosimulated_latency
+from ._chains import Chain, ChainLatency, HardwareSpan, cosimulated_latency, over_launches
 from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budget
 from ._model import Mapping, Placement, predict, wake_scale
 from ._observe import Observation, observe
@@ -33,6 +33,7 @@ class Options:
     calibration: Path | None = None
     recalibrate: bool = False
     time_limit_s: float = 60.0
+    rounds: int = 1  # --verify launches each mapping this many times, interleaved
 
 
 @dataclass
@@ -177,19 +178,24 @@ def verify(projects: dict[str, Path], plans: dict[str, Plan], chains: list[Chain
     """Launch each project (not profiling) and measure its chains: in wall time, except that a chain through
     an fpga target is measured with its hardware in co-simulated time (``cosimulated_latency``), since a
     co-simulation is slower than the hardware it stands for."""
-    found = {}
-    for label, project in projects.items():
-        plan = plans[label]
-        seen = observe(project, plan, duration=options.duration, warmup=options.warmup, profiling=False,
-                       log=options.out / f"verify-{label.strip('#').replace(' ', '-')}.log")
-        found[label] = chain_latencies(seen, chains)
-        if any(plan.in_hardware(n) for n in plan.nodes):
-            hop = _shm_hop(calibration()[0])
-            spans = hardware_spans(seen)
-            for chain in chains:
-                if any(plan.in_hardware(n) for n in chain.check(plan)):
-                    found[label][chain.name] = cosimulated_latency(plan, chain, seen.published, spans, hop)
-    return found
+    rounds: dict[str, list[dict[str, ChainLatency | None]]] = {label: [] for label in projects}
+    for round_ in range(max(1, options.rounds)):
+        # interleaved (every mapping once, then again), so a drift of the machine's load meets each of them
+        for label, project in projects.items():
+            plan = plans[label]
+            suffix = f"-{round_ + 1}" if options.rounds > 1 else ""
+            seen = observe(project, plan, duration=options.duration, warmup=options.warmup, profiling=False,
+                           log=options.out / f"verify-{label.strip('#').replace(' ', '-')}{suffix}.log")
+            measured = chain_latencies(seen, chains)
+            if any(plan.in_hardware(n) for n in plan.nodes):
+                hop = _shm_hop(calibration()[0])
+                spans = hardware_spans(seen)
+                for chain in chains:
+                    if any(plan.in_hardware(n) for n in chain.check(plan)):
+                        measured[chain.name] = cosimulated_latency(plan, chain, seen.published, spans, hop)
+            rounds[label].append(measured)
+    return {label: {chain.name: over_launches([r[chain.name] for r in launches]) for chain in chains}
+            for label, launches in rounds.items()}
 
 
 def _shm_hop(costs: Calibration) -> Callable[[str, int], float]:

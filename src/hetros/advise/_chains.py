@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import bisect
 import re
+import statistics
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -107,9 +108,26 @@ class ChainLatency:
     samples: int
     matched_by: str
     values_ms: tuple[float, ...] = ()
+    launch_p50s_ms: tuple[float, ...] = ()  # each launch's p50, where this is the median of several
 
     def as_dict(self) -> dict[str, object]:
-        return {"p50_ms": self.p50_ms, "p99_ms": self.p99_ms, "samples": self.samples, "matched_by": self.matched_by}
+        found: dict[str, object] = {"p50_ms": self.p50_ms, "p99_ms": self.p99_ms, "samples": self.samples,
+                                    "matched_by": self.matched_by}
+        if self.launch_p50s_ms:
+            found["launch_p50s_ms"] = list(self.launch_p50s_ms)
+        return found
+
+
+def over_launches(launches: list[ChainLatency | None]) -> ChainLatency | None:
+    """One chain's latency over several launches of one mapping: the median of their p50s and of their
+    p99s. A chain under a millisecond differs from launch to launch by more than the advisor's 20 %
+    (where the scheduler puts each process's threads, what else runs), so one launch is one draw."""
+    measured = [launch for launch in launches if launch is not None]
+    if len(measured) <= 1:
+        return measured[0] if measured else None
+    return ChainLatency(statistics.median(m.p50_ms for m in measured), statistics.median(m.p99_ms for m in measured),
+                        sum(m.samples for m in measured), measured[0].matched_by,
+                        tuple(v for m in measured for v in m.values_ms), tuple(m.p50_ms for m in measured))
 
 
 def measure(first: list[Published], last: list[Published]) -> ChainLatency | None:

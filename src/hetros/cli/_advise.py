@@ -39,6 +39,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--out", default="out/advise", help="folder for the profile, the timeline and logs")
     p.add_argument("--verify", action="store_true",
                    help="launch the advised mapping and the project's own, and print predicted beside measured")
+    p.add_argument("--rounds", type=int, default=1,
+                   help="with --verify: launch each mapping this many times, interleaved, and take the median "
+                        "of their chain p50s (a chain under a millisecond varies from launch to launch)")
     p.set_defaults(func=cmd_advise)
 
 
@@ -62,7 +65,10 @@ def cmd_advise(args: argparse.Namespace) -> int:
     options = Options(list(chains.values()), Path(args.out),
                       Path(args.profile) if args.profile else None, args.duration, args.warmup, args.cores,
                       frozenset(args.pin), args.fpga, max(1, args.top),
-                      Path(args.calibration) if args.calibration else None, args.calibrate, args.time_limit)
+                      Path(args.calibration) if args.calibration else None, args.calibrate, args.time_limit,
+                      args.rounds)
+    if args.rounds < 1:
+        raise AdviseError(f"--rounds must be at least 1, not {args.rounds}")
     options.out.mkdir(parents=True, exist_ok=True)
     if args.profile_only:
         for chain in options.chains:
@@ -85,12 +91,15 @@ def cmd_advise(args: argparse.Namespace) -> int:
         print(f"\nerror: {shortfall}")
         code = EXIT_MISSED
     if args.verify:
-        summary["measured"] = _verify(project, written, advice, options)
+        summary["measured"], launches = _verify(project, written, advice, options)
+        if options.rounds > 1:
+            summary["launch_p50s"] = launches
     (options.out / "advice.json").write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
     return code
 
 
-def _verify(project: Path, written: Path, advice: Advice, options: Options) -> dict[str, dict[str, float]]:
+def _verify(project: Path, written: Path, advice: Advice, options: Options
+            ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, list[float]]]]:
     from ..advise import verify, write_project
     from ..project import plan_file
 
@@ -110,9 +119,12 @@ def _verify(project: Path, written: Path, advice: Advice, options: Options) -> d
     finally:
         for path in extra:
             path.unlink(missing_ok=True)
-    print(f"\nverified (each launched for {options.duration:g} s, the first {options.warmup:g} s not counted):")
+    how = f"each launched {options.rounds} times, interleaved, the median of their p50s and p99s; " \
+        if options.rounds > 1 else "each launched "
+    print(f"\nverified ({how}for {options.duration:g} s, the first {options.warmup:g} s not counted):")
     print(f"{'mapping':<9} {'chain':<16} {'predicted p50/p99 ms':>21} {'measured p50/p99 ms':>20} {'p50 error':>9}")
     found: dict[str, dict[str, float]] = {}
+    launches: dict[str, dict[str, list[float]]] = {}
     any_cosimulated = False
     candidates = [*zip(projects, [*advice.ranked, advice.original], strict=True)]
     for label, candidate in candidates:
@@ -125,11 +137,15 @@ def _verify(project: Path, written: Path, advice: Advice, options: Options) -> d
                 continue
             error = (predicted.p50_ms - latency.p50_ms) / latency.p50_ms if latency.p50_ms else 0.0
             cosimulated = "co-simulated" in latency.matched_by
+            spread = (f"  (launches: {', '.join(f'{v:.2f}' for v in latency.launch_p50s_ms)})"
+                      if latency.launch_p50s_ms else "")
             print(f"{label:<9} {chain.name:<16} {predicted.p50_ms:>10.1f}/{predicted.p99_ms:<10.1f} "
-                  f"{latency.p50_ms:>9.1f}/{latency.p99_ms:<10.1f} {error:>+8.0%}" + (" *" if cosimulated else ""))
+                  f"{latency.p50_ms:>9.1f}/{latency.p99_ms:<10.1f} {error:>+8.0%}" + (" *" if cosimulated else "")
+                  + spread)
             found.setdefault(label, {})[chain.name] = latency.p50_ms
+            launches.setdefault(label, {})[chain.name] = list(latency.launch_p50s_ms)
             any_cosimulated = any_cosimulated or cosimulated
     if any_cosimulated:
         print("* through an fpga target: its hardware in co-simulated time at the target's clock (the gateway's "
               "cycles and copies), the software as measured")
-    return found
+    return found, launches

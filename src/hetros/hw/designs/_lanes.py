@@ -33,6 +33,9 @@ from ..streams._axi import register_slice
 
 _Made = TypeVar("_Made")
 
+_FIFO_SLICE = 64  # bits of the output FIFO's entry that share a pair of pointers
+_BLOCK_RAM_RINGS = 256  # stream width from which the line-buffer rings are block RAM
+
 # steps between a beat coming in and the window whose bottom row it completes going out
 _LAG = 3
 # the header walk, a 4-byte word at a time
@@ -109,15 +112,24 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # from the step that makes it until the FIFO gives it away, and a step is taken only while one more
     # fits, so the pipeline never stalls: its registers have no enable, and no stall signal fans out to
     # thousands of them (the lane-following target's critical path was that net)
+    # The FIFO is a FIFO per 64 bits of the entry, in step, each with pointers of its own: one FIFO's read
+    # pointer would drive every distributed-RAM cell of a wide beat (145 at 512 bits), a net too long
+    # for the clock.
     out_depth = node.kernel_stages + node.post_stages + 4
-    m.submodules.out_fifo = out_fifo = fifo.SyncFIFOBuffered(width=data_width + lanes + 1, depth=out_depth)
     push, push_data, push_keep, push_last = Signal(), Signal(data_width), Signal(lanes), Signal()
-    m.d.comb += [out_fifo.w_en.eq(push), out_fifo.w_data.eq(Cat(push_data, push_keep, push_last)),
-                 sink.tvalid.eq(out_fifo.r_rdy), Cat(sink.tdata, sink.tkeep, sink.tlast).eq(out_fifo.r_data),
-                 out_fifo.r_en.eq(sink.tready)]
+    entry = Cat(push_data, push_keep, push_last)
+    out_fifos = []
+    for index, start in enumerate(range(0, len(entry), _FIFO_SLICE)):
+        piece = entry[start:start + _FIFO_SLICE]
+        m.submodules[f"out_fifo{index}"] = part = fifo.SyncFIFOBuffered(width=len(piece), depth=out_depth)
+        m.d.comb += [part.w_en.eq(push), part.w_data.eq(piece), part.r_en.eq(sink.tready)]
+        out_fifos.append(part)
+    out_ready = out_fifos[0].r_rdy  # every slice holds the same number of entries
+    m.d.comb += [sink.tvalid.eq(out_ready),
+                 Cat(sink.tdata, sink.tkeep, sink.tlast).eq(Cat(*(part.r_data for part in out_fifos)))]
     outstanding = Signal(range(out_depth + 2))
     reserved = Signal()
-    m.d.sync += outstanding.eq(outstanding + reserved - (out_fifo.r_rdy & sink.tready))
+    m.d.sync += outstanding.eq(outstanding + reserved - (out_ready & sink.tready))
     room = Signal()
     m.d.comb += room.eq(outstanding < out_depth)
 
@@ -190,7 +202,10 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     m.d.comb += lines.eq(step >> shift)
     ring_bits = max(1, (depth - 1).bit_length())
     pointer = Signal(ring_bits)
-    rings = [Memory(shape=unsigned(data_width), depth=depth, init=[]) for _ in range(2)]
+    # a wide ring in distributed RAM is hundreds of cells on one pointer (23.9 ns of routing at 512 bits):
+    # block RAM takes a ring of 512 bits in 15 blocks
+    style = {"ram_style": "block"} if data_width >= _BLOCK_RAM_RINGS else None
+    rings = [Memory(shape=unsigned(data_width), depth=depth, init=[], attrs=style) for _ in range(2)]
     m.submodules.ring_older, m.submodules.ring_newer = rings
     writes = [r.write_port() for r in rings]
     reads = [r.read_port(domain="sync") for r in rings]  # read-first: a ring gives the beat it replaces

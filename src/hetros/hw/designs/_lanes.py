@@ -342,8 +342,10 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
 def _exceeds(count: Value, lane: int, shift: int) -> Value:
     """``count > lane`` for a lane of the beat (``lane < 2 ** shift``), from the count's low bits and one test
     of its high ones, which the lanes share: a wide comparison a lane was a carry chain a lane."""
-    sign = count[-1]
-    return ~sign & ((count[shift:-1] != 0) | (count[:shift] > lane))
+    above = count[shift:-1] != 0
+    if lane == (1 << shift) - 1:  # no low bits exceed the last lane (a comparison lint tools call constant)
+        return ~count[-1] & above
+    return ~count[-1] & (above | (count[:shift] > lane))
 
 
 def _log2(value: int) -> int:

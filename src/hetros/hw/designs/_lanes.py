@@ -367,22 +367,27 @@ def median_network(pipe: Pipe, values: Sequence[Value], pairs: Sequence[tuple[in
     run side by side make a level). Only the values a later pair or ``keep`` reads are registered: the
     synthesizer would remove the others, at a cost in netlist size and time."""
     held = list(values)
-    level = [0] * len(held)
-    for index, (x, y) in enumerate(pairs):
-        if max(level[x], level[y]) == every:
+    for index, ((x, y), registered_before) in enumerate(zip(pairs, _stage_breaks(pairs, every, len(held)),
+                                                            strict=True)):
+        if registered_before:
             live = {i for pair in pairs[index:] for i in pair} | {keep}
             held = [pipe.reg(v, "median") if i in live else v for i, v in enumerate(held)]
-            level = [0] * len(held)
         held[x], held[y] = exchange(held[x], held[y])
-        level[x] = level[y] = max(level[x], level[y]) + 1
     return pipe.reg(held[keep], "median")
 
 
 def stages_of(pairs: Sequence[tuple[int, int]], every: int, width: int) -> int:
     """The register stages :func:`median_network` puts into ``pairs`` on ``width`` values."""
-    level, stages = [0] * width, 1
+    return 1 + sum(_stage_breaks(pairs, every, width))
+
+
+def _stage_breaks(pairs: Sequence[tuple[int, int]], every: int, width: int) -> list[bool]:
+    """Before which of ``pairs`` a register stage comes: where an exchange would be the ``every + 1``-th in
+    series since the last stage."""
+    level, breaks = [0] * width, []
     for x, y in pairs:
-        if max(level[x], level[y]) == every:
-            level, stages = [0] * width, stages + 1
+        breaks.append(max(level[x], level[y]) == every)
+        if breaks[-1]:
+            level = [0] * width
         level[x] = level[y] = max(level[x], level[y]) + 1
-    return stages
+    return breaks

@@ -24,7 +24,7 @@ CACHE: dict[str, str] = {}
 
 
 def advise(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, XDG_CACHE_HOME=CACHE["folder"])
+    env = dict(os.environ, XDG_CACHE_HOME=CACHE.get("folder", str(cwd / "cache")))
     return subprocess.run([sys.executable, "-m", "hetros", "advise", *args], cwd=cwd, capture_output=True, text=True,
                           timeout=300, check=False, env=env)
 
@@ -80,6 +80,17 @@ def test_a_chain_that_is_not_there_is_refused_before_anything_runs(
                   "--out", str(tmp_path), cwd=tmp_path)
     assert done.returncode == 1
     assert "chain /current_pose->/nowhere: the project has no topic /nowhere" in done.stderr
+    assert not (tmp_path / "profile.json").exists()
+
+
+@pytest.mark.parametrize(("option", "said"), [(["--rounds", "0"], "--rounds must be at least 1, not 0"),
+                                              (["--cores", "-1"], "--cores must be a positive number of cores")])
+def test_a_count_out_of_range_is_refused_before_anything_runs(
+        option: list[str], said: str, tmp_path: Path) -> None:
+    done = advise(str(ROOT / "examples/autoware/project.yaml"), "--chain", CHAIN, *option, "--out",
+                  str(tmp_path), cwd=tmp_path)
+    assert done.returncode == 1
+    assert said in done.stderr
     assert not (tmp_path / "profile.json").exists()
 
 

@@ -55,6 +55,8 @@ def cmd_advise(args: argparse.Namespace) -> int:
     plan = plan_file(project)
     if args.cores < 0:
         raise AdviseError(f"--cores must be a positive number of cores, not {args.cores}")
+    if args.rounds < 1:
+        raise AdviseError(f"--rounds must be at least 1, not {args.rounds}")
     unknown = sorted(set(args.pin) - set(plan.nodes))
     if unknown:
         raise AdviseError(f"--pin names no node of the project: {', '.join(unknown)} (its nodes: "
@@ -67,8 +69,6 @@ def cmd_advise(args: argparse.Namespace) -> int:
                       frozenset(args.pin), args.fpga, max(1, args.top),
                       Path(args.calibration) if args.calibration else None, args.calibrate, args.time_limit,
                       args.rounds)
-    if args.rounds < 1:
-        raise AdviseError(f"--rounds must be at least 1, not {args.rounds}")
     options.out.mkdir(parents=True, exist_ok=True)
     if args.profile_only:
         for chain in options.chains:

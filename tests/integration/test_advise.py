@@ -49,7 +49,7 @@ def test_the_advice_is_a_table_a_project_a_timeline_and_a_verified_launch(
     assert "calibrated now (benchmarks/latency.py --quick)" in done.stdout
     calibration = json.loads((Path(CACHE["folder"]) / "hetros" / "calibration.json").read_text())
     assert set(calibration["table"]) == {"inproc", "shm", "copy"}
-    assert set(calibration["wake_alone_ms"]) == {"inproc", "shm"}
+    assert set(calibration["wake_alone_ms"]) == {"inproc", "shm", "shm_one_core"}
     assert "waking a subscriber adds" in done.stdout
     assert "all 128 candidates simulated" in done.stdout
     lines = done.stdout.splitlines()

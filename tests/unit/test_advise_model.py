@@ -85,6 +85,17 @@ def test_each_hop_also_wakes_its_subscriber() -> None:
     assert found.p50_ms == pytest.approx((SHM_MS + 0.2) + 10.0 + (INPROC_MS + 0.05) + 5.0)
 
 
+def test_processes_pinned_to_one_core_pay_that_core_s_wake() -> None:
+    """Between processes on one core the calibrated one-core wake; on different cores, or unpinned, the
+    wake across cores."""
+    waking = Calibration(CALIBRATION.machine, CALIBRATION.table, {"inproc": 0.05, "shm": 0.2, "shm_one_core": 0.15})
+    for a, b, wake in [(on("pa", 0), on("pb", 0), 0.15), (on("pa", 0), on("pb", 1), 0.2), (on("pa"), on("pb"), 0.2),
+                       (on("pa", 0, 1), on("pb", 0, 1), 0.2)]:
+        mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": a, "b": b}
+        found = predict(paper_profile(), waking, mapping, [CHAIN], cores=2).chains["main"]
+        assert found.p50_ms == pytest.approx((SHM_MS + 0.2) + 10.0 + (SHM_MS + wake) + 5.0), (a, b)
+
+
 def test_a_side_node_in_the_same_process_makes_the_chain_wait() -> None:
     """side subscribes /x before a: one process takes them in turn, so a starts 10 ms late."""
     mapping = {"camera": on("cam", 1), "side": on("p", 0), "a": on("p", 0), "b": on("p", 0)}

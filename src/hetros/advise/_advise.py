@@ -152,7 +152,8 @@ def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], No
                          time_limit_s=options.time_limit_s)
     wake = calibrated.wake_ms
     how += (f"; waking a subscriber adds {wake.get('inproc', 0.0) * calibrated.wake_scale * 1000:.0f} µs in a "
-            f"process, {wake.get('shm', 0.0) * calibrated.wake_scale * 1000:.0f} µs across processes ("
+            f"process, {wake.get('shm', 0.0) * calibrated.wake_scale * 1000:.0f} µs across processes "
+            f"({wake.get('shm_one_core', 0.0) * calibrated.wake_scale * 1000:.0f} µs pinned to one core; "
             + ("as calibrated" if scale is None else f"{scale:.2f} of the calibrated, as the profiled chains show")
             + ")")
     return Advice(profile, source, shipped, ranked, how, paths, limits, targets)

@@ -13,7 +13,8 @@ seconds of its sources' periods:
   a source (a loop or timer) works for its profiled CPU per period, once per period;
 - an **edge** delays a message by the calibrated one-way latency of the transport the planner
   would give it at the topic's size (in one process, or shared memory between processes), and by
-  the calibrated time to wake a sleeping subscriber of that kind;
+  the calibrated time to wake a sleeping subscriber of that kind (in a process; in another process
+  on another core, or pinned to the same one core);
 - a **hardware node** is its own server (its cycles per message at the target's clock); an edge
   between two hardware nodes of one target streams (the second finishes no earlier than the
   first: dataflow), an edge into or out of a target pays the gateway's copy and a shared-memory
@@ -187,8 +188,11 @@ class Simulation:
             delay += self.calibration.latency_ms("copy", size) * (int(sender.fpga) + int(receiver.fpga))
             if sender.fpga and receiver.fpga:
                 return delay + self.calibration.hop_ms("shm", size)
-        same = sender.process == receiver.process and not (sender.fpga or receiver.fpga)
-        return delay + self.calibration.hop_ms("inproc" if same else "shm", size)
+        if sender.process == receiver.process and not (sender.fpga or receiver.fpga):
+            return delay + self.calibration.hop_ms("inproc", size)
+        # two processes pinned to one core: the wake switches that core over rather than waking another
+        one_core = len(sender.cpus) == 1 and sender.cpus == receiver.cpus and not (sender.fpga or receiver.fpga)
+        return delay + self.calibration.hop_ms("shm", size, "shm_one_core" if one_core else "shm")
 
     # -- events -----------------------------------------------------------------------------
 

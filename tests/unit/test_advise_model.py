@@ -4,6 +4,7 @@ worked out on paper: a source, a chain of two nodes, and a side node that compet
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, cast
 
 import pytest
 import yaml
@@ -24,6 +25,8 @@ from hetros.advise import (
     search,
 )
 from hetros.advise import _search as search_module
+from hetros.advise._observe import Observation
+from hetros.advise._profile import pooled
 from hetros.advise._report import moved, target_names, write_project
 from hetros.advise._search import exhaustive, proposed
 
@@ -343,3 +346,30 @@ def test_a_gateway_counts_each_stamped_message_in_simulated_time() -> None:
     times.left("/out", second, 1900, 8)
     assert times.spans() == [{"stamp": 1_000_000_000, "topic": "/out", "sim_ns": 5000, "cpu_ns": 12},
                              {"stamp": 2_000_000_000, "topic": "/out", "sim_ns": 4000, "cpu_ns": 14}]
+
+
+def test_a_profile_of_several_launches_pools_them() -> None:
+    """Quantiles averaged point by point, counts added, means weighted by count, rates and CPU shares
+    averaged; a chain's p50 the median of the launches' (1, 3 and 2 ms: 2)."""
+    launches, observations = [], []
+    for k, (handling_ms, chain_ms) in enumerate([(10.0, 1.0), (20.0, 3.0), (30.0, 2.0)]):
+        profile = paper_profile()
+        profile.nodes["a"].handling["/x"] = Handling(100 * (k + 1), handling_ms, [handling_ms] * 22, cpu=True)
+        profile.nodes["a"].cpu_share = 0.1 * (k + 1)
+        profile.topics["/x"].rate_hz = 10.0 + k
+        launches.append(profile)
+        published = {"/x": [Published(t * 100_000_000, 8, None) for t in range(10)],
+                     "/z": [Published(t * 100_000_000 + int(chain_ms * 1e6), 8, None) for t in range(10)]}
+        observations.append(Observation(cast(Any, None), 1.0, published=published))
+    pooled_profile = pooled(launches, observations, [CHAIN])
+    a = pooled_profile.nodes["a"].handling["/x"]
+    assert a.count == 600
+    assert a.quantiles_ms == pytest.approx([20.0] * 22)
+    assert a.mean_ms == pytest.approx((100 * 10.0 + 200 * 20.0 + 300 * 30.0) / 600)
+    assert pooled_profile.nodes["a"].cpu_share == pytest.approx(0.2)
+    assert pooled_profile.topics["/x"].rate_hz == pytest.approx(11.0)
+    chain = pooled_profile.chains["main"]
+    assert chain["p50_ms"] == pytest.approx(2.0)
+    assert chain["launch_p50s_ms"] == pytest.approx([1.0, 3.0, 2.0])
+    assert chain["samples"] == 30
+    assert pooled([launches[0]], observations[:1], [CHAIN]) is launches[0]

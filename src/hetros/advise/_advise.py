@@ -14,7 +14,7 @@ from ._chains import Chain, ChainLatency, HardwareSpan, cosimulated_latency, ove
 from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budget
 from ._model import Mapping, Placement, predict, wake_scale
 from ._observe import Observation, observe
-from ._profile import Profile, build, chain_latencies, graph_key
+from ._profile import Profile, build, chain_latencies, graph_key, pooled
 from ._report import plot_timeline, table, write_project
 from ._search import Candidate, Limits, search
 
@@ -33,7 +33,7 @@ class Options:
     calibration: Path | None = None
     recalibrate: bool = False
     time_limit_s: float = 60.0
-    rounds: int = 1  # --verify launches each mapping this many times, interleaved
+    rounds: int = 1  # the profile's launches, and --verify's of each mapping (interleaved)
 
 
 @dataclass
@@ -104,12 +104,16 @@ def profile_project(project: Path, plan: Plan, options: Options) -> Profile:
     try:
         from ..project import plan_file
 
-        seen = observe(run, plan_file(run), duration=options.duration, warmup=options.warmup, profiling=True,
-                       log=options.out / "profile-launch.log", samples=samples)
+        launches = []
+        for round_ in range(options.rounds):
+            log = options.out / ("profile-launch.log" if round_ == 0 else f"profile-launch-{round_ + 1}.log")
+            launches.append(observe(run, plan_file(run), duration=options.duration, warmup=options.warmup,
+                                    profiling=True, log=log, samples=samples))
     finally:
         if remove is not None:
             remove.unlink(missing_ok=True)
-    profile = build(seen, options.chains)
+    seen = launches[-1]
+    profile = pooled([build(launch, options.chains) for launch in launches], launches, options.chains)
     profile.graph = graph_key(plan)
     hardware_profile(plan, project, profile, seen)
     profile.save(options.out / "profile.json")

@@ -40,8 +40,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--verify", action="store_true",
                    help="launch the advised mapping and the project's own, and print predicted beside measured")
     p.add_argument("--rounds", type=int, default=1,
-                   help="with --verify: launch each mapping this many times, interleaved, and take the median "
-                        "of their chain p50s (a chain under a millisecond varies from launch to launch)")
+                   help="profile over this many launches (node times pooled, the chains' median p50) and, with "
+                        "--verify, launch each mapping this many times, interleaved, taking the median of their "
+                        "chain p50s (a chain under a millisecond varies from launch to launch)")
     p.set_defaults(func=cmd_advise)
 
 

@@ -144,3 +144,23 @@ def test_without_a_callback_each_side_warns_of_incompatible_qos_as_rclpy_does(ca
         with caplog.at_level("WARNING"):
             report(IncompatibleQosStatus(1, 1, "reliability" if publisher else "durability"))
         assert [record.getMessage() for record in caplog.records] == [told]
+
+
+@pytest.mark.parametrize("wrong", ["hello", None, 5])
+def test_an_rclpy_publish_of_something_not_a_message_names_the_topic_and_its_type(wrong: object) -> None:
+    """rclpy raises TypeError for a publish of the wrong type; the shim's TopicTypeError is one, and says what
+    the topic carries (the copy rclpy's publish makes must not fail first with an AttributeError)."""
+    from hetros import Node, TopicTypeError
+    from hetros.compat.rclpy.node import Node as RclpyNode
+    from hetros.runtime import ros_main
+
+    hetros = Node("talker")
+    try:
+        with ros_main(hetros):
+            publisher = RclpyNode("talker").create_publisher(registry().get("std_msgs/msg/String"), "/chatter", 10)
+            with pytest.raises(TopicTypeError, match=r"topic /chatter carries std_msgs/msg/String, not "
+                                                     rf"{type(wrong).__name__}; construct a String") as raised:
+                publisher.publish(wrong)
+            assert isinstance(raised.value, TypeError)
+    finally:
+        hetros.close()

@@ -4,7 +4,17 @@ from typing import TYPE_CHECKING
 
 from .._lazy import lazy_exports
 from ._clock import Clock, Duration, SimulatedClock, Time
-from ._entities import PROFILE_VARIABLE, Client, HandlingStats, Publisher, Replies, Service, Subscription, Timer
+from ._entities import (
+    PROFILE_VARIABLE,
+    Client,
+    HandlingStats,
+    Publisher,
+    Replies,
+    Service,
+    Subscription,
+    Timer,
+    check_type,
+)
 from ._graph import Graph
 from ._host import Host, resolve
 from ._log import setup_logging
@@ -95,6 +105,7 @@ __all__ = [
     "Timer",
     "bound_node",
     "check_rate",
+    "check_type",
     "from_value_message",
     "header_stamp",
     "kind_of",

@@ -17,7 +17,7 @@ from typing import Any, TypeVar
 from ..._errors import NodeError, ParameterError
 from ...msg import copy as copy_message
 from ...plan import join_namespace
-from ...runtime import Clock, Ticker, bound_node, listed, type_change_problem
+from ...runtime import Clock, Ticker, bound_node, check_type, listed, type_change_problem
 from ...runtime import Node as HetrosNode
 from .._flavour import received
 from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
@@ -114,7 +114,12 @@ class Publisher:
         return self.topic_name
 
     def publish(self, msg: Any) -> None:
-        self._inner.publish(copy_message(msg))
+        try:
+            copied = type(msg)._hetros_copy(msg)
+        except AttributeError:  # not a message (a str, None): rclpy's TypeError, naming what the topic carries
+            check_type(msg, self._inner.typename, f"topic {self.topic_name}")
+            raise
+        self._inner.publish(copied)
 
     def get_subscription_count(self) -> int:
         matched = self._inner.matched

@@ -147,20 +147,32 @@ def test_without_a_callback_each_side_warns_of_incompatible_qos_as_rclpy_does(ca
 
 
 @pytest.mark.parametrize("wrong", ["hello", None, 5])
-def test_an_rclpy_publish_of_something_not_a_message_names_the_topic_and_its_type(wrong: object) -> None:
-    """rclpy raises TypeError for a publish of the wrong type; the shim's TopicTypeError is one, and says what
-    the topic carries (the copy rclpy's publish makes must not fail first with an AttributeError)."""
+def test_rclpy_code_handing_over_something_not_a_message_is_told_where_and_what_type(wrong: object) -> None:
+    """rclpy raises TypeError for a publish, a request or a goal of the wrong type; the shim's TopicTypeError is
+    one, and says what the topic, service or action carries (the copy rclpy code's hand-over makes must not
+    fail first with an AttributeError)."""
     from hetros import Node, TopicTypeError
+    from hetros.compat.rclpy.action.client import ActionClient
     from hetros.compat.rclpy.node import Node as RclpyNode
     from hetros.runtime import ros_main
 
+    types = registry()
     hetros = Node("talker")
     try:
         with ros_main(hetros):
-            publisher = RclpyNode("talker").create_publisher(registry().get("std_msgs/msg/String"), "/chatter", 10)
-            with pytest.raises(TopicTypeError, match=r"topic /chatter carries std_msgs/msg/String, not "
-                                                     rf"{type(wrong).__name__}; construct a String") as raised:
-                publisher.publish(wrong)
-            assert isinstance(raised.value, TypeError)
+            node = RclpyNode("talker")
+            hand_overs = [
+                (node.create_publisher(types.get("std_msgs/msg/String"), "/chatter", 10).publish,
+                 "topic /chatter carries std_msgs/msg/String", "String"),
+                (node.create_client(types.get_service("example_interfaces/srv/AddTwoInts"), "/add").call_async,
+                 "a request of service /add carries example_interfaces/srv/AddTwoInts_Request", "AddTwoInts_Request"),
+                (ActionClient(node, types.get_action("example_interfaces/action/Fibonacci"), "/fib").send_goal_async,
+                 "a goal of action /fib carries example_interfaces/action/Fibonacci_Goal", "Fibonacci_Goal"),
+            ]
+            for hand_over, carries, short in hand_overs:
+                with pytest.raises(TopicTypeError, match=rf"{carries}, not {type(wrong).__name__}; "
+                                                         rf"construct a {short}") as raised:
+                    hand_over(wrong)
+                assert isinstance(raised.value, TypeError)
     finally:
         hetros.close()

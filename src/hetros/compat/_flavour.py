@@ -30,6 +30,7 @@ import numpy as np
 from rosbags.interfaces import Nodetype
 
 from ..msg import ActionType, ServiceType, registry
+from ..runtime import check_type
 
 # array.array's type codes, as rclpy picks them per ROS type
 _TYPECODES = {"int8": "b", "uint8": "B", "byte": "B", "char": "B", "int16": "h", "uint16": "H", "int32": "i",
@@ -202,6 +203,18 @@ def viewer(typename: str) -> Viewer | None:
                 nested_viewer(item)
     _viewers[typename] = show
     return show
+
+
+def copied(value: Any, expected: type[Any], where: str) -> Any:
+    """A writable copy of ``value``, which ROS code keeps after handing it over (a publish, a request, a
+    goal, feedback, a result); a TopicTypeError (a TypeError, as rclpy raises) naming ``where`` and the
+    type it carries when ``value`` is no message of type ``expected``: a ``str`` or ``None`` would fail
+    inside the copy with an AttributeError that says nothing of either."""
+    try:
+        return type(value)._hetros_copy(value)
+    except AttributeError:
+        check_type(value, str(expected.__msgtype__), where)
+        raise
 
 
 def received(message: Any) -> Any:

@@ -15,11 +15,10 @@ from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
 from ..._errors import NodeError, ParameterError
-from ...msg import copy as copy_message
 from ...plan import join_namespace
-from ...runtime import Clock, Ticker, bound_node, check_type, listed, type_change_problem
+from ...runtime import Clock, Ticker, bound_node, listed, type_change_problem
 from ...runtime import Node as HetrosNode
-from .._flavour import received
+from .._flavour import copied, received
 from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
 from .parameter import Parameter
@@ -114,12 +113,7 @@ class Publisher:
         return self.topic_name
 
     def publish(self, msg: Any) -> None:
-        try:
-            copied = type(msg)._hetros_copy(msg)
-        except AttributeError:  # not a message (a str, None): rclpy's TypeError, naming what the topic carries
-            check_type(msg, self._inner.typename, f"topic {self.topic_name}")
-            raise
-        self._inner.publish(copied)
+        self._inner.publish(copied(msg, self.msg_type, f"topic {self.topic_name}"))
 
     def get_subscription_count(self) -> int:
         matched = self._inner.matched
@@ -192,11 +186,12 @@ class Client:
         self.srv_name = name
 
     def call_async(self, request: Any) -> Future:
-        return Future.wrapping(self._inner.call_async(copy_message(request)), received, self._node._schedule)
+        request = copied(request, self.srv_type.Request, f"a request of service {self.srv_name}")
+        return Future.wrapping(self._inner.call_async(request), received, self._node._schedule)
 
     def call(self, request: Any, timeout_sec: float | None = None) -> Any:
-        return received(self._inner.call(copy_message(request),
-                                         timeout=3600.0 if timeout_sec is None else timeout_sec))
+        request = copied(request, self.srv_type.Request, f"a request of service {self.srv_name}")
+        return received(self._inner.call(request, timeout=3600.0 if timeout_sec is None else timeout_sec))
 
     def wait_for_service(self, timeout_sec: float | None = None) -> bool:
         """True: the plan wires every client to its server before the graph starts, and a request waits in
@@ -410,7 +405,8 @@ class Node:
         name = self.resolve_service_name(srv_name)
 
         def handle(request: Any) -> Any:  # rclpy hands the callback a response to fill
-            return copy_message(callback(received(request), srv_type.Response()))
+            return copied(callback(received(request), srv_type.Response()), srv_type.Response,
+                          f"the response of service {name}")
         return self._own(Service(self._hetros.create_service(srv_type, name, handle), srv_type, name))
 
     def create_client(self, srv_type: Any, srv_name: str, *, qos_profile: Any = None,

@@ -8,11 +8,10 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ....msg import copy as copy_message
 from ....runtime import ActionClient as HetrosActionClient
 from ....runtime import ClientGoalHandle as HetrosGoalHandle
 from ....runtime import uuid_message
-from ..._flavour import flavoured_action, received
+from ..._flavour import copied, flavoured_action, received
 from ..executors import spin_until_done
 from ..task import Future
 
@@ -96,7 +95,8 @@ class ActionClient:
             def relay(feedback: Any) -> None:
                 message = message_type(goal_id=uuid_message(goal_id), feedback=received(feedback))
                 self._schedule(lambda: callback(message))
-        sent = self._inner.send_goal_async(copy_message(goal), relay, goal_id)
+        sent = self._inner.send_goal_async(copied(goal, self._type.Goal, f"a goal of action {self._inner.name}"), relay,
+                                           goal_id)
         return Future.wrapping(sent, lambda inner: ClientGoalHandle(self, inner), self._schedule)
 
     def send_goal(self, goal: Any, feedback_callback: Callable[[Any], None] | None = None,

@@ -10,11 +10,10 @@ from collections.abc import Callable
 from typing import Any
 
 from ...._log import get_logger
-from ....msg import copy as copy_message
 from ....runtime import ActionServer as HetrosActionServer
 from ....runtime import ServerGoalHandle as HetrosGoalHandle
 from ....runtime import uuid_message
-from ..._flavour import received
+from ..._flavour import copied, received
 from ..task import run_to_end
 
 log = get_logger("rclpy.action")
@@ -45,8 +44,9 @@ def default_cancel_callback(cancel_request: Any) -> CancelResponse:
 class ServerGoalHandle:
     """rclpy's goal handle: ``request``, ``execute()``, feedback, and the calls that end the goal."""
 
-    def __init__(self, inner: HetrosGoalHandle) -> None:
+    def __init__(self, inner: HetrosGoalHandle, action_type: Any) -> None:
         self._inner = inner
+        self._type = action_type
         self.request = received(inner.request)
         self._executing = threading.Event()
 
@@ -71,7 +71,7 @@ class ServerGoalHandle:
         self._executing.set()
 
     def publish_feedback(self, feedback: Any) -> None:
-        self._inner.publish_feedback(copy_message(feedback))
+        self._inner.publish_feedback(copied(feedback, self._type.Feedback, "the feedback of a goal"))
 
     def succeed(self) -> None:
         self._inner.succeed()
@@ -98,6 +98,7 @@ class ActionServer:
                  cancel_callback: Callable[[Any], CancelResponse] = default_cancel_callback,
                  result_timeout: int = 900, **_qos: Any) -> None:
         self._node = node
+        self._type = action_type
         self._execute_callback = execute_callback
         self._goal_callback = goal_callback
         self._handle_accepted_callback = handle_accepted_callback
@@ -117,7 +118,7 @@ class ActionServer:
         with self._lock:
             handle = self._handles.get(inner.goal_id)
             if handle is None:
-                handle = self._handles[inner.goal_id] = ServerGoalHandle(inner)
+                handle = self._handles[inner.goal_id] = ServerGoalHandle(inner, self._type)
             return handle
 
     def register_handle_accepted_callback(self, callback: Callable[[ServerGoalHandle], None]) -> None:
@@ -145,7 +146,8 @@ class ActionServer:
             if inner.is_active:
                 log.warning("Goal state not set, assuming aborted. Goal ID: %s", handle.goal_id.uuid)
                 inner.abort()
-            return None if result is None else copy_message(result)
+            where = f"the result of action {self._inner.name}"
+            return None if result is None else copied(result, self._type.Result, where)
         finally:
             with self._lock:
                 self._handles.pop(inner.goal_id, None)

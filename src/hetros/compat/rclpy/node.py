@@ -107,13 +107,14 @@ class Publisher:
         self._inner = inner
         self.msg_type = msg_type
         self.topic_name = topic
+        self._where = f"topic {topic}"  # for a wrong type's error, made once: publish is the hot path
 
     @property
     def topic(self) -> str:
         return self.topic_name
 
     def publish(self, msg: Any) -> None:
-        self._inner.publish(copied(msg, self.msg_type, f"topic {self.topic_name}"))
+        self._inner.publish(copied(msg, self.msg_type, self._where))
 
     def get_subscription_count(self) -> int:
         matched = self._inner.matched

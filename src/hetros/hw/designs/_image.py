@@ -421,31 +421,36 @@ class Compensation(ImageFilter3x3):
         return pipe.shared("sorted column", column, sort)
 
     def post_lanes(self, m: Module, pipe: Pipe, values: list[Value]) -> list[Value]:
-        """Each lane looks its byte up in its own copy of the stretch table (a block RAM read, then held)."""
-        self._tables = [Memory(shape=unsigned(8), depth=256, init=list(range(256))) for _ in values]
-        looked_up = []
-        for lane, (table, value) in enumerate(zip(self._tables, values, strict=True)):
-            m.submodules[f"stretch{lane}"] = table
-            read = table.read_port(domain="sync")
-            m.d.comb += [read.addr.eq(value), read.en.eq(pipe.advance)]
-            looked_up.append(pipe.reg(read.data, "stretched"))  # a block RAM's output is slow: held first
-        return looked_up
+        """Each lane's stretched byte: the table half of the word its histogram read gave (read, then held:
+        the ``post_stages``), as the byte's value addressed both."""
+        return [held[_HISTOGRAM_BITS:] for held in self._bins_held]
 
     def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: Value, count: Value) -> None:
         """A histogram per lane, each counting a byte a cycle with a read-modify-write four cycles long (the
         memory's output registered, then incremented, then written): the counts of the three bytes before,
-        still on their way to the memory, are forwarded to a read of the same bin."""
+        still on their way to the memory, are forwarded to a read of the same bin.
+
+        A bin's word holds the lane's copy of the stretch table's entry for the same value beside the count
+        (the byte addresses both in the same cycle), so a lane is one block RAM, not two: at 512 bits the
+        two made 128 blocks of 208 and a design nextpnr did not route. The count's write-back carries the
+        entry it read; between frames the scan clears the words and the table is written into them again."""
         self._count_lanes = count
-        self._scanning_lanes = Signal()
+        self._scanning_lanes, self._building_lanes = Signal(), Signal()
         self._level = Signal(9)
-        self._hist_reads = []
+        self._table_address, self._table_entry, self._table_write = Signal(8), Signal(8), Signal()
+        self._hist_reads: list[Value] = []
+        self._bins_held: list[Signal] = []
         for lane, (value, is_pixel) in enumerate(zip(values, pixels, strict=True)):
-            histogram = Memory(shape=unsigned(_HISTOGRAM_BITS), depth=256, init=[])
+            histogram = Memory(shape=unsigned(_HISTOGRAM_BITS + 8), depth=256,
+                               init=[entry << _HISTOGRAM_BITS for entry in range(256)])  # the first frame: as it is
             m.submodules[f"histogram{lane}"] = histogram
             read, write = histogram.read_port(domain="sync"), histogram.write_port()
-            read_held = Signal(_HISTOGRAM_BITS, name=f"read_held{lane}")
+            read_held = Signal(_HISTOGRAM_BITS + 8, name=f"read_held{lane}")
             m.d.sync += read_held.eq(read.data)
-            self._hist_reads.append(read_held)
+            self._bins_held.append(read_held)
+            self._hist_reads.append(read_held[:_HISTOGRAM_BITS])
+            entry_held = Signal(8, name=f"entry{lane}")  # the stretch entry of the bin being counted, written back
+            m.d.sync += entry_held.eq(read_held[_HISTOGRAM_BITS:])
             # (event, bin) of the byte in each cycle of its way: just taken, read back, counted, written
             events = [Signal(name=f"event{lane}_{k}") for k in range(5)]
             bins = [Signal(8, name=f"bin{lane}_{k}") for k in range(5)]
@@ -456,13 +461,18 @@ class Compensation(ImageFilter3x3):
             same = [Signal(name=f"same{lane}_{k}") for k in range(3)]
             m.d.sync += [flag.eq(events[k + 2] & (bins[k + 2] == bins[1])) for k, flag in enumerate(same)]
             counted = [Signal(_HISTOGRAM_BITS, name=f"counted{lane}_{k}") for k in range(3)]  # newest first
-            latest = Mux(same[0], counted[0], Mux(same[1], counted[1], Mux(same[2], counted[2], read_held)))
+            latest = Mux(same[0], counted[0], Mux(same[1], counted[1], Mux(same[2], counted[2],
+                                                                              read_held[:_HISTOGRAM_BITS])))
             m.d.sync += [counted[0].eq(latest + 1), counted[1].eq(counted[0]), counted[2].eq(counted[1])]
             with m.If(self._scanning_lanes):
                 m.d.comb += [read.addr.eq(self._level[:8]), write.addr.eq(self._level[:8]), write.data.eq(0),
                              write.en.eq(self._level < 256)]
+            with m.Elif(self._building_lanes):
+                m.d.comb += [write.addr.eq(self._table_address),
+                             write.data.eq(Cat(Const(0, _HISTOGRAM_BITS), self._table_entry)),
+                             write.en.eq(self._table_write)]
             with m.Else():
-                m.d.comb += [read.addr.eq(value), write.addr.eq(bins[3]), write.data.eq(counted[0]),
+                m.d.comb += [read.addr.eq(value), write.addr.eq(bins[3]), write.data.eq(Cat(counted[0], entry_held)),
                              write.en.eq(events[3])]
 
     def between_frames_lanes(self, m: Module, ended: Value) -> Value:
@@ -470,7 +480,7 @@ class Compensation(ImageFilter3x3):
         the percentiles (each bin cleared behind), then rebuild the stretch table, a division of a value
         at a time by repeated subtraction (at most 511 steps: the quotient stops at 255)."""
         settle = Signal(range(6))
-        scanning, building = self._scanning_lanes, Signal()
+        scanning, building = self._scanning_lanes, self._building_lanes
         level = self._level
         # the scan's pipeline, a bin a cycle: the lanes' counts read, held, summed in pairs, summed four at a
         # time a stage until one is left (one stage up to eight lanes, three at 64), added to the running
@@ -519,10 +529,8 @@ class Compensation(ImageFilter3x3):
         value, quotient, remainder = Signal(9), Signal(9), Signal(18)
         span = Signal(8)  # a register: the percentiles are found cycles before the table is built
         m.d.sync += span.eq(Mux(high > low, high - low, 1))
-        for table in self._tables:
-            write = table.write_port()
-            m.d.comb += [write.addr.eq(value[:8]), write.data.eq(quotient[:8]),
-                         write.en.eq(building & ~((remainder >= span) & (quotient < 255)))]
+        m.d.comb += [self._table_address.eq(value[:8]), self._table_entry.eq(quotient[:8]),
+                     self._table_write.eq(~((remainder >= span) & (quotient < 255)))]
         with m.If(building):
             with m.If((remainder >= span) & (quotient < 255)):
                 m.d.sync += [remainder.eq(remainder - span), quotient.eq(quotient + 1)]

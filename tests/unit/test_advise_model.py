@@ -26,8 +26,8 @@ from hetros.advise import (
 )
 from hetros.advise import _search as search_module
 from hetros.advise._observe import Observation
-from hetros.advise._profile import pooled
-from hetros.advise._report import moved, target_names, write_project
+from hetros.advise._profile import pooled, with_one_core
+from hetros.advise._report import moved, target_names, write_one_core, write_project
 from hetros.advise._search import exhaustive, proposed
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -97,6 +97,27 @@ def test_processes_pinned_to_one_core_pay_that_core_s_wake() -> None:
         mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": a, "b": b}
         found = predict(paper_profile(), waking, mapping, [CHAIN], cores=2).chains["main"]
         assert found.p50_ms == pytest.approx((SHM_MS + 0.2) + 10.0 + (SHM_MS + wake) + 5.0), (a, b)
+
+
+def test_a_process_sharing_its_one_core_with_another_runs_at_its_one_core_times() -> None:
+    """a and b measured 10 and 5 ms as mapped, 6 and 3 ms with every process on one core: the one-core
+    figures count where a process is pinned to one core another process is pinned to alone as well
+    (a busy core runs a node warm), the mapped ones everywhere else (alone there, or not pinned to one)."""
+    profile = paper_profile()
+    profile.nodes["a"].one_core = {"/x": constant(6.0)}
+    profile.nodes["b"].one_core = {"/y": constant(3.0)}
+    for a, b, work in [(on("pa", 0), on("pb", 0), 6.0 + 3.0), (on("pa", 0), on("pb", 1), 10.0 + 5.0),
+                       (on("pa"), on("pb"), 10.0 + 5.0), (on("pa", 0, 1), on("pb", 0, 1), 10.0 + 5.0)]:
+        mapping = {"camera": on("cam", 2), "side": on("s", 2), "a": a, "b": b}
+        found = predict(profile, CALIBRATION, mapping, [CHAIN], cores=3).chains["main"]
+        assert found.p50_ms == pytest.approx(2 * SHM_MS + work), (a, b)
+    # one process alone on its core: as mapped, though a and b share it as threads
+    alone = {"camera": on("cam", 2), "side": on("s", 2), "a": on("p", 0), "b": on("p", 0)}
+    found = predict(profile, CALIBRATION, alone, [CHAIN], cores=3).chains["main"]
+    assert found.p50_ms == pytest.approx(SHM_MS + 15.0 + INPROC_MS)
+    # the camera's process on core 0 too: a and b's process now shares it
+    found = predict(profile, CALIBRATION, {**alone, "camera": on("cam", 0)}, [CHAIN], cores=3).chains["main"]
+    assert found.p50_ms == pytest.approx(SHM_MS + 9.0 + INPROC_MS)
 
 
 def test_a_side_node_in_the_same_process_makes_the_chain_wait() -> None:
@@ -234,6 +255,23 @@ def test_a_chain_the_graph_cannot_carry_is_refused() -> None:
         Chain.parse("/cmd_vel:/image_raw").check(plan)
 
 
+def test_the_one_core_launch_pins_every_process_target_and_nothing_else(tmp_path: Path) -> None:
+    source = tmp_path / "project.yaml"
+    source.write_text(yaml.safe_dump({
+        "name": "p", "hosts": {"here": {"address": "127.0.0.1"}, "there": {"address": "10.0.0.2"}},
+        "targets": {"a": {"kind": "process", "cpus": [1]}, "b": {"kind": "process"}, "t": {"kind": "thread"},
+                    "far": {"kind": "process", "host": "there", "cpus": [3]}, "hw": {"kind": "fpga"}},
+        "nodes": {"n": {"run": "m:n", "target": "a"}}}))
+    written = yaml.safe_load(write_one_core(source, 0, tmp_path / "one.yaml").read_text())
+    assert written["targets"] == {"a": {"kind": "process", "cpus": [0]}, "b": {"kind": "process", "cpus": [0]},
+                                  "t": {"kind": "thread"}, "far": {"kind": "process", "host": "there", "cpus": [3]},
+                                  "hw": {"kind": "fpga"}}
+    assert written["nodes"] == {"n": {"run": "m:n", "target": "a"}}
+    source.write_text("name: p\ntargets: [a]\nnodes: {}\n")
+    with pytest.raises(AdviseError, match="targets: is not a mapping"):
+        write_one_core(source, 0, tmp_path / "one.yaml")
+
+
 def test_the_written_project_differs_only_in_targets(tmp_path: Path) -> None:
     from hetros.advise import mapping_of
     from hetros.project import plan_file
@@ -261,6 +299,8 @@ def test_the_written_project_differs_only_in_targets(tmp_path: Path) -> None:
 
 def test_a_profile_survives_its_file_and_knows_where_it_was_taken(tmp_path: Path) -> None:
     profile = paper_profile()
+    with_one_core(profile, paper_profile(side_ms=3.0))
+    assert profile.nodes["side"].one_core["/x"].mean_ms == 3.0
     profile.save(tmp_path / "profile.json")
     again = Profile.load(tmp_path / "profile.json")
     assert again == profile

@@ -9,7 +9,9 @@ seconds of its sources' periods:
   sharing); a process pinned to one core works there, one pinned to several or to none works
   on the least busy of them when it starts a message;
 - a **node's work** per message is drawn from its profiled CPU time on that input (its quantiles,
-  interpolated), and it then publishes what the profile says it publishes per message of it;
+  interpolated): as profiled, or, for a process pinned to one core that another process is pinned
+  to as well, as profiled with every process on one core (a core other processes keep busy runs a
+  node warm); it then publishes what the profile says it publishes per message of it;
   a source (a loop or timer) works for its profiled CPU per period, once per period;
 - an **edge** delays a message by the calibrated one-way latency of the transport the planner
   would give it at the topic's size (in one process, or shared memory between processes), and by
@@ -151,6 +153,7 @@ class Simulation:
             self.by_last.setdefault(chain.last, []).append(chain)
         self.samples: dict[str, list[tuple[float, tuple[Any, ...] | None]]] = {c.name: [] for c in chains}
         self.joins, self.sources_of = _joins(profile)
+        self.warm = _sharing_a_core(mapping)
         self.pending: dict[tuple[str, str, str, int], set[str]] = {}
         periods = [1.0 / rate for node in profile.nodes.values() for rate in node.triggers.get("", {}).values()
                    if rate > 0]
@@ -173,6 +176,8 @@ class Simulation:
         sampler = self.samplers.get(key)
         if sampler is None:
             handling = spec.handling.get(topic)
+            if place.process in self.warm:
+                handling = spec.one_core.get(topic, handling)
             sampler = self.samplers[key] = _Sampler(handling.quantiles_ms if handling else [0.0],
                                                     handling.points if handling else [0.0], self.rng)
         return sampler.draw()
@@ -358,6 +363,15 @@ class Simulation:
             chains[chain.name] = prediction
         load = {core: served / self.horizon for core, served in self.served.items()}
         return Prediction(chains, load, sorted(n for n, p in self.mapping.items() if p.fpga))
+
+
+def _sharing_a_core(mapping: Mapping) -> frozenset[str]:
+    """The processes pinned to one core that another process of ``mapping`` is pinned to alone as well."""
+    alone: dict[int, set[str]] = {}
+    for place in mapping.values():
+        if not place.fpga and len(place.cpus) == 1:
+            alone.setdefault(place.cpus[0], set()).add(place.process)
+    return frozenset(process for processes in alone.values() if len(processes) > 1 for process in processes)
 
 
 JOIN_RATE_TOLERANCE = 0.1

@@ -1,12 +1,13 @@
 """The profile: what the advisor's model knows of a project, measured once and kept as a file.
 
-Per node and input topic the node's time per message (its thread's CPU time while profiling,
-so that waiting for a shared core or the GIL is not counted as work) as quantiles, and which
-outputs it publishes per message of that input; per source (a node that publishes from a loop
-or a timer) its CPU per message; per topic its rate and size; per process its CPU share; per
-chain its measured latency. The profile names the project's graph (not its mapping) and the
-machine, so that advice from it can be recomputed without running again, and a profile from
-elsewhere is noticed.
+Per node and input topic the node's time per message (its thread's CPU time while profiling, so that
+waiting for a shared core or the GIL is not counted as work) as quantiles, as mapped and with every
+process on one core (``one_core``: a core that other processes keep busy runs a node faster than one
+it wakes from idle), and which outputs it publishes per message of that input; per source (a node
+that publishes from a loop or a timer) its CPU per message; per topic its rate and size; per process
+its CPU share; per chain its measured latency. The profile names the project's graph (not its
+mapping) and the machine, so that advice from it can be recomputed without running again, and a
+profile from elsewhere is noticed.
 """
 
 from __future__ import annotations
@@ -78,6 +79,9 @@ class NodeProfile:
     triggers: dict[str, dict[str, float]] = field(default_factory=dict)
     cpu_share: float = 0.0  # of one core, over the window
     hardware: dict[str, Any] = field(default_factory=dict)
+    # per input topic, the time per message in a launch with every process pinned to one core: a node whose
+    # core other processes keep busy runs warm (ball on plate's control 212 against 239 µs, 2026-11-29)
+    one_core: dict[str, Handling] = field(default_factory=dict)
 
 
 @dataclass
@@ -100,6 +104,7 @@ class Profile:
     topics: dict[str, TopicProfile]
     processes: dict[str, float]  # CPU share of one core per process
     chains: dict[str, dict[str, Any]] = field(default_factory=dict)
+    one_core_chains: dict[str, dict[str, Any]] = field(default_factory=dict)  # the chains in the one-core launch
     format: int = FORMAT
 
     def save(self, path: Path) -> None:
@@ -117,7 +122,8 @@ class Profile:
             raise AdviseError(f"{path}: a profile of format {FORMAT} expected, not "
                               f"{raw.get('format') if isinstance(raw, dict) else type(raw).__name__!r}; profile again")
         try:
-            nodes = {name: NodeProfile(**{**spec, "handling": {t: Handling(**h) for t, h in spec["handling"].items()}})
+            nodes = {name: NodeProfile(**{**spec, "handling": {t: Handling(**h) for t, h in spec["handling"].items()},
+                                          "one_core": {t: Handling(**h) for t, h in spec.get("one_core", {}).items()}})
                      for name, spec in raw["nodes"].items()}
             topics = {name: TopicProfile(**spec) for name, spec in raw["topics"].items()}
             return cls(**{**raw, "nodes": nodes, "topics": topics})
@@ -226,6 +232,16 @@ def pooled(profiles: list[Profile], observations: list[Observation], chains: lis
             measured[chain.name] = {"first": chain.first, "last": chain.last, **latency.as_dict()}
     return Profile(first.project, first.graph, first.machine, float(np.mean([p.window_s for p in profiles])),
                    first.mapping, nodes, topics, processes, measured)
+
+
+def with_one_core(profile: Profile, one_core: Profile) -> Profile:
+    """``profile`` with the node times and chains of ``one_core``, a profile of the same graph launched with
+    every process on one core."""
+    for name, spec in profile.nodes.items():
+        other = one_core.nodes.get(name)
+        spec.one_core = dict(other.handling) if other is not None else {}
+    profile.one_core_chains = dict(one_core.chains)
+    return profile
 
 
 def _triggers(figures: dict[str, Any], topics: dict[str, TopicProfile]) -> dict[str, dict[str, float]]:

@@ -89,6 +89,23 @@ def write_project(source: Path, mapping: Mapping, original: Mapping, targets: di
     return out
 
 
+def write_one_core(source: Path, cpu: int, out: Path) -> Path:
+    """``source`` with every process target (ROS 1 ones too) on this machine pinned to ``cpu``: the launch
+    in which the profile measures the nodes' times on a core the other processes keep busy."""
+    raw: dict[str, Any] = yaml.safe_load(source.read_text(encoding="utf-8"))
+    targets = raw.get("targets")
+    if not isinstance(targets, dict):
+        raise AdviseError(f"{source}: targets: is not a mapping of target entries; the profile's one-core launch "
+                          "needs them written out (not from an include)")
+    for spec in targets.values():
+        if isinstance(spec, dict) and spec.get("kind") in ("process", "ros1") and not spec.get("host"):
+            spec["cpus"] = [cpu]
+    text = yaml.safe_dump(raw, sort_keys=False, default_flow_style=None, width=120)
+    out.write_text(f"# written by `hetros advise` from {source.name}: every process on cpu {cpu}\n{text}",
+                   encoding="utf-8")
+    return out
+
+
 def plot_timeline(candidate: Candidate, chains: list[Chain], out: Path) -> Path:
     """Each chain's predicted way of one message (the median one): per node, waiting and working."""
     import matplotlib

@@ -127,15 +127,18 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     out_ready = out_fifos[0].r_rdy  # every slice holds the same number of entries
     m.d.comb += [sink.tvalid.eq(out_ready),
                  Cat(sink.tdata, sink.tkeep, sink.tlast).eq(Cat(*(part.r_data for part in out_fifos)))]
-    outstanding = Signal(range(out_depth + 2))
+    outstanding, following = Signal(range(out_depth + 2)), Signal(range(out_depth + 2))
     reserved = Signal()
-    m.d.sync += outstanding.eq(outstanding + reserved - (out_ready & sink.tready))
-    room = Signal()
-    m.d.comb += room.eq(outstanding < out_depth)
+    m.d.comb += following.eq(outstanding + reserved - (out_ready & sink.tready))
+    # ``outstanding < out_depth`` as a register of its own, decided from the count it is about to hold: the step
+    # (``stepping``) that hundreds of registers load on starts a logic level nearer its registers
+    room = Signal(init=1)
+    m.d.sync += [outstanding.eq(following), room.eq(following < out_depth)]
 
     # --- the header walk ---------------------------------------------------------------------------------
     bits = (node.width * channels + 2 * lanes).bit_length() + 1  # a line's bytes and then some
     until_window = Signal(bits)  # steps of this message before the first that fills a window
+    window_due = Signal(init=1)  # until_window == 0, as a register (the first window's step loads hundreds)
     state = Signal(range(11))
     in_pixels = Signal()  # state is _DATA, as one register
     at_data_len = Signal()  # state is _DATA_LEN, as one register (the beat's end is decided from it)
@@ -188,7 +191,9 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
                 m.d.sync += [data_len.eq(word), state.eq(Mux(word_zero, _STAMP, _DATA)), in_pixels.eq(~word_zero),
                              at_data_len.eq(0),
                              start.eq(Mux(pixels_here, (unit + 1) << 2, 0))]
-                m.d.sync += until_window.eq((step >> _log2(lanes)) + _LAG)
+                due = Signal(bits)
+                m.d.comb += due.eq((step >> _log2(lanes)) + _LAG)
+                m.d.sync += [until_window.eq(due), window_due.eq(due == 0)]
     # a message that ends in its header (no pixels): the walk starts over a cycle later, from a register
     # (not from the decision that let the beat go), and picks no word meanwhile
     m.d.sync += header_ended.eq(header_leaves & hold_last)
@@ -228,7 +233,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     b = [Signal(data_width, name=f"b{i}") for i in range(5)]
     c = [Signal(data_width, name=f"c{i}") for i in range(4)]
     window_fresh = Signal()  # the registers hold a window the pipeline has not taken yet
-    first_window = ~windows & (until_window == 0)
+    first_window = ~windows & window_due
     later_window = windows
     m.d.comb += stepping.eq(in_pixels & (flushing | hold_full & ~owed_last) & room)
     with m.If(stepping):
@@ -237,8 +242,8 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
                      c[1].eq(reads[1].data), *(c[k + 1].eq(c[k]) for k in range(1, 3)),
                      pointer.eq(Mux(pointer + 1 >= lines, 0, pointer + 1)),
                      window_fresh.eq(first_window | later_window)]
-        with m.If(until_window != 0):
-            m.d.sync += until_window.eq(until_window - 1)
+        with m.If(~window_due):
+            m.d.sync += [until_window.eq(until_window - 1), window_due.eq(until_window == 1)]
         with m.If(first_window):
             m.d.sync += [centre.eq(0), windows.eq(1)]
         with m.Elif(later_window):

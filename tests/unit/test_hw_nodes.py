@@ -160,3 +160,26 @@ def test_a_hardware_node_that_breaks_the_stream_rules_is_named_with_its_port_and
     node = NodeUnderTest(_Flaky(64), ["send"], ["recv"], 64, name="flaky")
     with pytest.raises(HardwareError, match=r"hardware node flaky port 'recv''s stream: TVALID dropped at cycle \d+"):
         simulate(node, [[bytes([0]) + bytes(200)]], stall=0.5, seed=3)
+
+
+def test_a_full_width_compensation_lane_is_one_memory_of_count_and_stretch_entry() -> None:
+    """Each lane's histogram word holds its count (24 bits) and its stretch table's entry (8): one block RAM a
+    lane, not two (at 512 bits the two made a design nextpnr did not route)."""
+    from amaranth.hdl import Fragment
+
+    from hetros.hw.designs._image import Compensation
+
+    memories: dict[str, Any] = {}
+
+    def walk(fragment: Any) -> None:
+        for sub, name, *_ in fragment.subfragments:
+            if type(sub).__name__ == "MemoryInstance":
+                memories[name] = sub._data
+            walk(sub)
+
+    walk(Fragment.get(Compensation("image_in", "image_out", data_width=64, width=640, channels=3), None))
+    lanes = {name: data for name, data in memories.items() if name.startswith("histogram")}
+    assert sorted(lanes) == [f"histogram{k}" for k in range(8)]
+    assert {(data.shape.width, data.depth) for data in lanes.values()} == {(32, 256)}
+    assert not [name for name in memories if name.startswith("stretch")]
+    assert [int(word) >> 24 for word in lanes["histogram0"].init] == list(range(256))  # the first frame as it is

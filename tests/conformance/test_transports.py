@@ -90,6 +90,7 @@ class Freezing(Writer):
     def __init__(self, inner: Writer, written: Callable[[Writer], None] = lambda writer: None) -> None:
         self.inner = inner
         self.written = written
+        self.shares_objects = inner.shares_objects
 
     def write(self, message: Any) -> None:
         self.inner.write(freeze(message))
@@ -592,6 +593,30 @@ def test_a_received_message_and_a_message_nested_in_one_can_be_published_again(
     writer.write(relayed)
     again = reader.try_take()
     assert again is not None and again.width == 3 and list(again.data) == [3] * 8
+
+
+@pytest.mark.parametrize("size", [8, 256 * 1024])
+def test_a_writer_that_shares_no_objects_is_done_with_a_message_when_write_returns(
+        make: Callable[[QoS], Harness], size: int) -> None:
+    """What ``publish(keep=True)`` rests on (rclpy code changes its message right after publishing it): a
+    writer that does not say ``shares_objects`` has serialized the message, unsealed, before ``write``
+    returns; one that does hands its readers the very object (the runtime copies a kept message for it)."""
+    h = make(QoS(depth=4))
+    reader = h.reader()
+    writer = h.writer()
+    inner = writer.inner if isinstance(writer, Freezing) else writer
+    message = image(1, 7, size)
+    inner.write(message)
+    if isinstance(writer, Freezing):
+        writer.written(inner)
+    message.data[:] = 99
+    message.height = 5
+    got = take_within(reader, 1, 5.0)
+    assert len(got) == 1
+    if writer.shares_objects:
+        assert got[0] is message
+    else:
+        assert got[0].height == 1 and set(np.asarray(got[0].data).tolist()) == {7}
 
 
 def test_pending_is_false_only_when_a_take_finds_nothing(make: Callable[[QoS], Harness]) -> None:

@@ -176,3 +176,20 @@ def test_rclpy_code_handing_over_something_not_a_message_is_told_where_and_what_
                 assert isinstance(raised.value, TypeError)
     finally:
         hetros.close()
+
+
+def test_rclpy_publish_keeps_the_callers_message_unless_it_must_copy_into_numpy() -> None:
+    """The shims publish a message as it is (``keep``: the transports serialize it, the caller keeps it)
+    where its numeric sequences are numpy arrays; a sequence rclpy-style in an ``array.array``, or numeric
+    sequences inside nested messages, go through a copy into hetros's own arrays."""
+    from hetros.compat._flavour import flavoured, keepable
+
+    image = flavoured(registry().get("sensor_msgs/msg/Image"))
+    msg = image()
+    msg.data = np.arange(4, dtype=np.uint8)
+    assert keepable(image)(msg)
+    msg.data = [1, 2]  # rclpy makes it an array.array
+    assert not keepable(image)(msg)
+    assert keepable(flavoured(registry().get("std_msgs/msg/String")))(None)  # no sequences: always
+    assert not keepable(flavoured(registry().get("trajectory_msgs/msg/JointTrajectory")))(None)
+    assert not keepable(str)("not a message")  # the copy says what the topic carries

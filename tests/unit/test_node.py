@@ -139,6 +139,41 @@ def test_published_message_is_handed_over_read_only(graph: Graph) -> None:
     assert got.copy().data == "a"
 
 
+def test_a_kept_message_stays_the_callers_and_is_copied_only_for_readers_in_process(graph: Graph) -> None:
+    """``publish(keep=True)``, rclpy's and rospy's rule: in process the subscriber gets a copy and the
+    message stays writable; a writer that serializes (every transport between processes) is given the
+    message itself, unsealed, and nothing is copied."""
+    from hetros.msg import registry
+    from hetros.runtime._endpoints import endpoint_writer
+    from hetros.transport import Writer
+
+    sub = Node("s", graph).create_subscription(String, "/x")
+    pub = Node("p", graph).create_publisher(String, "/x")
+    msg = String(data="a")
+    pub.publish(msg, keep=True)
+    msg.data = "b"
+    got = sub.try_take()
+    assert got is not msg and got.data == "a" and got.is_frozen
+
+    class Serializing(Writer):
+        """A transport between processes, as the runtime sees one: it encodes what it is given at once."""
+
+        def __init__(self) -> None:
+            self.written: list[tuple[object, str]] = []
+
+        def write(self, message: String) -> None:
+            self.written.append((message, message.data))
+
+        def close(self) -> None:
+            pass
+
+    serializing = Serializing()
+    pub._writer = endpoint_writer([serializing], registry())
+    pub.publish(msg, keep=True)
+    msg.data = "c"
+    assert serializing.written == [(msg, "b")] and not msg.is_frozen
+
+
 def test_wrong_type_is_refused_with_the_topic_named(graph: Graph) -> None:
     pub = Node("p", graph).create_publisher(String, "/x")
     with pytest.raises(TopicTypeError, match="topic /x carries std_msgs/msg/String, not std_msgs/msg/Int32"):

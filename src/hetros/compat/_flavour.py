@@ -14,9 +14,10 @@ hetros runs sees rclpy's flavour where it can tell the difference:
   small message's one-way latency; its arrays are hetros's read-only numpy arrays, and it prints as
   hetros's messages do.
 
-Outgoing messages are copied into hetros's own class first (the shim's publishers, replies and
-goals do so), so the transports only ever see hetros's classes.
-"""
+Replies, goals, feedback and results are copied into hetros's own class first. A topic's message is
+published as the caller made it, unsealed (``Publisher.publish(keep=True)``): every transport between
+processes serializes it before the publish returns, the flavoured class encodes as its base does, and
+only an in-process subscriber, which would hold the object, gets a copy."""
 
 from __future__ import annotations
 
@@ -215,6 +216,43 @@ def copied(value: Any, expected: type[Any], where: str) -> Any:
     except AttributeError:
         check_type(value, str(expected.__msgtype__), where)
         raise
+
+
+_keepers: dict[type[Any], Callable[[Any], bool]] = {}
+
+
+def keepable(cls: type[Any]) -> Callable[[Any], bool]:
+    """Whether a message of ``cls`` a shim publishes may go as it is (``Publisher.publish(keep=True)``:
+    the transports serialize it, the caller keeps it): where its numeric sequences are numpy arrays,
+    which every codec reads as they are. A sequence rclpy-style in an ``array.array``, or numeric
+    sequences inside nested messages (a walk per publish would cost more than the copy), go through
+    :func:`copied`. Asked once per class, then once per publish: rclpy code that publishes a large
+    image no longer pays a copy of its own."""
+    found = _keepers.get(cls)
+    if found is None:
+        found = _keepers[cls] = _keeper(cls)
+    return found
+
+
+def _keeper(cls: type[Any]) -> Callable[[Any], bool]:
+    typename = getattr(cls, "__msgtype__", None)
+    if not isinstance(typename, str) or typename not in registry().fielddefs or \
+            any(_nested_sequences(nested) for nested, _ in _nested(typename).values()):
+        return lambda _message: False
+    reads = [next(k.__dict__[name] for k in cls.__mro__ if name in k.__dict__ and not isinstance(
+        k.__dict__[name], property)).__get__ for name in _sequences(typename)]
+    if not reads:
+        return lambda _message: True
+    if len(reads) == 1:
+        (read,) = reads
+        return lambda message: type(read(message, None)) is not array.array
+    return lambda message: all(type(read(message, None)) is not array.array for read in reads)
+
+
+@functools.cache
+def _nested_sequences(typename: str) -> bool:
+    """Whether ``typename`` or a message inside it has a numeric sequence."""
+    return bool(_sequences(typename)) or any(_nested_sequences(t) for t, _ in _nested(typename).values())
 
 
 def received(message: Any) -> Any:

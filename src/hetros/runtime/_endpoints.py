@@ -58,6 +58,7 @@ class EndpointWriter(Writer):
         self._types = types
         self._lender = next((p for p in parts if p.lends_slots), None)
         self._local = any(p is not self._lender for p in parts)
+        self.shares_objects = any(p.shares_objects for p in parts)
 
     def loan_maker(self, cls: type[Message], sizes: dict[str, int]) -> Callable[[], Message]:
         """What makes loans of these array lengths (``Publisher.loan`` keeps it): messages to
@@ -116,6 +117,13 @@ class EndpointWriter(Writer):
             lender.write(_hand_over(message, copy_arrays=False))
             return
         _hand_over(message, copy_arrays=self._local)
+        for part in self._parts:
+            part.write(message)
+
+    def write_kept(self, message: Any) -> None:
+        """Write a message its caller keeps and may change afterwards, neither sealed nor copied: only
+        for a writer whose parts all serialize it (``shares_objects`` False) and a message no transport
+        lent."""
         for part in self._parts:
             part.write(message)
 

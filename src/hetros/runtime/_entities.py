@@ -23,6 +23,7 @@ from .._errors import (
     TopicTypeError,
 )
 from ..msg import Message, ServiceKind, service_type
+from ..msg import copy as copy_message
 from ..plan import reply_channel, request_channel
 from ..transport import Reader, Writer
 from ._endpoints import EndpointWriter
@@ -77,8 +78,8 @@ class Publisher(Generic[M]):
 
     ``publish`` hands the message object over (it becomes read-only) but leaves your arrays
     yours: a writable array you own is copied once (into shared memory, or into a read-only
-    copy for in-process subscribers). ``loan`` gives arrays hetros owns, which travel
-    without a copy.
+    copy for in-process subscribers). ``publish(message, keep=True)`` leaves the whole message
+    yours, as rclpy and rospy do. ``loan`` gives arrays hetros owns, which travel without a copy.
     """
 
     def __init__(self, node: Node, msg_type: type[M], topic: str, writer: EndpointWriter) -> None:
@@ -99,16 +100,27 @@ class Publisher(Generic[M]):
         # the topic's tap in this process: counts what is sent; sinks only while someone looks
         self._tap = node.graph.tap_point(topic, self.typename)
 
-    def publish(self, message: M) -> None:
-        """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError."""
+    def publish(self, message: M, *, keep: bool = False) -> None:
+        """Hand ``message`` to every subscriber; a field value its type cannot carry raises FieldValueError.
+
+        ``keep``: the message stays yours, to change and publish again (rclpy's and rospy's rule). It
+        is copied only where a subscriber in this process would get the object itself; transports
+        between processes serialize it as it is, so a large message costs no copy of its own.
+        """
         if getattr(message, "__msgtype__", None) != self.typename:
             check_type(message, self.typename, f"topic {self.topic}")
         message._hetros_validate(message, self._short)
+        write = self._writer.write
+        if keep:
+            if self._writer.shares_objects or getattr(message, "_hetros_loan", None) is not None:
+                message = copy_message(message)
+            else:
+                write = self._writer.write_kept
         tap = self._tap
         tap.published += 1
         if tap.sinks:  # before the write: a loan's arrays leave with a shared-memory send
             tap.offer(message)
-        self._writer.write(message)
+        write(message)
         if self.deadline is not None:
             self.deadline.seen()
         if self.manual_liveliness:

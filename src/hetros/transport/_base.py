@@ -48,6 +48,9 @@ class Writer(ABC, Generic[T]):
     # whether the transport lends its own memory for messages to be filled in place
     # (``slot_loan_maker``, ``owns_loan``): shared memory does, in-process delivery need not
     lends_slots = False
+    # whether a reader gets the written object itself (in-process delivery); every other writer has
+    # serialized the message when ``write`` returns, so its caller may go on changing it
+    shares_objects = False
 
     @abstractmethod
     def write(self, message: T) -> None:

@@ -163,6 +163,8 @@ class InprocTopic:
 
 
 class InprocWriter(Writer):
+    shares_objects = True  # the publisher's object goes into each subscriber's mailbox
+
     def __init__(self, topic: InprocTopic) -> None:
         self._topic = topic
         self.closed = False

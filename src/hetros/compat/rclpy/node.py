@@ -18,7 +18,7 @@ from ..._errors import NodeError, ParameterError
 from ...plan import join_namespace
 from ...runtime import Clock, Ticker, bound_node, listed, type_change_problem
 from ...runtime import Node as HetrosNode
-from .._flavour import copied, received
+from .._flavour import copied, keepable, received
 from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
 from .parameter import Parameter
@@ -100,7 +100,7 @@ def guarded(node: Node, hetros: HetrosNode, callback: Callable[..., Any], group:
 
 
 class Publisher:
-    """Publishes as rclpy does: the message stays the caller's (it is copied, then handed over)."""
+    """Publishes as rclpy does: the message stays the caller's (``publish(keep=True)``)."""
 
     def __init__(self, node: Node, inner: Any, msg_type: type[Any], topic: str) -> None:
         self._node = node
@@ -108,13 +108,20 @@ class Publisher:
         self.msg_type = msg_type
         self.topic_name = topic
         self._where = f"topic {topic}"  # for a wrong type's error, made once: publish is the hot path
+        self._class: type[Any] | None = None  # the class last published, and whether its messages go as they are
+        self._keepable: Callable[[Any], bool] = bool
 
     @property
     def topic(self) -> str:
         return self.topic_name
 
     def publish(self, msg: Any) -> None:
-        self._inner.publish(copied(msg, self.msg_type, self._where))
+        if type(msg) is not self._class:
+            self._class, self._keepable = type(msg), keepable(type(msg))
+        if self._keepable(msg):
+            self._inner.publish(msg, keep=True)
+        else:
+            self._inner.publish(copied(msg, self.msg_type, self._where))
 
     def get_subscription_count(self) -> int:
         matched = self._inner.matched

@@ -23,6 +23,7 @@ from ...runtime import ROSPY_CONSOLE, Ticker, node_logger
 from ...runtime import Node as HetrosNode
 from ...runtime import bound_node as _bound_node
 from ...runtime import ros_main as _ros_main
+from .._flavour import keepable
 
 __all__ = [
     "Duration",
@@ -404,8 +405,13 @@ class Publisher:
         self._seq = 0  # rospy's count of messages published, written into their header.seq
 
     def publish(self, *args: Any, **kwargs: Any) -> None:
-        message = _message(self.data_class, args, kwargs)
-        self._inner.publish(message)
+        message = args[0] if len(args) == 1 and not kwargs and isinstance(args[0], Message) else \
+            self.data_class(*args, **kwargs)
+        if keepable(type(message))(message):
+            self._inner.publish(message, keep=True)
+        else:
+            message = copy_message(message)
+            self._inner.publish(message)
         self._seq += 1
         if hasattr(message, "header") and hasattr(type(message.header), "seq"):
             _set_seq(message.header, self._seq)

@@ -67,12 +67,12 @@ def test_the_advice_is_a_table_a_project_a_timeline_and_a_verified_launch(
     assert profile["chains"]["steer"]["samples"] >= 25
     assert profile["nodes"]["lane_select"]["triggers"] == {"/current_pose": {"/base_waypoints": 1.0}}
     assert profile["nodes"]["vehicle"]["triggers"][""]["/current_pose"] == pytest.approx(10.0, rel=0.2)
-    # the one-core launch: every node's times with all processes on one core, its chain, its file gone
+    # the one-core launch: every node's times with all of them in one process on one core, its chain, its file gone
     assert all(set(spec["one_core"]) == set(spec["handling"]) for spec in profile["nodes"].values())
     assert profile["one_core_chains"]["steer"]["samples"] >= 25
     assert (out / "profile-one-core-1.log").is_file()
     assert not (example / ".project_one_core.yaml").exists()
-    assert "works at the node times of the one-core launch" in done.stdout
+    assert "works at its time in the one-core launch" in done.stdout
     assert "verified" in done.stdout
     summary = json.loads((out / "advice.json").read_text())
     for label in ("#1", "as given"):

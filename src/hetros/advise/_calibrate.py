@@ -49,8 +49,11 @@ class Calibration:
     machine: dict[str, object]
     table: dict[str, list[tuple[int, float, float]]]
     wake_ms: dict[str, float] = field(default_factory=dict)
-    # how much of the calibrated wake a graph's hops pay: fitted on a profile's chains (not saved)
+    # how much of the calibrated wake a graph's hops pay: fitted on a profile's chains (not saved); a hop
+    # within a process pinned to one core (its core awake, the subscriber next) pays ``warm_scale`` of it,
+    # fitted on the chains of the profile's one-core launch
     wake_scale: float = 1.0
+    warm_scale: float = 1.0
 
     def latency_ms(self, transport: str, size: int, *, p99: bool = False) -> float:
         """The one-way latency of ``size`` bytes over ``transport``, interpolated between the measured
@@ -66,10 +69,11 @@ class Calibration:
             return float(values[-1] + slope * (size - sizes[-1])) / 1000.0
         return float(np.interp(size, sizes, values)) / 1000.0
 
-    def hop_ms(self, transport: str, size: int, wake: str | None = None) -> float:
+    def hop_ms(self, transport: str, size: int, wake: str | None = None, *, warm: bool = False) -> float:
         """One hop of ``size`` bytes to a sleeping subscriber: the transport and the wake (of the kind
-        ``wake``, the transport's own by default)."""
-        return self.latency_ms(transport, size) + self.wake_ms.get(wake or transport, 0.0) * self.wake_scale
+        ``wake``, the transport's own by default; ``warm``: within a process pinned to one core)."""
+        scale = self.warm_scale if warm else self.wake_scale
+        return self.latency_ms(transport, size) + self.wake_ms.get(wake or transport, 0.0) * scale
 
     def save(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)

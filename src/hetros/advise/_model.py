@@ -9,9 +9,9 @@ seconds of its sources' periods:
   sharing); a process pinned to one core works there, one pinned to several or to none works
   on the least busy of them when it starts a message;
 - a **node's work** per message is drawn from its profiled CPU time on that input (its quantiles,
-  interpolated): as profiled, or, for a process pinned to one core that another process is pinned
-  to as well, as profiled with every process on one core (a core other processes keep busy runs a
-  node warm); it then publishes what the profile says it publishes per message of it;
+  interpolated): as profiled, or, for a message from a node of its own process pinned to one core,
+  as profiled with every node in one process on one core (it runs right after its publisher on
+  the same awake core: warm); it then publishes what the profile says it publishes per message of it;
   a source (a loop or timer) works for its profiled CPU per period, once per period;
 - an **edge** delays a message by the calibrated one-way latency of the transport the planner
   would give it at the topic's size (in one process, or shared memory between processes), and by
@@ -121,6 +121,7 @@ class _Job:
     trace: tuple[Any, ...] | None  # (parent trace, (node, where, arrived)) while on a chain
     arrived: float
     ticks: dict[str, int] = field(default_factory=dict)  # per source node, which of its periods began this
+    sender: str = ""  # the node that published its input
     overlap: float = 0.0  # streamed in from hardware upstream: the time it already worked beside it
     work: float = 0.0
     started: float = 0.0
@@ -145,7 +146,7 @@ class Simulation:
         self.busy: dict[str, _Job | None] = {}
         self.running: dict[int, list[_Job]] = {c: [] for c in range(cores)}
         self.served: dict[int, float] = dict.fromkeys(range(cores), 0.0)
-        self.samplers: dict[tuple[str, str], _Sampler] = {}
+        self.samplers: dict[tuple[str, str, bool], _Sampler] = {}
         self.carry: dict[tuple[str, str, str], float] = {}
         self.firsts = {c.first for c in chains}
         self.by_last: dict[str, list[Chain]] = {}
@@ -153,7 +154,6 @@ class Simulation:
             self.by_last.setdefault(chain.last, []).append(chain)
         self.samples: dict[str, list[tuple[float, tuple[Any, ...] | None]]] = {c.name: [] for c in chains}
         self.joins, self.sources_of = _joins(profile)
-        self.warm = _sharing_a_core(mapping)
         self.pending: dict[tuple[str, str, str, int], set[str]] = {}
         periods = [1.0 / rate for node in profile.nodes.values() for rate in node.triggers.get("", {}).values()
                    if rate > 0]
@@ -165,18 +165,19 @@ class Simulation:
     def _placement(self, node: str) -> Placement:
         return self.mapping[node]
 
-    def _work(self, node: str, topic: str) -> float:
+    def _work(self, node: str, topic: str, sender: str) -> float:
         spec = self.profile.nodes[node]
         place = self._placement(node)
         if place.fpga:
             return float(spec.hardware.get("ms", 0.0))
         if not topic:
             return _source_work(spec, self.profile.window_s)
-        key = (node, topic)
+        warm = len(place.cpus) == 1 and sender in self.mapping and self._placement(sender) == place
+        key = (node, topic, warm)
         sampler = self.samplers.get(key)
         if sampler is None:
             handling = spec.handling.get(topic)
-            if place.process in self.warm:
+            if warm:
                 handling = spec.one_core.get(topic, handling)
             sampler = self.samplers[key] = _Sampler(handling.quantiles_ms if handling else [0.0],
                                                     handling.points if handling else [0.0], self.rng)
@@ -194,7 +195,7 @@ class Simulation:
             if sender.fpga and receiver.fpga:
                 return delay + self.calibration.hop_ms("shm", size)
         if sender.process == receiver.process and not (sender.fpga or receiver.fpga):
-            return delay + self.calibration.hop_ms("inproc", size)
+            return delay + self.calibration.hop_ms("inproc", size, warm=len(sender.cpus) == 1)
         # two processes pinned to one core: the wake switches that core over rather than waking another
         one_core = len(sender.cpus) == 1 and sender.cpus == receiver.cpus and not (sender.fpga or receiver.fpga)
         return delay + self.calibration.hop_ms("shm", size, "shm_one_core" if one_core else "shm")
@@ -220,7 +221,7 @@ class Simulation:
         job = queue.popleft()
         self.busy[server] = job
         job.started = self.now
-        job.work = self._work(job.node, job.topic)
+        job.work = self._work(job.node, job.topic, job.sender)
         place = self._placement(job.node)
         if place.fpga:
             job.started -= min(job.overlap, job.work)
@@ -288,7 +289,7 @@ class Simulation:
             if reader is None or subscriber not in self.mapping or topic not in reader.handling:
                 continue  # a system node, or a subscriber that never took the topic while profiled
             at = self.now + self._delay(job.node, subscriber, topic)
-            follower = _Job(subscriber, topic, origins, trace, at, dict(job.ticks))
+            follower = _Job(subscriber, topic, origins, trace, at, dict(job.ticks), sender=job.node)
             sender, receiver = self._placement(job.node), self._placement(subscriber)
             if sender.fpga and receiver.fpga and sender.process == receiver.process:
                 follower.overlap = self.now - job.started  # dataflow: it worked beside its upstream node
@@ -363,15 +364,6 @@ class Simulation:
             chains[chain.name] = prediction
         load = {core: served / self.horizon for core, served in self.served.items()}
         return Prediction(chains, load, sorted(n for n, p in self.mapping.items() if p.fpga))
-
-
-def _sharing_a_core(mapping: Mapping) -> frozenset[str]:
-    """The processes pinned to one core that another process of ``mapping`` is pinned to alone as well."""
-    alone: dict[int, set[str]] = {}
-    for place in mapping.values():
-        if not place.fpga and len(place.cpus) == 1:
-            alone.setdefault(place.cpus[0], set()).add(place.process)
-    return frozenset(process for processes in alone.values() if len(processes) > 1 for process in processes)
 
 
 JOIN_RATE_TOLERANCE = 0.1
@@ -457,21 +449,57 @@ def predict(profile: Profile, calibration: Calibration, mapping: Mapping, chains
     return Simulation(profile, calibration, mapping, chains, cores, seed=seed).run()
 
 
-def wake_scale(profile: Profile, calibration: Calibration, mapping: Mapping, chains: list[Chain],
-               cores: int) -> float | None:
-    """How much of the calibrated wakes the profiled run's chains show, or None where it measured none.
+def fitted(profile: Profile, calibration: Calibration, mapping: Mapping, chains: list[Chain],
+           cores: int) -> tuple[Calibration, str]:
+    """``calibration`` with its wake scales fitted on the profile's chains, and in words how.
+
+    First the warm scale, on the one-core launch's chains (every node in one process on one core: its
+    hops are all warm), then the scale of every other hop, on the chains of the mapping profiled with
+    the warm one fixed: ball on plate's chain in one process on one core measured 0.49 ms where the
+    calibrated in-process wake (a subscriber asleep a whole period) predicted 0.7."""
+    warm = _scale(profile.one_core_chains, profile, calibration, one_core_mapping(profile), chains, cores, "warm_scale")
+    if warm is not None:
+        calibration = replace(calibration, warm_scale=warm)
+    # without a one-core launch every hop shares one scale, fitted on the mapping profiled
+    cold = _scale(profile.chains, profile, calibration, mapping, chains, cores,
+                  "wake_scale" if warm is not None else "both")
+    calibration = replace(calibration, wake_scale=1.0 if cold is None else cold)
+    if warm is None:
+        calibration = replace(calibration, warm_scale=calibration.wake_scale)
+    how = "as calibrated" if cold is None else f"{cold:.2f} of the calibrated, as the profiled chains show"
+    if warm is not None:
+        how += f"; within a process on one core {warm:.2f}, as the one-core launch's chains show"
+    return calibration, how
+
+
+def one_core_mapping(profile: Profile) -> Mapping:
+    """The mapping of the profile's one-core launch: every node in one process on one core."""
+    return {node: Placement("advise_one_core", (0,)) for node in profile.nodes}
+
+
+def _scale(chains_measured: dict[str, dict[str, Any]], profile: Profile, calibration: Calibration, mapping: Mapping,
+           chains: list[Chain], cores: int, which: str) -> float | None:
+    """How much of the calibrated wakes (those ``which`` scales: ``warm_scale``, ``wake_scale`` or both) the
+    measured chains show, or None where none was measured.
 
     The calibration wakes a subscriber that slept a whole period; along a chain the next node is
     often still warm from its last message, or shares the core's cache, and pays less. The chains
     measured while profiling tell how much: their measured p50 less the model's prediction of that
-    very mapping without wakes, over what the calibrated wakes add to it (0 to 2, averaged over the
-    chains). The ratio between a wake in a process and one across processes stays the calibration's.
+    very mapping without those wakes, over what the calibrated wakes add to it (0 to 2, averaged over
+    the chains). The ratio between a wake in a process and one across processes stays the calibration's.
     """
-    measured = {name: float(figures["p50_ms"]) for name, figures in profile.chains.items()}
+    measured = {name: float(figures["p50_ms"]) for name, figures in chains_measured.items()}
     if not any(c.name in measured for c in chains):
         return None
-    bare = predict(profile, replace(calibration, wake_scale=0.0), mapping, chains, cores)
-    full = predict(profile, replace(calibration, wake_scale=1.0), mapping, chains, cores)
+
+    def scaled(value: float) -> Calibration:
+        if which == "both":
+            return replace(calibration, wake_scale=value, warm_scale=value)
+        return replace(calibration, warm_scale=value) if which == "warm_scale" else \
+            replace(calibration, wake_scale=value)
+
+    bare = predict(profile, scaled(0.0), mapping, chains, cores)
+    full = predict(profile, scaled(1.0), mapping, chains, cores)
     scales = []
     for chain in chains:
         if chain.name not in measured:

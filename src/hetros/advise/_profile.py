@@ -2,12 +2,12 @@
 
 Per node and input topic the node's time per message (its thread's CPU time while profiling, so that
 waiting for a shared core or the GIL is not counted as work) as quantiles, as mapped and with every
-process on one core (``one_core``: a core that other processes keep busy runs a node faster than one
-it wakes from idle), and which outputs it publishes per message of that input; per source (a node
-that publishes from a loop or a timer) its CPU per message; per topic its rate and size; per process
-its CPU share; per chain its measured latency. The profile names the project's graph (not its
-mapping) and the machine, so that advice from it can be recomputed without running again, and a
-profile from elsewhere is noticed.
+node in one process on one core (``one_core``: a node right after its publisher on the same awake
+core runs faster than on a core it wakes from idle), and which outputs it publishes per message of
+that input; per source (a node that publishes from a loop or a timer) its CPU per message; per topic
+its rate and size; per process its CPU share; per chain its measured latency. The profile names the
+project's graph (not its mapping) and the machine, so that advice from it can be recomputed without
+running again, and a profile from elsewhere is noticed.
 """
 
 from __future__ import annotations
@@ -79,8 +79,9 @@ class NodeProfile:
     triggers: dict[str, dict[str, float]] = field(default_factory=dict)
     cpu_share: float = 0.0  # of one core, over the window
     hardware: dict[str, Any] = field(default_factory=dict)
-    # per input topic, the time per message in a launch with every process pinned to one core: a node whose
-    # core other processes keep busy runs warm (ball on plate's control 212 against 239 µs, 2026-11-29)
+    # per input topic, the time per message in a launch with every node in one process pinned to one core: a
+    # node right after its publisher on the same awake core runs warm (ball on plate's control 221 against
+    # 284 µs, 2026-11-29)
     one_core: dict[str, Handling] = field(default_factory=dict)
 
 

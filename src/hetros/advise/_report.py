@@ -90,20 +90,29 @@ def write_project(source: Path, mapping: Mapping, original: Mapping, targets: di
 
 
 def write_one_core(source: Path, cpu: int, out: Path) -> Path:
-    """``source`` with every process target (ROS 1 ones too) on this machine pinned to ``cpu``: the launch
-    in which the profile measures the nodes' times on a core the other processes keep busy."""
+    """``source`` with every node of a process or thread target on this machine in one process pinned to
+    ``cpu`` (the target ``advise_one_core``): the launch in which the profile measures each node right
+    after its publisher on the same awake core. ROS 1, fpga and other machines' targets stay."""
     raw: dict[str, Any] = yaml.safe_load(source.read_text(encoding="utf-8"))
-    targets = raw.get("targets")
-    if not isinstance(targets, dict):
-        raise AdviseError(f"{source}: targets: is not a mapping of target entries; the profile's one-core launch "
-                          "needs them written out (not from an include)")
-    for spec in targets.values():
-        if isinstance(spec, dict) and spec.get("kind") in ("process", "ros1") and not spec.get("host"):
-            spec["cpus"] = [cpu]
+    targets, nodes = raw.get("targets"), raw.get("nodes")
+    if not isinstance(targets, dict) or not isinstance(nodes, dict):
+        raise AdviseError(f"{source}: targets: and nodes: must be mappings written out (not from an include) for "
+                          "the profile's one-core launch")
+    moving = {name for name, spec in targets.items()
+              if isinstance(spec, dict) and spec.get("kind") in ("process", "thread") and not spec.get("host")}
+    for entry in nodes.values():
+        if isinstance(entry, dict) and entry.get("target") in moving:
+            entry["target"] = ONE_CORE_TARGET
+    used = {entry.get("target") for entry in nodes.values() if isinstance(entry, dict)}
+    raw["targets"] = {name: spec for name, spec in targets.items() if name not in moving or name in used}
+    raw["targets"][ONE_CORE_TARGET] = {"kind": "process", "cpus": [cpu]}
     text = yaml.safe_dump(raw, sort_keys=False, default_flow_style=None, width=120)
-    out.write_text(f"# written by `hetros advise` from {source.name}: every process on cpu {cpu}\n{text}",
+    out.write_text(f"# written by `hetros advise` from {source.name}: every node in one process on cpu {cpu}\n{text}",
                    encoding="utf-8")
     return out
+
+
+ONE_CORE_TARGET = "advise_one_core"
 
 
 def plot_timeline(candidate: Candidate, chains: list[Chain], out: Path) -> Path:

@@ -9,9 +9,10 @@ seconds of its sources' periods:
   sharing); a process pinned to one core works there, one pinned to several or to none works
   on the least busy of them when it starts a message;
 - a **node's work** per message is drawn from its profiled CPU time on that input (its quantiles,
-  interpolated): as profiled, or, for a message from a node of its own process pinned to one core,
-  as profiled with every node in one process on one core (it runs right after its publisher on
-  the same awake core: warm); it then publishes what the profile says it publishes per message of it;
+  interpolated): as profiled, or, for a message from a node of its own process pinned to one core
+  that was warm itself or a source, as profiled with every node in one process on one core (it
+  runs right after its publisher on a core kept awake since the source's period began: warm); it
+  then publishes what the profile says it publishes per message of it;
   a source (a loop or timer) works for its profiled CPU per period, once per period;
 - an **edge** delays a message by the calibrated one-way latency of the transport the planner
   would give it at the topic's size (in one process, or shared memory between processes), and by
@@ -121,7 +122,8 @@ class _Job:
     trace: tuple[Any, ...] | None  # (parent trace, (node, where, arrived)) while on a chain
     arrived: float
     ticks: dict[str, int] = field(default_factory=dict)  # per source node, which of its periods began this
-    sender: str = ""  # the node that published its input
+    # its input came from a node of its process, pinned to one core, that was a source or warm itself
+    warm: bool = False
     overlap: float = 0.0  # streamed in from hardware upstream: the time it already worked beside it
     work: float = 0.0
     started: float = 0.0
@@ -165,14 +167,13 @@ class Simulation:
     def _placement(self, node: str) -> Placement:
         return self.mapping[node]
 
-    def _work(self, node: str, topic: str, sender: str) -> float:
+    def _work(self, node: str, topic: str, warm: bool) -> float:
         spec = self.profile.nodes[node]
         place = self._placement(node)
         if place.fpga:
             return float(spec.hardware.get("ms", 0.0))
         if not topic:
             return _source_work(spec, self.profile.window_s)
-        warm = len(place.cpus) == 1 and sender in self.mapping and self._placement(sender) == place
         key = (node, topic, warm)
         sampler = self.samplers.get(key)
         if sampler is None:
@@ -221,7 +222,7 @@ class Simulation:
         job = queue.popleft()
         self.busy[server] = job
         job.started = self.now
-        job.work = self._work(job.node, job.topic, job.sender)
+        job.work = self._work(job.node, job.topic, job.warm)
         place = self._placement(job.node)
         if place.fpga:
             job.started -= min(job.overlap, job.work)
@@ -289,8 +290,10 @@ class Simulation:
             if reader is None or subscriber not in self.mapping or topic not in reader.handling:
                 continue  # a system node, or a subscriber that never took the topic while profiled
             at = self.now + self._delay(job.node, subscriber, topic)
-            follower = _Job(subscriber, topic, origins, trace, at, dict(job.ticks), sender=job.node)
             sender, receiver = self._placement(job.node), self._placement(subscriber)
+            # a wake across processes or cores leaves the next node's core cold, and what follows it there
+            warm = sender == receiver and len(receiver.cpus) == 1 and not receiver.fpga and (job.warm or not job.topic)
+            follower = _Job(subscriber, topic, origins, trace, at, dict(job.ticks), warm=warm)
             if sender.fpga and receiver.fpga and sender.process == receiver.process:
                 follower.overlap = self.now - job.started  # dataflow: it worked beside its upstream node
             self._schedule(at, "arrive", follower)

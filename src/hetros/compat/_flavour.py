@@ -92,7 +92,7 @@ def _shown(value: Any) -> Any:
 def _sequence_property(base: type[Any], name: str, code: str) -> property:
     """A numeric sequence over ``base``'s slot: read through :class:`SequenceView`; written as rclpy converts
     (a list becomes an ``array.array``; an array is kept, plain, so that it travels without a copy)."""
-    slot = next(k.__dict__[name] for k in base.__mro__ if name in k.__dict__)
+    slot = _slot(base, name)
     read, write = slot.__get__, slot.__set__
 
     def get(self: Any) -> Any:
@@ -110,6 +110,13 @@ def _sequence_property(base: type[Any], name: str, code: str) -> property:
         write(self, value)
 
     return property(get, put)
+
+
+def _slot(cls: type[Any], name: str) -> Any:
+    """The slot that stores field ``name`` of ``cls`` (a flavoured class's sequence property stands in front
+    of it)."""
+    return next(k.__dict__[name] for k in cls.__mro__ if name in k.__dict__ and not isinstance(k.__dict__[name],
+                                                                                                property))
 
 
 def rclpy_repr(message: Any) -> str:
@@ -239,8 +246,7 @@ def _keeper(cls: type[Any]) -> Callable[[Any], bool]:
     if not isinstance(typename, str) or typename not in registry().fielddefs or \
             any(_nested_sequences(nested) for nested, _ in _nested(typename).values()):
         return lambda _message: False
-    reads = [next(k.__dict__[name] for k in cls.__mro__ if name in k.__dict__ and not isinstance(
-        k.__dict__[name], property)).__get__ for name in _sequences(typename)]
+    reads = [_slot(cls, name).__get__ for name in _sequences(typename)]
     if not reads:
         return lambda _message: True
     if len(reads) == 1:

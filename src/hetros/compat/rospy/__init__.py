@@ -380,11 +380,16 @@ def logfatal(message: Any, *args: Any, **_kwargs: Any) -> None:
 # -- topics ---------------------------------------------------------------------------------------
 
 
-def _message(data_class: type[Any], args: tuple[Any, ...], kwargs: dict[str, Any]) -> Any:
+def _given(data_class: type[Any], args: tuple[Any, ...], kwargs: dict[str, Any]) -> Any:
     """rospy's publish and call conventions: a message, or the fields of one (positional or by name)."""
     if len(args) == 1 and not kwargs and isinstance(args[0], Message):
-        return copy_message(args[0])
-    return copy_message(data_class(*args, **kwargs))  # into hetros's own class (served types are flavoured)
+        return args[0]
+    return data_class(*args, **kwargs)
+
+
+def _message(data_class: type[Any], args: tuple[Any, ...], kwargs: dict[str, Any]) -> Any:
+    """:func:`_given`, copied into hetros's own class (served types are flavoured)."""
+    return copy_message(_given(data_class, args, kwargs))
 
 
 class Publisher:
@@ -405,8 +410,7 @@ class Publisher:
         self._seq = 0  # rospy's count of messages published, written into their header.seq
 
     def publish(self, *args: Any, **kwargs: Any) -> None:
-        message = args[0] if len(args) == 1 and not kwargs and isinstance(args[0], Message) else \
-            self.data_class(*args, **kwargs)
+        message = _given(self.data_class, args, kwargs)
         if keepable(type(message))(message):
             self._inner.publish(message, keep=True)
         else:

@@ -438,7 +438,6 @@ class Compensation(ImageFilter3x3):
         self._scanning_lanes, self._building_lanes = Signal(), Signal()
         self._level = Signal(9)
         self._table_address, self._table_entry, self._table_write = Signal(8), Signal(8), Signal()
-        self._hist_reads: list[Value] = []
         self._bins_held: list[Signal] = []
         for lane, (value, is_pixel) in enumerate(zip(values, pixels, strict=True)):
             histogram = Memory(shape=unsigned(_HISTOGRAM_BITS + 8), depth=256,
@@ -448,7 +447,6 @@ class Compensation(ImageFilter3x3):
             read_held = Signal(_HISTOGRAM_BITS + 8, name=f"read_held{lane}")
             m.d.sync += read_held.eq(read.data)
             self._bins_held.append(read_held)
-            self._hist_reads.append(read_held[:_HISTOGRAM_BITS])
             entry_held = Signal(8, name=f"entry{lane}")  # the stretch entry of the bin being counted, written back
             m.d.sync += entry_held.eq(read_held[_HISTOGRAM_BITS:])
             # (event, bin) of the byte in each cycle of its way: just taken, read back, counted, written
@@ -485,7 +483,8 @@ class Compensation(ImageFilter3x3):
         # the scan's pipeline, a bin a cycle: the lanes' counts read, held, summed in pairs, summed four at a
         # time a stage until one is left (one stage up to eight lanes, three at 64), added to the running
         # total, multiplied by 100 (two stages), compared; ``stage[k]`` says which bin stage k holds
-        pairs = [Signal(_HISTOGRAM_BITS + 1, name=f"pair{i}") for i in range(-(-len(self._hist_reads) // 2))]
+        reads = [held[:_HISTOGRAM_BITS] for held in self._bins_held]  # the counts, without the stretch entries
+        pairs = [Signal(_HISTOGRAM_BITS + 1, name=f"pair{i}") for i in range(-(-len(reads) // 2))]
         sums = [pairs]
         while len(sums[-1]) > 1 or len(sums) == 1:
             sums.append([Signal(32, name=f"sum{len(sums)}_{i}") for i in range(-(-len(sums[-1]) // 4))])
@@ -505,7 +504,6 @@ class Compensation(ImageFilter3x3):
             with m.If(settle == 1):
                 m.d.sync += [scanning.eq(1), level.eq(0)]
         with m.If(scanning):
-            reads = self._hist_reads
             m.d.sync += [level.eq(level + 1), stage[0][0].eq(level < 256), stage[0][1].eq(level[:8])]
             m.d.sync += [stage[k + 1][0].eq(stage[k][0]) for k in range(len(stage) - 1)]
             m.d.sync += [stage[k + 1][1].eq(stage[k][1]) for k in range(len(stage) - 1)]

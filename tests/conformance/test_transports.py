@@ -324,8 +324,13 @@ class SeamDds(SeamHarness):
         dds_writer = getattr(writer, "writer", None)  # DdsEdgeWriter.writer: the Cyclone DataWriter
         if dds_writer is None:
             return
-        deadline = time.monotonic() + 5.0  # discovery, even within a process, takes a moment
-        while len(dds_writer.get_matched_subscriptions()) < len(self.readers) and time.monotonic() < deadline:
+        # discovery, even within a process, takes a moment, and seconds on a loaded machine: a write before
+        # the match would be lost to a volatile reader, so the suite waits for it and says when it never came
+        deadline = time.monotonic() + 30.0
+        while len(dds_writer.get_matched_subscriptions()) < len(self.readers):
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{len(self.readers)} readers, {len(dds_writer.get_matched_subscriptions())} "
+                                     "matched after 30 s of DDS discovery")
             time.sleep(0.005)
         if self.qos.reliability == "reliable":
             dds_writer.wait_for_acks(int(20e9))

@@ -25,7 +25,7 @@ from hetros.advise import (
     search,
 )
 from hetros.advise import _search as search_module
-from hetros.advise._model import fitted
+from hetros.advise._model import fitted, one_core_mapping
 from hetros.advise._observe import Observation
 from hetros.advise._profile import pooled, with_one_core
 from hetros.advise._report import moved, target_names, write_one_core, write_project
@@ -144,6 +144,27 @@ def test_the_warm_hops_are_fitted_on_the_one_core_launch_and_the_others_on_the_m
     profile.one_core_chains = {}
     fit, _ = fitted(profile, waking, mapping, [CHAIN], cores=2)
     assert fit.warm_scale == fit.wake_scale == pytest.approx((16.61 - 15.11) / 3.0)
+
+
+def test_the_one_core_launch_leaves_ros1_and_remote_nodes_where_they_were() -> None:
+    """A camera on ROS 1 stays in its own process in the one-core launch, which measured 27.61 ms: the
+    camera's hop across processes (0.1 + a 2 ms wake), side and a (20), the warm hop a -> b (0.01 + the
+    1 ms wake at the warm scale) and b (5) make 27.11 without that wake: warm hops pay half. Taking the
+    camera into the one process (25.02 without the warm wakes, two of them) would fit 1.295."""
+    waking = Calibration(CALIBRATION.machine, CALIBRATION.table, {"inproc": 1.0, "shm": 2.0})
+    profile = paper_profile()
+    for spec in profile.nodes.values():
+        spec.one_core = dict(spec.handling)
+    profile.one_core_chains = {"main": {"p50_ms": 27.61}}
+    profile.chains = {"main": {"p50_ms": 16.61}}
+    mapping = {"camera": on("ros1_camera"), "side": on("s", 1), "a": on("p", 0), "b": on("p", 0)}
+    launch = one_core_mapping(mapping, ["side", "a", "b"])
+    together = Placement("advise_one_core", (0,))
+    assert launch == {"camera": on("ros1_camera"), "side": together, "a": together, "b": together}
+    fit, _ = fitted(profile, waking, mapping, [CHAIN], cores=2, one_core=launch)
+    assert fit.warm_scale == pytest.approx(0.5)
+    assumed, _ = fitted(profile, waking, mapping, [CHAIN], cores=2)
+    assert assumed.warm_scale == pytest.approx(1.295)
 
 
 def test_a_side_node_in_the_same_process_makes_the_chain_wait() -> None:

@@ -12,7 +12,7 @@ from ..plan import Plan
 from ._calibrate import Calibration, calibration
 from ._chains import Chain, ChainLatency, HardwareSpan, cosimulated_latency, over_launches
 from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budget
-from ._model import Mapping, Placement, fitted, predict
+from ._model import Mapping, Placement, fitted, one_core_mapping, predict
 from ._observe import Observation, observe
 from ._profile import Profile, build, chain_latencies, graph_key, pooled, with_one_core
 from ._report import plot_timeline, table, write_one_core, write_project
@@ -166,7 +166,9 @@ def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], No
                           "hardware nodes into, and nodes with hw: implementations")
     limits = Limits(cores, fpga, part_budget(plan, fpga) if fpga else {}, options.pinned)
     chains = [c for c, _ in paths]
-    calibrated, fit = fitted(profile, calibrated, _profiled_mapping(profile, original), chains, cores)
+    profiled = _profiled_mapping(profile, original)
+    calibrated, fit = fitted(profile, calibrated, profiled, chains, cores,
+                             one_core=one_core_mapping(profiled, _one_core_nodes(plan)))
     shipped = Candidate(original, predict(profile, calibrated, original, chains, cores))
     ranked, how = search(profile, calibrated, original, paths, limits, keep=options.keep,
                          time_limit_s=options.time_limit_s)
@@ -179,6 +181,14 @@ def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], No
         how += ("; a node whose publisher is in its process, pinned to one core, works at its time in the one-core "
                 "launch")
     return Advice(profile, source, shipped, ranked, how, paths, limits, targets)
+
+
+def _one_core_nodes(plan: Plan) -> list[str]:
+    """The nodes the profile's one-core launch runs together (``write_one_core``): those of this machine's
+    processes and threads, and those mapped to hardware (which the profile runs in software)."""
+    return [node for node, spec in plan.nodes.items() if not spec.run.startswith("hetros.") and (
+        plan.in_hardware(node) or (plan.targets[spec.target].kind in ("process", "thread")
+                                   and not plan.targets[spec.target].host))]
 
 
 def _profiled_mapping(profile: Profile, original: Mapping) -> Mapping:

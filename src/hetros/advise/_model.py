@@ -32,6 +32,7 @@ from __future__ import annotations
 import heapq
 import itertools
 from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -453,14 +454,17 @@ def predict(profile: Profile, calibration: Calibration, mapping: Mapping, chains
 
 
 def fitted(profile: Profile, calibration: Calibration, mapping: Mapping, chains: list[Chain],
-           cores: int) -> tuple[Calibration, str]:
+           cores: int, *, one_core: Mapping | None = None) -> tuple[Calibration, str]:
     """``calibration`` with its wake scales fitted on the profile's chains, and in words how.
 
     First the warm scale, on the one-core launch's chains (every node in one process on one core: its
     hops are all warm), then the scale of every other hop, on the chains of the mapping profiled with
     the warm one fixed: ball on plate's chain in one process on one core measured 0.49 ms where the
-    calibrated in-process wake (a subscriber asleep a whole period) predicted 0.7."""
-    warm = _scale(profile.one_core_chains, profile, calibration, one_core_mapping(profile), chains, cores, "warm_scale")
+    calibrated in-process wake (a subscriber asleep a whole period) predicted 0.7. ``one_core`` is the
+    one-core launch's mapping (by default every node of the profile in it)."""
+    if one_core is None:
+        one_core = one_core_mapping(mapping, profile.nodes)
+    warm = _scale(profile.one_core_chains, profile, calibration, one_core, chains, cores, "warm_scale")
     if warm is not None:
         calibration = replace(calibration, warm_scale=warm)
     # without a one-core launch every hop shares one scale, fitted on the mapping profiled
@@ -475,9 +479,11 @@ def fitted(profile: Profile, calibration: Calibration, mapping: Mapping, chains:
     return calibration, how
 
 
-def one_core_mapping(profile: Profile) -> Mapping:
-    """The mapping of the profile's one-core launch: every node in one process on one core."""
-    return {node: Placement("advise_one_core", (0,)) for node in profile.nodes}
+def one_core_mapping(profiled: Mapping, moved: Iterable[str]) -> Mapping:
+    """The mapping of the profile's one-core launch: the nodes it ``moved`` (those of this machine's
+    processes and threads) in one process on one core, the others (ROS 1, other machines) where they were."""
+    together = Placement("advise_one_core", (0,))
+    return {**profiled, **dict.fromkeys(moved, together)}
 
 
 def _scale(chains_measured: dict[str, dict[str, Any]], profile: Profile, calibration: Calibration, mapping: Mapping,

@@ -103,6 +103,8 @@ class Run:
     missing: dict[str, str] = field(default_factory=dict)
     throughput: list[dict[str, Any]] = field(default_factory=list)
     cpu: list[dict[str, Any]] = field(default_factory=list)
+    # the Python thread hand-over a rospy-style pinger pays (``_handover``), on the ping's core
+    handover: dict[str, Any] = field(default_factory=dict)
     # each round's result per (system, size), for ratios that compare a round with itself
     rounds: dict[tuple[str, int], list[Result]] = field(default_factory=dict)
 
@@ -347,6 +349,16 @@ class Bench:
             out.append({"what": label, **data})
         return out
 
+    def handover(self) -> dict[str, Any]:
+        """The floor the rospy structure adds to a round trip (``_handover``), on the ping's core."""
+        cpu = "-" if self.cpus is None else str(self.cpus[0])
+        proc = subprocess.run([sys.executable, "-m", "hetros_bench._handover", cpu], capture_output=True, text=True,
+                              env=self.env, check=False, timeout=300)
+        if proc.returncode:
+            return {"error": proc.stderr.strip()[-300:]}
+        measured: dict[str, Any] = json.loads(proc.stdout.strip().splitlines()[-1])
+        return measured
+
     def close(self) -> None:
         if self.rosmaster is not None:
             self.rosmaster.terminate()
@@ -433,9 +445,25 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
             return "-"
         return f"{mine.rtt.p50 / native.rtt.p50:.2f}x"
 
+    floor = run.handover.get("floor_us")
+
+    def beyond_floor(size: int, ported: str) -> str:
+        mine, native = by.get((ported, size)), by.get(("hetros-shm-cb", size))
+        if floor is None or mine is None or native is None or mine.rtt is None or native.rtt is None:
+            return "-"
+        return f"{(mine.rtt.p50 - floor) / native.rtt.p50:.2f}x"
+
     if both and "hetros-shm-cb" in shown:
         _table(lines, "Both ends written the ROS way: p50 round trip of the unchanged rclpy/rospy ping-pong / "
                       "hetros-shm-cb p50 (the same pair in hetros's API)", both, sizes, both_ends)
+        if floor is not None and "hetros-rospy-pp" in both:
+            lines += ["", f"A rospy pinger waits in its main thread for what its callback thread receives: each "
+                          f"round trip wakes a sleeping thread. Without any transport, on the ping's core in this "
+                          f"run, that hand-over took {run.handover['event_wait_us']:.1f} µs (p50) against "
+                          f"{run.handover['polling_us']:.1f} µs for a thread that polls: a floor of "
+                          f"{floor:.1f} µs (`hetros_bench._handover`)."]
+            _table(lines, "The rospy ping-pong less that floor / hetros-shm-cb p50", ["hetros-rospy-pp"], sizes,
+                   beyond_floor)
     peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
     for ours in ("hetros-shm-cb", "hetros-shm-loan-cb", "hetros-shm-loan", "hetros-inproc"):
         if ours in shown:
@@ -583,6 +611,8 @@ def main(argv: list[str] | None = None) -> int:
                 for size in (64, 1024 * 1024):
                     run.throughput.append(bench.throughput(system, size, tp_seconds))
         run.cpu = bench.idle_cpu(3.0 if args.quick else 10.0)
+        if "hetros-rospy-pp" in systems and "hetros-rospy-pp" not in run.missing:
+            run.handover = bench.handover()
     finally:
         bench.close()
     report = render(run, systems, sizes)
@@ -598,6 +628,8 @@ def main(argv: list[str] | None = None) -> int:
             handle.write(json.dumps({"throughput": t}) + "\n")
         for c in run.cpu:
             handle.write(json.dumps({"cpu": c}) + "\n")
+        if run.handover:
+            handle.write(json.dumps({"handover": run.handover}) + "\n")
         for system, why in run.missing.items():
             handle.write(json.dumps({"missing": system, "why": why}) + "\n")
     plot(run, [s for s in systems if s not in run.missing], out / "latency.png")

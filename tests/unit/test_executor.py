@@ -48,6 +48,24 @@ def test_a_hot_spin_runs_polled_callbacks_in_turn() -> None:
     assert ran == list("abcabcabc"), "a busy subscription must not starve the others"
 
 
+def test_a_stopped_executor_drains_what_was_delivered_within_its_bound() -> None:
+    """Stopped, spin_once runs nothing; drain runs every delivered message, in turn, and no more."""
+    stop = threading.Event()
+    executor = Executor(stop)
+    ran: list[str] = []
+    executor.poll_while_spinning(_Queue("a", 2, ran))
+    executor.poll_while_spinning(_Queue("b", 1, ran))
+    stop.set()
+    assert not executor.spin_once(0.0)
+    assert executor.drain(5.0) == 3
+    assert ran == ["a", "b", "a"]
+    endless = Executor(stop)
+    endless.poll_while_spinning(_Queue("c", 10**9, ran))
+    started = time.monotonic()
+    assert endless.drain(0.05) > 0
+    assert time.monotonic() - started < 5.0, "a drain ends at its bound even if messages keep coming"
+
+
 def test_a_polled_callback_that_stops_being_polled_is_left_alone() -> None:
     executor = Executor(threading.Event())
     ran: list[str] = []

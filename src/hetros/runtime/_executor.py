@@ -166,6 +166,20 @@ class Executor:
         cost a callback 3.7 µs per message, as much as taking the message itself."""
         self._polled = [*self._polled, entity]
 
+    def drain(self, seconds: float) -> int:
+        """Once the graph stops: run the callbacks of messages already delivered to this node's subscriptions,
+        until none is left or ``seconds`` pass; how many ran. The launch stops the processes with shutdown
+        hooks first so that what a hook publishes finds its subscribers running; a subscriber told to stop
+        a moment later still has it to handle (rospy's on_shutdown example, heard by its listener)."""
+        end = time.monotonic() + seconds
+        ran, progress = 0, True
+        while progress and time.monotonic() < end:
+            progress = False
+            for entity in self._polled:
+                if entity.dispatch():
+                    ran, progress = ran + 1, True
+        return ran
+
     def stop_polling(self, entity: Dispatchable) -> None:
         self._polled = [polled for polled in self._polled if polled is not entity]
 

@@ -9,6 +9,7 @@ together. Names resolve as rospy's: ``'chatter'`` is ``/chatter``, ``'~x'`` is `
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import threading
 import time as _time
@@ -77,6 +78,10 @@ class ServiceException(ROSException):
     """A service call that failed."""
 
 
+# how long a stopping node's callbacks go on with the messages already delivered to it (Executor.drain)
+DRAIN_SECONDS = 0.5
+
+
 class _State:
     """The rospy state of one hetros node (its thread): name, callback thread, shutdown hooks."""
 
@@ -107,6 +112,9 @@ class _State:
                     try:
                         while not hetros.graph.stop.is_set() and not self.shutdown_reason and self.failure is None:
                             hetros.executor.spin_once(0.1)
+                        if hetros.graph.stop.is_set() and self.failure is None:
+                            with contextlib.suppress(ShutdownError):  # a callback blocked by the stop ends it
+                                hetros.executor.drain(DRAIN_SECONDS)
                     except BaseException as exc:
                         self.failure = exc
             self.spinner = threading.Thread(target=run, name=f"rospy callbacks:{hetros.name}", daemon=True)

@@ -93,7 +93,8 @@ fast: install-test
 test: lint
 	HETROS_PURE_PYTHON=1 $(VENV)/bin/pytest -q -p no:cacheprovider tests/conformance
 	$(VENV)/bin/pytest -q -p no:cacheprovider --cov=hetros --cov-report= tests/unit tests/conformance tests/fuzz
-	$(VENV)/bin/pytest -q -p no:cacheprovider tests/integration tests/interop
+	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 --dist loadfile -m "not machine_wide" tests/integration tests/interop
+	$(VENV)/bin/pytest -q -p no:cacheprovider -m machine_wide tests/integration tests/interop
 	@$(VENV)/bin/coverage report --format=total | xargs printf "coverage: %s%% of src/hetros's lines ran in the test process\n"
 
 clean:

@@ -24,6 +24,10 @@ from hetros.transport.shm._iceoryx import iceoryx_root
 from hetros.transport.shm._sample import FILE_PREFIX, SHM_DIR
 from hetros.transport.shm._stale import _dead, cleanup_stale, recorded_nodes, remove_orphaned_services
 
+# it reads or changes state every launch of this account shares (/dev/shm, the launch registry): `make test`
+# runs it alone, after the integration tests that run side by side
+pytestmark = pytest.mark.machine_wide
+
 NODES = textwrap.dedent('''
     from hetros import Node
     from hetros.interfaces.std_msgs.msg import UInt64

@@ -185,6 +185,7 @@ def start_launcher(project: Path) -> tuple[subprocess.Popen[str], dict[str, int]
     return proc, pids, seen
 
 
+@pytest.mark.machine_wide  # compares all of /dev/shm before and after
 def test_sigkill_of_a_worker_is_detected_and_reported(tmp_path: Path) -> None:
     before = set(os.listdir(SHM))
     proc, pids, _ = start_launcher(EXAMPLES / "talker_listener" / "project.yaml")

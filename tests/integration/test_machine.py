@@ -18,6 +18,10 @@ import pytest
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "talker_listener" / "project.yaml"
 root_only = pytest.mark.skipif(os.getuid() != 0 or shutil.which("unshare") is None, reason="needs root and unshare")
 
+# it reads or changes state every launch of this account shares (/dev/shm, the launch registry): `make test`
+# runs it alone, after the integration tests that run side by side
+pytestmark = pytest.mark.machine_wide
+
 
 @root_only
 @pytest.mark.parametrize("size", ["64k", "1m"])

@@ -15,6 +15,10 @@ import pytest
 
 from hetros.launch.launcher._registry import registry_folder, running
 
+# it reads or changes state every launch of this account shares (/dev/shm, the launch registry): `make test`
+# runs it alone, after the integration tests that run side by side
+pytestmark = pytest.mark.machine_wide
+
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 

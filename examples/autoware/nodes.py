@@ -141,14 +141,23 @@ def velocity_set(node: Node) -> None:
 
 
 def pure_pursuit(node: Node) -> None:
+    """Steers for the pose of the cycle its waypoints were cut for (the lane's header is that pose's), as
+    message_filters would pair them: the newest pose instead made the trajectory depend on which of the two
+    topics' messages a busy machine delivered first."""
     pub = node.create_publisher(TwistStamped, "/twist_raw")
-    pose = {"value": (0.0, 0.0, 0.0)}
-
-    def on_pose(msg: PoseStamped) -> None:
-        pose["value"] = pose_xy_yaw(msg)
+    poses = node.create_subscription(PoseStamped, "/current_pose")  # taken in steer, up to the lane's own
+    seen: dict[str, tuple[float, float, float]] = {}
 
     def steer(lane: Lane) -> None:
-        x, y, yaw = pose["value"]
+        try:
+            while lane.header.frame_id not in seen:
+                msg = poses.take(timeout=5.0)
+                seen[msg.header.frame_id] = pose_xy_yaw(msg)
+        except ShutdownError:  # the launch ended while this lane waited for its pose
+            return
+        x, y, yaw = seen.pop(lane.header.frame_id)
+        for older in list(seen)[:-16]:  # poses whose lanes never came (the first ones, a dropped cycle)
+            del seen[older]
         points, speeds = lane_points(lane)
         twist = TwistStamped(header=lane.header)
         if len(points):
@@ -164,7 +173,6 @@ def pure_pursuit(node: Node) -> None:
             twist.twist.angular.z = speed * curvature
         pub.publish(twist)
 
-    node.create_subscription(PoseStamped, "/current_pose", on_pose)
     node.create_subscription(Lane, "/final_waypoints", steer)
 
 

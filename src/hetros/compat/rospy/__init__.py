@@ -260,6 +260,9 @@ def spin() -> None:
     state.start_callbacks()
     while not is_shutdown():
         state.hetros.graph.stop.wait(0.1)
+    # the node closes once its main returns: first its callbacks handle what was delivered before the stop
+    if state.spinner is not None and state.spinner is not threading.current_thread():
+        state.spinner.join(DRAIN_SECONDS + 1.0)
 
 
 # -- time -----------------------------------------------------------------------------------------

@@ -441,7 +441,7 @@ class Launcher:
                 except OSError:
                     pass
             if child.reader is not None:
-                child.reader.join(timeout=1.0)  # its last status lines are in the queue then
+                child.reader.join(timeout=5.0)  # its last lines are forwarded then (a loaded machine is slow)
         if self.host is not None:
             self._failed_at_shutdown(t.spec.name for t in self.host.threads if t.failed)
         while (event := self._next_event(0)) is not None:

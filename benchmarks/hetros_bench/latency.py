@@ -439,23 +439,19 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
                       "hetros-shm-cb p50", shims, sizes, shim_cost)
     both: list[str] = [s for s in ("hetros-rclpy-pp", "hetros-rospy-pp") if s in shown]
 
-    def both_ends(size: int, ported: str) -> str:
-        mine, native = by.get((ported, size)), by.get(("hetros-shm-cb", size))
-        if mine is None or native is None or mine.rtt is None or native.rtt is None:
-            return "-"
-        return f"{mine.rtt.p50 / native.rtt.p50:.2f}x"
+    def both_ends(less_us: float = 0.0) -> Callable[[int, str], str]:
+        """A ported ping-pong's p50 round trip, less ``less_us``, over hetros-shm-cb's."""
+        def cell(size: int, ported: str) -> str:
+            mine, native = by.get((ported, size)), by.get(("hetros-shm-cb", size))
+            if mine is None or native is None or mine.rtt is None or native.rtt is None:
+                return "-"
+            return f"{(mine.rtt.p50 - less_us) / native.rtt.p50:.2f}x"
+        return cell
 
     floor = run.handover.get("floor_us")
-
-    def beyond_floor(size: int, ported: str) -> str:
-        mine, native = by.get((ported, size)), by.get(("hetros-shm-cb", size))
-        if floor is None or mine is None or native is None or mine.rtt is None or native.rtt is None:
-            return "-"
-        return f"{(mine.rtt.p50 - floor) / native.rtt.p50:.2f}x"
-
     if both and "hetros-shm-cb" in shown:
         _table(lines, "Both ends written the ROS way: p50 round trip of the unchanged rclpy/rospy ping-pong / "
-                      "hetros-shm-cb p50 (the same pair in hetros's API)", both, sizes, both_ends)
+                      "hetros-shm-cb p50 (the same pair in hetros's API)", both, sizes, both_ends())
         if floor is not None and "hetros-rospy-pp" in both:
             lines += ["", f"A rospy pinger waits in its main thread for what its callback thread receives: each "
                           f"round trip wakes a sleeping thread. Without any transport, on the ping's core in this "
@@ -463,7 +459,7 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
                           f"{run.handover['polling_us']:.1f} µs for a thread that polls: a floor of "
                           f"{floor:.1f} µs (`hetros_bench._handover`)."]
             _table(lines, "The rospy ping-pong less that floor / hetros-shm-cb p50", ["hetros-rospy-pp"], sizes,
-                   beyond_floor)
+                   both_ends(floor))
     peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]
     for ours in ("hetros-shm-cb", "hetros-shm-loan-cb", "hetros-shm-loan", "hetros-inproc"):
         if ours in shown:

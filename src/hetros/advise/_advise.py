@@ -15,7 +15,7 @@ from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budge
 from ._model import Mapping, Placement, fitted, one_core_mapping, predict
 from ._observe import Observation, observe
 from ._profile import Profile, build, chain_latencies, graph_key, pooled, with_one_core
-from ._report import plot_timeline, table, write_one_core, write_project
+from ._report import joins_one_core, plot_timeline, table, write_one_core, write_project
 from ._search import Candidate, Limits, search
 
 
@@ -187,8 +187,7 @@ def _one_core_nodes(plan: Plan) -> list[str]:
     """The nodes the profile's one-core launch runs together (``write_one_core``): those of this machine's
     processes and threads, and those mapped to hardware (which the profile runs in software)."""
     return [node for node, spec in plan.nodes.items() if not spec.run.startswith("hetros.") and (
-        plan.in_hardware(node) or (plan.targets[spec.target].kind in ("process", "thread")
-                                   and not plan.targets[spec.target].host))]
+        plan.in_hardware(node) or joins_one_core(plan.targets[spec.target].kind, plan.targets[spec.target].host))]
 
 
 def _profiled_mapping(profile: Profile, original: Mapping) -> Mapping:

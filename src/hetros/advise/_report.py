@@ -99,7 +99,7 @@ def write_one_core(source: Path, cpu: int, out: Path) -> Path:
         raise AdviseError(f"{source}: targets: and nodes: must be mappings written out (not from an include) for "
                           "the profile's one-core launch")
     moving = {name for name, spec in targets.items()
-              if isinstance(spec, dict) and spec.get("kind") in ("process", "thread") and not spec.get("host")}
+              if isinstance(spec, dict) and joins_one_core(spec.get("kind"), spec.get("host"))}
     for entry in nodes.values():
         if isinstance(entry, dict) and entry.get("target") in moving:
             entry["target"] = ONE_CORE_TARGET
@@ -113,6 +113,12 @@ def write_one_core(source: Path, cpu: int, out: Path) -> Path:
 
 
 ONE_CORE_TARGET = "advise_one_core"
+
+
+def joins_one_core(kind: object, host: object) -> bool:
+    """Whether the one-core launch takes a target's nodes into its one process: this machine's processes
+    and threads; ROS 1, fpga and other machines' targets stay."""
+    return kind in ("process", "thread") and not host
 
 
 def plot_timeline(candidate: Candidate, chains: list[Chain], out: Path) -> Path:

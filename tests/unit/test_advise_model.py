@@ -124,25 +124,34 @@ def test_a_node_after_its_publisher_in_a_process_on_one_core_runs_at_its_one_cor
         assert found.p50_ms == pytest.approx(expected), mapping
 
 
+# wakes of 1 ms in a process and 2 ms across
+WAKING = Calibration(CALIBRATION.machine, CALIBRATION.table, {"inproc": 1.0, "shm": 2.0})
+
+
+def profiled_with_one_core(one_core_p50_ms: float, mapped_p50_ms: float) -> Profile:
+    """The paper profile with each node as fast in the one-core launch as mapped, and the chain's p50 in each."""
+    profile = paper_profile()
+    for spec in profile.nodes.values():
+        spec.one_core = dict(spec.handling)
+    profile.one_core_chains = {"main": {"p50_ms": one_core_p50_ms}}
+    profile.chains = {"main": {"p50_ms": mapped_p50_ms}}
+    return profile
+
+
 def test_the_warm_hops_are_fitted_on_the_one_core_launch_and_the_others_on_the_mapping() -> None:
     """Wakes of 1 ms in a process and 2 ms across. The one-core launch (every node in one process on one
     core: side first, then a) measured 26.02 ms where the model without wakes says 25.02 and with them
     27.02: warm hops pay half. The mapping profiled (the camera's process elsewhere, a and b in one on
     core 0) measured 16.61 ms: 15.61 without the cross-process wake (the warm hop a -> b at half), 17.61
     with it: the other hops pay half too."""
-    waking = Calibration(CALIBRATION.machine, CALIBRATION.table, {"inproc": 1.0, "shm": 2.0})
-    profile = paper_profile()
-    for spec in profile.nodes.values():
-        spec.one_core = dict(spec.handling)
-    profile.one_core_chains = {"main": {"p50_ms": 26.02}}
-    profile.chains = {"main": {"p50_ms": 16.61}}
+    profile = profiled_with_one_core(26.02, 16.61)
     mapping = {"camera": on("cam", 1), "side": on("s", 1), "a": on("p", 0), "b": on("p", 0)}
-    fit, how = fitted(profile, waking, mapping, [CHAIN], cores=2)
+    fit, how = fitted(profile, WAKING, mapping, [CHAIN], cores=2)
     assert (fit.warm_scale, fit.wake_scale) == (pytest.approx(0.5), pytest.approx(0.5))
     assert "within a process on one core 0.50" in how
     # no one-core launch: warm hops pay what the others do
     profile.one_core_chains = {}
-    fit, _ = fitted(profile, waking, mapping, [CHAIN], cores=2)
+    fit, _ = fitted(profile, WAKING, mapping, [CHAIN], cores=2)
     assert fit.warm_scale == fit.wake_scale == pytest.approx((16.61 - 15.11) / 3.0)
 
 
@@ -151,19 +160,14 @@ def test_the_one_core_launch_leaves_ros1_and_remote_nodes_where_they_were() -> N
     camera's hop across processes (0.1 + a 2 ms wake), side and a (20), the warm hop a -> b (0.01 + the
     1 ms wake at the warm scale) and b (5) make 27.11 without that wake: warm hops pay half. Taking the
     camera into the one process (25.02 without the warm wakes, two of them) would fit 1.295."""
-    waking = Calibration(CALIBRATION.machine, CALIBRATION.table, {"inproc": 1.0, "shm": 2.0})
-    profile = paper_profile()
-    for spec in profile.nodes.values():
-        spec.one_core = dict(spec.handling)
-    profile.one_core_chains = {"main": {"p50_ms": 27.61}}
-    profile.chains = {"main": {"p50_ms": 16.61}}
+    profile = profiled_with_one_core(27.61, 16.61)
     mapping = {"camera": on("ros1_camera"), "side": on("s", 1), "a": on("p", 0), "b": on("p", 0)}
     launch = one_core_mapping(mapping, ["side", "a", "b"])
     together = Placement("advise_one_core", (0,))
     assert launch == {"camera": on("ros1_camera"), "side": together, "a": together, "b": together}
-    fit, _ = fitted(profile, waking, mapping, [CHAIN], cores=2, one_core=launch)
+    fit, _ = fitted(profile, WAKING, mapping, [CHAIN], cores=2, one_core=launch)
     assert fit.warm_scale == pytest.approx(0.5)
-    assumed, _ = fitted(profile, waking, mapping, [CHAIN], cores=2)
+    assumed, _ = fitted(profile, WAKING, mapping, [CHAIN], cores=2)
     assert assumed.warm_scale == pytest.approx(1.295)
 
 

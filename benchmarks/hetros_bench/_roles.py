@@ -209,8 +209,9 @@ class Iceoryx2Endpoint(Endpoint):
 
     def recv(self, timeout: float) -> tuple[int, int, Any] | None:
         deadline = time.monotonic() + timeout
-        spin = self.spin.budget()
-        spin_end = time.perf_counter() + spin
+        started = time.perf_counter()
+        spin = self.spin.budget(started)
+        spin_end = started + spin
         while True:
             sample = self.sub.receive()
             if sample is not None:

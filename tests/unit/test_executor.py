@@ -142,3 +142,59 @@ def test_a_hot_spin_hands_the_gil_over_at_every_poll_only_once_a_thread_of_this_
     assert executor.yield_every == 1
     spin()
     assert empty.polls >= 2 and len(yields) == empty.polls, "an in-process publisher gets the GIL at every poll"
+
+
+class _LateSource:
+    """A wake channel whose poll finds the message that arrived just after the polled subscription's turn:
+    it puts the message in ``queue`` and wakes the subscription, as the shared-memory channel does."""
+
+    def __init__(self, executor: Executor, queue: _Queue, polls_before: int) -> None:
+        self.executor, self.queue, self.polls_before = executor, queue, polls_before
+
+    def poll(self) -> None:
+        self.polls_before -= 1
+        if self.polls_before == 0:
+            self.queue.count += 1
+            self.executor.notify(self.queue)
+
+    def wait(self, timeout: float | None) -> None:
+        time.sleep(timeout or 0.0)
+
+    def interrupt(self) -> None:
+        pass
+
+
+def test_a_message_the_wake_channel_finds_is_run_from_the_spin_and_its_late_wake_runs_nothing() -> None:
+    """The channel's poll wakes a polled subscription whose message came after its turn: the spin runs it at
+    once, and the wake, still queued, neither runs a callback again nor ends the next spin_once early."""
+    ran: list[str] = []
+    queue = _Queue("q", 0, ran)
+    executor = Executor(threading.Event())
+    source = _LateSource(executor, queue, polls_before=1)
+    executor._source = source
+    executor.poll_while_spinning(queue)
+    _hot(executor)
+    dispatched: list[bool] = []
+    spin_for_work = executor._spin_for_work
+    executor._spin_for_work = lambda seen, wait: dispatched.append(  # type: ignore[method-assign]
+        (found := spin_for_work(seen, wait)) is executor_module._DISPATCHED) or found
+    assert executor.spin_once(1.0)
+    assert ran == ["q"] and dispatched == [True], "run from the spin, not by the ready queue's way"
+    _hot(executor)
+    started = time.monotonic()
+    assert not executor.spin_once(0.05), "the late wake found nothing to run: no work done"
+    assert ran == ["q"] and time.monotonic() - started >= 0.05
+
+
+def test_the_hot_path_leaves_a_due_timer_and_queued_work_their_turn_first() -> None:
+    ran: list[str] = []
+    executor = Executor(threading.Event())
+    executor.poll_while_spinning(_Queue("polled", 10, ran))
+    executor.add_timer(time.monotonic() - 1.0, lambda: ran.append("timer") or None)
+    queued = _Queue("queued", 1, ran)
+    executor.notify(queued)
+    _hot(executor)
+    for _ in range(3):
+        assert executor.spin_once(1.0)
+    assert ran == ["timer", "queued", "polled"]
+

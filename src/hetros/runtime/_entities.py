@@ -392,9 +392,10 @@ class Subscription(Generic[M]):
         deadline = None if timeout is None else time.monotonic() + timeout
         stop = self.node.graph.stop
         executor = self.node.executor
-        spin = self._spin.budget()
+        started = time.perf_counter()
+        spin = self._spin.budget(started)
         if spin:
-            spin_end = time.perf_counter() + spin
+            spin_end = started + spin
             polls = 0
             executor.hot_spin(True)
             try:

@@ -25,6 +25,47 @@ def test_a_constructed_numeric_sequence_is_an_array_array_as_in_rclpy() -> None:
     assert np.array_equal(copied.sequence, [0, 1, 1])
 
 
+def _same(a: object, b: object) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return type(a) is type(b) and np.array_equal(a, b)  # type: ignore[arg-type]
+    if getattr(a, "__msgtype__", None):
+        return type(a) is type(b) and all(_same(getattr(a, f), getattr(b, f)) for f in a.__fieldnames__)
+    return type(a) is type(b) and a == b
+
+
+def test_the_flavoured_constructor_stores_what_assigning_each_field_stores() -> None:
+    """Flavoured classes have a generated constructor of their own (the base's one stored sequences through
+    the properties, 0.45 µs per new Image): for every shipped type with numeric sequences it must give what
+    the base's constructor and the properties give, for defaults, None, lists, arrays and empty arrays."""
+    from hetros.compat._flavour import _sequences
+
+    checked = 0
+    for typename in sorted(registry().fielddefs):
+        base = registry().get(typename)
+        sequences = _sequences(typename)
+        if not sequences or "/msg/" not in typename:
+            continue
+        cls = flavoured(base)
+        assert cls.__init__ is not base.__init__
+        plain, made = base(), cls()
+        for name in base.__fieldnames__:
+            value = getattr(made, name)
+            if name in sequences:
+                assert type(value) is array.array and value.typecode == sequences[name] and not value, typename
+            else:
+                assert _same(value, getattr(plain, name)), f"{typename}.{name}"
+        for name, code in sequences.items():
+            dtype = np.dtype(code)
+            for given in ([1, 2], np.arange(3, dtype=dtype), np.zeros(0, dtype=dtype), None):
+                reference = cls()
+                setattr(reference, name, base(**{name: given}).__getattribute__(name) if given is not None else
+                        np.zeros(0, dtype=dtype))
+                assert _same(cls(**{name: given}).__getattribute__(name), getattr(reference, name)), \
+                    f"{typename}.{name} = {given!r}"
+        checked += 1
+    assert checked > 20
+
+
 def test_served_types_print_as_rclpy_prints_them_and_copy_into_hetros_classes() -> None:
     """rosidl's repr: the module path, numeric sequences as lists ([] when empty), messages inside alike; a
     copy (what publish sends) is of hetros's own class again."""
@@ -193,3 +234,4 @@ def test_rclpy_publish_keeps_the_callers_message_unless_it_must_copy_into_numpy(
     assert keepable(flavoured(registry().get("std_msgs/msg/String")))(None)  # no sequences: always
     assert not keepable(flavoured(registry().get("trajectory_msgs/msg/JointTrajectory")))(None)
     assert not keepable(str)("not a message")  # the copy says what the topic carries
+

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from rosbags.interfaces import Nodetype
 
-from ..msg import ActionType, ServiceType, registry
+from ..msg import ActionType, ServiceType, init_source, registry
 from ..runtime import check_type
 
 # array.array's type codes, as rclpy picks them per ROS type
@@ -89,27 +89,57 @@ def _shown(value: Any) -> Any:
     return value.view(SequenceView) if type(value) is np.ndarray else value
 
 
+def _stored_sequence(code: str) -> Callable[[Any], Any]:
+    """What a numeric sequence field stores of a value, as rclpy converts it (a list becomes an
+    ``array.array``; an array is kept, plain, so that it travels without a copy)."""
+
+    def stored(value: Any) -> Any:
+        kind = type(value)
+        if kind is SequenceView:
+            return value.view(np.ndarray)
+        if kind is np.ndarray:
+            if not value.size and value.flags.writeable:
+                return array.array(code)  # a new message's empty sequence, ready to append to
+            return value
+        if kind is array.array:
+            return value
+        return value.view(np.ndarray) if isinstance(value, np.ndarray) else array.array(code, value)
+
+    return stored
+
+
 def _sequence_property(base: type[Any], name: str, code: str) -> property:
-    """A numeric sequence over ``base``'s slot: read through :class:`SequenceView`; written as rclpy converts
-    (a list becomes an ``array.array``; an array is kept, plain, so that it travels without a copy)."""
+    """A numeric sequence over ``base``'s slot: read through :class:`SequenceView`, written as rclpy converts."""
     slot = _slot(base, name)
     read, write = slot.__get__, slot.__set__
+    stored = _stored_sequence(code)
 
     def get(self: Any) -> Any:
         return _shown(read(self, None))
 
     def put(self: Any, value: Any) -> None:
-        kind = type(value)
-        if kind is SequenceView:
-            value = value.view(np.ndarray)
-        elif kind is np.ndarray:
-            if not value.size and value.flags.writeable:
-                value = array.array(code)  # a new message's empty sequence, ready to append to
-        elif kind is not array.array:
-            value = value.view(np.ndarray) if isinstance(value, np.ndarray) else array.array(code, value)
-        write(self, value)
+        # a filled numpy array, what a publisher's data usually is, without another call
+        write(self, value if type(value) is np.ndarray and value.size else stored(value))
 
     return property(get, put)
+
+
+def _flavoured_init(cls: type[Any], sequences: dict[str, str]) -> Callable[..., None]:
+    """``cls``'s generated constructor with its numeric sequences stored as rclpy stores them, straight into
+    their slots: through the sequence properties the base's constructor cost a new Image 0.45 µs more than
+    hetros's own, on the path of every message rclpy code publishes."""
+    spec = cls._hetros_init
+    namespace = {**spec.namespace, "_A": array.array}
+    stores = {}
+    for name, code in sequences.items():
+        namespace[f"_S_{name}"] = _slot(cls, name).__set__
+        namespace[f"_C_{name}"] = _stored_sequence(code)
+        stores[name] = (f"_S_{name}(_m, _A({code!r}) if {name} is _U or {name} is None "
+                        f"else _C_{name}({{value}}))")
+    source = "\n".join(init_source(spec.fields, stores))
+    exec(compile(source, f"<hetros rclpy-flavoured message {cls.__msgtype__}>", "exec"), namespace)
+    init: Callable[..., None] = namespace["__init__"]
+    return init
 
 
 def _slot(cls: type[Any], name: str) -> Any:
@@ -145,8 +175,10 @@ def flavoured(cls: type[Any]) -> type[Any]:
     copies and encodes it as ``cls`` itself."""
     if cls in _classes:
         return _classes[cls]
-    members: dict[str, Any] = {name: _sequence_property(cls, name, code)
-                               for name, code in _sequences(cls.__msgtype__).items()}
+    sequences = _sequences(cls.__msgtype__)
+    members: dict[str, Any] = {name: _sequence_property(cls, name, code) for name, code in sequences.items()}
+    if sequences and getattr(cls, "_frozen_class", None) is not cls:
+        members["__init__"] = _flavoured_init(cls, sequences)
     made: Any = type(cls.__name__, (cls,), {"__slots__": (), "__module__": cls.__module__,
                                             "__qualname__": cls.__qualname__, "__repr__": rclpy_repr,
                                             "__str__": rclpy_repr, **members})

@@ -29,6 +29,7 @@ class Message:
     __fieldnames__: ClassVar[tuple[str, ...]] = ()
     _frozen_class: ClassVar[type[Message]]
     _thawed_class: ClassVar[type[Message]]
+    _hetros_init: ClassVar[Any]  # the InitSpec its generated __init__ was made of (see _registry)
     # what freeze() must visit, fixed per type when the class is generated
     _array_names: ClassVar[tuple[str, ...]] = ()
     _nested_names: ClassVar[tuple[str, ...]] = ()

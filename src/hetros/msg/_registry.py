@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import keyword
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -362,27 +362,20 @@ class TypeRegistry:
         namespace: dict[str, Any] = {"_np": np, "_Message": Message, "_FrozenMessage": FrozenMessage,
                                      "_U": _UNSET, "_L": _as_list}
         defaults = self._defaults.get(full, {})
-        params: list[str] = []
-        body: list[str] = []
-        fieldnames: list[str] = []
+        inits: list[InitField] = []
         for index, (name, desc) in enumerate(fields):
             attr = _attr_name(name)
-            fieldnames.append(attr)
             default_expr, coerce = self._default_for(desc, namespace, index, defaults.get(name, _NO_DEFAULT),
                                                      f"{full.rsplit('/', 1)[-1]}.{attr}")
-            params.append(f"{attr}=_U")
-            value = f"{coerce}({attr})" if coerce else attr
-            # None stands for the field's default, as in rospy's generated classes (``Point(1.0, None, 2.0)``)
-            body.append(f"        _m.{attr} = {default_expr} if {attr} is _U or {attr} is None else {value}")
+            inits.append(InitField(attr, default_expr, f"{coerce}({attr})" if coerce else attr))
+        fieldnames = [field.attr for field in inits]
         short = full.rsplit("/", 1)[-1]
         lines = [f"class {short}(_Message):", f"    __slots__ = {tuple(fieldnames)!r}"]
         lines.append(f"    __msgtype__ = {full!r}")
         lines.append(f"    __fieldnames__ = {tuple(fieldnames)!r}")
         for cname, _ctype, cvalue in consts:
             lines.append(f"    {cname} = {cvalue!r}")
-        lines.append(f"    def __init__(_m, {', '.join(params)}):" if params else "    def __init__(_m):")
-        lines.extend(body)
-        lines.append("        _m._hetros_loan = None")  # set, so the transport's check for a loan is cheap
+        lines.extend(f"    {line}" for line in init_source(inits, {}))
         lines.append(f"class Frozen{short}(_FrozenMessage, {short}):")
         lines.append("    __slots__ = ()")
         try:
@@ -397,6 +390,7 @@ class TypeRegistry:
         cls.__qualname__ = short
         cls._frozen_class = frozen
         cls._thawed_class = cls
+        cls._hetros_init = InitSpec(tuple(inits), namespace)
         kinds = [(attr, desc) for attr, (_name, desc) in zip(fieldnames, fields, strict=True)]
         cls._array_names = tuple(a for a, d in kinds if d[0] in (Nodetype.ARRAY, Nodetype.SEQUENCE)
                                  and d[1][0][0] == Nodetype.BASE and d[1][0][1][0] != "string")
@@ -485,6 +479,41 @@ class TypeRegistry:
 
 
 _NO_DEFAULT: Any = object()
+
+
+@dataclass(frozen=True)
+class InitField:
+    """One field as a generated constructor fills it: ``default`` when the argument is not given (or None,
+    as in rospy's generated classes: ``Point(1.0, None, 2.0)``), else ``value`` (the argument, coerced)."""
+
+    attr: str
+    default: str
+    value: str
+
+
+@dataclass(frozen=True)
+class InitSpec:
+    """What a message class's generated ``__init__`` was made of, kept so that a subclass that stores
+    some fields differently (rclpy's flavour) gets a constructor as flat as its base's."""
+
+    fields: tuple[InitField, ...]
+    namespace: dict[str, Any]
+
+
+def init_source(fields: Sequence[InitField], stores: Mapping[str, str]) -> list[str]:
+    """The lines of a generated ``__init__`` over ``fields``; ``stores[attr]``, a format with ``{default}``
+    and ``{value}``, replaces the plain assignment of that field."""
+    params = ", ".join(f"{field.attr}=_U" for field in fields)
+    lines = [f"def __init__(_m, {params}):" if params else "def __init__(_m):"]
+    for field in fields:
+        if field.attr in stores:
+            stored = stores[field.attr].format(default=field.default, value=field.value)
+            lines.append(f"    {stored}")
+        else:
+            lines.append(f"    _m.{field.attr} = {field.default} if {field.attr} is _U or {field.attr} is None "
+                         f"else {field.value}")
+    lines.append("    _m._hetros_loan = None")  # set, so the transport's check for a loan is cheap
+    return lines
 
 
 def _as_list(value: Any) -> Any:

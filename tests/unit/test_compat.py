@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import array
+import os
 import threading
 
 import numpy as np
@@ -235,3 +236,39 @@ def test_rclpy_publish_keeps_the_callers_message_unless_it_must_copy_into_numpy(
     assert not keepable(flavoured(registry().get("trajectory_msgs/msg/JointTrajectory")))(None)
     assert not keepable(str)("not a message")  # the copy says what the topic carries
 
+
+def test_a_rospy_node_on_one_core_lets_its_callback_thread_finish_before_its_main_thread_runs() -> None:
+    """Once a rospy node's callback thread runs, its main thread (here, the thread that called init_node)
+    runs SCHED_BATCH when it has one core: a callback that wakes it is not preempted holding the GIL. The
+    callback thread keeps the default policy, and a callback that sets an event reaches the waiting thread."""
+    import hetros.compat.rospy as rospy_shim
+    from hetros import Node
+    from hetros.runtime import ros_main
+
+    hetros = Node("listener")
+    seen: dict[str, int] = {}
+    heard = threading.Event()
+
+    def main() -> None:
+        os.sched_setaffinity(0, sorted(os.sched_getaffinity(0))[:1])
+        with ros_main(hetros):
+            rospy_shim.init_node("listener")
+            string = registry().get("std_msgs/msg/String")
+            rospy_shim.Subscriber("/chatter", string, lambda message: heard.set())
+            publisher = rospy_shim.Publisher("/chatter", string, queue_size=1)
+            seen["main"] = os.sched_getscheduler(0)
+            state = rospy_shim._state()
+            assert state.spinner is not None and state.spinner.native_id is not None
+            seen["callbacks"] = os.sched_getscheduler(state.spinner.native_id)
+            publisher.publish(string(data="hi"))
+            assert heard.wait(10.0)
+            rospy_shim.signal_shutdown("done")
+
+    try:
+        thread = threading.Thread(target=main)
+        thread.start()
+        thread.join(30.0)
+    finally:
+        hetros.close()
+    assert seen == {"main": os.SCHED_BATCH, "callbacks": os.SCHED_OTHER}
+    assert os.sched_getscheduler(0) == os.SCHED_OTHER

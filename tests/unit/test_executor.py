@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 
@@ -198,3 +199,24 @@ def test_the_hot_path_leaves_a_due_timer_and_queued_work_their_turn_first() -> N
         assert executor.spin_once(1.0)
     assert ran == ["timer", "queued", "polled"]
 
+
+def test_a_thread_on_one_core_stops_preempting_its_waker_and_one_on_several_cores_is_left_alone() -> None:
+    """yield_to_callbacks: what hetros's rospy does to a node's main thread once its callback thread runs."""
+    from hetros.runtime import yield_to_callbacks
+
+    cores = sorted(os.sched_getaffinity(0))
+    seen: dict[str, int] = {}
+
+    def on(name: str, cpus: list[int]) -> None:
+        os.sched_setaffinity(0, cpus)  # this thread only
+        yield_to_callbacks()
+        seen[name] = os.sched_getscheduler(0)
+
+    for name, cpus in (("one", cores[:1]), ("all", cores)):
+        thread = threading.Thread(target=on, args=(name, cpus))
+        thread.start()
+        thread.join()
+    assert seen["one"] == os.SCHED_BATCH
+    if len(cores) > 1:
+        assert seen["all"] == os.SCHED_OTHER
+    assert os.sched_getscheduler(0) == os.SCHED_OTHER, "other threads keep their policy"

@@ -34,7 +34,7 @@ from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, Liveline
 if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle, uuid_message
     from ._clock import Ticker
-    from ._executor import AdaptiveSpin
+    from ._executor import AdaptiveSpin, yield_to_callbacks
     from ._log import RCLPY_CONSOLE, ROSPY_CONSOLE, log_to_file, node_logger, stop_logging_to
     from ._ros_main import bound_node, mark_shut_down, ros_main, shut_down
     from ._taps import TapSink, check_rate, header_stamp
@@ -48,6 +48,7 @@ _LAZY = {
     "GoalStatus": "._action",
     "ServerGoalHandle": "._action",
     "AdaptiveSpin": "._executor",
+    "yield_to_callbacks": "._executor",
     "RCLPY_CONSOLE": "._log",
     "ROSPY_CONSOLE": "._log",
     "TapSink": "._taps",
@@ -121,4 +122,5 @@ __all__ = [
     "to_value_message",
     "type_change_problem",
     "uuid_message",
+    "yield_to_callbacks",
 ]

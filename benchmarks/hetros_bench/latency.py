@@ -109,15 +109,18 @@ class Run:
     rounds: dict[tuple[str, int], list[Result]] = field(default_factory=dict)
 
 
-def round_ratio(run: Run, ours: str, theirs: str, size: int) -> float | None:
-    """Our round trip mean over theirs, round by round, the median of the rounds.
+def round_ratio(run: Run, ours: str, theirs: str, size: int, statistic: str = "mean",
+                less_us: float = 0.0) -> float | None:
+    """Our round trip over theirs (its mean, or ``statistic``; ours less ``less_us``), round by round, the
+    median of the rounds.
 
     Both rows of a round ran back to back, so they met the same speed phase of the machine;
     a phase that hit one round of ours but not theirs moves one ratio, not the median.
     """
     mine, other = run.rounds.get((ours, size), []), run.rounds.get((theirs, size), [])
-    ratios = sorted(a.rtt.mean / b.rtt.mean for a, b in zip(mine, other, strict=False)
-                    if a.rtt is not None and b.rtt is not None and b.rtt.mean > 0)
+    ratios: list[float] = sorted((getattr(a.rtt, statistic) - less_us) / getattr(b.rtt, statistic)
+                                 for a, b in zip(mine, other, strict=False)
+                                 if a.rtt is not None and b.rtt is not None and getattr(b.rtt, statistic) > 0)
     if not ratios:
         return None
     middle = len(ratios) // 2
@@ -440,18 +443,17 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
     both: list[str] = [s for s in ("hetros-rclpy-pp", "hetros-rospy-pp") if s in shown]
 
     def both_ends(less_us: float = 0.0) -> Callable[[int, str], str]:
-        """A ported ping-pong's p50 round trip, less ``less_us``, over hetros-shm-cb's."""
+        """A ported ping-pong's p50 round trip, less ``less_us``, over hetros-shm-cb's, round by round."""
         def cell(size: int, ported: str) -> str:
-            mine, native = by.get((ported, size)), by.get(("hetros-shm-cb", size))
-            if mine is None or native is None or mine.rtt is None or native.rtt is None:
-                return "-"
-            return f"{(mine.rtt.p50 - less_us) / native.rtt.p50:.2f}x"
+            value = round_ratio(run, ported, "hetros-shm-cb", size, "p50", less_us)
+            return "-" if value is None else f"{value:.2f}x"
         return cell
 
     floor = run.handover.get("floor_us")
     if both and "hetros-shm-cb" in shown:
         _table(lines, "Both ends written the ROS way: p50 round trip of the unchanged rclpy/rospy ping-pong / "
-                      "hetros-shm-cb p50 (the same pair in hetros's API)", both, sizes, both_ends())
+                      "hetros-shm-cb p50 (the same pair in hetros's API; with rounds, the median of the rounds' "
+                      "ratios)", both, sizes, both_ends())
         if floor is not None and "hetros-rospy-pp" in both:
             lines += ["", f"A rospy pinger waits in its main thread for what its callback thread receives: each "
                           f"round trip wakes a sleeping thread. Without any transport, on the ping's core in this "

@@ -2,14 +2,16 @@
 
 rospy runs subscription callbacks in threads of their own, so a pinger written the rospy way keeps
 its loop in the main thread and waits (``threading.Event``) for the reply its callback receives: each
-round trip wakes a thread that slept in the kernel. This measures that wake on the ping's core in the
-same run as the ping-pong, with no transport at all: a waker thread polling awake (as hetros's
-callback thread does, yielding the CPU at every poll) hands a token to the main thread, which either
-sleeps in ``Event.wait`` (rospy's structure) or polls awake too (the structure of a loop that runs the
-callbacks itself, as rclpy's ``spin_once`` and hetros's own API do). The difference of the two p50s is
-the floor the rospy structure adds to a round trip, whatever carries the messages. The sleeping main
-thread runs under the policy hetros's rospy gives it on a single core (``yield_to_callbacks``); the
-default policy's hand-over, several times dearer there, is reported beside it.
+round trip passes the reply from one thread to the other, and wakes a thread that slept in the kernel.
+This measures that on the ping's core in the same run as the ping-pong, with no transport at all: a
+waker thread polling awake (as hetros's callback thread does, yielding the CPU at every poll) hands a
+token to the main thread, which sleeps in ``Event.wait`` (rospy's structure), under the policy
+hetros's rospy gives it on a single core (``yield_to_callbacks``). A loop that runs the callbacks
+itself (rclpy's ``spin_once``, hetros's own API) passes nothing between threads: the same token
+moved within one thread is the baseline, and the difference of the two p50s is the floor the rospy
+structure adds to a round trip, whatever carries the messages. Beside them: the hand-over under the
+default policy (several times dearer on one core), and two threads that both poll (the thread
+switches without the sleep).
 
 Run as ``python -m hetros_bench._handover CPU``: prints one JSON line.
 """
@@ -71,13 +73,31 @@ def _p50_us(sleeping: bool, as_the_shim_runs: bool = True) -> float:
     return times[len(times) // 2] / 1000.0
 
 
+def _one_thread_p50_us() -> float:
+    """The same token's round within one thread: what a loop that runs its callbacks itself pays."""
+    asked, answered = [False], [False]
+    times = []
+    for _ in range(ROUNDS):
+        started = time.perf_counter_ns()
+        asked[0] = True
+        if asked[0]:
+            asked[0] = False
+            answered[0] = True
+        while not answered[0]:
+            pass
+        answered[0] = False
+        times.append(time.perf_counter_ns() - started)
+    times.sort()
+    return times[len(times) // 2] / 1000.0
+
+
 def measure(cpu: int | None) -> dict[str, Any]:
     if cpu is not None:
         os.sched_setaffinity(0, [cpu])
     _p50_us(True)  # warm-up: the first thousands of rounds run while the CPU's frequency settles
-    sleeping, polling = _p50_us(True), _p50_us(False)
-    return {"event_wait_us": sleeping, "event_wait_default_policy_us": _p50_us(True, as_the_shim_runs=False),
-            "polling_us": polling, "floor_us": max(0.0, sleeping - polling)}
+    sleeping, one_thread = _p50_us(True), _one_thread_p50_us()
+    return {"event_wait_us": sleeping, "one_thread_us": one_thread, "floor_us": max(0.0, sleeping - one_thread),
+            "event_wait_default_policy_us": _p50_us(True, as_the_shim_runs=False), "polling_us": _p50_us(False)}
 
 
 if __name__ == "__main__":

@@ -343,6 +343,8 @@ class CycloneEndpoint(Endpoint):
 ROS_STYLE = {"hetros-rclpy-cb": "rclpy", "hetros-rospy-cb": "rospy"}
 # both ends written the ROS way: the pinger too (hetros-shm-cb is the same pair in hetros's own API)
 ROS_BOTH = {"hetros-rclpy-pp": "rclpy", "hetros-rospy-pp": "rospy"}
+# both ends rospy, the pinger's callback publishing the next ping (its main thread only waits)
+ROSPY_CALLBACK_PING = "hetros-rospy-pp-cb"
 
 
 class RosPingEndpoint(Endpoint):
@@ -412,6 +414,78 @@ class RosPingEndpoint(Endpoint):
         self._bound.__exit__(None, None, None)
         self.hetros.close()
         self.graph.close()
+
+
+def rospy_callback_ping(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The pinger written the other way rospy nodes are: a subscription callback that publishes the next
+    ping as soon as a reply comes, the main thread waiting until the last one, so that no reply is handed
+    from the thread that receives it to another. Each round trip is timed from the moment its ping is
+    built to the moment its reply's callback starts; probes and warm-up as in :func:`ping`."""
+    from hetros import Node
+    from hetros.compat import install
+    from hetros.runtime import Graph, ros_main
+
+    graph = Graph(_hetros_plan(16), "p0", cfg["session"])
+    graph.prepare(["ping"])
+    node = Node("ping", graph)
+    install()
+    rospy = importlib.import_module("rospy")
+    Image = importlib.import_module("sensor_msgs.msg").Image
+    payload = np.zeros(cfg["size"], np.uint8)
+    written = np.empty(cfg["size"], np.uint8)  # the producer writes its data, as RosPingEndpoint's does
+    total = cfg["warmup"] + cfg["reps"]
+    rtt: list[int] = []
+    started: list[int] = []  # when each numbered ping was built
+    answered, finished = threading.Event(), threading.Event()
+
+    with ros_main(node):
+        rospy.init_node("ping")
+        publisher = rospy.Publisher("/send", Image, queue_size=16)
+
+        def send(seq: int) -> None:
+            stamp = time.monotonic_ns()
+            if seq >= 0:
+                started.append(stamp)
+            msg = Image()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+            msg.height, msg.width = seq & 0xFFFFFFFF, 1 if seq < 0 else 0
+            if seq == STOP:
+                msg.data = payload[:0]
+            else:
+                np.copyto(written, payload)
+                msg.data = written
+            publisher.publish(msg)
+
+        def on_reply(msg: Any) -> None:
+            now = time.monotonic_ns()
+            seq = msg.height if not msg.width else msg.height - (1 << 32)
+            if seq == PROBE:
+                answered.set()
+                return
+            if seq != len(started) - 1 or finished.is_set():
+                return
+            if seq >= cfg["warmup"]:
+                rtt.append(now - started[seq])
+            if seq + 1 < total:
+                send(seq + 1)
+            else:
+                finished.set()
+
+        rospy.Subscriber("/recv", Image, on_reply, queue_size=16)
+        deadline = time.monotonic() + cfg.get("connect_timeout", 30.0)
+        while not answered.is_set():
+            send(PROBE)
+            if not answered.wait(0.2) and time.monotonic() > deadline:
+                raise SystemExit(f"{cfg['system']}: the echo side never answered")
+        time.sleep(0.05)  # the replies to the other probes
+        send(0)
+        if not finished.wait(600.0):
+            raise SystemExit(f"{cfg['system']}: reply {len(started) - 1} lost")
+        send(STOP)
+        rospy.signal_shutdown("done")
+    node.close()
+    graph.close()
+    return {"rtt_ns": rtt}
 
 
 def open_endpoint(system: str, role: str, cfg: dict[str, Any]) -> Endpoint:
@@ -641,6 +715,10 @@ def main() -> None:
             os.sched_setaffinity(0, [cfg["cpus"][0 if role == "ping" else 1]])
         if role == "echo" and system in ROS_STYLE | ROS_BOTH:
             result = ros_echo(cfg, (ROS_STYLE | ROS_BOTH)[system])
+        elif role == "echo" and system == ROSPY_CALLBACK_PING:
+            result = ros_echo(cfg, "rospy")
+        elif role == "ping" and system == ROSPY_CALLBACK_PING:
+            result = rospy_callback_ping(cfg)
         elif role == "ping" and system in ROS_BOTH:
             ros_pinger = RosPingEndpoint(cfg, ROS_BOTH[system])
             result = ping(ros_pinger, cfg)

@@ -38,13 +38,16 @@ SIZE_LABELS = {4: "4 B", 3072: "3 kB", 12288: "12 kB", 49152: "50 kB", 196608: "
 # take in a loop on both sides. -py: the same with HETROS_PURE_PYTHON=1 (no compiled hot path)
 PURE_PYTHON = "-py"
 # -rclpy-cb / -rospy-cb: the callback echo node written the rclpy or rospy way, run through hetros's shims;
-# -rclpy-pp / -rospy-pp: the pinger too (both ends of the ping-pong as ROS users port them)
+# -rclpy-pp / -rospy-pp: the pinger too (both ends of the ping-pong as ROS users port them); -rospy-pp-cb: the
+# rospy pinger's callback publishes the next ping (no reply handed from its callback thread to its main thread)
 SYSTEMS = ["hetros-inproc", "hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb",
-           "hetros-rclpy-cb", "hetros-rospy-cb", "hetros-rclpy-pp", "hetros-rospy-pp", "hetros-shm-py",
+           "hetros-rclpy-cb", "hetros-rospy-cb", "hetros-rclpy-pp", "hetros-rospy-pp", "hetros-rospy-pp-cb",
+           "hetros-shm-py",
            "hetros-shm-cb-py", "iceoryx2", "cyclonedds",
            "zenoh", "dora-rs", "rospy", "mp-pipe", "numpy-copy"]
 HETROS_SHM = ("hetros-shm", "hetros-shm-loan", "hetros-shm-cb", "hetros-shm-loan-cb", "hetros-rclpy-cb",
-              "hetros-rospy-cb", "hetros-rclpy-pp", "hetros-rospy-pp", "hetros-shm-py", "hetros-shm-cb-py")
+              "hetros-rospy-cb", "hetros-rclpy-pp", "hetros-rospy-pp", "hetros-rospy-pp-cb", "hetros-shm-py",
+              "hetros-shm-cb-py")
 HERE = Path(__file__).resolve().parent
 LOOPBACK_CYCLONEDDS = textwrap.dedent("""\
     <CycloneDDS><Domain id="any">
@@ -440,7 +443,7 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
     if shims and "hetros-shm-cb" in shown:
         _table(lines, "Cost of the rclpy and rospy shims: p50 one-way of the unchanged ROS-style echo node / "
                       "hetros-shm-cb p50", shims, sizes, shim_cost)
-    both: list[str] = [s for s in ("hetros-rclpy-pp", "hetros-rospy-pp") if s in shown]
+    both: list[str] = [s for s in ("hetros-rclpy-pp", "hetros-rospy-pp", "hetros-rospy-pp-cb") if s in shown]
 
     def both_ends(less_us: float = 0.0) -> Callable[[int, str], str]:
         """A ported ping-pong's p50 round trip, less ``less_us``, over hetros-shm-cb's, round by round."""
@@ -455,11 +458,13 @@ def render(run: Run, systems: list[str], sizes: list[int]) -> str:
                       "hetros-shm-cb p50 (the same pair in hetros's API; with rounds, the median of the rounds' "
                       "ratios)", both, sizes, both_ends())
         if floor is not None and "hetros-rospy-pp" in both:
-            lines += ["", f"A rospy pinger waits in its main thread for what its callback thread receives: each "
-                          f"round trip wakes a sleeping thread. Without any transport, on the ping's core in this "
-                          f"run, that hand-over took {run.handover['event_wait_us']:.1f} µs (p50) against "
-                          f"{run.handover['polling_us']:.1f} µs for a thread that polls: a floor of "
-                          f"{floor:.1f} µs (`hetros_bench._handover`)."]
+            lines += ["", f"hetros-rospy-pp's pinger waits in its main thread for what its callback thread "
+                          f"receives: each round trip passes the reply from one thread to the other and wakes a "
+                          f"sleeping thread (hetros-rospy-pp-cb's pinger publishes from its callback: it passes "
+                          f"nothing). Without any transport, on the ping's core in this run, that hand-over took "
+                          f"{run.handover['event_wait_us']:.1f} µs (p50) against "
+                          f"{run.handover.get('one_thread_us', 0.0):.1f} µs for the same token within one "
+                          f"thread: a floor of {floor:.1f} µs (`hetros_bench._handover`)."]
             _table(lines, "The rospy ping-pong less that floor / hetros-shm-cb p50", ["hetros-rospy-pp"], sizes,
                    both_ends(floor))
     peers = [s for s in shown if not s.startswith("hetros") and s != "numpy-copy"]

@@ -44,13 +44,13 @@ def test_the_overhead_table_shows_the_median_ratio() -> None:
 def test_the_ported_ping_pong_is_compared_round_by_round_and_less_the_floor() -> None:
     run = Run()
     for system, values in (("hetros-rclpy-pp", (12.0, 30.0, 11.0)), ("hetros-rospy-pp", (30.0, 30.0, 30.0)),
-                           ("hetros-shm-cb", (10.0, 15.0, 10.0))):
+                           ("hetros-rospy-pp-cb", (11.0, 16.5, 11.0)), ("hetros-shm-cb", (10.0, 15.0, 10.0))):
         run.rounds[(system, 4)] = [_result(system, [v]) for v in values]
     run.results = [pooled(results) for results in run.rounds.values()]
-    run.handover = {"event_wait_us": 17.0, "polling_us": 3.0, "floor_us": 14.0}
-    report = render(run, ["hetros-shm-cb", "hetros-rclpy-pp", "hetros-rospy-pp"], [4])
+    run.handover = {"event_wait_us": 14.1, "one_thread_us": 0.1, "floor_us": 14.0}
+    report = render(run, ["hetros-shm-cb", "hetros-rclpy-pp", "hetros-rospy-pp", "hetros-rospy-pp-cb"], [4])
     both = report.split("### Both ends")[1].split("###")[0]
-    assert "| 4 B | 1.20x | 3.00x |" in both, "rounds 1.2, 2.0 and 1.1: the median, not the pooled 1.53"
+    assert "| 4 B | 1.20x | 3.00x | 1.10x |" in both, "rounds 1.2, 2.0 and 1.1: the median, not the pooled 1.53"
     assert "| 4 B | 1.60x |" in report.split("less that floor")[1], "(30 - 14) / 10 in rounds 1 and 3"
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import array
 import os
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -240,10 +241,13 @@ def test_rclpy_publish_keeps_the_callers_message_unless_it_must_copy_into_numpy(
 def test_a_rospy_node_on_one_core_lets_its_callback_thread_finish_before_its_main_thread_runs() -> None:
     """Once a rospy node's callback thread runs, its main thread (here, the thread that called init_node)
     runs SCHED_BATCH when it has one core: a callback that wakes it is not preempted holding the GIL. The
-    callback thread keeps the default policy, and a callback that sets an event reaches the waiting thread."""
+    callback thread keeps the default policy, and a callback that sets an event reaches the waiting thread.
+    Its hot spin hands the GIL over at every poll while the main thread runs beside it, every few polls
+    once the main thread only waits in rospy.spin()."""
     import hetros.compat.rospy as rospy_shim
     from hetros import Node
     from hetros.runtime import ros_main
+    from hetros.runtime._executor import SPARSE_YIELD
 
     hetros = Node("listener")
     seen: dict[str, int] = {}
@@ -262,13 +266,25 @@ def test_a_rospy_node_on_one_core_lets_its_callback_thread_finish_before_its_mai
             seen["callbacks"] = os.sched_getscheduler(state.spinner.native_id)
             publisher.publish(string(data="hi"))
             assert heard.wait(10.0)
-            rospy_shim.signal_shutdown("done")
+            seen["yield_every"] = hetros.executor.yield_every
+
+            def while_spinning() -> None:  # rospy.spin(): the callbacks' hot spin need not yield at every poll
+                deadline = time.monotonic() + 10.0
+                while hetros.executor.yield_every == 1 and time.monotonic() < deadline:
+                    time.sleep(0.01)
+                seen["yield_every_in_spin"] = hetros.executor.yield_every
+                with ros_main(hetros):  # rospy calls from a thread of the node's own
+                    rospy_shim.signal_shutdown("done")
+
+            threading.Thread(target=while_spinning, daemon=True).start()
+            rospy_shim.spin()
 
     try:
-        thread = threading.Thread(target=main)
+        thread = threading.Thread(target=main, daemon=True)  # a failure here fails the test, not the run
         thread.start()
         thread.join(30.0)
     finally:
         hetros.close()
-    assert seen == {"main": os.SCHED_BATCH, "callbacks": os.SCHED_OTHER}
+    assert seen == {"main": os.SCHED_BATCH, "callbacks": os.SCHED_OTHER, "yield_every": 1,
+                    "yield_every_in_spin": SPARSE_YIELD}
     assert os.sched_getscheduler(0) == os.SCHED_OTHER

@@ -171,6 +171,12 @@ class Executor:
                 self._listener = None
                 self._woken()
 
+    def alone(self) -> None:
+        """No other thread of this process needs the GIL often from now (a rospy main thread that went into
+        ``spin()``): a hot spin hands it over every SPARSE_YIELD polls again, until a thread of this
+        process wakes the node (see _woken)."""
+        self.yield_every = SPARSE_YIELD
+
     def poll_while_spinning(self, entity: Dispatchable) -> None:
         """Let a hot spin dispatch ``entity`` (a subscription callback) as soon as it has a
         message, instead of through its wake function and the ready queue: that round

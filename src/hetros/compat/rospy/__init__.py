@@ -261,6 +261,9 @@ def spin() -> None:
     """Keep the node alive until shutdown; its callbacks run meanwhile (in their thread)."""
     state = _state()
     state.start_callbacks()
+    # this thread only looks at the stop flag ten times a second now: the callback thread's hot spin need
+    # not hand it the GIL at every poll (0.5 µs each)
+    state.hetros.executor.alone()
     while not is_shutdown():
         state.hetros.graph.stop.wait(0.1)
     # the node closes once its main returns: first its callbacks handle what was delivered before the stop

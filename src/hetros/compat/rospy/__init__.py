@@ -123,7 +123,6 @@ class _State:
             yield_to_callbacks()
 
 
-
 _states: dict[int, _State] = {}
 _states_lock = threading.Lock()
 
@@ -478,7 +477,7 @@ class Subscriber:
                 if header:
                     _SEQS.pop(id(message.header), None)
             # a thread the callback woke (a main thread waiting for what it received) runs now, not after the
-            # executor's next turn in this thread: 9 µs -> 6.5 from the callback to the woken main thread
+            # executor's next turn in this thread: 9.1 µs -> 6.2 from the callback to the woken main thread
             os.sched_yield()
         self._inner = state.hetros.create_subscription(data_class, self.name, deliver)
         state.start_callbacks()

@@ -339,15 +339,14 @@ class Executor:
         self._spinner = threading.get_ident() if spinning else 0
 
 
-
 def yield_to_callbacks() -> None:
     """On a single core, the calling thread (a node's main thread, once its callback thread runs) does not
     preempt the thread that wakes it: SCHED_BATCH.
 
     A rospy node's main thread often waits (``threading.Event``, a condition) for what its callback thread
     receives. On one core the woken main thread preempted the callback thread while that still held the GIL
-    and the lock it had just set, and waited for both: four switches per hand-over instead of one, 14 µs
-    against 5 here (``benchmarks/hetros_bench/_handover.py``). Threads of one interpreter cannot run Python at
+    and the lock it had just set, and waited for both: 17 µs per hand-over against 8 here
+    (``benchmarks/hetros_bench/_handover.py``). Threads of one interpreter cannot run Python at
     the same time anyway, so among themselves the preemption gained nothing. The callback thread keeps the
     normal policy: a message that wakes it still preempts the main thread. With more than one core the main
     thread wakes on another, and nothing changes; where the policy cannot be set (a sandbox), nothing does.

@@ -69,8 +69,7 @@ def _p50_us(sleeping: bool, as_the_shim_runs: bool = True) -> float:
     thread.join()
     with contextlib.suppress(OSError):  # the next run's waker starts with the default policy, as the shim's does
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-    times.sort()
-    return times[len(times) // 2] / 1000.0
+    return _p50(times)
 
 
 def _one_thread_p50_us() -> float:
@@ -87,8 +86,13 @@ def _one_thread_p50_us() -> float:
             pass
         answered[0] = False
         times.append(time.perf_counter_ns() - started)
-    times.sort()
-    return times[len(times) // 2] / 1000.0
+    return _p50(times)
+
+
+def _p50(times_ns: list[int]) -> float:
+    """The median of ``times_ns``, in µs."""
+    times_ns.sort()
+    return times_ns[len(times_ns) // 2] / 1000.0
 
 
 def measure(cpu: int | None) -> dict[str, Any]:

@@ -54,8 +54,6 @@ class AdaptiveSpin:
     nor does one that went quiet: a 100 Hz or 1 kHz subscriber sleeps between messages.
     """
 
-    HOT, LOW, HIGH = HOT, LOW, HIGH
-
     def __init__(self) -> None:
         self.last = 0.0
         self.gap = 0.0
@@ -320,11 +318,6 @@ class Executor:
         whether one ran its callback."""
         polled = self._polled
         count = len(polled)
-        if count == 1:  # the common case, without the round robin's arithmetic
-            if polled[0].dispatch():
-                self._spin.arrived(time.perf_counter())
-                return True
-            return False
         for turn in range(count):
             index = (self._next_polled + turn) % count
             if polled[index].dispatch():

@@ -47,21 +47,18 @@ def spin_once_node(hetros: HetrosNode, timeout_sec: float | None) -> None:
         raise ExternalShutdownException("the graph is shutting down")
     executor = hetros.executor
     seen = executor.arrivals
-    started = time.monotonic()
-    # the first turn straight away: a ping-pong's reply comes within it, and the loop's arithmetic before the
+    deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
+    # the first turn takes the timeout as given: a ping-pong's reply comes within it, and arithmetic before the
     # executor starts polling would add to its round trip
-    if timeout_sec is None or timeout_sec > 0:
-        if executor.spin_once(0.02 if timeout_sec is None else min(timeout_sec, 0.02)) or executor.arrivals != seen:
-            return
-    deadline = None if timeout_sec is None else started + timeout_sec
+    left = timeout_sec
     while _running(hetros):
-        left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             return
         # a wait that merely ended (each one moves the executor's generation) is no work done: a
         # `while cycles < 20: spin_once(node)` loop must count callbacks, not 20 ms waits
         if executor.spin_once(0.02 if left is None else min(left, 0.02)) or executor.arrivals != seen:
             return
+        left = None if deadline is None else deadline - time.monotonic()
 
 
 def spin_until_done(hetros: HetrosNode, future: Future, timeout_sec: float | None) -> None:

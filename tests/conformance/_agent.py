@@ -2,14 +2,14 @@
 
 Commands: {"op": "open", ...}, {"op": "take"}, {"op": "pending"}, {"op": "close"}. Replies are
 {"reply": ...}; wake-ups of the reader arrive as {"event": "wake"} at any time.
-Message data travels back through a file, so 64 MiB payloads stay cheap.
+Message data travels back through a file in the directory named by the first argument, so 64 MiB
+payloads stay cheap.
 """
 
 from __future__ import annotations
 
 import json
 import sys
-import tempfile
 import threading
 from pathlib import Path
 from typing import Any
@@ -35,7 +35,7 @@ def pump(channel: WakeChannel) -> None:
 def main() -> None:
     domain: ShmDomain | None = None
     reader: Any = None
-    spool = Path(tempfile.mkdtemp(prefix="hetros-agent-"))
+    spool = Path(sys.argv[1])  # the test owns it, and removes it however this process ends
     count = 0
     for line in sys.stdin:
         cmd = json.loads(line)

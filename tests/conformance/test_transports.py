@@ -10,8 +10,10 @@ import dataclasses
 import itertools
 import json
 import queue
+import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -165,7 +167,8 @@ class _AgentReader(Reader):
         self.wake = wake
         self.replies: queue.Queue[Any] = queue.Queue()
         self.calling = threading.Lock()  # one command in flight: replies carry no id to pair them
-        self.proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("_agent.py"))],
+        self.spool = tempfile.mkdtemp(prefix="hetros-agent-")
+        self.proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("_agent.py")), self.spool],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         threading.Thread(target=self._pump, daemon=True).start()
         self.call({"op": "open", "session": harness.session, "name": f"agent{index}", "type": TYPE,
@@ -216,6 +219,7 @@ class _AgentReader(Reader):
                 pass
         self.proc.kill()
         self.proc.wait()
+        shutil.rmtree(self.spool, ignore_errors=True)
 
 
 class ShmProcessHarness(ShmHarness):

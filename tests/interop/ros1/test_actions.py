@@ -131,10 +131,10 @@ def _project(tmp_path: Path, ros1: str) -> Path:
     return tmp_path / "project.yaml"
 
 
-def test_the_actionlib_wrappers_hash_as_rospy_says() -> None:
+def test_the_actionlib_wrappers_hash_as_rospy_says(tmp_path: Path) -> None:
     """md5sums rospy's generated actionlib.msg carries (TestActionGoal, ...Result, ...Feedback)."""
     types = registry()
-    types.load_folder(_folder_with_test_action())
+    types.load_folder(_folder_with_test_action(tmp_path))
     kind = Ros1ActionType(types, "actionlib/action/Test")
     assert kind.goal.name == "actionlib/TestActionGoal" and kind.goal.md5 == "348369c5b403676156094e8c159720bf"
     assert kind.result.md5 == "3d669e3a63aa986c667ea7b0f46ce85e"
@@ -142,10 +142,7 @@ def test_the_actionlib_wrappers_hash_as_rospy_says() -> None:
     assert kind.status.md5 == "8b2b82f13216d0a8ea88bd3af735e619"
 
 
-def _folder_with_test_action() -> Path:
-    import tempfile
-
-    root = Path(tempfile.mkdtemp(prefix="hetros-actionlib-"))
+def _folder_with_test_action(root: Path) -> Path:
     (root / "actionlib" / "action").mkdir(parents=True)
     (root / "actionlib" / "action" / "Test.action").write_text(ACTION)
     return root

@@ -10,16 +10,29 @@ installs handlers of its own (nothing has started before: no process, no shared 
 since a KeyboardInterrupt raised in the middle of an import can surface as another error. A
 command that has something to finish (a recording's index) makes SIGINT a KeyboardInterrupt
 again (:func:`interruptible`) as soon as it runs.
+
+The kernel may deliver a signal sent to a process to any of its threads, and CPython runs the
+Python handler only in the main thread, between two bytecodes. A main thread blocked in an
+untimed wait never gets there when the signal landed on another thread: a `hetros master` then
+outlived its SIGTERM, and a launch its Ctrl-C. A main thread that waits for something else
+therefore waits in slices (:func:`wait_until_set`, :func:`next_item`), which bounds the delay.
 """
 
 from __future__ import annotations
 
 import itertools
 import os
+import queue
 import signal
 import sys
 import threading
+import time
 from types import FrameType
+from typing import TypeVar
+
+_Item = TypeVar("_Item")
+
+SIGNAL_SLICE = 0.2  # seconds a stop signal that reached another thread waits, at most, for its handler
 
 
 def _exit_now(signum: int, _frame: FrameType | None) -> None:
@@ -43,3 +56,22 @@ def interruptible() -> None:
     """SIGINT as Python's KeyboardInterrupt (for a command that stops in order by catching it)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def wait_until_set(event: threading.Event) -> None:
+    """``event.wait()``, during which a stop signal's handler still runs (see the module's docstring)."""
+    while not event.wait(SIGNAL_SLICE):
+        pass
+
+
+def next_item(items: queue.Queue[_Item], timeout: float | None = None) -> _Item:
+    """``items.get(timeout=timeout)`` (``queue.Empty`` when it runs out), during which a stop signal's
+    handler still runs (see the module's docstring)."""
+    end = None if timeout is None else time.monotonic() + timeout
+    while True:
+        left = SIGNAL_SLICE if end is None else min(SIGNAL_SLICE, end - time.monotonic())
+        try:
+            return items.get(timeout=max(left, 0.0))
+        except queue.Empty:
+            if end is not None and time.monotonic() >= end:
+                raise

@@ -416,6 +416,7 @@ def cmd_reference(args: argparse.Namespace) -> int:
 def cmd_master(args: argparse.Namespace) -> int:
     import threading
 
+    from .._signals import wait_until_set
     from ..runtime import setup_logging
     from ..transport.tcpros import Master
 
@@ -423,7 +424,7 @@ def cmd_master(args: argparse.Namespace) -> int:
     master = Master(args.host, args.port)
     print(f"ROS master at {master.uri} (ROS_MASTER_URI={master.uri}); Ctrl-C stops it", flush=True)
     try:
-        threading.Event().wait()
+        wait_until_set(threading.Event())  # until a stop signal ends the process
     finally:
         master.close()
     return 0

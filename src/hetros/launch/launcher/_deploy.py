@@ -16,6 +16,7 @@ import threading
 from pathlib import Path
 
 from ..._errors import LaunchError
+from ..._signals import wait_until_set
 from ...plan import Plan
 from ._hosts import local_host
 
@@ -66,7 +67,7 @@ def deploy(plan: Plan, project: Path, *, remote: str = "python3 -m hetros", dura
                                            stdin=subprocess.DEVNULL)
         threading.Thread(target=relay, args=(name, processes[name]), daemon=True).start()
     try:
-        ended.wait()
+        wait_until_set(ended)
     except KeyboardInterrupt:
         pass
     for process in processes.values():

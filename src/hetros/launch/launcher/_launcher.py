@@ -28,6 +28,7 @@ from ..._errors import Error, LaunchError
 from ..._log import get_logger
 from ..._net import is_local_address
 from ..._process import death_cause
+from ..._signals import next_item
 from ...compat import install as install_ros_names
 from ...plan import LAUNCHER, Plan
 from ...runtime import Host, log_to_file, setup_logging, stop_logging_to
@@ -329,7 +330,7 @@ class Launcher:
 
     def _next_event(self, timeout: float | None) -> dict[str, Any] | None:
         try:
-            return self.events.get(timeout=None if timeout is None else max(timeout, 0.0))
+            return next_item(self.events, None if timeout is None else max(timeout, 0.0))
         except queue.Empty:
             return None
 

@@ -17,6 +17,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
+from ..._signals import wait_until_set
 from ...compat import install as install_ros_names
 from ...plan import Plan
 from ...runtime import Host, setup_logging
@@ -114,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
         if go.wait(0.05):
             host.start()
             break
-    stop.wait()
+    wait_until_set(stop)
     looks.close()
     stuck = host.stop()
     failed = [t.spec.name for t in host.threads if t.failed]

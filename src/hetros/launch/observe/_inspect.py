@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from ..._errors import InspectError, LaunchError
+from ..._signals import next_item
 from ...msg import Message, TypeRegistry, registry
 from ...plan import Plan
 from ...transport import MessageCodec
@@ -182,7 +183,7 @@ class RunningLaunch:
                     threading.Thread(target=_pump, args=(sock, process, topic, events), daemon=True).start()
             attached()
             while True:
-                event = events.get()
+                event = next_item(events)
                 if isinstance(event, Exception):
                     raise event
                 yield event

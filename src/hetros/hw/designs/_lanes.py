@@ -272,39 +272,55 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
             picked.append(beat.word_select(index % lanes, 8))
         return picked
 
-    # where each lane of the middle beat sits: its column, its row + 1 (row 0 is the header before the pixels),
-    # and how many of the message's pixel bytes lie beyond lane 0 (so the last row needs no height: a memory
-    # node's synthetic header gives none)
-    right = Signal(bits)
-    m.d.comb += right.eq(step - channels)
+    # where each lane of the middle beat sits, decided for the beat, not for each lane: a line is whole beats,
+    # so the pixels' first byte ``start`` splits every beat at the same lane. Lanes from ``start`` on hold
+    # this beat's bytes of a line (the n-th beat since the pixels began is beat n % lines of line n // lines);
+    # lanes before it hold the end of the beat before (n - 1), the header's last bytes when n is 0. A lane
+    # keeps only what ``start`` makes of it (which side of the split it is on, whether it is among the first
+    # or the last ``channels`` bytes of its beat); the beat's side is a few flags, for this beat and the one
+    # before. (A column and row a lane, compared with the line's length, were 64 carry chains on one bus at
+    # 512 bits: a quarter of the congestion that kept the compensation from routing.) How many of the
+    # message's pixel bytes lie beyond lane 0 gives the last row without the height (a memory node's
+    # synthetic header has none).
     beyond = Signal(signed(34))  # pixel bytes from lane 0 of the middle beat to the end
     below = Signal(signed(34))  # the same, less the last row
     with m.If(stepping & first_window):
         m.d.sync += [beyond.eq(data_len + start), below.eq(data_len + start - step)]
     with m.Elif(stepping & later_window):
         m.d.sync += [beyond.eq(beyond - lanes), below.eq(below - lanes)]
+    beat_of_line = Signal(bits)  # n % lines
+    one_beat_lines = Signal()  # lines == 1, as a register (the line's length is known long before its pixels)
+    m.d.sync += one_beat_lines.eq(lines == 1)
+    this = _BeatPlace("this")  # beat n
+    before = _BeatPlace("before")  # beat n - 1
+    header_before = Signal()  # n is 0: the lanes before ``start`` hold header bytes
+    with m.If(stepping & first_window):
+        m.d.sync += [beat_of_line.eq(0), this.first.eq(1), this.last.eq(one_beat_lines), this.later_line.eq(0),
+                     header_before.eq(1), before.first.eq(0), before.last.eq(0), before.later_line.eq(0)]
+    with m.Elif(stepping & later_window):
+        m.d.sync += [before.first.eq(this.first), before.last.eq(this.last), before.later_line.eq(this.later_line),
+                     header_before.eq(0), this.first.eq(this.last), this.later_line.eq(this.later_line | this.last)]
+        with m.If(this.last):
+            m.d.sync += [beat_of_line.eq(0), this.last.eq(one_beat_lines)]
+        with m.Else():
+            m.d.sync += [beat_of_line.eq(beat_of_line + 1), this.last.eq(beat_of_line + 2 == lines)]
     interior, pixel, header = [], [], []
     for lane in range(lanes):
-        column, row = Signal(bits, name=f"column{lane}"), Signal(2, name=f"row{lane}")  # row: 0, 1, 2 = 2 or more
-        with m.If(stepping & first_window):
-            with m.If(start == 0):
-                m.d.sync += [column.eq(lane), row.eq(1)]
-            with m.Elif(start > lane if lane < lanes - 4 else Const(0, 1)):  # the pixels begin at 4k < lanes
-                m.d.sync += [column.eq(step - start + lane), row.eq(0)]
-            with m.Else():
-                m.d.sync += [column.eq(lane - start), row.eq(1)]
-        with m.Elif(stepping & later_window):
-            wrapped = Signal(bits + 1, name=f"wrapped{lane}")
-            m.d.comb += wrapped.eq(column + lanes - step[:bits])
-            with m.If(wrapped[-1]):
-                m.d.sync += column.eq(column + lanes)
-            with m.Else():
-                m.d.sync += [column.eq(wrapped[:bits]), row.eq(Mux(row == 2, 2, row + 1))]
-        in_image = _exceeds(beyond, lane, shift)
-        above_last_row = _exceeds(below, lane, shift)
-        interior.append((row == 2) & above_last_row & (column >= channels) & (column < right))
-        pixel.append((row != 0) & in_image)
-        header.append(row == 0)
+        # what ``start`` makes of this lane, as registers: ``start`` is set in the header, beats before the pixels
+        after_split = Signal(name=f"after_split{lane}", init=1)
+        leading, trailing = Signal(name=f"leading{lane}"), Signal(name=f"trailing{lane}")
+        offset = (Const(lane, shift + 1) - start)[:shift]  # the lane's byte in its beat of a line
+        m.d.sync += [after_split.eq(start <= lane if lane < lanes - 1 else Const(1, 1)),
+                     leading.eq(offset < channels if channels < lanes else Const(1, 1)),
+                     trailing.eq(offset >= lanes - channels if channels < lanes else Const(1, 1))]
+        first, last, later_line = (Mux(after_split, mine, theirs) for mine, theirs in
+                                   ((this.first, before.first), (this.last, before.last),
+                                    (this.later_line, before.later_line)))
+        at_edge = (leading & first) | (trailing & last)
+        is_header = ~after_split & header_before
+        interior.append(later_line & _exceeds(below, lane, shift) & ~at_edge)
+        pixel.append(~is_header & _exceeds(beyond, lane, shift))
+        header.append(is_header)
     last_centre = owed_last & (centre + 1 == real_beats)
 
     # the kernel, lane by lane, then the node's own stages after it
@@ -342,6 +358,15 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     waiting = Signal()
     m.d.comb += waiting.eq(node.between_frames_lanes(m, ended))
     m.d.comb += busy.eq(waiting)
+
+
+class _BeatPlace:
+    """Where a beat of the pixels sits in its line: its first beat, its last, in a line after the first."""
+
+    def __init__(self, name: str) -> None:
+        self.first = Signal(name=f"{name}_first")
+        self.last = Signal(name=f"{name}_last")
+        self.later_line = Signal(name=f"{name}_later_line")
 
 
 def _exceeds(count: Value, lane: int, shift: int) -> Value:

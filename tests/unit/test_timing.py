@@ -63,18 +63,29 @@ def test_a_design_that_misses_its_clock_says_by_how_much_and_where() -> None:
     assert Bitstream("fpga", "x", Path("x.bit"), 100.0, 100.0, 1, 1, 1.0).meets_clock
 
 
-def test_a_router_that_runs_out_of_time_is_named_and_the_table_says_which_routed(tmp_path: Path) -> None:
+def test_a_router_that_runs_out_of_time_is_named_and_the_table_says_which_routed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """nextpnr's first router may not finish a congested design; the flow stops it at its time limit (a
-    real process here) and routes with router2, and the table says so."""
+    real process here), places the design again spread out and routes it with router2, and the table
+    says so."""
     from hetros import HardwareError
-    from hetros.hw.flow._bitstream import _run, format_bitstreams
+    from hetros.hw.flow import _bitstream
+    from hetros.hw.flow._bitstream import SPREAD, _run, format_bitstreams
 
     with pytest.raises(HardwareError, match=r"sleep ran past 0.2 s"):
         _run(["sleep", "5"], tmp_path, "sleep", timeout=0.2)
+    # a stand-in for nextpnr (the flow is under test, not the tool): router1 never finishes, the rest is logged
+    fake = tmp_path / "nextpnr"
+    fake.write_text('#!/bin/sh\ncase "$*" in *router1*) exec sleep 30;; esac\necho "$*" >> calls.txt\n')
+    fake.chmod(0o755)
+    monkeypatch.setattr(_bitstream, "ROUTER1_SECONDS", 0.3)
+    assert _bitstream._place_and_route(str(fake), "--85k", "CABGA756", 100.0, 1, tmp_path) == SPREAD
+    (call,) = (tmp_path / "calls.txt").read_text().splitlines()
+    assert call.endswith("--placer static --router router2") and "--freq 100" in call
     (tmp_path / "fpga.bit").write_bytes(b"x" * 2048)
     row = Bitstream("fpga", "LFE5U-25KF-CABGA381", tmp_path / "fpga.bit", 103.0, 100.0, 900, 800, 3.0,
-                    router="router2")
-    assert "| 103.0 MHz, router2 | 100 MHz | fpga.bit (2 KiB) |" in format_bitstreams([row])
+                    router=SPREAD)
+    assert "| 103.0 MHz, static placer, router2 | 100 MHz | fpga.bit (2 KiB) |" in format_bitstreams([row])
 
 
 def test_figures_use_the_achieved_clock_where_it_is_below_clock_mhz(tmp_path: Path,

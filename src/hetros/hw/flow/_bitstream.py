@@ -28,7 +28,8 @@ from ..._errors import HardwareError
 # ECP5 devices nextpnr knows, smallest first: (nextpnr flag, package, logic cells, block RAMs)
 _DEVICES = (("--25k", "CABGA381", 24_288, 56), ("--45k", "CABGA381", 43_848, 108), ("--85k", "CABGA756", 83_640, 208))
 HARNESS_TOP = "hetros_fmax"
-ROUTER1_SECONDS = 600.0  # then router2 takes over (see build_bitstream)
+ROUTER1_SECONDS = 600.0  # then the design is spread and router2 takes over (see _place_and_route)
+SPREAD = "static placer, router2"  # what routed a design router1 did not finish
 _CLOCK_PINS = {"CABGA381": "G2"}  # a PCLK input of every ECP5 in this package (ULX3S's 25 MHz clock pin)
 
 
@@ -94,7 +95,7 @@ class Bitstream:
     ffs: int
     seconds: float
     critical: CriticalPath | None = None
-    router: str = "router1"  # nextpnr's router that gave this (router2 where router1 ran out of time)
+    router: str = "router1"  # what placed and routed it: SPREAD where router1 ran out of time
 
     @property
     def meets_clock(self) -> bool:
@@ -229,12 +230,15 @@ def _place_and_route(nextpnr: str, flag: str, package: str, clock_mhz: float, se
         placed += ["--lpf", "pins.lpf", "--lpf-allow-unconstrained"]
     # nextpnr's first router gives the better Fmax (Compensation alone: 108.0 MHz against 97.3), but on a
     # congested design it may not finish: the lane-following target (two filters, a hardware topic,
-    # gateways: 53,000 arcs) ran 40 minutes without finishing on a 2-CPU machine; router2 routes it in one
+    # gateways: 53,000 arcs) ran 40 minutes without finishing on a 2-CPU machine. Then the design is placed
+    # again by the static placer, which spreads it to 70 % of the device's cells, and routed by router2: the
+    # 512-bit compensation (50,000 cells on an LFE5U-85F) never routed as the default placer packs it
+    # (router1 or router2, for hours), and routed so in 41 of router2's passes.
     try:
         _run([*placed, "--router", "router1"], out, "nextpnr-ecp5", timeout=ROUTER1_SECONDS)
     except _TimedOut:
-        _run([*placed, "--router", "router2"], out, "nextpnr-ecp5")
-        return "router2"
+        _run([*placed, "--placer", "static", "--router", "router2"], out, "nextpnr-ecp5")
+        return SPREAD
     return "router1"
 
 

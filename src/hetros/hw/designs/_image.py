@@ -439,6 +439,16 @@ class Compensation(ImageFilter3x3):
         self._level = Signal(9)
         self._table_address, self._table_entry, self._table_write = Signal(8), Signal(8), Signal()
         self._bins_held: list[Signal] = []
+        # the scan's clearing writes and the table's, the same for every lane, come a cycle late from registers:
+        # chosen in each lane from the state machine's logic, that choice was one net to every lane's memory
+        # across the device (12 ns of routing at 512 bits, the critical path once the design routed)
+        scanning, level = self._scanning_lanes, self._level
+        by_level = Signal()  # a clearing or table write is due in every lane
+        level_address, level_data, level_write = Signal(8), Signal(_HISTOGRAM_BITS + 8), Signal()
+        m.d.sync += [by_level.eq(scanning | self._building_lanes),
+                     level_address.eq(Mux(scanning, level[:8], self._table_address)),
+                     level_data.eq(Mux(scanning, 0, Cat(Const(0, _HISTOGRAM_BITS), self._table_entry))),
+                     level_write.eq(Mux(scanning, level < 256, self._building_lanes & self._table_write))]
         for lane, (value, is_pixel) in enumerate(zip(values, pixels, strict=True)):
             histogram = Memory(shape=unsigned(_HISTOGRAM_BITS + 8), depth=256,
                                init=[entry << _HISTOGRAM_BITS for entry in range(256)])  # the first frame: as it is
@@ -462,15 +472,11 @@ class Compensation(ImageFilter3x3):
             latest = Mux(same[0], counted[0], Mux(same[1], counted[1], Mux(same[2], counted[2],
                                                                               read_held[:_HISTOGRAM_BITS])))
             m.d.sync += [counted[0].eq(latest + 1), counted[1].eq(counted[0]), counted[2].eq(counted[1])]
-            with m.If(self._scanning_lanes):
-                m.d.comb += [read.addr.eq(self._level[:8]), write.addr.eq(self._level[:8]), write.data.eq(0),
-                             write.en.eq(self._level < 256)]
-            with m.Elif(self._building_lanes):
-                m.d.comb += [write.addr.eq(self._table_address),
-                             write.data.eq(Cat(Const(0, _HISTOGRAM_BITS), self._table_entry)),
-                             write.en.eq(self._table_write)]
+            m.d.comb += read.addr.eq(Mux(scanning, level[:8], value))
+            with m.If(by_level):
+                m.d.comb += [write.addr.eq(level_address), write.data.eq(level_data), write.en.eq(level_write)]
             with m.Else():
-                m.d.comb += [read.addr.eq(value), write.addr.eq(bins[3]), write.data.eq(Cat(counted[0], entry_held)),
+                m.d.comb += [write.addr.eq(bins[3]), write.data.eq(Cat(counted[0], entry_held)),
                              write.en.eq(events[3])]
 
     def between_frames_lanes(self, m: Module, ended: Value) -> Value:

@@ -152,3 +152,30 @@ def test_the_device_is_chosen_by_logic_cells_and_block_rams_not_lut4s_alone() ->
     assert logic_cells(compensation) == 40000 and smallest_device(compensation) == 2
     small = "      120   CCU2C\n        4   DP16KD\n     2400   LUT4\n     2200   TRELLIS_FF\n"
     assert logic_cells(small) == 2640 and smallest_device(small) == 0
+
+
+def test_placing_a_target_builds_its_hardware_nodes_only_for_the_design(tmp_path: Path,
+                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """Components made and never elaborated make Amaranth warn, which `hw bitstream` printed twice."""
+    import gc
+    import warnings
+
+    from hetros.hw.flow import _bitstream
+    from hetros.msg import registry
+    from hetros.project import load_project, plan
+
+    class Placed(Exception):
+        pass
+
+    def place(*_args: object, **_kwargs: object) -> None:
+        raise Placed
+
+    monkeypatch.setattr(_bitstream, "build_bitstream", place)  # what comes before place and route is under test
+    planned = plan(load_project(Path(__file__).resolve().parents[2] / "examples" / "lane_following" /
+                                "project_fpga.yaml"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(Placed):
+            _bitstream.bitstreams(planned, "fpga", tmp_path, registry(), "target")
+        gc.collect()
+    assert [w.category.__name__ for w in caught] == []

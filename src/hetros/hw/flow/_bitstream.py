@@ -300,8 +300,9 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
     spec = plan.targets[target]
     made = []
     if parts in ("target", "all"):
-        path, _manifest = build(plan, target, out / "target", types)
-        sources = [out / "target" / s.name for s in verilog_sources(hardware_nodes(plan, target))]
+        path, manifest = build(plan, target, out / "target", types)
+        # the Verilog nodes' files, which the build copied beside the top (its manifest names them)
+        sources = [out / "target" / name for name in json.loads(manifest.read_text())["verilog_sources"]]
         whole = build_bitstream(path.read_text(), top_name(target), out / "target", spec.clock_mhz, f"{target}",
                                 sources)
         # what the launch's and `hw report`'s figures then use, where it is below clock_mhz

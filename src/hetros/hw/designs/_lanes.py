@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol, TypeVar
 
-from amaranth import Array, Cat, Const, Module, Mux, Signal, signed, unsigned
+from amaranth import Cat, Const, Module, Mux, Signal, signed, unsigned
 from amaranth.hdl import Value
 from amaranth.lib import fifo
 from amaranth.lib.memory import Memory
@@ -153,9 +153,16 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     header_ended = Signal()  # the last message ended in its header: the walk starts over
     picking = Signal()
     m.d.comb += picking.eq(hold_full & ~in_pixels & ~busy & ~phase & ~header_ended)
+    # a beat's first word is picked from the held beat, and the words after it move on here, one further at
+    # each pick: a multiplexer of the beat's words indexed by ``unit`` was the 512-bit compensation's critical
+    # path once the design routed (ten logic levels from ``unit`` to ``word_zero``)
+    first_unit = Signal(init=1)  # unit is 0, as a register
+    ahead = Signal(max(1, data_width - 32))  # the held beat's words after the one last picked, the next lowest
     with m.If(picking):
-        picked = Array(hold.word_select(i, 32) for i in range(words))[unit]
+        picked = hold[:32] if words == 1 else Mux(first_unit, hold[:32], ahead[:32])
         m.d.sync += [word.eq(picked), word_zero.eq(picked == 0), phase.eq(1)]
+        if words > 1:
+            m.d.sync += ahead.eq(Mux(first_unit, hold[32:], ahead[32:]))
     last_unit = Signal(init=words == 1)  # unit is the beat's last word, as a register
     pixels_here = at_data_len & ~last_unit & ~word_zero  # the pixels begin inside this beat
     beat_read = last_unit | pixels_here
@@ -166,7 +173,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     with m.If(walking):
         m.d.sync += phase.eq(0)
     with m.If(walking):
-        m.d.sync += [unit.eq(Mux(beat_read, 0, unit + 1)),
+        m.d.sync += [unit.eq(Mux(beat_read, 0, unit + 1)), first_unit.eq(beat_read),
                      last_unit.eq(Mux(beat_read, words == 1, unit + 1 == words - 1))]
         with m.Switch(state):
             with m.Case(_STAMP):
@@ -198,7 +205,8 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # (not from the decision that let the beat go), and picks no word meanwhile
     m.d.sync += header_ended.eq(header_leaves & hold_last)
     with m.If(header_ended):
-        m.d.sync += [state.eq(_STAMP), unit.eq(0), last_unit.eq(words == 1), phase.eq(0), at_data_len.eq(0)]
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), first_unit.eq(1), last_unit.eq(words == 1), phase.eq(0),
+                     at_data_len.eq(0)]
 
     # --- the pixels: a step per beat, through two rings of beats -----------------------------------------
     pipe = Pipe(m)
@@ -363,8 +371,8 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
                      push_last.eq(last_flag)]
     m.d.sync += ended.eq(~header_push & valids[-1] & last_flag)
     with m.If(ended):
-        m.d.sync += [state.eq(_STAMP), unit.eq(0), last_unit.eq(words == 1), windows.eq(0), real_beats.eq(0),
-                     owed_last.eq(0), pointer.eq(0), in_pixels.eq(0)]
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), first_unit.eq(1), last_unit.eq(words == 1), windows.eq(0),
+                     real_beats.eq(0), owed_last.eq(0), pointer.eq(0), in_pixels.eq(0)]
     waiting = Signal()
     m.d.comb += waiting.eq(node.between_frames_lanes(m, ended))
     m.d.comb += busy.eq(waiting)

@@ -330,7 +330,7 @@ class Launcher:
 
     def _next_event(self, timeout: float | None) -> dict[str, Any] | None:
         try:
-            return next_item(self.events, None if timeout is None else max(timeout, 0.0))
+            return next_item(self.events, timeout)  # a deadline already past takes what is there, at once
         except queue.Empty:
             return None
 

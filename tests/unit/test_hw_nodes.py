@@ -183,3 +183,30 @@ def test_a_full_width_compensation_lane_is_one_memory_of_count_and_stretch_entry
     assert {(data.shape.width, data.depth) for data in lanes.values()} == {(32, 256)}
     assert not [name for name in memories if name.startswith("stretch")]
     assert [int(word) >> 24 for word in lanes["histogram0"].init] == list(range(256))  # the first frame as it is
+
+
+def test_the_median_s_three_way_choice_gives_low_middle_and_high_of_every_triple() -> None:
+    """The full-width median chooses each of the three by the same three comparisons side by side; every
+    triple of 3-bit values, ties included, against Python's sort."""
+    from amaranth.sim import Simulator
+
+    from hetros.hw.designs._lanes import low_middle_high
+
+    m = Module()
+    inputs = [Signal(3, name=name) for name in "abc"]
+    outputs = [Signal(3, name=name) for name in ("low", "middle", "high")]
+    m.d.comb += [output.eq(value) for output, value in zip(outputs, low_middle_high(*inputs), strict=True)]
+    seen: list[tuple[tuple[int, ...], tuple[int, ...]]] = []
+
+    async def bench(ctx: Any) -> None:
+        for number in range(8 ** 3):
+            triple = (number >> 6, (number >> 3) & 7, number & 7)
+            for signal, value in zip(inputs, triple, strict=True):
+                ctx.set(signal, value)
+            seen.append((triple, tuple(ctx.get(output) for output in outputs)))
+
+    sim = Simulator(m)
+    sim.add_testbench(bench)
+    sim.run()
+    assert len(seen) == 512
+    assert all(chosen == tuple(sorted(triple)) for triple, chosen in seen)

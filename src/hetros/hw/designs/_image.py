@@ -28,7 +28,7 @@ from ..._errors import HardwareError
 from ..streams._axi import axi_stream
 from ..streams._bytes import bytes_in, bytes_out
 from ..streams._ports import port_part
-from ._lanes import Pipe, elaborate_lanes, exchange, median_network, stages_of
+from ._lanes import Pipe, elaborate_lanes, low_middle_high
 
 # bytes per pixel of the encodings whose pixels are bytes (sensor_msgs/image_encodings)
 _BYTES_PER_PIXEL = {"mono8": 1, "8UC1": 1, "8SC1": 1, "rgb8": 3, "bgr8": 3, "8UC3": 3, "rgba8": 4, "bgra8": 4,
@@ -372,7 +372,6 @@ _HISTOGRAM_BITS = 24  # a lane's count of one value: 16 M bytes, a 4K rgb8 frame
 # the last ten take the median of three sorted triples (lows at 0, 3, 6; middles 1, 4, 7; highs 2, 5, 8)
 _MEDIAN9 = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8), (0, 3), (5, 8), (4, 7),
             (3, 6), (1, 4), (2, 5), (4, 7), (4, 2), (6, 4), (4, 2))
-_MEDIAN9_OF_SORTED_TRIPLES = _MEDIAN9[9:]
 
 
 class Compensation(ImageFilter3x3):
@@ -393,32 +392,27 @@ class Compensation(ImageFilter3x3):
                 Mux(values[a] < values[b], values[b], values[a])
         return values[4]
 
-    # Two compare-exchanges in series between registers. A lane's window shares its byte columns with the
-    # lanes a pixel to each side, so each column of the beat is sorted once (three exchanges, two stages)
-    # and each lane runs Paeth's last ten on its three sorted columns: the median of nine is the same
-    # whether the rows or the columns are sorted first, and only the columns are shared.
-    _EVERY = 2
-    kernel_stages = 2 + stages_of(_MEDIAN9_OF_SORTED_TRIPLES, _EVERY, 9)
+    # The median of nine is the median of the highest of the three columns' lows, the median of their
+    # middles and the lowest of their highs, once each column is sorted. A lane's window shares its byte
+    # columns with the lanes a pixel to each side, so each column of the beat is sorted once. Each of the
+    # three stages is one level of comparisons side by side and a choice by their outcomes: Paeth's compare-
+    # exchanges, two in series a stage, were the 512-bit compensation's critical path (11 logic levels,
+    # 16.2 ns).
+    kernel_stages = 3
     post_stages = 2
 
     def lane_kernel(self, pipe: Pipe, top: list[Value], middle: list[Value], bottom: list[Value]) -> Value:
         columns = [self._sorted_column(pipe, [top[i], middle[i], bottom[i]]) for i in range(3)]
-        return median_network(pipe, [v for column in columns for v in column], _MEDIAN9_OF_SORTED_TRIPLES,
-                              self._EVERY, keep=4)
+        lows, middles, highs = zip(*columns, strict=True)
+        candidates = (pipe.reg(low_middle_high(*lows)[2], "lows"), pipe.reg(low_middle_high(*middles)[1], "middles"),
+                      pipe.reg(low_middle_high(*highs)[0], "highs"))
+        return pipe.reg(low_middle_high(*candidates)[1], "median")
 
     @staticmethod
     def _sorted_column(pipe: Pipe, column: list[Value]) -> list[Value]:
-        """``column`` low to high, two stages later (the lanes that share it share this)."""
-
-        def sort() -> list[Value]:
-            low, middle, high = column
-            middle, high = exchange(middle, high)
-            low, middle = exchange(low, middle)
-            low, middle, high = (pipe.reg(v, "column") for v in (low, middle, high))
-            middle, high = exchange(middle, high)
-            return [pipe.reg(v, "column") for v in (low, middle, high)]
-
-        return pipe.shared("sorted column", column, sort)
+        """``column`` low to high, a stage later (the lanes that share it share this)."""
+        return pipe.shared("sorted column", column,
+                           lambda: [pipe.reg(v, "column") for v in low_middle_high(*column)])
 
     def post_lanes(self, m: Module, pipe: Pipe, values: list[Value]) -> list[Value]:
         """Each lane's stretched byte: the table half of the word its histogram read gave (read, then held:

@@ -14,8 +14,9 @@
 - **No stall inside, registered ready at both ends.** The pipeline's registers move every cycle
   (no enable fans out to thousands of them): a beat is let in only while the output FIFO has room
   for it and every beat already on its way (credits counted from the step that makes a beat to
-  the FIFO giving it away), so a downstream node's TREADY reaches only the FIFO; the input is a
-  register slice, so this node's TREADY is a register (chains meet their clock one node at a time).
+  the FIFO giving it away), so a downstream node's TREADY reaches only the FIFO; the input is two
+  beats that the stream writes in turn, so this node's TREADY is a register and none of its
+  decisions reaches the enable of a data register (chains meet their clock one node at a time).
 """
 
 from __future__ import annotations
@@ -29,11 +30,11 @@ from amaranth.lib import fifo
 from amaranth.lib.memory import Memory
 
 from ..._errors import HardwareError
-from ..streams._axi import register_slice
 
 _Made = TypeVar("_Made")
 
 _FIFO_SLICE = 64  # bits of the output FIFO's entry that share a pair of pointers
+_STEP_SLICE = 64  # bits of the window's registers that load on one copy of the step
 _BLOCK_RAM_RINGS = 256  # stream width from which the line-buffer rings are block RAM
 
 # steps between a beat coming in and the window whose bottom row it completes going out
@@ -93,20 +94,24 @@ class LaneFilter(Protocol):
 
 def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_width: int) -> None:
     """Build the full-width filter of ``node`` between ``source`` and ``sink`` in ``m``."""
-    source = register_slice(m, source, data_width)
     lanes = data_width // 8
     words = lanes // 4
     channels = node.channels
     depth = max(1, -(-node.width * channels // lanes))
 
-    # the held input beat: the header walk reads it a word at a time; the pixels step through it
-    hold, hold_keep, hold_last, hold_full = Signal(data_width), Signal(lanes), Signal(), Signal()
-    release = Signal()
-    m.d.comb += source.tready.eq(~hold_full | release)
-    with m.If(source.tready & source.tvalid):
-        m.d.sync += [hold.eq(source.tdata), hold_keep.eq(source.tkeep), hold_last.eq(source.tlast), hold_full.eq(1)]
-    with m.Elif(release):
-        m.d.sync += hold_full.eq(0)
+    # the step through the pixels loads the window's registers, a slice of the beat at a time, each slice on
+    # a copy of the step of its own (a copy of each register it is decided from, kept apart by its own
+    # feedback, which synthesis cannot prove the same): one step to every window register (thirteen beats)
+    # was one net of over 6,600 clock enables at 512 bits. Copy 0 is the control's alone (counters,
+    # the walk's state), so that its few registers sit together: on a copy that also loaded a slice, the
+    # control was spread over the device (16.2 ns, 13.6 of them routing, on the 512-bit blur); copy 1 moves
+    # the line-buffer rings, whose block RAMs stand in columns across the device (on the control's copy,
+    # they pulled it apart again: 11.8 of 13.2 ns routing). Slice k loads on copy k + 2.
+    slices = max(1, data_width // _STEP_SLICE)
+    slice_bits = data_width // slices
+    copies = slices + 2
+    # the held input beat (``hold``): the header walk reads it a word at a time; the pixels step through it
+    hold, hold_keep, hold_last, held_copies, release = _input_pair(m, source, data_width, slices, copies)
 
     # output: a FIFO deep enough for every beat the pipeline may hold; a beat is counted (``outstanding``)
     # from the step that makes it until the FIFO gives it away, and a step is taken only while one more
@@ -115,7 +120,7 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # The FIFO is a FIFO per 64 bits of the entry, in step, each with pointers of its own: one FIFO's read
     # pointer would drive every distributed-RAM cell of a wide beat (145 at 512 bits), a net too long
     # for the clock.
-    out_depth = node.kernel_stages + node.post_stages + 4
+    out_depth = node.kernel_stages + node.post_stages + 5
     push, push_data, push_keep, push_last = Signal(), Signal(data_width), Signal(lanes), Signal()
     entry = Cat(push_data, push_keep, push_last)
     out_fifos = []
@@ -127,13 +132,19 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     out_ready = out_fifos[0].r_rdy  # every slice holds the same number of entries
     m.d.comb += [sink.tvalid.eq(out_ready),
                  Cat(sink.tdata, sink.tkeep, sink.tlast).eq(Cat(*(part.r_data for part in out_fifos)))]
-    outstanding, following = Signal(range(out_depth + 2)), Signal(range(out_depth + 2))
-    reserved = Signal()
-    m.d.comb += following.eq(outstanding + reserved - (out_ready & sink.tready))
-    # ``outstanding < out_depth`` as a register of its own, decided from the count it is about to hold: the step
-    # (``stepping``) that hundreds of registers load on starts a logic level nearer its registers
-    room = Signal(init=1)
-    m.d.sync += [outstanding.eq(following), room.eq(following < out_depth)]
+    # Whether one more beat fits (``room``) is a register, decided from registers alone: the count takes
+    # a step's reservation a cycle late (``reserved_late``) and the room keeps a place for it. Decided
+    # from the step itself, it closed a loop through the control (room, step, reservation, count, room)
+    # that was the 512-bit blur's critical path.
+    reserved, reserved_late = Signal(), Signal()
+    m.d.sync += reserved_late.eq(reserved)
+    rooms = []
+    for copy in range(copies):
+        outstanding = Signal(range(out_depth + 2), name=f"outstanding{copy}")
+        following = Signal(range(out_depth + 2), name=f"following{copy}")
+        rooms.append(Signal(init=1, name=f"room{copy}"))
+        m.d.comb += following.eq(outstanding + reserved_late - (out_ready & sink.tready))
+        m.d.sync += [outstanding.eq(following), rooms[-1].eq(following + 2 <= out_depth)]
 
     # --- the header walk ---------------------------------------------------------------------------------
     bits = (node.width * channels + 2 * lanes).bit_length() + 1  # a line's bytes and then some
@@ -151,29 +162,42 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     word, word_zero, phase = Signal(32), Signal(), Signal()
     busy = Signal()  # the node works between two frames (its between_frames_lanes), so the next one waits
     header_ended = Signal()  # the last message ended in its header: the walk starts over
-    picking = Signal()
-    m.d.comb += picking.eq(hold_full & ~in_pixels & ~busy & ~phase & ~header_ended)
-    # a beat's first word is picked from the held beat, and the words after it move on here, one further at
-    # each pick: a multiplexer of the beat's words indexed by ``unit`` was the 512-bit compensation's critical
-    # path once the design routed (ten logic levels from ``unit`` to ``word_zero``)
-    first_unit = Signal(init=1)  # unit is 0, as a register
+    # a beat's first word is picked from the held beat, and the words after it move on in ``ahead``, one further
+    # at each pick: a multiplexer of the beat's words indexed by ``unit`` was the 512-bit compensation's critical
+    # path once the design routed (ten logic levels from ``unit`` to ``word_zero``). ``ahead`` moves a slice at
+    # a time, each on copies of its own of the pick and of whether the beat's first word is next (a pick and a
+    # select of all 480 bits were the 512-bit blur's critical path, 11.1 ns of routing); a copy is decided from
+    # the copies of the held beat's count or of the room, which keeps synthesis from merging it with the others
+    picks = [Signal(name=f"picking{copy}") for copy in range(copies)]
+    m.d.comb += [pick.eq(held & ~in_pixels & ~busy & ~phase & ~header_ended)
+                 for pick, held in zip(picks, held_copies, strict=True)]
+    picking = picks[0]
+    firsts = [Signal(init=1, name=f"first_unit{copy}") for copy in range(copies)]  # unit is 0, as registers
     ahead = Signal(max(1, data_width - 32))  # the held beat's words after the one last picked, the next lowest
     with m.If(picking):
-        picked = hold[:32] if words == 1 else Mux(first_unit, hold[:32], ahead[:32])
+        picked = hold[:32] if words == 1 else Mux(firsts[0], hold[:32], ahead[:32])
         m.d.sync += [word.eq(picked), word_zero.eq(picked == 0), phase.eq(1)]
-        if words > 1:
-            m.d.sync += ahead.eq(Mux(first_unit, hold[32:], ahead[32:]))
+    for index in range(slices if words > 1 else 0):
+        bits_of = slice(index * slice_bits, min((index + 1) * slice_bits, len(ahead)))
+        if bits_of.start < bits_of.stop:
+            with m.If(picks[index + 2]):
+                m.d.sync += ahead[bits_of].eq(Mux(firsts[index + 2], hold[32:], ahead[32:])[bits_of])
     last_unit = Signal(init=words == 1)  # unit is the beat's last word, as a register
     pixels_here = at_data_len & ~last_unit & ~word_zero  # the pixels begin inside this beat
     beat_read = last_unit | pixels_here
     header_leaves = Signal()
-    walking = Signal()
-    m.d.comb += [walking.eq(phase & (~beat_read | pixels_here | room)),
-                 header_leaves.eq(walking & beat_read & ~pixels_here)]
+    walks = [Signal(name=f"walking{copy}") for copy in range(copies)]
+    m.d.comb += [walk.eq(phase & (~beat_read | pixels_here | copy_room)) for walk, copy_room in zip(walks, rooms,
+                                                                                                     strict=True)]
+    walking = walks[0]
+    m.d.comb += header_leaves.eq(walking & beat_read & ~pixels_here)
+    for walk, first in zip(walks, firsts, strict=True):
+        with m.If(walk):
+            m.d.sync += first.eq(beat_read)
     with m.If(walking):
         m.d.sync += phase.eq(0)
     with m.If(walking):
-        m.d.sync += [unit.eq(Mux(beat_read, 0, unit + 1)), first_unit.eq(beat_read),
+        m.d.sync += [unit.eq(Mux(beat_read, 0, unit + 1)),
                      last_unit.eq(Mux(beat_read, words == 1, unit + 1 == words - 1))]
         with m.Switch(state):
             with m.Case(_STAMP):
@@ -205,8 +229,8 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # (not from the decision that let the beat go), and picks no word meanwhile
     m.d.sync += header_ended.eq(header_leaves & hold_last)
     with m.If(header_ended):
-        m.d.sync += [state.eq(_STAMP), unit.eq(0), first_unit.eq(1), last_unit.eq(words == 1), phase.eq(0),
-                     at_data_len.eq(0)]
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), *(first.eq(1) for first in firsts), last_unit.eq(words == 1),
+                     phase.eq(0), at_data_len.eq(0)]
 
     # --- the pixels: a step per beat, through two rings of beats -----------------------------------------
     pipe = Pipe(m)
@@ -230,12 +254,14 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     last_keep = Signal(lanes)
     windows = Signal()  # every step after the first that fills a window fills one
     centre = Signal(24)  # the pixel beat whose window the registers hold
-    incoming = Signal(data_width)
-    m.d.comb += incoming.eq(Mux(flushing, 0, hold))
-    m.d.comb += [reads[0].addr.eq(pointer), reads[1].addr.eq(pointer), reads[0].en.eq(stepping),
-                 reads[1].en.eq(stepping), writes[0].addr.eq(pointer), writes[1].addr.eq(pointer),
+    # the beats the flush steps in (below the last line) are whatever the input holds: a window that reaches
+    # them is on the frame's border, which the masks below give as 0 or as it came
+    incoming = hold
+    ring_step = Signal()
+    m.d.comb += [reads[0].addr.eq(pointer), reads[1].addr.eq(pointer), reads[0].en.eq(ring_step),
+                 reads[1].en.eq(ring_step), writes[0].addr.eq(pointer), writes[1].addr.eq(pointer),
                  writes[0].data.eq(incoming), writes[1].data.eq(reads[0].data),
-                 writes[0].en.eq(stepping), writes[1].en.eq(stepping)]
+                 writes[0].en.eq(ring_step), writes[1].en.eq(ring_step)]
     # the bottom row (a), the middle (b) and the top (c): after step n, a[k] is beat n - k of the stream
     a = [Signal(data_width, name=f"a{i}") for i in range(5)]
     b = [Signal(data_width, name=f"b{i}") for i in range(5)]
@@ -243,13 +269,23 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     window_fresh = Signal()  # the registers hold a window the pipeline has not taken yet
     first_window = ~windows & window_due
     later_window = windows
-    m.d.comb += stepping.eq(in_pixels & (flushing | hold_full & ~owed_last) & room)
+    steps = [Signal(name=f"stepping{copy}") for copy in range(copies)]
+    m.d.comb += [copy_step.eq(in_pixels & (flushing | held & ~owed_last) & copy_room)
+                 for copy_step, held, copy_room in zip(steps, held_copies, rooms, strict=True)]
+    m.d.comb += stepping.eq(steps[0])
+    for index, copy_step in enumerate(steps[2:]):
+        bits_of = slice(index * slice_bits, (index + 1) * slice_bits)
+        with m.If(copy_step):
+            m.d.sync += [a[0][bits_of].eq(incoming[bits_of]), *(a[k + 1][bits_of].eq(a[k][bits_of]) for k in range(4)),
+                         b[1][bits_of].eq(reads[0].data[bits_of]),
+                         *(b[k + 1][bits_of].eq(b[k][bits_of]) for k in range(1, 4)),
+                         c[1][bits_of].eq(reads[1].data[bits_of]),
+                         *(c[k + 1][bits_of].eq(c[k][bits_of]) for k in range(1, 3))]
+    m.d.comb += ring_step.eq(steps[1])
+    with m.If(ring_step):
+        m.d.sync += pointer.eq(Mux(pointer + 1 >= lines, 0, pointer + 1))
     with m.If(stepping):
-        m.d.sync += [a[0].eq(incoming), *(a[k + 1].eq(a[k]) for k in range(4)),
-                     b[1].eq(reads[0].data), *(b[k + 1].eq(b[k]) for k in range(1, 4)),
-                     c[1].eq(reads[1].data), *(c[k + 1].eq(c[k]) for k in range(1, 3)),
-                     pointer.eq(Mux(pointer + 1 >= lines, 0, pointer + 1)),
-                     window_fresh.eq(first_window | later_window)]
+        m.d.sync += window_fresh.eq(first_window | later_window)
         with m.If(~window_due):
             m.d.sync += [until_window.eq(until_window - 1), window_due.eq(until_window == 1)]
         with m.If(first_window):
@@ -371,11 +407,56 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
                      push_last.eq(last_flag)]
     m.d.sync += ended.eq(~header_push & valids[-1] & last_flag)
     with m.If(ended):
-        m.d.sync += [state.eq(_STAMP), unit.eq(0), first_unit.eq(1), last_unit.eq(words == 1), windows.eq(0),
-                     real_beats.eq(0), owed_last.eq(0), pointer.eq(0), in_pixels.eq(0)]
+        m.d.sync += [state.eq(_STAMP), unit.eq(0), *(first.eq(1) for first in firsts), last_unit.eq(words == 1),
+                     windows.eq(0), real_beats.eq(0), owed_last.eq(0), pointer.eq(0), in_pixels.eq(0)]
     waiting = Signal()
     m.d.comb += waiting.eq(node.between_frames_lanes(m, ended))
     m.d.comb += busy.eq(waiting)
+
+
+def _input_pair(m: Module, source: Any, data_width: int, slices: int,
+                copies: int) -> tuple[Value, Value, Value, list[Signal], Signal]:
+    """Two input beats, written in turn by the stream and read in turn by the node: the held beat (read in
+    ``slices``), its keep and last, ``copies`` copies of whether one is held (each counted on its own), and
+    the node's signal that lets it go. Only the stream's side
+    loads the beats (an entry's enable is TVALID and its turn, from registers), and letting a beat go
+    moves a pointer: a beat loaded on the node's decision (TREADY from the step through the pixels)
+    put that decision on the enables of twice 512 registers, the 512-bit compensation's critical path
+    (17.8 ns). TREADY is a register, as a register slice's is."""
+    lanes = data_width // 8
+    entries = [(Signal(data_width, name=f"in{k}_data"), Signal(lanes, name=f"in{k}_keep"),
+                Signal(name=f"in{k}_last")) for k in range(2)]
+    full, release, taking = Signal(), Signal(), Signal()
+    m.d.comb += [source.tready.eq(~full), taking.eq(source.tvalid & ~full)]
+    held_copies = []
+    for copy in range(copies):
+        held, after = Signal(2, name=f"held{copy}"), Signal(2, name=f"after{copy}")
+        held_copies.append(Signal(name=f"hold_full{copy}"))
+        m.d.comb += after.eq(held + taking - release)
+        m.d.sync += [held.eq(after), held_copies[-1].eq(after != 0)]
+        if copy == 0:
+            m.d.sync += full.eq(after == 2)
+    # which entry is written and which is read, a copy a slice of the beat (toggles, which synthesis cannot
+    # merge): one write turn enabling both entries' 1,154 flip-flops was the 512-bit blur's critical path
+    # (9.8 ns of routing on that net), and one read turn selecting all 512 bits a net of 512 loads
+    part = data_width // slices
+    write_turns = [Signal(name=f"write_turn{index}") for index in range(slices)]
+    read_turns = [Signal(name=f"read_turn{index}") for index in range(slices)]
+    with m.If(taking):
+        m.d.sync += [turn.eq(~turn) for turn in write_turns]
+    for turn, (data, keep, last) in enumerate(entries):
+        with m.If(taking & (write_turns[0] == turn)):
+            m.d.sync += [keep.eq(source.tkeep), last.eq(source.tlast)]
+        for index, write_turn in enumerate(write_turns):
+            bits_of = slice(index * part, (index + 1) * part)
+            with m.If(taking & (write_turn == turn)):
+                m.d.sync += data[bits_of].eq(source.tdata[bits_of])
+    with m.If(release):
+        m.d.sync += [turn.eq(~turn) for turn in read_turns]
+    (data0, keep0, last0), (data1, keep1, last1) = entries
+    data = Cat(*(Mux(turn, data1[index * part:(index + 1) * part], data0[index * part:(index + 1) * part])
+                 for index, turn in enumerate(read_turns)))
+    return data, Mux(read_turns[0], keep1, keep0), Mux(read_turns[0], last1, last0), held_copies, release
 
 
 class _BeatPlace:
@@ -403,39 +484,10 @@ def _log2(value: int) -> int:
     return value.bit_length() - 1
 
 
-def exchange(a: Value, b: Value) -> tuple[Value, Value]:
-    """``a`` and ``b``, the lower first."""
-    return Mux(a < b, a, b), Mux(a < b, b, a)
-
-
-def median_network(pipe: Pipe, values: Sequence[Value], pairs: Sequence[tuple[int, int]], every: int,
-                   keep: int) -> Value:
-    """Compare-exchange ``values`` by ``pairs`` (each puts the lower value at its first index) and give the
-    value left at ``keep``, with a register stage after each ``every`` levels of the network (exchanges that
-    run side by side make a level). Only the values a later pair or ``keep`` reads are registered: the
-    synthesizer would remove the others, at a cost in netlist size and time."""
-    held = list(values)
-    for index, ((x, y), registered_before) in enumerate(zip(pairs, _stage_breaks(pairs, every, len(held)),
-                                                            strict=True)):
-        if registered_before:
-            live = {i for pair in pairs[index:] for i in pair} | {keep}
-            held = [pipe.reg(v, "median") if i in live else v for i, v in enumerate(held)]
-        held[x], held[y] = exchange(held[x], held[y])
-    return pipe.reg(held[keep], "median")
-
-
-def stages_of(pairs: Sequence[tuple[int, int]], every: int, width: int) -> int:
-    """The register stages :func:`median_network` puts into ``pairs`` on ``width`` values."""
-    return 1 + sum(_stage_breaks(pairs, every, width))
-
-
-def _stage_breaks(pairs: Sequence[tuple[int, int]], every: int, width: int) -> list[bool]:
-    """Before which of ``pairs`` a register stage comes: where an exchange would be the ``every + 1``-th in
-    series since the last stage."""
-    level, breaks = [0] * width, []
-    for x, y in pairs:
-        breaks.append(max(level[x], level[y]) == every)
-        if breaks[-1]:
-            level = [0] * width
-        level[x] = level[y] = max(level[x], level[y]) + 1
-    return breaks
+def low_middle_high(a: Value, b: Value, c: Value) -> tuple[Value, Value, Value]:
+    """The lowest, the middle and the highest of three values, each chosen by the same three comparisons,
+    made side by side: one comparison's delay, where compare-exchanges in series take three."""
+    ab, ac, bc = a < b, a < c, b < c
+    return (Mux(ab, Mux(ac, a, c), Mux(bc, b, c)),
+            Mux(ab, Mux(bc, b, Mux(ac, c, a)), Mux(ac, a, Mux(bc, c, b))),
+            Mux(ab, Mux(bc, c, b), Mux(ac, c, a)))

@@ -298,6 +298,8 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
 
     assert isinstance(plan, Plan) and isinstance(types, TypeRegistry)
     spec = plan.targets[target]
+    # the design as it is now: place and route takes minutes to hours, and the sources may change meanwhile
+    key = target_key(plan, target)
     made = []
     if parts in ("target", "all"):
         path, manifest = build(plan, target, out / "target", types)
@@ -306,7 +308,7 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
         whole = build_bitstream(path.read_text(), top_name(target), out / "target", spec.clock_mhz, f"{target}",
                                 sources)
         # what the launch's and `hw report`'s figures then use, where it is below clock_mhz
-        record_fmax(target_key(plan, target), whole.fmax_mhz, whole.device,
+        record_fmax(key, whole.fmax_mhz, whole.device,
                     whole.critical.describe() if whole.critical else "")
         made.append(whole)
     if parts in ("parts", "all"):
@@ -319,7 +321,7 @@ def bitstreams(plan: object, target: str, out: Path, types: object, parts: str =
             # the target's clock can be no faster than its slowest node alone: where the whole target is not
             # placed (too big for any ECP5, or --parts parts), that bound is the figure to use
             slowest = min(nodes, key=lambda row: row.fmax_mhz)
-            record_fmax(target_key(plan, target), slowest.fmax_mhz, slowest.device,
+            record_fmax(key, slowest.fmax_mhz, slowest.device,
                         f"{slowest.design}: " + (slowest.critical.describe() if slowest.critical else ""),
                         nodes_alone=True)
         made += nodes

@@ -10,6 +10,7 @@ speed-up computed at a clock the design misses is not one.
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import os
 import sys
@@ -48,8 +49,7 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
     for name, node in sorted(plan.nodes.items()):
         if node.target == target and plan.in_hardware(name):
             parts.append(f"{name}={node.hw}:{json.dumps(node.parameters, sort_keys=True, default=str)}:{node.memory}")
-            module = sys.modules.get(node.hw.partition(":")[0])
-            source = getattr(module, "__file__", None)
+            source = _module_file(node.hw.partition(":")[0])
             if source:
                 files.append(Path(source))
     digest = hashlib.sha256("\0".join(parts).encode())
@@ -57,6 +57,20 @@ def design_key(plan: Plan, target: str, topics: list[HardwareTopic], sources: li
         if ".venv" not in path.parts and path.is_file():
             digest.update(str(path).encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()
+
+
+def _module_file(name: str) -> str | None:
+    """The file of module ``name``, whether or not this process has imported it yet (a key that counted it
+    only once imported differed between ``hetros hw bitstream``, which builds the nodes, and a benchmark
+    reading the clock that run recorded)."""
+    module = sys.modules.get(name)
+    if module is not None:
+        return getattr(module, "__file__", None)
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):
+        return None
+    return spec.origin if spec is not None and spec.has_location else None
 
 
 def target_key(plan: Plan, target: str) -> str:

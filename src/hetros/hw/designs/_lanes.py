@@ -418,11 +418,11 @@ def _input_pair(m: Module, source: Any, data_width: int, slices: int,
                 copies: int) -> tuple[Value, Value, Value, list[Signal], Signal]:
     """Two input beats, written in turn by the stream and read in turn by the node: the held beat (read in
     ``slices``), its keep and last, ``copies`` copies of whether one is held (each counted on its own), and
-    the node's signal that lets it go. Only the stream's side
-    loads the beats (an entry's enable is TVALID and its turn, from registers), and letting a beat go
-    moves a pointer: a beat loaded on the node's decision (TREADY from the step through the pixels)
-    put that decision on the enables of twice 512 registers, the 512-bit compensation's critical path
-    (17.8 ns). TREADY is a register, as a register slice's is."""
+    the node's signal that lets it go. Only the stream's side loads the beats (an entry's enable is TVALID
+    and its turn, from registers), and letting a beat go moves a pointer: a beat loaded on the node's
+    decision (TREADY from the step through the pixels) put that decision on the enables of twice 512
+    registers, the 512-bit compensation's critical path (17.8 ns). TREADY is a register, as a register
+    slice's is."""
     lanes = data_width // 8
     entries = [(Signal(data_width, name=f"in{k}_data"), Signal(lanes, name=f"in{k}_keep"),
                 Signal(name=f"in{k}_last")) for k in range(2)]

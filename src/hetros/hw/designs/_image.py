@@ -140,10 +140,11 @@ class ImageFilter3x3(wiring.Component):
         """:meth:`post` of each lane's byte, with ``post_stages`` registers; here none."""
         return [self.post(m, value) for value in values]
 
-    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: Value, count: Value) -> None:
+    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: list[Value],
+                      count: Value) -> None:
         """:meth:`observe` for a beat: ``values`` before :meth:`post_lanes`, ``pixels`` high in the lanes that are
-        the image's (the others are header bytes or past its end), ``taken`` when the beat moves on and
-        ``count`` the image's bytes. Nothing here."""
+        the image's (the others are header bytes or past its end), ``taken[i]`` when lane i's byte moves on (the
+        same for every lane, a copy by each slice of the beat) and ``count`` the image's bytes. Nothing here."""
 
     def between_frames_lanes(self, m: Module, ended: Value) -> Value:
         """:meth:`between_frames` of the full-width datapath; nothing here."""
@@ -419,7 +420,8 @@ class Compensation(ImageFilter3x3):
         the ``post_stages``), as the byte's value addressed both."""
         return [held[_HISTOGRAM_BITS:] for held in self._bins_held]
 
-    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: Value, count: Value) -> None:
+    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: list[Value],
+                      count: Value) -> None:
         """A histogram per lane, each counting a byte a cycle with a read-modify-write four cycles long (the
         memory's output registered, then incremented, then written): the counts of the three bytes before,
         still on their way to the memory, are forwarded to a read of the same bin.
@@ -443,7 +445,7 @@ class Compensation(ImageFilter3x3):
                      level_address.eq(Mux(scanning, level[:8], self._table_address)),
                      level_data.eq(Mux(scanning, 0, Cat(Const(0, _HISTOGRAM_BITS), self._table_entry))),
                      level_write.eq(Mux(scanning, level < 256, self._building_lanes & self._table_write))]
-        for lane, (value, is_pixel) in enumerate(zip(values, pixels, strict=True)):
+        for lane, (value, is_pixel, lane_taken) in enumerate(zip(values, pixels, taken, strict=True)):
             histogram = Memory(shape=unsigned(_HISTOGRAM_BITS + 8), depth=256,
                                init=[entry << _HISTOGRAM_BITS for entry in range(256)])  # the first frame: as it is
             m.submodules[f"histogram{lane}"] = histogram
@@ -456,7 +458,7 @@ class Compensation(ImageFilter3x3):
             # (event, bin) of the byte in each cycle of its way: just taken, read back, counted, written
             events = [Signal(name=f"event{lane}_{k}") for k in range(5)]
             bins = [Signal(8, name=f"bin{lane}_{k}") for k in range(5)]
-            m.d.comb += [events[0].eq(taken & is_pixel), bins[0].eq(value)]
+            m.d.comb += [events[0].eq(lane_taken & is_pixel), bins[0].eq(value)]
             m.d.sync += [e.eq(events[k]) for k, e in enumerate(events[1:])]
             m.d.sync += [b.eq(bins[k]) for k, b in enumerate(bins[1:])]
             # while read back, whether the 1st, 2nd, 3rd byte before it counted the same bin

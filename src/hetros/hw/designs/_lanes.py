@@ -86,7 +86,7 @@ class LaneFilter(Protocol):
 
     def post_lanes(self, m: Module, pipe: Pipe, values: list[Value]) -> list[Value]: ...
 
-    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: Value,
+    def observe_lanes(self, m: Module, values: list[Value], pixels: list[Value], taken: list[Value],
                       count: Value) -> None: ...
 
     def between_frames_lanes(self, m: Module, ended: Value) -> Value: ...
@@ -121,13 +121,12 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # pointer would drive every distributed-RAM cell of a wide beat (145 at 512 bits), a net too long
     # for the clock.
     out_depth = node.kernel_stages + node.post_stages + 5
-    push, push_data, push_keep, push_last = Signal(), Signal(data_width), Signal(lanes), Signal()
-    entry = Cat(push_data, push_keep, push_last)
+    entry_bits = data_width + lanes + 1  # the beat, its keep and its last
     out_fifos = []
-    for index, start in enumerate(range(0, len(entry), _FIFO_SLICE)):
-        piece = entry[start:start + _FIFO_SLICE]
-        m.submodules[f"out_fifo{index}"] = part = fifo.SyncFIFOBuffered(width=len(piece), depth=out_depth)
-        m.d.comb += [part.w_en.eq(push), part.w_data.eq(piece), part.r_en.eq(sink.tready)]
+    for index, start in enumerate(range(0, entry_bits, _FIFO_SLICE)):
+        width = min(_FIFO_SLICE, entry_bits - start)
+        m.submodules[f"out_fifo{index}"] = part = fifo.SyncFIFOBuffered(width=width, depth=out_depth)
+        m.d.comb += part.r_en.eq(sink.tready)
         out_fifos.append(part)
     out_ready = out_fifos[0].r_rdy  # every slice holds the same number of entries
     m.d.comb += [sink.tvalid.eq(out_ready),
@@ -151,7 +150,10 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     until_window = Signal(bits)  # steps of this message before the first that fills a window
     window_due = Signal(init=1)  # until_window == 0, as a register (the first window's step loads hundreds)
     state = Signal(range(11))
-    in_pixels = Signal()  # state is _DATA, as one register
+    # state is _DATA, as a register a copy: a copy's pick and step are decided from registers of its own,
+    # which sit by the slice they load (one register of the control's to every copy's step, then the step
+    # to the slice, were two nets across the device in series: the 512-bit compensation's critical path)
+    pixel_copies = [Signal(name=f"in_pixels{copy}") for copy in range(copies)]
     at_data_len = Signal()  # state is _DATA_LEN, as one register (the beat's end is decided from it)
     unit = Signal(range(max(2, words)))
     remaining = Signal(32)
@@ -169,8 +171,8 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # select of all 480 bits were the 512-bit blur's critical path, 11.1 ns of routing); a copy is decided from
     # the copies of the held beat's count or of the room, which keeps synthesis from merging it with the others
     picks = [Signal(name=f"picking{copy}") for copy in range(copies)]
-    m.d.comb += [pick.eq(held & ~in_pixels & ~busy & ~phase & ~header_ended)
-                 for pick, held in zip(picks, held_copies, strict=True)]
+    m.d.comb += [pick.eq(held & ~copy_pixels & ~busy & ~phase & ~header_ended)
+                 for pick, held, copy_pixels in zip(picks, held_copies, pixel_copies, strict=True)]
     picking = picks[0]
     firsts = [Signal(init=1, name=f"first_unit{copy}") for copy in range(copies)]  # unit is 0, as registers
     ahead = Signal(max(1, data_width - 32))  # the held beat's words after the one last picked, the next lowest
@@ -219,12 +221,15 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
             with m.Case(_STEP):
                 m.d.sync += [step.eq(word), state.eq(_DATA_LEN), at_data_len.eq(1)]
             with m.Case(_DATA_LEN):
-                m.d.sync += [data_len.eq(word), state.eq(Mux(word_zero, _STAMP, _DATA)), in_pixels.eq(~word_zero),
+                m.d.sync += [data_len.eq(word), state.eq(Mux(word_zero, _STAMP, _DATA)),
                              at_data_len.eq(0),
                              start.eq(Mux(pixels_here, (unit + 1) << 2, 0))]
                 due = Signal(bits)
                 m.d.comb += due.eq((step >> _log2(lanes)) + _LAG)
                 m.d.sync += [until_window.eq(due), window_due.eq(due == 0)]
+    for walk, copy_pixels in zip(walks, pixel_copies, strict=True):
+        with m.If(walk & at_data_len):
+            m.d.sync += copy_pixels.eq(~word_zero)
     # a message that ends in its header (no pixels): the walk starts over a cycle later, from a register
     # (not from the decision that let the beat go), and picks no word meanwhile
     m.d.sync += header_ended.eq(header_leaves & hold_last)
@@ -247,10 +252,13 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     writes = [r.write_port() for r in rings]
     reads = [r.read_port(domain="sync") for r in rings]  # read-first: a ring gives the beat it replaces
     stepping = Signal()
-    flushing = Signal()
+    flush_copies = [Signal(name=f"flushing{copy}") for copy in range(copies)]  # as ``pixel_copies``
+    flushing = flush_copies[0]
+    final_flush = Signal()  # flush_left == 1, as a register
     flush_left = Signal(bits)
     real_beats = Signal(24)  # pixel beats stepped in this message
-    owed_last = Signal()  # the message's last beat has stepped
+    owed_copies = [Signal(name=f"owed_last{copy}") for copy in range(copies)]  # the message's last beat has stepped
+    owed_last = owed_copies[0]
     last_keep = Signal(lanes)
     windows = Signal()  # every step after the first that fills a window fills one
     centre = Signal(24)  # the pixel beat whose window the registers hold
@@ -266,12 +274,20 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     a = [Signal(data_width, name=f"a{i}") for i in range(5)]
     b = [Signal(data_width, name=f"b{i}") for i in range(5)]
     c = [Signal(data_width, name=f"c{i}") for i in range(4)]
-    window_fresh = Signal()  # the registers hold a window the pipeline has not taken yet
+    # the registers hold a window the pipeline has not taken yet, a copy each (the valid at the pipeline's end
+    # then chooses a FIFO's input and enables it from a register by that FIFO's slice)
+    fresh_copies = [Signal(name=f"window_fresh{copy}") for copy in range(copies)]
     first_window = ~windows & window_due
     later_window = windows
     steps = [Signal(name=f"stepping{copy}") for copy in range(copies)]
-    m.d.comb += [copy_step.eq(in_pixels & (flushing | held & ~owed_last) & copy_room)
-                 for copy_step, held, copy_room in zip(steps, held_copies, rooms, strict=True)]
+    for copy_step, held, copy_room, copy_pixels, copy_flushing, copy_owed, fresh in zip(
+            steps, held_copies, rooms, pixel_copies, flush_copies, owed_copies, fresh_copies, strict=True):
+        m.d.comb += copy_step.eq(copy_pixels & (copy_flushing | held & ~copy_owed) & copy_room)
+        m.d.sync += fresh.eq(copy_step & (first_window | later_window))
+        with m.If(copy_step & ~copy_flushing & hold_last):
+            m.d.sync += [copy_flushing.eq(1), copy_owed.eq(1)]
+        with m.If(copy_step & copy_flushing & final_flush):
+            m.d.sync += copy_flushing.eq(0)
     m.d.comb += stepping.eq(steps[0])
     for index, copy_step in enumerate(steps[2:]):
         bits_of = slice(index * slice_bits, (index + 1) * slice_bits)
@@ -285,7 +301,6 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     with m.If(ring_step):
         m.d.sync += pointer.eq(Mux(pointer + 1 >= lines, 0, pointer + 1))
     with m.If(stepping):
-        m.d.sync += window_fresh.eq(first_window | later_window)
         with m.If(~window_due):
             m.d.sync += [until_window.eq(until_window - 1), window_due.eq(until_window == 1)]
         with m.If(first_window):
@@ -295,13 +310,10 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
         with m.If(~flushing):
             m.d.sync += real_beats.eq(real_beats + 1)
             with m.If(hold_last):
-                m.d.sync += [flushing.eq(1), flush_left.eq(lines + _LAG), owed_last.eq(1), last_keep.eq(hold_keep)]
+                m.d.sync += [flush_left.eq(lines + _LAG), final_flush.eq(lines + _LAG == 1),
+                             last_keep.eq(hold_keep)]
         with m.Else():
-            m.d.sync += flush_left.eq(flush_left - 1)
-            with m.If(flush_left == 1):
-                m.d.sync += flushing.eq(0)
-    with m.Else():
-        m.d.sync += window_fresh.eq(0)
+            m.d.sync += [flush_left.eq(flush_left - 1), final_flush.eq(flush_left == 2)]
     m.d.comb += release.eq(header_leaves | (stepping & ~flushing))
     # the window of the middle beat b[3]: rows c (top), b, a (bottom); beats [4] before, [3], [2] after (c one
     # index less: its ring is a step behind); every ring's output is registered before the kernels use it
@@ -326,22 +338,33 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # 512 bits: a quarter of the congestion that kept the compensation from routing.) How many of the
     # message's pixel bytes lie beyond lane 0 gives the last row without the height (a memory node's
     # synthetic header has none).
+    # They move a cycle after the step, from registers (``lane_first``, ``lane_later``), and the masks are a
+    # stage shorter: from the step itself, the control's decision reached these registers, which the 64 lanes
+    # pull across the device (the 512-bit compensation's critical path, 15.5 of 16.9 ns routing).
+    lane_first, lane_later = Signal(), Signal()
+    m.d.sync += [lane_first.eq(stepping & first_window), lane_later.eq(stepping & later_window)]
     beyond = Signal(signed(34))  # pixel bytes from lane 0 of the middle beat to the end
     below = Signal(signed(34))  # the same, less the last row
-    with m.If(stepping & first_window):
-        m.d.sync += [beyond.eq(data_len + start), below.eq(data_len + start - step)]
-    with m.Elif(stepping & later_window):
-        m.d.sync += [beyond.eq(beyond - lanes), below.eq(below - lanes)]
+    # whether either count reaches past the beat, as a register a count, decided with the count: a test of its
+    # 27 high bits that all lanes shared, one net from three logic levels to 64 lanes, was the 512-bit
+    # compensation's critical path (11.6 of 13.7 ns routing)
+    beyond_past, below_past = Signal(), Signal()
+    next_beyond, next_below = Signal(signed(34)), Signal(signed(34))
+    m.d.comb += [next_beyond.eq(Mux(lane_first, data_len + start, beyond - lanes)),
+                 next_below.eq(Mux(lane_first, data_len + start - step, below - lanes))]
+    with m.If(lane_first | lane_later):
+        m.d.sync += [beyond.eq(next_beyond), below.eq(next_below),
+                     beyond_past.eq(next_beyond[shift:-1] != 0), below_past.eq(next_below[shift:-1] != 0)]
     beat_of_line = Signal(bits)  # n % lines
     one_beat_lines = Signal()  # lines == 1, as a register (the line's length is known long before its pixels)
     m.d.sync += one_beat_lines.eq(lines == 1)
     this = _BeatPlace("this")  # beat n
     before = _BeatPlace("before")  # beat n - 1
     header_before = Signal()  # n is 0: the lanes before ``start`` hold header bytes
-    with m.If(stepping & first_window):
+    with m.If(lane_first):
         m.d.sync += [beat_of_line.eq(0), this.first.eq(1), this.last.eq(one_beat_lines), this.later_line.eq(0),
                      header_before.eq(1), before.first.eq(0), before.last.eq(0), before.later_line.eq(0)]
-    with m.Elif(stepping & later_window):
+    with m.Elif(lane_later):
         m.d.sync += [before.first.eq(this.first), before.last.eq(this.last), before.later_line.eq(this.later_line),
                      header_before.eq(0), this.first.eq(this.last), this.later_line.eq(this.later_line | this.last)]
         with m.If(this.last):
@@ -362,30 +385,35 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
                                     (this.later_line, before.later_line)))
         at_edge = (leading & first) | (trailing & last)
         is_header = ~after_split & header_before
-        interior.append(later_line & _exceeds(below, lane, shift) & ~at_edge)
-        pixel.append(~is_header & _exceeds(beyond, lane, shift))
+        interior.append(later_line & _exceeds(below, below_past, lane, shift) & ~at_edge)
+        pixel.append(~is_header & _exceeds(beyond, beyond_past, lane, shift))
         header.append(is_header)
     last_centre = owed_last & (centre + 1 == real_beats)
 
     # the kernel, lane by lane, then the node's own stages after it
-    valids: list[Value] = [window_fresh]
+    # the valid, a chain a copy; lane i's is its slice's
+    valids = [[fresh] for fresh in fresh_copies]
+    lane_copy = [2 + lane * 8 // slice_bits for lane in range(lanes)]
     kernels = [node.lane_kernel(pipe, lane_bytes(top_row, lane), lane_bytes(middle_row, lane),
                                 lane_bytes(bottom_row, lane)) for lane in range(lanes)]
     stages = node.kernel_stages
-    masks = [pipe.delay(Cat(interior[i], pixel[i], header[i]), stages, f"mask{i}") for i in range(lanes)]
+    masks = [pipe.delay(Cat(interior[i], pixel[i], header[i]), stages - 1, f"mask{i}") for i in range(lanes)]
     raw = pipe.delay(b[3], stages, "raw")
     last_flag = pipe.delay(last_centre, stages, "last")
-    for _ in range(stages):
-        valids.append(pipe.reg(valids[-1], "valid"))
+    for chain in valids:
+        for _ in range(stages):
+            chain.append(pipe.reg(chain[-1], "valid"))
     shaped = [Mux(masks[i][0], kernels[i], 0)[:8] for i in range(lanes)]
-    node.observe_lanes(m, shaped, [masks[i][1] for i in range(lanes)], valids[-1], data_len)
+    node.observe_lanes(m, shaped, [masks[i][1] for i in range(lanes)], [valids[lane_copy[i]][-1] for i in range(lanes)],
+                       data_len)
     posted = node.post_lanes(m, pipe, shaped)
     after = node.post_stages
     masks = [pipe.delay(mask, after, f"postmask{i}") for i, mask in enumerate(masks)]
     raw = pipe.delay(raw, after, "postraw")
     last_flag = pipe.delay(last_flag, after, "postlast")
-    for _ in range(after):
-        valids.append(pipe.reg(valids[-1], "postvalid"))
+    for chain in valids:
+        for _ in range(after):
+            chain.append(pipe.reg(chain[-1], "postvalid"))
     out_bytes = [Mux(masks[i][2], raw.word_select(i, 8), Mux(masks[i][1], posted[i], 0)) for i in range(lanes)]
     m.d.comb += reserved.eq(header_leaves | (stepping & (first_window | later_window)))
     # a beat of header goes into the FIFO a cycle after the walk let it go, from a copy of the held beat that
@@ -394,21 +422,26 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # 512-bit compensation's critical path (8.5 ns of its 18.3 ns routing that one net). The credit is
     # counted from the decision, so the FIFO has room for it; header beats and the pipeline's never meet
     # (the walk starts once the frame before has left).
-    header_push, header_beat = Signal(), Signal(data_width)
-    header_keep, header_last = Signal(lanes), Signal()
-    m.d.sync += [header_push.eq(header_leaves), header_beat.eq(hold), header_keep.eq(hold_keep),
-                 header_last.eq(hold_last)]
+    # Each FIFO makes that choice from a copy of its own of the push (and of the valid), decided from the walk
+    # of the copy that loads its slice: one register choosing for all 577 bits was the next critical path.
+    header_beat, header_keep, header_last = Signal(data_width), Signal(lanes), Signal()
+    m.d.sync += [header_beat.eq(hold), header_keep.eq(hold_keep), header_last.eq(hold_last)]
+    header_pushes = [Signal(name=f"header_push{copy}") for copy in range(copies)]
+    m.d.sync += [push.eq(walk & beat_read & ~pixels_here) for push, walk in zip(header_pushes, walks, strict=True)]
+    header_entry = Cat(header_beat, header_keep, header_last)
+    pipeline_entry = Cat(*out_bytes, Mux(last_flag, last_keep, Const((1 << lanes) - 1, lanes)), last_flag)
+    for index, part in enumerate(out_fifos):
+        start = index * _FIFO_SLICE
+        copy = 2 + start // slice_bits if start < data_width else (start - data_width) // _FIFO_SLICE % 2
+        piece = slice(start, start + len(part.w_data))
+        m.d.comb += [part.w_en.eq(header_pushes[copy] | valids[copy][-1]),
+                     part.w_data.eq(Mux(header_pushes[copy], header_entry[piece], pipeline_entry[piece]))]
     ended = Signal()  # the frame's last beat went out last cycle: the walk starts over (from a register)
-    with m.If(header_push):
-        m.d.comb += [push.eq(1), push_data.eq(header_beat), push_keep.eq(header_keep), push_last.eq(header_last)]
-    with m.Elif(valids[-1]):
-        m.d.comb += [push.eq(1), push_data.eq(Cat(*out_bytes)),
-                     push_keep.eq(Mux(last_flag, last_keep, Const((1 << lanes) - 1, lanes))),
-                     push_last.eq(last_flag)]
-    m.d.sync += ended.eq(~header_push & valids[-1] & last_flag)
+    m.d.sync += ended.eq(~header_pushes[0] & valids[0][-1] & last_flag)
     with m.If(ended):
         m.d.sync += [state.eq(_STAMP), unit.eq(0), *(first.eq(1) for first in firsts), last_unit.eq(words == 1),
-                     windows.eq(0), real_beats.eq(0), owed_last.eq(0), pointer.eq(0), in_pixels.eq(0)]
+                     windows.eq(0), real_beats.eq(0), pointer.eq(0), *(owed.eq(0) for owed in owed_copies),
+                     *(copy_pixels.eq(0) for copy_pixels in pixel_copies)]
     waiting = Signal()
     m.d.comb += waiting.eq(node.between_frames_lanes(m, ended))
     m.d.comb += busy.eq(waiting)
@@ -418,38 +451,43 @@ def _input_pair(m: Module, source: Any, data_width: int, slices: int,
                 copies: int) -> tuple[Value, Value, Value, list[Signal], Signal]:
     """Two input beats, written in turn by the stream and read in turn by the node: the held beat (read in
     ``slices``), its keep and last, ``copies`` copies of whether one is held (each counted on its own), and
-    the node's signal that lets it go. Only the stream's side loads the beats (an entry's enable is TVALID
-    and its turn, from registers), and letting a beat go moves a pointer: a beat loaded on the node's
+    the node's signal that lets it go. Only the stream's side loads the beats (an entry's enable is its turn
+    and room in the pair, from registers), and letting a beat go moves a pointer: a beat loaded on the node's
     decision (TREADY from the step through the pixels) put that decision on the enables of twice 512
     registers, the 512-bit compensation's critical path (17.8 ns). TREADY is a register, as a register
     slice's is."""
     lanes = data_width // 8
     entries = [(Signal(data_width, name=f"in{k}_data"), Signal(lanes, name=f"in{k}_keep"),
                 Signal(name=f"in{k}_last")) for k in range(2)]
-    full, release, taking = Signal(), Signal(), Signal()
-    m.d.comb += [source.tready.eq(~full), taking.eq(source.tvalid & ~full)]
-    held_copies = []
+    release = Signal()
+    held_copies, fulls, takings = [], [], []
     for copy in range(copies):
         held, after = Signal(2, name=f"held{copy}"), Signal(2, name=f"after{copy}")
         held_copies.append(Signal(name=f"hold_full{copy}"))
-        m.d.comb += after.eq(held + taking - release)
-        m.d.sync += [held.eq(after), held_copies[-1].eq(after != 0)]
-        if copy == 0:
-            m.d.sync += full.eq(after == 2)
+        fulls.append(Signal(name=f"full{copy}"))
+        takings.append(Signal(name=f"taking{copy}"))
+        m.d.comb += [takings[-1].eq(source.tvalid & ~fulls[-1]), after.eq(held + takings[-1] - release)]
+        m.d.sync += [held.eq(after), held_copies[-1].eq(after != 0), fulls[-1].eq(after == 2)]
+    m.d.comb += source.tready.eq(~fulls[0])
     # which entry is written and which is read, a copy a slice of the beat (toggles, which synthesis cannot
     # merge): one write turn enabling both entries' 1,154 flip-flops was the 512-bit blur's critical path
     # (9.8 ns of routing on that net), and one read turn selecting all 512 bits a net of 512 loads
     part = data_width // slices
     write_turns = [Signal(name=f"write_turn{index}") for index in range(slices)]
     read_turns = [Signal(name=f"read_turn{index}") for index in range(slices)]
-    with m.If(taking):
-        m.d.sync += [turn.eq(~turn) for turn in write_turns]
+    # An entry loads whenever it is the next to be written and the pair is not full (it then holds nothing),
+    # whether TVALID is high or not: TVALID, a register of whatever is upstream, then moves only the turns and
+    # counts, and each slice's enable comes from registers beside it (TVALID to the entries' enables was the
+    # 512-bit compensation's critical path once the rest was pipelined, 12.4 ns of routing).
+    for index, write_turn in enumerate(write_turns):
+        with m.If(takings[index + 2]):
+            m.d.sync += write_turn.eq(~write_turn)
     for turn, (data, keep, last) in enumerate(entries):
-        with m.If(taking & (write_turns[0] == turn)):
+        with m.If(~fulls[0] & (write_turns[0] == turn)):
             m.d.sync += [keep.eq(source.tkeep), last.eq(source.tlast)]
         for index, write_turn in enumerate(write_turns):
             bits_of = slice(index * part, (index + 1) * part)
-            with m.If(taking & (write_turn == turn)):
+            with m.If(~fulls[index + 2] & (write_turn == turn)):
                 m.d.sync += data[bits_of].eq(source.tdata[bits_of])
     with m.If(release):
         m.d.sync += [turn.eq(~turn) for turn in read_turns]
@@ -468,13 +506,13 @@ class _BeatPlace:
         self.later_line = Signal(name=f"{name}_later_line")
 
 
-def _exceeds(count: Value, lane: int, shift: int) -> Value:
-    """``count > lane`` for a lane of the beat (``lane < 2 ** shift``), from the count's low bits and one test
-    of its high ones, which the lanes share: a wide comparison a lane was a carry chain a lane."""
-    above = count[shift:-1] != 0
+def _exceeds(count: Value, past: Value, lane: int, shift: int) -> Value:
+    """``count > lane`` for a lane of the beat (``lane < 2 ** shift``), from the count's low bits and sign and
+    ``past``, whether its other high bits are not all zero, which the lanes share: a wide comparison a lane
+    was a carry chain a lane."""
     if lane == (1 << shift) - 1:  # no low bits exceed the last lane (a comparison lint tools call constant)
-        return ~count[-1] & above
-    return ~count[-1] & (above | (count[:shift] > lane))
+        return ~count[-1] & past
+    return ~count[-1] & (past | (count[:shift] > lane))
 
 
 def _log2(value: int) -> int:

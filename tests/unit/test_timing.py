@@ -215,3 +215,27 @@ def test_a_designs_key_is_the_same_whether_or_not_its_nodes_module_was_imported(
     keys = {subprocess.run([sys.executable, "-c", script, how], cwd=root, capture_output=True, text=True,
                            check=True).stdout for how in ("imported", "not imported")}
     assert len(keys) == 1 and len(keys.pop().strip()) == 64
+
+
+@pytest.mark.parametrize("outputs", [1, 4, 5, 75, 577])
+def test_the_pin_harness_folds_every_output_four_bits_a_stage(outputs: int) -> None:
+    """The harness must never be a design's critical path: each registered XOR reads at most four bits, and
+    the folds still give the parity of every output (so none is optimised away)."""
+    import random
+    import re
+
+    from hetros.hw.flow._bitstream import pin_harness
+
+    design = f"module d (input wire clk, input wire rst, input wire a, output wire [{outputs - 1}:0] y);\nendmodule\n"
+    design = design.replace("(input", "(\n  input").replace(", ", ",\n  ")
+    harness = pin_harness(design, "d")
+    assert f"reg [{outputs - 1}:0] held;" in harness, harness
+    held = [random.getrandbits(1) for _ in range(outputs)]
+    values = {"held": held}
+    for name, bit, source, high, low in re.findall(r"(\w+)\[(\d+)\] <= \^(\w+)\[(\d+):(\d+)\];", harness):
+        assert int(high) - int(low) < 4
+        values.setdefault(name, []).append(sum(values[source][int(low):int(high) + 1]) % 2)
+        assert len(values[name]) == int(bit) + 1
+    (last,) = re.findall(r"sout <= \^(\w+);", harness)
+    assert len(values[last]) <= 4
+    assert sum(values[last]) % 2 == sum(held) % 2

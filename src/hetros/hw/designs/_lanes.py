@@ -348,21 +348,13 @@ def elaborate_lanes(node: LaneFilter, m: Module, source: Any, sink: Any, data_wi
     # whether either count reaches past the beat, as a register a count, decided with the count: a test of its
     # 27 high bits that all lanes shared, one net from three logic levels to 64 lanes, was the 512-bit
     # compensation's critical path (11.6 of 13.7 ns routing)
-    # (their first values are registers too, a sum and a difference of the header's words that settle in the
-    # steps before the first window: summed as the first window came, they were the 64-bit target's)
     beyond_past, below_past = Signal(), Signal()
-    first_beyond, first_below = Signal(signed(34)), Signal(signed(34))
-    first_beyond_past, first_below_past = Signal(), Signal()
-    m.d.sync += [first_beyond.eq(data_len + start), first_below.eq(first_beyond - step),
-                 first_beyond_past.eq(first_beyond[shift:-1] != 0), first_below_past.eq(first_below[shift:-1] != 0)]
-    later_beyond, later_below = Signal(signed(34)), Signal(signed(34))
-    m.d.comb += [later_beyond.eq(beyond - lanes), later_below.eq(below - lanes)]
-    with m.If(lane_first):
-        m.d.sync += [beyond.eq(first_beyond), below.eq(first_below),
-                     beyond_past.eq(first_beyond_past), below_past.eq(first_below_past)]
-    with m.Elif(lane_later):
-        m.d.sync += [beyond.eq(later_beyond), below.eq(later_below),
-                     beyond_past.eq(later_beyond[shift:-1] != 0), below_past.eq(later_below[shift:-1] != 0)]
+    next_beyond, next_below = Signal(signed(34)), Signal(signed(34))
+    m.d.comb += [next_beyond.eq(Mux(lane_first, data_len + start, beyond - lanes)),
+                 next_below.eq(Mux(lane_first, data_len + start - step, below - lanes))]
+    with m.If(lane_first | lane_later):
+        m.d.sync += [beyond.eq(next_beyond), below.eq(next_below),
+                     beyond_past.eq(next_beyond[shift:-1] != 0), below_past.eq(next_below[shift:-1] != 0)]
     beat_of_line = Signal(bits)  # n % lines
     one_beat_lines = Signal()  # lines == 1, as a register (the line's length is known long before its pixels)
     m.d.sync += one_beat_lines.eq(lines == 1)

@@ -12,7 +12,8 @@ one root and still tell the kinds apart::
     │   ├── ReadOnlyMessageError  writing to a message that was handed over
     │   └── MissingFieldError  a ROS 1 field ROS 2's layout dropped (header.seq), asked by rospy code
     ├── ProjectError           the project file (YAML path)
-    │   └── CheckError         `hetros check` found problems (carries all of them)
+    │   ├── CheckError         `hetros check` found problems (carries all of them)
+    │   └── LaunchFileError    a ROS launch file asks what its description cannot give (file:line)
     ├── TransportError         moving messages
     │   ├── ProtocolError         a peer broke its protocol (TCPROS header, frame; offset)
     │   ├── PublishTimeoutError   back-pressure outlasted the timeout
@@ -81,6 +82,11 @@ class MissingFieldError(MessageError, AttributeError):
 
 class ProjectError(Error):
     """The project file is invalid; the message names the YAML path."""
+
+
+class LaunchFileError(ProjectError):
+    """A ROS launch file (Python, XML, YAML) asks for what its description cannot give, or for what hetros
+    cannot express; the message names the file and line."""
 
 
 class CheckError(ProjectError):

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import atexit
 import faulthandler
 import math
 import os
 import re
 import shlex
+import shutil
 import sys
+import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -245,11 +248,42 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _launch_file_kind(path: Path) -> str | None:
+    """``ros2launch`` or ``roslaunch`` for a ROS launch file (what ``ros2 launch``/``roslaunch`` take), else None."""
+    name = path.name
+    if name.endswith(".py") or name.endswith((".launch.xml", "_launch.xml", ".launch.yaml", "_launch.yaml")):
+        return "ros2launch"
+    return "roslaunch" if name.endswith(".launch") else None
+
+
+def _launch_arguments(words: list[str]) -> dict[str, str]:
+    found = {}
+    for word in words:
+        name, sep, value = word.partition(":=")
+        if not sep or not name:
+            raise ProjectError(f"a launch argument is NAME:=VALUE, not {word!r}")
+        found[name] = value
+    return found
+
+
 def cmd_launch(args: argparse.Namespace) -> int:
     from ..launch import launch
-    from ..project import plan_file
+    from ..project import import_launch, plan_file
     from ..runtime import NODE_TIMES_VARIABLE
 
+    kind = _launch_file_kind(Path(args.project))
+    if args.launch_args and kind is None:
+        raise ProjectError(f"NAME:=VALUE arguments are a launch file's; {args.project} is a project file")
+    if kind is not None:  # a ROS launch file: imported into a project of the launch's own, then launched
+        folder = Path(tempfile.mkdtemp(prefix="hetros-launch-", dir=os.environ.get("XDG_RUNTIME_DIR")))
+        atexit.register(shutil.rmtree, folder, True)
+        project, notes = import_launch(Path(args.project), kind == "ros2launch",
+                                       [Path(p) for p in args.package_path or []], folder,
+                                       _launch_arguments(args.launch_args))
+        for note in notes:
+            print(f"[launch] {note}", file=sys.stderr)
+        args.project = str(folder / "project.yaml")
+        Path(args.project).write_text(yaml.safe_dump(project, sort_keys=False), encoding="utf-8")
     plan = plan_file(args.project)
     if args.node_times:
         os.environ[NODE_TIMES_VARIABLE] = "1"  # the worker processes inherit it
@@ -486,8 +520,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--live", action="store_true", help="of a running launch, with each topic's rate on its edges")
     p.add_argument("--session", help="with --live: the launch's session (hetros ps)")
     p.set_defaults(func=cmd_graph)
-    p = sub.add_parser("launch", help="run a project")
-    p.add_argument("project")
+    p = sub.add_parser("launch", help="run a project, or a ROS launch file (Python, XML, YAML; ROS 1 .launch)")
+    p.add_argument("project", help="a project file, or a launch file (imported as `hetros import` does)")
+    p.add_argument("launch_args", nargs="*", metavar="NAME:=VALUE", help="a launch file's arguments")
+    p.add_argument("--package-path", action="append", metavar="DIR",
+                   help="a launch file's packages are found under this folder (repeatable; also $HETROS_PACKAGE_PATH, "
+                        "and the folder holding the launch file's own package)")
     p.add_argument("--duration", type=float, help="stop after this many seconds")
     p.add_argument("--start-timeout", type=_seconds, default=60.0,
                    help="seconds the targets may take to start, a simulator's announced compilation not counted "

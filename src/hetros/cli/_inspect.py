@@ -15,7 +15,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import yaml
 
@@ -260,8 +260,9 @@ def cmd_topic_pub(args: argparse.Namespace) -> int:
 
 
 def ros_name(plan: Plan, node: str) -> str:
-    """A node's full ROS name, namespace and name (``/r2/talker``): what the CLI shows and accepts."""
-    return join_namespace(plan.nodes[node].namespace, node) or f"/{node}"
+    """A node's full ROS name, namespace and name (``/r2/talker``, the project's ``name:`` where it gives
+    one): what the CLI shows and accepts."""
+    return plan.full_name(node)
 
 
 def node_key(launch: RunningLaunch, given: str) -> str:
@@ -324,6 +325,77 @@ def cmd_service_call(args: argparse.Namespace) -> int:
     response = launch.call(args.service, request)
     print(f"response:\n{_python_repr(typename, response)}\n")
     return 0
+
+
+# -- lifecycle (ros2 lifecycle) -------------------------------------------------------------------
+
+
+def _managed(launch: RunningLaunch, given: str | None) -> list[str]:
+    """The managed nodes (``lifecycle:``) asked for: one by name, else all; by full ROS name."""
+    managed = sorted(ros_name(launch.plan, n) for n, spec in launch.plan.nodes.items() if spec.lifecycle)
+    if given is None:
+        return managed
+    full = ros_name(launch.plan, node_key(launch, given))
+    if full not in managed:
+        raise InspectError(f"node {full} is not a managed node (give it lifecycle: in the project file); managed "
+                           f"nodes: {', '.join(managed) or 'none'}")
+    return [full]
+
+
+def _transitions(launch: RunningLaunch, node: str, graph: bool = False) -> list[Any]:
+    service = f"{node}/get_transition_graph" if graph else f"{node}/get_available_transitions"
+    typename = "lifecycle_msgs/srv/GetAvailableTransitions"
+    answer: Any = launch.call(service, launch.types.get(f"{typename}_Request")())
+    return list(answer.available_transitions)
+
+
+def _print_transitions(transitions: list[Any]) -> None:
+    for item in transitions:
+        print(f"- {item.transition.label} [{item.transition.id}]\n\tStart: {item.start_state.label}\n\t"
+              f"Goal: {item.goal_state.label}")
+
+
+def cmd_lifecycle_nodes(args: argparse.Namespace) -> int:
+    for node in _managed(_launch(args), None):
+        print(node)
+    return 0
+
+
+def cmd_lifecycle_get(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    request = launch.types.get("lifecycle_msgs/srv/GetState_Request")()
+    nodes = _managed(launch, args.node)
+    for node in nodes:
+        state = cast(Any, launch.call(f"{node}/get_state", request)).current_state
+        print(f"{node}: {state.label} [{state.id}]" if args.node is None else f"{state.label} [{state.id}]")
+    return 0
+
+
+def cmd_lifecycle_list(args: argparse.Namespace) -> int:
+    launch = _launch(args)
+    _print_transitions(_transitions(launch, _managed(launch, args.node)[0], graph=args.all))
+    return 0
+
+
+def cmd_lifecycle_set(args: argparse.Namespace) -> int:
+    """ros2 lifecycle set: a transition by label or id, among those available from the node's state."""
+    launch = _launch(args)
+    node = _managed(launch, args.node)[0]
+    available = _transitions(launch, node)
+    chosen = next((t.transition for t in available if args.transition in (t.transition.label,
+                                                                          str(t.transition.id))), None)
+    if chosen is None:
+        print("Unknown transition requested, available ones are:", file=sys.stderr)
+        for item in available:
+            print(f"- {item.transition.label} [{item.transition.id}]", file=sys.stderr)
+        return 1
+    typename = "lifecycle_msgs/srv/ChangeState"
+    request = launch.types.get(f"{typename}_Request")(transition=chosen)
+    if cast(Any, launch.call(f"{node}/change_state", request)).success:
+        print("Transitioning successful")
+        return 0
+    print("Transitioning failed")
+    return 1
 
 
 def cmd_action_list(args: argparse.Namespace) -> int:
@@ -730,6 +802,21 @@ def add_commands(sub: Any) -> None:
     p.add_argument("action")
     p.add_argument("-t", "--show-types", action="store_true")
     p.set_defaults(func=cmd_action_info)
+    lifecycle = sub.add_parser("lifecycle", help="managed nodes of a running launch (ros2 lifecycle)").add_subparsers(
+        dest="lifecycle_command", required=True)
+    p = lifecycle.add_parser("nodes", help="the managed nodes")
+    p.set_defaults(func=cmd_lifecycle_nodes)
+    p = lifecycle.add_parser("get", help="a managed node's state (every one's without a node)")
+    p.add_argument("node", nargs="?")
+    p.set_defaults(func=cmd_lifecycle_get)
+    p = lifecycle.add_parser("list", help="the transitions available from a managed node's state")
+    p.add_argument("node")
+    p.add_argument("-a", "--all", action="store_true", help="every transition of the state machine")
+    p.set_defaults(func=cmd_lifecycle_list)
+    p = lifecycle.add_parser("set", help="take a transition (configure, activate, deactivate, cleanup, shutdown)")
+    p.add_argument("node")
+    p.add_argument("transition", help="its label or id")
+    p.set_defaults(func=cmd_lifecycle_set)
     param = sub.add_parser("param", help="parameters of a running launch's nodes (ros2 param)").add_subparsers(
         dest="param_command", required=True)
     p = param.add_parser("list")
@@ -792,7 +879,7 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--launch", metavar="PROJECT", help="launch the part of this project that consumes the recording "
                    "(its nodes that only publish recorded topics stay out), play into it, then stop it")
     p.set_defaults(func=cmd_play)
-    for group in (topic, node, groups["service"], groups["action"], param):
+    for group in (topic, node, groups["service"], groups["action"], lifecycle, param):
         for parser in group.choices.values():
             _which(parser)
     for name in ("top", "log", "foxglove", "record", "play"):

@@ -61,18 +61,19 @@ def get_package_share_directory(package_name: str, print_warning: bool = True) -
         if package_name in _made:
             return str(_made[package_name])
         source = _package_folder(package_name)
-        installed = [(folder, files) for folder, files in data_files(source)
-                     if folder.rstrip("/") == f"share/{package_name}"]
+        prefix = f"share/{package_name}"
+        installed = [(folder.rstrip("/")[len(prefix):].lstrip("/"), files) for folder, files in data_files(source)
+                     if folder.rstrip("/") == prefix or folder.startswith(f"{prefix}/")]
         if not installed and not (source / "setup.py").is_file():
             _made[package_name] = source
             return str(source)
         share = _share_root() / package_name / "share" / package_name
-        share.mkdir(parents=True, exist_ok=True)
-        for _, files in installed:
+        for below, files in installed:  # share/<pkg>/launch, share/<pkg>/config, ... as colcon lays them out
+            (share / below).mkdir(parents=True, exist_ok=True)
             for relative in files:
-                link = share / Path(relative).name
+                link = share / below / Path(relative).name
                 if not link.exists():
-                    link.symlink_to(source / relative)
+                    link.symlink_to((source / relative).resolve())
         _made[package_name] = share
         return str(share)
 

@@ -123,6 +123,8 @@ class NodePlan:
     root: str = ""
     # fpga: the topics its hardware reads and writes in memory through its AXI4 port (``memory:``)
     memory: tuple[str, ...] = ()
+    # a managed node: the lifecycle state the launch brings it to ("" = not managed by the project)
+    lifecycle: str = ""
 
 
 @dataclass(frozen=True)
@@ -190,6 +192,8 @@ class Plan:
         for node, spec in self.nodes.items():
             if spec.run not in SYSTEM_NODES.values() and not self.in_hardware(node) and not self.speaks_ros1(node):
                 servers.update({s: (node, t) for s, t in parameter_services(self.full_name(node)).items()})
+                if spec.lifecycle:  # a managed node's lifecycle services too
+                    servers.update({s: (node, t) for s, t in lifecycle_services(self.full_name(node)).items()})
         return servers
 
     def process_of(self, node: str) -> str:
@@ -362,6 +366,21 @@ PARAMETER_SERVICES = {"describe_parameters": "rcl_interfaces/srv/DescribeParamet
                       "list_parameters": "rcl_interfaces/srv/ListParameters",
                       "set_parameters": "rcl_interfaces/srv/SetParameters",
                       "set_parameters_atomically": "rcl_interfaces/srv/SetParametersAtomically"}
+
+
+# the services and the topic through which ``ros2 lifecycle``, launch and other nodes drive a managed node,
+# each under its full name (``/lc_talker/change_state``)
+LIFECYCLE_SERVICES = {"change_state": "lifecycle_msgs/srv/ChangeState",
+                      "get_state": "lifecycle_msgs/srv/GetState",
+                      "get_available_states": "lifecycle_msgs/srv/GetAvailableStates",
+                      "get_available_transitions": "lifecycle_msgs/srv/GetAvailableTransitions",
+                      "get_transition_graph": "lifecycle_msgs/srv/GetAvailableTransitions"}
+LIFECYCLE_EVENTS = ("transition_event", "lifecycle_msgs/msg/TransitionEvent")
+
+
+def lifecycle_services(full_name: str) -> dict[str, str]:
+    """The lifecycle services of the managed node called ``full_name``: service -> type."""
+    return {f"{full_name}/{service}": typename for service, typename in LIFECYCLE_SERVICES.items()}
 
 
 def full_node_name(key: str, namespace: str = "", ros_name: str = "") -> str:

@@ -206,6 +206,8 @@ def gather_endpoints(c: CheckContext) -> None:
         for service, typename in c.project.parameter_services_called(nname).items():
             if service not in spec.services:
                 c.servers.setdefault(service, []).append((nname, typename))
+        for topic, typename in c.project.lifecycle_events_heard(nname).items():
+            c.publishers.setdefault(topic, []).append((nname, typename))
 
 
 def code_runs(c: CheckContext) -> None:

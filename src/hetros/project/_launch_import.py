@@ -14,9 +14,12 @@ file, a composable container, ...) is refused naming file:line.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shlex
+import subprocess
+import sys
 import xml.parsers.expat
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -96,6 +99,29 @@ def _yaml_tree(path: Path) -> _Element:
 
 
 @dataclass
+class NodeRequest:
+    """One node a launch file starts, in whichever form it wrote it, before its code is found."""
+
+    where: str
+    package: str
+    executable: str
+    name: str = ""
+    namespace: str = ""
+    remap: dict[str, str] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    env: dict[str, str] = field(default_factory=dict)
+    args: list[str] = field(default_factory=list)
+    required: bool = False
+    respawn: bool = False
+    lifecycle: str | None = None  # a managed node's state once the launch has started it
+    target: str | None = None  # a component's container (else a process of its own)
+
+    @property
+    def full_name(self) -> str:
+        return f"{self.namespace.rstrip('/')}/{self.name}"
+
+
+@dataclass
 class _Scope:
     namespace: str = ""
     remap: dict[str, str] = field(default_factory=dict)
@@ -127,16 +153,20 @@ class LaunchImporter:
 
     def find_package(self, name: str, where: str) -> list[Path]:
         """The folders holding package ``name`` (its package.xml), nearest the search paths first."""
+        packages = self._package_index()
+        if name not in packages:
+            searched = ", ".join(str(p) for p in self.package_paths)
+            raise ProjectError(f"{where}: package {name!r} not found under {searched}; pass its folder's parent "
+                               "with --package-path")
+        return packages[name]
+
+    def _package_index(self) -> dict[str, list[Path]]:
         if self._packages is None:
             self._packages = {}
             for folder in self.package_paths:
                 for xml in sorted(folder.rglob("package.xml"), key=lambda x: (len(x.parts), x)):
                     self._packages.setdefault(package_name(xml.parent), []).append(xml.parent)
-        if name not in self._packages:
-            searched = ", ".join(str(p) for p in self.package_paths)
-            raise ProjectError(f"{where}: package {name!r} not found under {searched}; pass its folder's parent "
-                               "with --package-path")
-        return self._packages[name]
+        return self._packages
 
     # -- substitutions -----------------------------------------------------------------------
 
@@ -198,8 +228,11 @@ class LaunchImporter:
 
     def read(self, path: Path, scope: _Scope) -> None:
         if path.suffix == ".py":
-            raise ProjectError(f"{path}:1: a Python launch file runs code to make its graph; hetros imports XML "
-                               "and YAML launch files (write it as .launch.xml or .launch.yaml)")
+            if not self.ros2:
+                raise ProjectError(f"{path}:1: a Python launch file is ROS 2's; import it with `hetros import "
+                                   "ros2launch`")
+            self._python(path, scope)
+            return
         tree = _yaml_tree(path) if path.suffix in (".yaml", ".yml") else _parse_xml(path)
         self._actions(tree.children, scope, path)
 
@@ -280,8 +313,6 @@ class LaunchImporter:
             if refused in element.attributes:
                 raise ProjectError(f"{where}: <node {refused}=...> has no counterpart; a hetros node's process is "
                                    "its target (map it with targets: and hosts:)")
-        package = self.attribute(element, "pkg", scope, path)
-        executable = self.attribute(element, "exec" if self.ros2 else "type", scope, path)
         namespace = join_namespace(scope.namespace, self.attribute(element, "namespace" if self.ros2 else "ns", scope,
                                                                  path, ""))
         remap = dict(scope.remap)
@@ -297,39 +328,208 @@ class LaunchImporter:
             else:
                 raise ProjectError(f"{path}:{child.line}: <node> holds <remap>, <param>, <rosparam> and <env>, not "
                                    f"<{child.tag}>")
-        found = self._code(package, self.find_package(package, where), executable, where, params)
-        key_name = self.attribute(element, "name", scope, path, "") or found.key
+        self.add_node(NodeRequest(
+            where=where, package=self.attribute(element, "pkg", scope, path),
+            executable=self.attribute(element, "exec" if self.ros2 else "type", scope, path),
+            name=self.attribute(element, "name", scope, path, ""), namespace=namespace, remap=remap, params=params,
+            env=env, args=shlex.split(self.attribute(element, "args", scope, path, "")),
+            required=self.attribute(element, "required", scope, path, "false").lower() == "true",
+            respawn=self.attribute(element, "respawn", scope, path, "false").lower() == "true"))
+
+    def add_node(self, request: NodeRequest) -> str:
+        """One node of the launch (any of its forms) into the project: its code found in its package, its
+        command line's ROS arguments applied as ROS applies them; its key."""
+        args = self._ros_arguments(request)
+        found = self._code(request.package, self.find_package(request.package, request.where), request.executable,
+                           request.where, request.params)
+        code_name = found.ros_names[0] if len(set(found.ros_names)) == 1 else ""
+        key_name = request.name or code_name or found.key
         key = unique_key(key_name, self.project["nodes"])
-        node: dict[str, Any] = {"run": found.run, "target": key}
+        target = request.target or key
+        node: dict[str, Any] = {"run": found.run, "target": target}
+        namespace = request.namespace
         if namespace:
             node["namespace"] = namespace
-        if key_name != key or (found.ros_names and found.ros_names[0] != key_name):
-            node["name"] = key_name
+        # the launch's name stands over the code's; without one the node keeps its code's, as in ROS
+        if request.name and (request.name != key or code_name != request.name):
+            node["name"] = request.name
+        elif not request.name and code_name and code_name != key:
+            node["name"] = code_name
         for section, endpoints in found.endpoints.items():
             if endpoints:
                 node[section] = dict(endpoints)
-        if remap:
-            node["remap"] = remap
-        if params:
-            node["parameters"] = params
-        if env:
-            node["env"] = env
-        arguments = self.attribute(element, "args", scope, path, "")
-        if arguments:
-            node["args"] = shlex.split(arguments)
-        if self.attribute(element, "required", scope, path, "false").lower() == "true":
+        for option, value in (("remap", request.remap), ("parameters", request.params), ("env", request.env),
+                              ("args", args)):
+            if value:
+                node[option] = value
+        if request.required:
             node["required"] = True
-        if self.attribute(element, "respawn", scope, path, "false").lower() == "true":
+        if request.respawn:
             node["restart"] = "on-failure"
+        if request.lifecycle is not None or found.managed:
+            node["lifecycle"] = request.lifecycle or "unconfigured"
         self.project["nodes"][key] = node
-        self.project["targets"][key] = {"kind": "process"}
+        self.project["targets"].setdefault(target, {"kind": "process"})
         resolved = {resolve_name(k, namespace, key_name): resolve_name(v, namespace, key_name)
-                    for k, v in remap.items()}
+                    for k, v in request.remap.items()}
         topics = self.project.setdefault("topics", {})
         for topic, qos in found.qos.items():
             if not topic.startswith(("?", "~")):
                 topics.setdefault(resolve_name(topic, namespace, key_name, resolved), qos)
         self.notes += [note.replace("{node}", key) for note in found.notes]
+        return key
+
+    def _ros_arguments(self, request: NodeRequest) -> list[str]:
+        """``request.args`` less what ROS reads from a node's command line, applied to the request: ROS 1's
+        ``from:=to`` remaps, ``_param:=value``, ``__name:=`` and ``__ns:=``; ROS 2's ``--ros-args`` section
+        (``-r``/``--remap``, ``-p``/``--param``, ``--params-file``, and the same ``__node:=``/``__ns:=``)."""
+        kept: list[str] = []
+        words = iter(request.args)
+        inside = False
+        for word in words:
+            if self.ros2 and word == "--ros-args":
+                inside = True
+            elif inside and word == "--":
+                inside = False
+            elif inside and word in ("-r", "--remap", "-p", "--param", "--params-file", "-e", "--enclave",
+                                     "--log-level", "--log-config-file"):
+                value = next(words, None)
+                if value is None:
+                    raise ProjectError(f"{request.where}: {word} needs a value in the node's --ros-args")
+                if word in ("-r", "--remap"):
+                    self._name_assignment(value, request, remap_only=True)
+                elif word in ("-p", "--param"):
+                    name, _, text = value.partition(":=")
+                    request.params[name] = yaml.safe_load(text) if text else text
+                elif word == "--params-file":
+                    request.params.update(ros2_parameter_file(Path(value), request.full_name, request.where))
+            elif inside:
+                continue  # the flags ROS reads without a value (--disable-rosout-logs, ...)
+            elif ":=" in word and (not self.ros2 or word.startswith("__")):
+                self._name_assignment(word, request, remap_only=False)
+            else:
+                kept.append(word)
+        return kept
+
+    def _name_assignment(self, word: str, request: NodeRequest, remap_only: bool) -> None:
+        name, _, value = word.partition(":=")
+        if ":" in name and not name.startswith("/"):
+            name = name.split(":", 1)[1]  # ROS 2's node-qualified remap (talker:chatter:=x) names this node
+        if name in ("__node", "__name") and not remap_only:
+            request.name = value
+        elif name == "__ns" and not remap_only:
+            request.namespace = join_namespace("", value)
+        elif name.startswith("_") and not name.startswith("__") and not self.ros2 and not remap_only:
+            request.params[name[1:]] = yaml.safe_load(value) if value else value
+        elif name.startswith("__"):
+            raise ProjectError(f"{request.where}: the argument {word!r} has no counterpart in hetros")
+        else:
+            request.remap[name] = value
+
+    # -- Python launch files ------------------------------------------------------------------
+
+    def _python(self, path: Path, scope: _Scope) -> None:
+        """The file's ``generate_launch_description()`` run in an interpreter of its own against hetros's
+        ``launch`` and ``launch_ros`` (:mod:`hetros.compat.launch_eval`), and what it records read here."""
+        packages = {name: str(folders[0]) for name, folders in self._package_index().items()}
+        request = {"file": str(path.resolve()), "args": scope.args, "packages": packages, "namespace": scope.namespace,
+                   "remap": list(scope.remap.items()), "params": list(scope.params.items())}
+        try:
+            done = subprocess.run([sys.executable, "-m", "hetros.compat.launch_eval"], input=json.dumps(request),
+                                  capture_output=True, text=True, timeout=_PYTHON_LAUNCH_SECONDS, check=False,
+                                  cwd=path.parent)
+        except subprocess.TimeoutExpired:
+            raise ProjectError(f"{path}:1: generate_launch_description() did not return within "
+                               f"{_PYTHON_LAUNCH_SECONDS} s") from None
+        marker = done.stdout.rfind(_MARKER)
+        if marker < 0:
+            last = (done.stderr.strip().splitlines() or ["(no output)"])[-1]
+            raise ProjectError(f"{path}:1: the launch file could not be read: {last}")
+        answer = json.loads(done.stdout[marker + len(_MARKER):])
+        if "error" in answer:
+            raise ProjectError(answer["error"])
+        self._records(answer["records"], scope)
+
+    def _records(self, records: list[dict[str, Any]], scope: _Scope) -> None:
+        keys: dict[int, str] = {}
+        transitions: dict[int, list[tuple[str, int]]] = {}
+        for record in records:
+            kind, where = record["kind"], record["where"]
+            if kind in ("node", "process"):
+                request = self._python_node(record)
+                if request is None:
+                    continue
+                keys[record["id"]] = self.add_node(request)
+            elif kind == "container":
+                self.notes.append(f"{where}: container {record['name']}: its components are refused or started "
+                                  "as listed; the container process itself is not started")
+            elif kind == "component":
+                self._component(record)
+            elif kind == "include":
+                inner = _Scope(record["namespace"], dict(map(tuple, record["remap"])), dict(record["env"]),
+                               dict(record["args"]), self._merged(record["params"], "", where))
+                file = Path(record["file"])
+                if not file.is_file():
+                    raise ProjectError(f"{where}: included launch file {file} does not exist")
+                self.read(file, inner)
+            elif kind == "required":
+                self.project["nodes"][self._key_of(keys, record)]["required"] = True
+            elif kind == "transition":
+                transitions.setdefault(record["id"], []).append((where, record["transition"]))
+            elif kind in ("note", "log"):
+                self.notes.append(f"{where}: {record['text']}" if kind == "note" else f"launch says: {record['text']}")
+        for node_id, steps in transitions.items():
+            key = self._key_of(keys, {"id": node_id, "where": steps[0][0]})
+            node = self.project["nodes"][key]
+            state = node.get("lifecycle", "unconfigured")
+            for where, transition in steps:
+                state = lifecycle_state_after(state, transition, f"{where}: node {key}")
+            node["lifecycle"] = state
+
+    def _key_of(self, keys: dict[int, str], record: dict[str, Any]) -> str:
+        if record["id"] not in keys:
+            raise ProjectError(f"{record['where']}: the event names an action that starts no node of this launch")
+        return keys[record["id"]]
+
+    def _python_node(self, record: dict[str, Any]) -> NodeRequest | None:
+        where = record["where"]
+        if record["kind"] == "process" and record["package"] is None:
+            program = record["args"][0] if record["args"] else "?"
+            raise ProjectError(f"{where}: ExecuteProcess of {program!r}: hetros runs a package's own executables "
+                               "(ExecutableInPackage, or `ros2 run PACKAGE EXECUTABLE`), not other programs; run "
+                               f"{Path(program).name} beside the launch")
+        name = record.get("name") or ""
+        request = NodeRequest(where=where, package=record["package"], executable=record["executable"], name=name,
+                              namespace=join_namespace("", record.get("namespace") or ""),
+                              env=record.get("env", {}), args=[*record.get("args", [])],
+                              respawn=bool(record.get("respawn")))
+        if record["kind"] == "node":
+            if record.get("ros_args"):
+                request.args += ["--ros-args", *record["ros_args"]]
+            request.remap = dict(map(tuple, record["remap"]))
+            request.lifecycle = ("active" if record.get("autostart") else "unconfigured") \
+                if record.get("lifecycle") else None
+            request.params = self._merged(record["parameters"], request.full_name if name else "", where)
+        return request
+
+    def _component(self, record: dict[str, Any]) -> None:
+        """A component of a container: ROS 2's components are C++ plugins (rclcpp_components); rclpy has
+        none, so the launch is refused at the component's line with the form hetros runs."""
+        raise ProjectError(f"{record['where']}: ComposableNode(plugin={record['plugin']!r}) is a C++ component, "
+                           "which hetros cannot load; start its Python counterpart as launch_ros.actions.Node (the "
+                           "nodes of one process target of the project run as threads of one process)")
+
+    def _merged(self, entries: list[Any], full_name: str, where: str) -> dict[str, Any]:
+        """A node's parameters from launch_ros's entries, in order: values, and files' values for this node."""
+        merged: dict[str, Any] = {}
+        for entry in entries:
+            if isinstance(entry, (list, tuple)):  # (name, value) pairs of SetParameter, or ({"file": f}, None)
+                entry = entry[0] if isinstance(entry[0], dict) else {"values": {entry[0]: entry[1]}}
+            if "values" in entry:
+                merged.update(entry["values"])
+            else:
+                merged.update(ros2_parameter_file(Path(entry["file"]), full_name, where))
+        return merged
 
     # -- helpers -----------------------------------------------------------------------------
 
@@ -392,11 +592,72 @@ class LaunchImporter:
         return {name.lstrip("/~"): value}
 
 
+_PYTHON_LAUNCH_SECONDS = 60
+_MARKER = "\n@@hetros-launch@@"  # hetros.compat.launch_eval's: that module is not imported here
+
+# lifecycle_msgs/Transition ids -> (the state each starts from, the state it ends in)
+_TRANSITIONS = {1: ("unconfigured", "inactive"), 2: ("inactive", "unconfigured"), 3: ("inactive", "active"),
+                4: ("active", "inactive"), 5: ("unconfigured", "finalized"), 6: ("inactive", "finalized"),
+                7: ("active", "finalized")}
+
+
+def lifecycle_state_after(state: str, transition: int, where: str) -> str:
+    """The state a managed node is in after ``transition`` from ``state``, as the launch asks it."""
+    if transition not in _TRANSITIONS:
+        raise ProjectError(f"{where}: transition {transition} is not one a launch asks (1 configure, 2 cleanup, "
+                           "3 activate, 4 deactivate, 5-7 shutdown)")
+    start, end = _TRANSITIONS[transition]
+    if start != state:
+        raise ProjectError(f"{where}: transition {transition} starts from {start}, but the node is {state} then")
+    return end
+
+
+def ros2_parameter_file(path: Path, full_name: str, where: str) -> dict[str, Any]:
+    """What a ROS 2 parameter file gives the node ``full_name`` (``/ns/name``; empty: every entry): the
+    entries under ``/**``, under its name or full name (``*`` matching within a name), in the file's order."""
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise ProjectError(f"{where}: cannot read parameter file {path}: {exc}") from None
+    if not isinstance(data, dict):
+        raise ProjectError(f"{where}: parameter file {path} must map node names to {{ros__parameters: ...}}")
+    values: dict[str, Any] = {}
+    for pattern, entry in data.items():
+        if not isinstance(entry, dict) or not isinstance(entry.get("ros__parameters"), dict):
+            raise ProjectError(f"{path}: {pattern}: a node's entry holds ros__parameters:, a mapping")
+        if not full_name or _node_matches(str(pattern), full_name):
+            values.update(flatten(entry["ros__parameters"]))
+    return values
+
+
+def _node_matches(pattern: str, full_name: str) -> bool:
+    if pattern in ("/**", "**"):
+        return True
+    if not pattern.startswith("/"):
+        pattern = "/**/" + pattern if "/" not in pattern else "/" + pattern
+    expression = re.escape(pattern).replace(r"/\*\*", "(/[^/]+)*").replace(r"\*", "[^/]*")
+    return re.fullmatch(expression, full_name) is not None
+
+
+def package_search_path(launch_file: Path) -> list[Path]:
+    """Where a launch file's packages are looked for besides ``--package-path``: ``$HETROS_PACKAGE_PATH``
+    (folders, as ROS's prefix paths), the launch file's folder, and the folder holding the package the
+    launch file belongs to (``pkg/launch/x_launch.py``: beside ``pkg``)."""
+    found = [Path(p) for p in os.environ.get("HETROS_PACKAGE_PATH", "").split(os.pathsep) if p]
+    folder = launch_file.resolve().parent
+    found.append(folder)
+    for above in folder.parents:
+        if (above / "package.xml").is_file():
+            found.append(above.parent)
+            break
+    return found
+
+
 def import_launch(path: Path, ros2: bool, package_paths: list[Path], base: Path,
                   args: dict[str, str] | None = None) -> tuple[dict[str, Any], list[str]]:
     """The project a ROS 1 (``ros2=False``) or ROS 2 launch file describes, and notes on what the scan of
     its nodes' code could not follow."""
-    importer = LaunchImporter(ros2, [*package_paths, path.parent.resolve()], base)
+    importer = LaunchImporter(ros2, [*package_paths, *package_search_path(path)], base)
     importer.read(path, _Scope(args=dict(args or {})))
     importer.share_global_params()
     importer.project = {**code_folders(base, importer.imported_from, importer.used_packages), **importer.project}

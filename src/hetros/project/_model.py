@@ -14,7 +14,15 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 from .._errors import MessageError, ProjectError
 from .._qos import QoS
 from ..msg import normalize_typename
-from ..plan import ACTION_PREFIX, LAUNCHER, action_endpoints, full_node_name, parameter_services
+from ..plan import (
+    ACTION_PREFIX,
+    LAUNCHER,
+    LIFECYCLE_EVENTS,
+    action_endpoints,
+    full_node_name,
+    lifecycle_services,
+    parameter_services,
+)
 from ._expand import declared_args, expand, substitute
 from ._names import plain_name_problem
 
@@ -141,6 +149,9 @@ class NodeSpec(_Strict):
     restart: Literal["never", "on-failure"] = Field(default="never", description="on-failure: a node that raised "
                                                    "starts again, its subscriptions kept")
     required: bool = Field(default=False, description="when this node returns, the whole launch ends")
+    lifecycle: Literal["unconfigured", "inactive", "active"] | None = Field(
+        default=None, description="a managed node (rclpy.lifecycle): the state the launch brings it to before the "
+        "graph runs, as launch_ros's transitions do (absent: it stays where its code puts it)")
     max_restarts: int = Field(default=3, ge=0, description="restarts after which a failing node stays failed")
     namespace: str = Field(default="", description="the node's namespace: relative endpoint names (chatter, "
                            "~/x) resolve under it, as in ROS; a relative namespace nests in its group's or "
@@ -456,16 +467,28 @@ class LoadedProject:
             target = self.model.targets.get(spec.target)
             if target is not None and target.kind in ("fpga", "ros1"):
                 continue
-            for service, typename in parameter_services(full_node_name(key, spec.namespace, spec.name or "")).items():
+            full = full_node_name(key, spec.namespace, spec.name or "")
+            offered = parameter_services(full) | (lifecycle_services(full) if spec.lifecycle is not None else {})
+            for service, typename in offered.items():
                 if service in called:
                     found.setdefault(key, {})[service] = typename
         return found
 
     def parameter_services_called(self, node: str) -> dict[str, str]:
-        """The parameter services of ``node`` some node of the project calls (an rclpy
-        ``AsyncParameterClient``): the node serves them on the graph's transports. Every node answers
-        the command line's parameter requests whatever the project says."""
+        """The parameter services of ``node`` (and a managed node's lifecycle services) some node of the
+        project calls (an rclpy ``AsyncParameterClient``, a lifecycle manager): the node serves them on the
+        graph's transports. Every node answers the command line's requests whatever the project says."""
         return dict(self._parameter_services_called.get(node, {}))
+
+    def lifecycle_events_heard(self, node: str) -> dict[str, str]:
+        """A managed node's ``transition_event`` topic when some node of the project subscribes to it: the
+        node publishes it on the graph's transports."""
+        spec = self.model.nodes[node]
+        if spec.lifecycle is None:
+            return {}
+        topic = f"{full_node_name(node, spec.namespace, spec.name or '')}/{LIFECYCLE_EVENTS[0]}"
+        heard = any(topic in other.subscribe for other in self.model.nodes.values())
+        return {topic: LIFECYCLE_EVENTS[1]} if heard and topic not in spec.publish else {}
 
     def where(self, *yaml_path: str | int) -> str:
         """``file:line: a.b.c`` for a YAML path (the line of the nearest known ancestor)."""

@@ -114,7 +114,7 @@ _Endpoints = tuple[str, dict[str, str], dict[str, str], dict[str, str], dict[str
 
 def _endpoints(project: LoadedProject, bridges: list[NodePlan], speaks_ros1: set[str]) -> list[_Endpoints]:
     """Every hetros node's endpoints, the bridges' too (ROS 1 nodes' endpoints are ROS 1's, not channels)."""
-    found = [(n, spec.types("publish"), spec.types("subscribe"),
+    found = [(n, spec.types("publish") | project.lifecycle_events_heard(n), spec.types("subscribe"),
               spec.types("services") | project.parameter_services_called(n), spec.types("clients"))
              for n, spec in project.model.nodes.items() if n not in speaks_ros1]
     return found + [(b.name, b.publish, b.subscribe, b.services, b.clients) for b in bridges]
@@ -190,14 +190,15 @@ def _target_plan(name: str, target: TargetSpec, host: str, framed: tuple[tuple[s
 def _node_plan(project: LoadedProject, name: str, spec: NodeSpec) -> NodePlan:
     return NodePlan(
         name=name, run=spec.run, target=spec.target, parameters=dict(spec.parameters), restart=spec.restart,
-        max_restarts=spec.max_restarts, required=spec.required, publish=spec.types("publish"),
+        max_restarts=spec.max_restarts, required=spec.required,
+        publish=spec.types("publish") | project.lifecycle_events_heard(name),
         subscribe=spec.types("subscribe"), services=spec.types("services") | project.parameter_services_called(name),
         clients=spec.types("clients"),
         actions={a: normalize_typename(t, "action") for a, t in spec.types("actions").items()},
         action_clients={a: normalize_typename(t, "action") for a, t in spec.types("action_clients").items()},
         max_goals=spec.max_goals(), hw=spec.hw or "", args=tuple(spec.args), namespace=spec.namespace,
         remap=dict(spec.remap), ros_name=spec.name or "", env=dict(spec.env), root=project.node_roots.get(name, ""),
-        memory=tuple(spec.memory))
+        memory=tuple(spec.memory), lifecycle=spec.lifecycle or "")
 
 
 def _gateway_plan(channels: dict[str, ChannelPlan], gateway: str, target: str) -> NodePlan:

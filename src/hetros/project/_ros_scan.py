@@ -25,7 +25,8 @@ from ..plan import PARAMETER_SERVICES
 # placeholders start with this: not a ROS name, so the checks refuse them with their own message
 PLACEHOLDER = "?"
 
-_RCLPY_CALLS = {"create_publisher": ("publish", 0, 1, 2), "create_subscription": ("subscribe", 0, 1, 3),
+_RCLPY_CALLS = {"create_publisher": ("publish", 0, 1, 2), "create_lifecycle_publisher": ("publish", 0, 1, 2),
+                "create_subscription": ("subscribe", 0, 1, 3),
                 "create_service": ("services", 0, 1, None), "create_client": ("clients", 0, 1, None)}
 # call -> (section, index of the type, index of the name): rclpy.action's classes take the node first
 _ACTION_CALLS = {"ActionServer": ("actions", 1, 2), "ActionClient": ("action_clients", 1, 2)}
@@ -50,6 +51,7 @@ class RosNode:
     endpoints: dict[str, dict[str, str]] = field(default_factory=dict)
     qos: dict[str, dict[str, Any]] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    managed: bool = False  # a managed node (an rclpy.lifecycle Node): it starts unconfigured
 
 
 def entry_points(package: Path) -> dict[str, str]:
@@ -161,6 +163,15 @@ class _Reader:
         self.classes = {s.name: s for s in self.tree.body if isinstance(s, ast.ClassDef)}
         self.functions = {s.name: s for s in self.tree.body if isinstance(s, ast.FunctionDef | ast.AsyncFunctionDef)}
 
+    def _lifecycle_base(self, base: ast.expr) -> bool:
+        """Whether a class base is rclpy's managed node (``rclpy.lifecycle.Node``, ``LifecycleNode``)."""
+        text = ast.unparse(base)
+        if text in ("LifecycleNode", "lifecycle.Node", "rclpy.lifecycle.Node", "rclpy.lifecycle.LifecycleNode"):
+            return True
+        return text == "Node" and any(isinstance(stmt, ast.ImportFrom) and stmt.module == "rclpy.lifecycle" and
+                                      any(a.name == "Node" and (a.asname or a.name) == "Node" for a in stmt.names)
+                                      for stmt in self.tree.body)
+
     def where(self, node: ast.AST) -> str:
         return f"{self.path.name}:{getattr(node, 'lineno', 0)}"
 
@@ -172,6 +183,9 @@ class _Reader:
             return f"{starred[0]}/{expr.id}"  # from pkg.srv import *
         if isinstance(expr, ast.Attribute) and isinstance(expr.value, ast.Name):
             return f"{expr.value.id}/{expr.attr}"
+        dotted = ast.unparse(expr).split(".")
+        if len(dotted) == 3 and dotted[1] == kind:  # import std_msgs.msg ... std_msgs.msg.String
+            return "/".join(dotted)
         return f"{PLACEHOLDER}type of {ast.unparse(expr)} at {self.where(expr)}"
 
     def collect(self, scope: ast.AST, node: RosNode, seen: set[str], bound: dict[str, str] | None = None) -> None:
@@ -182,6 +196,7 @@ class _Reader:
         names = {**self.constants, **(bound or {})}
         if isinstance(scope, ast.ClassDef):
             names |= _attributes(scope, names)
+            node.managed |= any(self._lifecycle_base(base) for base in scope.bases)
         for call in ast.walk(scope):
             if not isinstance(call, ast.Call):
                 continue
@@ -520,13 +535,7 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
         # another main makes too, after its entry point (the console script's name), as `ros2 run` knows it
         key = unique_key(ros_name if ros_name and named.count(ros_name) == 1 else node.key, project["nodes"])
         project["targets"][key] = {"kind": "process"}
-        entry: dict[str, Any] = {"run": node.run, "target": key}
-        if ros_name and ros_name != key:
-            entry["name"] = ros_name
-        for section in ("publish", "subscribe", "services", "clients", "actions", "action_clients"):
-            if node.endpoints.get(section):
-                entry[section] = dict(node.endpoints[section])
-        project["nodes"][key] = entry
+        project["nodes"][key] = _template_entry(node, key, ros_name)
         for topic, qos in node.qos.items():
             if not topic.startswith((PLACEHOLDER, "~")):
                 project["topics"].setdefault(topic if topic.startswith("/") else f"/{topic}", qos)
@@ -534,6 +543,19 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     if not project["topics"]:
         del project["topics"]
     return project, notes
+
+
+def _template_entry(node: RosNode, key: str, ros_name: str) -> dict[str, Any]:
+    """A found node as ``hetros init`` writes it under ``nodes:``."""
+    entry: dict[str, Any] = {"run": node.run, "target": key}
+    if ros_name and ros_name != key:
+        entry["name"] = ros_name
+    for section in ("publish", "subscribe", "services", "clients", "actions", "action_clients"):
+        if node.endpoints.get(section):
+            entry[section] = dict(node.endpoints[section])
+    if node.managed:
+        entry["lifecycle"] = "unconfigured"
+    return entry
 
 
 def _runs_as_script(tree: ast.Module) -> bool:

@@ -35,6 +35,7 @@ if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle, uuid_message
     from ._clock import Ticker
     from ._executor import AdaptiveSpin, yield_to_callbacks
+    from ._lifecycle import LIFECYCLE_LABELS, Lifecycle
     from ._log import RCLPY_CONSOLE, ROSPY_CONSOLE, log_to_file, node_logger, stop_logging_to
     from ._ros_main import bound_node, mark_shut_down, ros_main, shut_down
     from ._taps import TapSink, check_rate, header_stamp
@@ -46,6 +47,8 @@ _LAZY = {
     "ActionServer": "._action",
     "ClientGoalHandle": "._action",
     "GoalStatus": "._action",
+    "Lifecycle": "._lifecycle",
+    "LIFECYCLE_LABELS": "._lifecycle",
     "ServerGoalHandle": "._action",
     "AdaptiveSpin": "._executor",
     "yield_to_callbacks": "._executor",
@@ -70,6 +73,7 @@ __getattr__ = lazy_exports(__name__, _LAZY)
 
 
 __all__ = [
+    "LIFECYCLE_LABELS",
     "NODE_TIMES_VARIABLE",
     "PROFILE_VARIABLE",
     "RCLPY_CONSOLE",
@@ -87,6 +91,7 @@ __all__ = [
     "HandlingStats",
     "Host",
     "IncompatibleQosStatus",
+    "Lifecycle",
     "LivelinessChangedStatus",
     "LivelinessLostStatus",
     "MatchedStatus",

@@ -48,6 +48,7 @@ from ._qos_events import (
 if TYPE_CHECKING:
     from ..transport import Reader
     from ._action import ActionClient, ActionServer, ServerGoalHandle
+    from ._lifecycle import Lifecycle, TransitionCallback
 
 M = TypeVar("M", bound=Message)
 # set (to 1) in the launcher's environment by `hetros launch --node-times`; workers inherit it
@@ -96,6 +97,8 @@ class Node:
         self.action_clients: dict[str, ActionClient] = {}
         # what the node's own figures are for ``hetros top`` (a gateway's cycles per message), when it has any
         self.figures: Callable[[], dict[str, Any]] | None = None
+        # a managed node's state machine, once its code made it one (``create_lifecycle``, rclpy.lifecycle)
+        self.lifecycle: Lifecycle | None = None
         planned_services = planned.services if (planned := self._planned()) is not None else {}
         for service, (srv_type, handler) in self.parameter_services.items():
             if service in planned_services:
@@ -422,6 +425,34 @@ class Node:
             full_name = plan.full_name(self.name) if plan is not None and planned else f"/{self.name}"
             self._parameter_services = ParameterServices(self, full_name)
         return dict(self._parameter_services.handlers)
+
+    def create_lifecycle(self, on_configure: Callable[[], bool | None] | None = None,
+                         on_activate: Callable[[], bool | None] | None = None,
+                         on_deactivate: Callable[[], bool | None] | None = None,
+                         on_cleanup: Callable[[], bool | None] | None = None,
+                         on_shutdown: Callable[[], bool | None] | None = None,
+                         on_error: Callable[[], bool | None] | None = None) -> Lifecycle:
+        """Make this a managed node (ROS 2's lifecycle): each callback runs in its transition, and may
+        refuse it by returning False (raising is the transition's error). ``lifecycle.state`` tells where
+        the node is; ``hetros lifecycle set`` and the project's ``lifecycle:`` move it."""
+        from ._lifecycle import from_functions
+
+        run = from_functions(on_configure=on_configure, on_activate=on_activate, on_deactivate=on_deactivate,
+                             on_cleanup=on_cleanup, on_shutdown=on_shutdown, on_error=on_error)
+        return self.manage(run)
+
+    def manage(self, callback: TransitionCallback, full_name: str = "") -> Lifecycle:
+        """The state machine of this managed node, made once; ``callback(state, started_from)`` runs in each
+        transition state and returns SUCCESS, FAILURE or ERROR (rclpy.lifecycle's nodes use this)."""
+        if self.lifecycle is not None:
+            raise NodeError(f"node {self.name!r} is a managed node already; make one lifecycle per node")
+        from ._lifecycle import Lifecycle
+
+        plan = self.graph.plan
+        name = full_name or (plan.full_name(self.name) if plan is not None and self.name in plan.nodes
+                             else f"/{self.name}")
+        self.lifecycle = Lifecycle(self, name, callback)
+        return self.lifecycle
 
     def entities(self) -> list[Any]:
         """The node's publishers, subscriptions, services, clients and actions, as created."""

@@ -276,6 +276,8 @@ class ControlServer:
         for node in nodes:
             if (found := node.parameter_services.get(name)) is not None:
                 return node, *found, not isinstance(node.parameter_access, ProjectParameters)
+            if node.lifecycle is not None and (found := node.lifecycle.services.get(name)) is not None:
+                return node, *found, True  # transitions run the node's callbacks: in its executor
         raise InspectError(f"no server of {name} runs in {self.process} (yet)")
 
     def _op_call(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:

@@ -1,0 +1,8 @@
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+
+
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument("mode", default_value="fast", choices=["slow", "normal"]),
+    ])

@@ -90,9 +90,16 @@ def test_talker_listener_across_processes(tmp_path: Path, env: dict[str, str]) -
         per_second, size = _last_figures(bandwidth, r"(\d+) B/s from \d+ messages\n\tMessage size mean: (\d+) B")
         assert per_second == pytest.approx(10.0 * size, rel=0.10)
         assert hetros(env, "node", "list").stdout == "/listener\n/listener2\n/talker\n"
+        parameter_services = "".join(f"    /talker/{name}: rcl_interfaces/srv/{kind}\n" for name, kind in (
+            ("describe_parameters", "DescribeParameters"), ("get_parameter_types", "GetParameterTypes"),
+            ("get_parameters", "GetParameters"), ("list_parameters", "ListParameters"),
+            ("set_parameters", "SetParameters"), ("set_parameters_atomically", "SetParametersAtomically")))
         assert hetros(env, "node", "info", "/talker").stdout == (
             "/talker\n  Subscribers:\n  Publishers:\n    /chatter: std_msgs/msg/String\n  Service Servers:\n"
-            "  Service Clients:\n  Action Servers:\n  Action Clients:\n")
+            f"{parameter_services}  Service Clients:\n  Action Servers:\n  Action Clients:\n")
+        assert hetros(env, "service", "type", "/talker/get_parameters").stdout == "rcl_interfaces/srv/GetParameters\n"
+        assert hetros(env, "service", "find", "rcl_interfaces/srv/SetParameters").stdout == \
+            "/listener/set_parameters\n/listener2/set_parameters\n/talker/set_parameters\n"
         assert hetros(env, "param", "get", "/talker", "hz").stdout == "Double value is: 10.0\n"
         assert hetros(env, "param", "set", "/talker", "hz", "12").stdout == "Set parameter successful\n"
         assert hetros(env, "param", "get", "/talker", "hz").stdout == "Double value is: 12.0\n"

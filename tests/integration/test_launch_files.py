@@ -93,12 +93,16 @@ def test_a_ros1_launch_file_imports_and_runs(tmp_path: Path) -> None:
     for node in nodes.values():
         assert node["namespace"] == "/demo" and node["remap"] == {"chatter": "talk"}
         assert node["target"] in project["targets"]
-    assert nodes["talker"]["parameters"] == {"greeting": "hello", "gains/p": 2, "rate": 10}
+    # a <rosparam> in the group is the parameter server's, under the group's namespace; the node's <param>
+    # is its private one
+    assert project["parameters"] == {"/demo/greeting": "hello", "/demo/gains/p": 2}
+    assert nodes["talker"]["parameters"] == {"rate": 10}
     assert nodes["talker"]["publish"] == {"chatter": "std_msgs/msg/String"}
     done = run(tmp_path, 2.5)
     assert done.returncode == 0, done.stderr
-    heard = re.findall(r"^\[INFO\] \[[\d.]+\]: /demo/listener_\d+_\d+I heard (hello world [\d.]+)$", done.stderr,
-                       re.MULTILINE)  # rospy's console form
+    # rospy's console form; the launch file's name stands over the code's anonymous one, as under roslaunch
+    heard = re.findall(r"^\[INFO\] \[[\d.]+\]: /demo/listenerI heard (hello world [\d.]+)$", done.stderr,
+                       re.MULTILINE)
     assert len(heard) >= 5, done.stderr
 
 

@@ -232,7 +232,8 @@ def test_rospy_tutorials_from_their_launch_files(tmp_path: Path) -> None:
     assert checked.returncode == 0, checked.stdout + checked.stderr
     done = _hetros("launch", str(tmp_path / "project.yaml"), "--duration", "2.5", cwd=tmp_path, timeout=90)
     assert done.returncode == 0, done.stderr
-    heard = re.findall(r"^/listener_header_\d+_\d+ (\d+) I just heard that hello world (\d+) at +([\d.]+)$",
+    # the launch file names the node: rospy's anonymous suffix gives way to it, as under roslaunch
+    heard = re.findall(r"^/listener_header (\d+) I just heard that hello world (\d+) at +([\d.]+)$",
                        done.stdout, re.MULTILINE)
     assert len(heard) >= 5, done.stdout
     assert [(int(seq), int(count)) for seq, count, _ in heard[:5]] == [(i + 1, i) for i in range(5)]
@@ -242,4 +243,22 @@ def test_rospy_tutorials_from_their_launch_files(tmp_path: Path) -> None:
                           "/foo/param_talker/topic_name is chatter", "/foo/default_param is default_value",
                           "gains are 1.0, 2.0, 3.0"], done.stderr
     assert "deleted /foo/to_delete parameter" in logged and logged.count("Hello World") >= 2, done.stderr
+    # the launch file's global <param> is the parameter server's /global_example, not the node's private one
+    assert "found global_example parameter under key: /global_example" in logged, done.stderr
+    params = yaml.safe_load((tmp_path / "params.yaml").read_text())
+    assert params["parameters"]["/global_example"] == "global value"
+    assert params["nodes"]["param_talker"]["parameters"] == {"topic_name": "chatter"}
     assert "Traceback" not in done.stderr, done.stderr  # the point cloud publisher ran until the end
+
+
+def test_rospy_tutorials_003_remaps_each_talker_as_its_launch_file_says(tmp_path: Path) -> None:
+    """listener_with_user_data.launch: `args="chatter:=chatterN"` remaps each talker, so the listener hears
+    only chatter2's (its chatter subscriptions hear nobody), as under ROS 1."""
+    launch = TUTORIALS / "rospy_tutorials" / "003_listener_with_user_data" / "listener_with_user_data.launch"
+    done = _hetros("launch", str(launch), "--package-path", str(TUTORIALS), "--duration", "3", cwd=tmp_path,
+                   timeout=90)
+    assert done.returncode == 0, done.stderr
+    heard = [line for line in done.stdout.splitlines() if "I heard" in line]
+    assert len(heard) >= 5, done.stdout
+    assert all(re.fullmatch(r"I heard \[hello world [\d.]+\] with userdata \[This is from chatter2\]", line)
+               for line in heard), done.stdout

@@ -193,7 +193,7 @@ def test_init_skips_tests_and_symlinks_and_adds_the_packages_own_interfaces(tmp_
     from hetros.project import ros_template
 
     package = tmp_path / "pkg"
-    shutil.copytree(TUTORIALS / "001_talker_listener", package / "scripts")
+    shutil.copytree(TUTORIALS / "001_talker_listener", package / "scripts", symlinks=True)
     (package / "package.xml").write_text("<package><name>pkg</name></package>\n")
     (package / "msg").mkdir()
     (package / "msg" / "Count.msg").write_text("int32 count\n")

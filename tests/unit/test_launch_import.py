@@ -51,13 +51,23 @@ def test_a_relative_package_path_finds_the_package_from_anywhere(tmp_path: Path,
     assert share.is_absolute() and (share / "package.xml").is_file()
 
 
-def test_ros1_params_in_groups_beside_a_node_reach_it_by_their_relative_names(tmp_path: Path) -> None:
-    """ROS 1's parameter server: /outer/inner/b and /outer/d, set in groups that hold no node, are read by
-    the node in /outer as inner/b and d; /elsewhere/e is not in its namespace."""
+def test_ros1_params_outside_nodes_are_the_parameter_servers(tmp_path: Path) -> None:
+    """ROS 1's parameter server: /outer/inner/b and /outer/d, set in groups that hold no node, are the
+    project's global parameters by their full names (the node in /outer reads them as inner/b and d, as
+    rospy resolves them); a node's own <param> is its private one."""
     launch = tmp_path / "t.launch"
     launch.write_text(
         '<launch>\n  <group ns="outer">\n    <node pkg="rospy_tutorials" type="talker.py" name="talker"/>\n'
         '    <group ns="inner"><param name="b" value="3"/></group>\n    <group><param name="d" value="5"/></group>\n'
         '  </group>\n  <group ns="elsewhere"><param name="e" value="6"/></group>\n</launch>\n')
     project, _ = import_launch(launch, False, [ROS1_PACKAGES], tmp_path)
-    assert project["nodes"]["talker"]["parameters"] == {"inner/b": 3, "d": 5}
+    assert project["parameters"] == {"/outer/inner/b": 3, "/outer/d": 5, "/elsewhere/e": 6}
+    assert "parameters" not in project["nodes"]["talker"]
+    launch.write_text('<launch>\n  <param name="/top" value="1"/>\n  <node pkg="rospy_tutorials" type="talker.py" '
+                      'name="talker" args="chatter:=speech _rate:=5 __ns:=/r2 extra">\n'
+                      '    <param name="private" value="2"/>\n  </node>\n</launch>\n')
+    project, _ = import_launch(launch, False, [ROS1_PACKAGES], tmp_path)
+    talker = project["nodes"]["talker"]
+    assert project["parameters"] == {"/top": 1}
+    assert talker["parameters"] == {"private": 2, "rate": 5}  # _rate:= is a private parameter
+    assert (talker["remap"], talker["namespace"], talker["args"]) == ({"chatter": "speech"}, "/r2", ["extra"])

@@ -112,7 +112,8 @@ def test_an_rclpy_nodes_parameter_services_follow_rclpys_rules(rclpy_node: tuple
     assert "cannot be unset" in results[3].reason
     assert seen == [["width"]] and strict.get_parameter("width").value == 320
     listed_ = _call(hetros, "list_parameters", _srv("ListParameters").Request())
-    assert list(listed_.result.names) == ["width"]  # rclpy's declared ones (the project's preset is not declared)
+    # rclpy's declared ones (the project's preset is not declared), use_sim_time first as on every ROS 2 node
+    assert list(listed_.result.names) == ["use_sim_time", "width"]
 
 
 def test_an_rclpy_node_that_allows_undeclared_ones_takes_and_undeclares_them(rclpy_node: tuple[Node, Any]) -> None:

@@ -85,9 +85,10 @@ def test_a_ros2_parameter_file_gives_a_node_its_own_entries(tmp_path: Path) -> N
                     "camera:\n  ros__parameters: {c: {d: 3}}\n"
                     "/other/camera:\n  ros__parameters: {e: 4}\n")
     assert ros2_parameter_file(file, "/robot/camera", "here") == {"a": 1, "b": 2, "c.d": 3}
+    assert ros2_parameter_file(file, "/other/camera", "here") == {"a": 1, "b": 1, "c.d": 3, "e": 4}
     assert ros2_parameter_file(file, "/camera", "here") == {"a": 1, "b": 1, "c.d": 3}
     file.write_text("camera: {not_parameters: 1}\n")
-    with pytest.raises(ProjectError, match="ros__parameters"):
+    with pytest.raises(ProjectError, match=r"^here: .*ros__parameters"):
         ros2_parameter_file(file, "/camera", "here")
 
 

@@ -300,7 +300,9 @@ def cmd_node_info(args: argparse.Namespace) -> int:
     print(ros_name(launch.plan, name))
     section("Subscribers", spec.subscribe)
     section("Publishers", spec.publish)
-    section("Service Servers", spec.services)
+    builtin = {service: typename for service, (node, typename) in launch.plan.parameter_servers().items()
+               if node == name}  # its parameter services (a managed node's lifecycle ones too), as ROS 2 lists
+    section("Service Servers", {**spec.services, **builtin})
     section("Service Clients", spec.clients)
     section("Action Servers", spec.actions)
     section("Action Clients", spec.action_clients)
@@ -311,6 +313,21 @@ def cmd_service_list(args: argparse.Namespace) -> int:
     launch = _launch(args)
     for name in launch.services():
         print(f"{name} [{launch.server_of(name)[1]}]" if args.show_types else name)
+    return 0
+
+
+def cmd_service_type(args: argparse.Namespace) -> int:
+    print(_launch(args).server_of(args.service)[1])
+    return 0
+
+
+def cmd_service_find(args: argparse.Namespace) -> int:
+    """ros2 service find: the services of one type (``pkg/srv/Type``, or ``pkg/Type``)."""
+    launch = _launch(args)
+    wanted = normalize_typename(args.type, "srv")
+    for name in launch.services():
+        if launch.server_of(name)[1] == wanted:
+            print(name)
     return 0
 
 
@@ -798,6 +815,12 @@ def add_commands(sub: Any) -> None:
         p.add_argument("-t", "--show-types", action="store_true")
         p.set_defaults(func=list_function)
         _request_parser(group, verb, word, description, request_function)
+    p = groups["service"].add_parser("type", help="a service's type")
+    p.add_argument("service")
+    p.set_defaults(func=cmd_service_type)
+    p = groups["service"].add_parser("find", help="the services of a type")
+    p.add_argument("type")
+    p.set_defaults(func=cmd_service_find)
     p = groups["action"].add_parser("info", help="an action's clients and servers")
     p.add_argument("action")
     p.add_argument("-t", "--show-types", action="store_true")

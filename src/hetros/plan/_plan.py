@@ -178,6 +178,8 @@ class Plan:
     foxglove_hosts: tuple[str, ...] = ()
     # every process' clock follows /clock (see CLOCK_PREFIX) instead of the wall
     use_sim_time: bool = False
+    # ROS 1's parameter server: global parameters by absolute name, which every rospy node reads
+    parameters: dict[str, Any] = field(default_factory=dict)
     # folders node modules are imported from after the project file's own (its python_path:), absolute
     python_path: tuple[str, ...] = ()
 
@@ -313,6 +315,7 @@ class Plan:
             local_host=raw.get("local_host", ""),
             on_peer_lost=raw.get("on_peer_lost", "stop"),
             use_sim_time=raw.get("use_sim_time", False),
+            parameters=dict(raw.get("parameters", {})),
             dds_domain=raw.get("dds_domain"),
             project_hash=raw.get("project_hash", ""),
             foxglove_hosts=tuple(raw.get("foxglove_hosts", ())),

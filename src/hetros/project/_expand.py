@@ -112,6 +112,8 @@ class Expanded:
     nodes: dict[str, dict[str, Any]] = field(default_factory=dict)
     targets: dict[str, Any] = field(default_factory=dict)
     topics: dict[str, Any] = field(default_factory=dict)
+    # ROS 1's parameter server: every file's, by absolute name (a later file's value wins)
+    parameters: dict[str, Any] = field(default_factory=dict)
     messages: list[str] = field(default_factory=list)
     # python_path: folders of every file, absolute (an included file's are relative to it)
     python_path: list[str] = field(default_factory=list)
@@ -152,6 +154,7 @@ def _expand_into(out: Expanded, data: dict[str, Any], scope: _Scope, path: Path,
             out.targets[_prefixed(scope.prefix, name, "_")] = target
     for topic, qos in (data.get("topics") or {}).items():
         out.topics[resolve_name(topic, scope.namespace, "")] = qos
+    out.parameters.update(data.get("parameters") or {})
     known = {(scope.folder / m).resolve() for m in out.messages}
     for folder in data.get("messages") or []:
         if (scope.folder / folder).resolve() not in known:

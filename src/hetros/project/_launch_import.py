@@ -29,7 +29,7 @@ import yaml
 
 from .._errors import ProjectError
 from ..plan import join_namespace, resolve_name
-from ._expand import flatten
+from ._expand import flatten, parameters_from_files
 from ._ros_scan import code_folders, entry_points, package_name, scan_ros_entry, scan_ros_script, unique_key
 
 _EXECUTABLE_FOLDERS = ("scripts", "nodes", "bin", "src", "")
@@ -145,9 +145,6 @@ class LaunchImporter:
         # folders ROS 2 entry points import from join python_path:
         self.used_packages: dict[Path, None] = {}
         self.imported_from: dict[Path, None] = {}
-        # ROS 1: every <param>/<rosparam> outside a node by its full name; after reading, each node gets
-        # those in its namespace or below under their names relative to it (``inner/b``), as rospy reads them
-        self.global_params: dict[str, Any] = {}
 
     # -- packages --------------------------------------------------------------------------
 
@@ -276,22 +273,17 @@ class LaunchImporter:
     _on_set_env = _on_env
 
     def _on_param(self, element: _Element, scope: _Scope, path: Path) -> None:
-        found = self._parameters(element, scope, path)
-        scope.params.update(found)
-        if not self.ros2:
-            for name, value in found.items():
-                self.global_params[join_namespace(scope.namespace, name)] = value
+        """ROS 2: a parameter of every node after it in its scope. ROS 1: a parameter of the parameter
+        server (the project's ``parameters:``), by its full name, which every node reads by it."""
+        found = self._parameters(element, scope, path, keep_absolute=True)
+        if self.ros2:
+            scope.params.update(found)
+            return
+        for name, value in found.items():
+            full = name if name.startswith("/") else join_namespace(scope.namespace, name)
+            self.project.setdefault("parameters", {})[full] = value
 
     _on_rosparam = _on_param
-
-    def share_global_params(self) -> None:
-        """ROS 1's parameter server, as each node's parameters: a parameter in a node's namespace or below
-        (set in a group beside or after the node) under its name relative to that namespace."""
-        for node in self.project["nodes"].values():
-            namespace = node.get("namespace", "").rstrip("/")
-            for name, value in self.global_params.items():
-                if name.startswith(f"{namespace}/"):
-                    node.setdefault("parameters", {}).setdefault(name[len(namespace) + 1:], value)
 
     def _on_include(self, element: _Element, scope: _Scope, path: Path) -> None:
         file = Path(self.attribute(element, "file", scope, path))
@@ -350,8 +342,9 @@ class LaunchImporter:
         namespace = request.namespace
         if namespace:
             node["namespace"] = namespace
-        # the launch's name stands over the code's; without one the node keeps its code's, as in ROS
-        if request.name and (request.name != key or code_name != request.name):
+        # the launch's name stands over the code's (an anonymous one's too, as roslaunch's __name:= does);
+        # without one the node keeps its code's, as in ROS
+        if request.name:
             node["name"] = request.name
         elif not request.name and code_name and code_name != key:
             node["name"] = code_name
@@ -509,7 +502,11 @@ class LaunchImporter:
             request.remap = dict(map(tuple, record["remap"]))
             request.lifecycle = ("active" if record.get("autostart") else "unconfigured") \
                 if record.get("lifecycle") else None
-            request.params = self._merged(record["parameters"], request.full_name if name else "", where)
+            if not name:  # a parameter file's entries are for the name the node will have: its code's
+                found = self._code(request.package, self.find_package(request.package, where), request.executable,
+                                   where, {})
+                name = found.ros_names[0] if len(set(found.ros_names)) == 1 else found.key
+            request.params = self._merged(record["parameters"], join_namespace(request.namespace, name), where)
         return request
 
     def _component(self, record: dict[str, Any]) -> None:
@@ -553,7 +550,8 @@ class LaunchImporter:
         raise ProjectError(f"{where}: package {name} has no executable {executable!r} (looked in "
                            f"{', '.join(f or '.' for f in _EXECUTABLE_FOLDERS)} and below)")
 
-    def _parameters(self, element: _Element, scope: _Scope, path: Path) -> dict[str, Any]:
+    def _parameters(self, element: _Element, scope: _Scope, path: Path,
+                    keep_absolute: bool = False) -> dict[str, Any]:
         """What a <param> or <rosparam> gives: a value, or a file's (ROS 1: a mapping; ROS 2: node:
         {ros__parameters: ...})."""
         where = f"{path}:{element.line}"
@@ -589,7 +587,7 @@ class LaunchImporter:
         kind = element.attributes.get("type")
         if kind in ("str", "string"):
             value = str(self.attribute(element, "value", scope, path))
-        return {name.lstrip("/~"): value}
+        return {name if keep_absolute and name.startswith("/") else name.lstrip("/~"): value}
 
 
 _PYTHON_LAUNCH_SECONDS = 60
@@ -613,30 +611,12 @@ def lifecycle_state_after(state: str, transition: int, where: str) -> str:
 
 
 def ros2_parameter_file(path: Path, full_name: str, where: str) -> dict[str, Any]:
-    """What a ROS 2 parameter file gives the node ``full_name`` (``/ns/name``; empty: every entry): the
-    entries under ``/**``, under its name or full name (``*`` matching within a name), in the file's order."""
+    """What a ROS 2 parameter file gives the node ``full_name`` (``/ns/name``), as a launch reads it for the
+    node: :func:`parameters_from_files`, its errors named with the launch file's line."""
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise ProjectError(f"{where}: cannot read parameter file {path}: {exc}") from None
-    if not isinstance(data, dict):
-        raise ProjectError(f"{where}: parameter file {path} must map node names to {{ros__parameters: ...}}")
-    values: dict[str, Any] = {}
-    for pattern, entry in data.items():
-        if not isinstance(entry, dict) or not isinstance(entry.get("ros__parameters"), dict):
-            raise ProjectError(f"{path}: {pattern}: a node's entry holds ros__parameters:, a mapping")
-        if not full_name or _node_matches(str(pattern), full_name):
-            values.update(flatten(entry["ros__parameters"]))
-    return values
-
-
-def _node_matches(pattern: str, full_name: str) -> bool:
-    if pattern in ("/**", "**"):
-        return True
-    if not pattern.startswith("/"):
-        pattern = "/**/" + pattern if "/" not in pattern else "/" + pattern
-    expression = re.escape(pattern).replace(r"/\*\*", "(/[^/]+)*").replace(r"\*", "[^/]*")
-    return re.fullmatch(expression, full_name) is not None
+        return parameters_from_files([path], full_name)
+    except ProjectError as exc:
+        raise ProjectError(f"{where}: {exc}") from None
 
 
 def package_search_path(launch_file: Path) -> list[Path]:
@@ -659,7 +639,6 @@ def import_launch(path: Path, ros2: bool, package_paths: list[Path], base: Path,
     its nodes' code could not follow."""
     importer = LaunchImporter(ros2, [*package_paths, *package_search_path(path)], base)
     importer.read(path, _Scope(args=dict(args or {})))
-    importer.share_global_params()
     importer.project = {**code_folders(base, importer.imported_from, importer.used_packages), **importer.project}
     if not importer.project.get("topics"):
         importer.project.pop("topics", None)

@@ -402,12 +402,23 @@ class Project(_Strict):
     foxglove_hosts: list[str] = Field(default_factory=list, description="interfaces `hetros foxglove` may listen "
                                       "on besides 127.0.0.1 (its protocol has no authentication: whoever reaches "
                                       "the port sees every topic)")
+    parameters: dict[str, Any] = Field(default_factory=dict, description="ROS 1's parameter server: absolute "
+                                       "name (/robot/speed) -> value, read by every rospy node by its full or "
+                                       "relative name (a node's private ones are under nodes.<node>.parameters)")
     use_sim_time: bool = Field(default=False, description="every node's clock (get_clock, create_timer, rate) "
                                "follows /clock (rosgraph_msgs/msg/Clock, published by a simulator node or "
                                "`hetros play --clock`) instead of the wall")
     chains: dict[str, ChainSpec] = Field(default_factory=dict, description="name -> a path of topics whose "
                                          "latency matters (first topic to last): `hetros advise` predicts, "
                                          "meets and verifies it")
+
+    @field_validator("parameters")
+    @classmethod
+    def _global_names(cls, value: dict[str, Any]) -> dict[str, Any]:
+        for name in value:
+            if not name.startswith("/") or "//" in name or (name.endswith("/") and name != "/"):
+                raise ValueError(f"a global parameter's name must be absolute (/robot/speed), not {name!r}")
+        return value
 
     @field_validator("shm_budget")
     @classmethod
@@ -591,6 +602,7 @@ def load_project(path: str | Path) -> LoadedProject:
     expanded = expand(model.model_dump(by_alias=True), path, load_included)
     flat = {**model.model_dump(by_alias=True, exclude_unset=True), "nodes": expanded.nodes,
             "targets": expanded.targets, "topics": expanded.topics, "messages": expanded.messages,
+            "parameters": expanded.parameters,
             "python_path": expanded.python_path, "groups": {}, "include": {}}
     if not expanded.nodes:
         raise ProjectError(f"{path}:1: the project has no nodes; list them under nodes: (or bring them with "

@@ -103,6 +103,7 @@ def _tables(project: LoadedProject, channels: dict[str, ChannelPlan], edges: tup
         dds_domain=model.dds_domain,
         project_hash=project_hash(project),
         use_sim_time=model.use_sim_time,
+        parameters=dict(model.parameters),
         foxglove_hosts=tuple(model.foxglove_hosts),
         python_path=tuple(map(str, project.import_folders[1:])),
     )

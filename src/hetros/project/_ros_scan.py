@@ -503,7 +503,7 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
             imported_from.append(root)
             for key, target in sorted(entry_points(given).items()):
                 nodes.append(scan_ros_entry(root, key, target))
-            for script in sorted(given.rglob("*")):
+            for script in sorted(given.rglob("*"), key=lambda p: (p.is_symlink(), p)):  # real files first
                 inside = script.relative_to(given).parts[:-1]
                 if any(part in ("test", "tests") for part in inside) or script.resolve() in seen:
                     continue  # a package's tests are no nodes of its graph

@@ -295,6 +295,11 @@ class Node:
         self.default_callback_group: CallbackGroup = MutuallyExclusiveCallbackGroup()
         self._owned: list[Publisher | Subscription | Timer | Service] = []  # closed by destroy_node
         self.executor: Any = None
+        # every ROS 2 node has use_sim_time, declared: the project's use_sim_time unless the node's parameters
+        # say otherwise
+        plan = self._hetros.graph.plan
+        sim_time = self._overrides.get("use_sim_time", plan.use_sim_time if plan is not None else False)
+        self._declared["use_sim_time"] = Parameter("use_sim_time", value=bool(sim_time))
         if automatically_declare_parameters_from_overrides:
             for name, value in self._overrides.items():
                 self._declared[name] = Parameter(name, value=value)

@@ -44,6 +44,7 @@ __all__ = [
     "get_caller_id",
     "get_name",
     "get_param",
+    "get_param_names",
     "get_rostime",
     "get_time",
     "has_param",
@@ -225,6 +226,9 @@ def init_node(name: str, argv: list[str] | None = None, anonymous: bool = False,
     """Name the node (its logs and ``get_name()``); its endpoints are the ones the project gives its hetros
     node. ``anonymous`` adds rospy's suffix to the name it reports."""
     state = _state()
+    if state.hetros.ros_name:  # the project's (a launch file's) name stands over the code's, anonymous or not
+        state.name = state.hetros.ros_name
+        return
     state.name = f"{name}_{id(state) % 100000}_{int(_time.time() * 1000) % 100000}" if anonymous else name
 
 
@@ -555,21 +559,55 @@ def wait_for_service(service: str, timeout: float | None = None) -> None:
 _MISSING: Any = object()
 
 
-def _parameter_name(name: str) -> str:
-    """The project's parameters belong to the node: ``~x``, ``x`` and ``/<node>/x`` all name ``x``."""
-    state = _state()
-    private = f"/{state.name}/"
+_globals: dict[str, Any] | None = None  # ROS 1's parameter server as this process sees it (the plan's)
+
+
+def _server() -> dict[str, Any]:
+    """The project's global parameters (``parameters:``, absolute names), one copy per process: what one
+    node of the process sets, the others read; other processes keep the project's values."""
+    global _globals
+    if _globals is None:
+        plan = _state().hetros.graph.plan
+        with _states_lock:
+            if _globals is None:
+                _globals = dict(plan.parameters) if plan is not None else {}
+    return _globals
+
+
+def _parameter_key(name: str) -> tuple[bool, str]:
+    """(private, key) of a parameter name as rospy resolves it: ``~x`` and ``/<ns>/<node>/x`` are the node's
+    own (``x``, the project's ``parameters:`` of the node); any other name is global, by its full name
+    (a relative one under the node's namespace)."""
     if name.startswith("~"):
-        return name[1:].lstrip("/")
-    if name.startswith(private):
-        return name[len(private):]
-    return name.lstrip("/")
+        return True, name[1:].lstrip("/")
+    full = name if name.startswith("/") else f"{_state().hetros.namespace.rstrip('/')}/{name}"
+    own = f"{get_name()}/"
+    if full.startswith(own):
+        return True, full[len(own):]
+    return False, full
+
+
+def _parameter_name(name: str) -> str:
+    """The node's own parameter a name reaches: private names, and (as hetros projects have always put a
+    rospy node's parameters under the node) a global name the server does not hold."""
+    private, key = _parameter_key(name)
+    return key if private else name.lstrip("~/")
 
 
 def get_param(name: str, default: Any = _MISSING) -> Any:
-    """As rospy: a namespace of parameters (``gains`` over ``gains/P``, ``gains/I``) is a dictionary."""
+    """As rospy: a namespace of parameters (``gains`` over ``gains/P``, ``gains/I``) is a dictionary. A global
+    name is looked up on the server, then (for projects that give a rospy node all its parameters under the
+    node) among the node's own."""
     hetros = _state().hetros
-    key = _parameter_name(name)
+    private, key = _parameter_key(name)
+    if not private:
+        server = _server()
+        if key in server:
+            return server[key]
+        below = _namespace_of(server, key)
+        if below:
+            return below
+        key = name.lstrip("/")
     try:
         return hetros.get_parameter(key)
     except ParameterError as exc:
@@ -577,7 +615,7 @@ def get_param(name: str, default: Any = _MISSING) -> Any:
         if below:
             return below
         if default is not _MISSING:
-            return hetros.get_parameter(key, default)
+            return default
         raise KeyError(name) from exc
 
 
@@ -602,11 +640,32 @@ _MISSING_DEFAULT = object()
 
 
 def set_param(name: str, value: Any) -> None:
-    _state().hetros.set_parameter(_parameter_name(name), value)
+    """A private name sets the node's own parameter; a global one, the server's (a dictionary: each leaf)."""
+    private, key = _parameter_key(name)
+    if private:
+        _state().hetros.set_parameter(key, value)
+        return
+    server = _server()
+    for below in [k for k in server if k.startswith(f"{key}/")]:
+        del server[below]
+    server.update(_leaves(key, value))
+
+
+def _leaves(key: str, value: Any) -> dict[str, Any]:
+    """A value set under ``key`` as the server's leaves (a dictionary nests its names under ``key``)."""
+    if not isinstance(value, dict):
+        return {key: value}
+    return {leaf: v for name, inner in value.items() for leaf, v in _leaves(f"{key}/{name}", inner).items()}
 
 
 def delete_param(name: str) -> None:
     """As rospy: KeyError when the parameter does not exist."""
+    private, key = _parameter_key(name)
+    server = _server()
+    if not private and (key in server or _namespace_of(server, key)):
+        for found in [k for k in server if k == key or k.startswith(f"{key}/")]:
+            del server[found]
+        return
     try:
         _state().hetros.delete_parameter(_parameter_name(name))
     except ParameterError as exc:
@@ -614,9 +673,25 @@ def delete_param(name: str) -> None:
 
 
 def search_param(name: str) -> str | None:
-    """The full name of parameter ``name`` as rospy finds it (here: the node's own, which is where the
-    project file puts every parameter), or None."""
-    return f"{get_name()}/{name.lstrip('~/')}" if has_param(name) else None
+    """rospy's search: ``name`` in the node's own namespace, then in each namespace above it; its full name,
+    or None."""
+    if name.startswith(("/", "~")):
+        return name if has_param(name) else None
+    namespace = get_name().rsplit("/", 1)[0]
+    while True:
+        candidate = f"{namespace}/{name}"
+        if candidate in _server() or _namespace_of(_server(), candidate):
+            return candidate
+        if not namespace:
+            break
+        namespace = namespace.rsplit("/", 1)[0]
+    return f"{get_name()}/{name}" if has_param(f"~{name}") else None
+
+
+def get_param_names() -> list[str]:
+    """Every parameter's full name: the server's and the node's own."""
+    own = [f"{get_name()}/{key}" for key in _state().hetros.parameters]
+    return sorted({*_server(), *own})
 
 
 def resolve_name(name: str, caller_id: str | None = None) -> str:

@@ -171,6 +171,9 @@ class NodeThread:
                 set_node_argv([_program(self.spec.run, body), *self.spec.args])
                 loop = _give_thread_an_event_loop()
                 run_node_body(body, node)
+                if node.thread_failure is not None:
+                    raise NodeError(f"a thread node {self.spec.name} started raised (its traceback is logged "
+                                    f"above):\n{node.thread_failure}")
                 finished = True
                 if not self.graph.stop.is_set():
                     self.on_done(self.spec.name)

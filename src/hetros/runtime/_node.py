@@ -99,6 +99,8 @@ class Node:
         self.figures: Callable[[], dict[str, Any]] | None = None
         # a managed node's state machine, once its code made it one (``create_lifecycle``, rclpy.lifecycle)
         self.lifecycle: Lifecycle | None = None
+        # the traceback of a thread the node's code started that raised: the node fails with it
+        self.thread_failure: str | None = None
         planned_services = planned.services if (planned := self._planned()) is not None else {}
         for service, (srv_type, handler) in self.parameter_services.items():
             if service in planned_services:

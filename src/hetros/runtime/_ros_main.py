@@ -17,6 +17,11 @@ from .._errors import NodeError
 from ._node import Node
 
 _bound = threading.local()
+# the nodes running a ROS main() in this process, and the threads of their own that their code started
+_mains: dict[int, Node] = {}
+_threads: dict[int, Node] = {}
+_lock = threading.Lock()
+_hooked: list[Callable[[threading.ExceptHookArgs], Any]] = []
 
 
 def runs_as_ros_main(factory: Callable[..., Any]) -> bool:
@@ -38,19 +43,65 @@ def ros_main(node: Node) -> Iterator[None]:
     previous = getattr(_bound, "node", None)
     _bound.node = node
     _bound.shut_down = False
+    _watch_threads()
+    with _lock:
+        _mains[id(node)] = node
     try:
         yield
     finally:
         _bound.node = previous
+        with _lock:
+            _mains.pop(id(node), None)
 
 
 def bound_node() -> Node:
     """The hetros node this thread runs as (inside ``ros_main``); NodeError outside hetros."""
     node: Node | None = getattr(_bound, "node", None)
     if node is None:
+        node = _node_of_this_process()
+        _bound.node = node  # a thread the node's code started: it is that node's from now on
+        _bound.shut_down = False
+        with _lock:
+            _threads[threading.get_ident()] = node
+    return node
+
+
+def _node_of_this_process() -> Node:
+    """The node a thread the user's code started belongs to: the one node of this process running a ROS
+    main(); with several, which one is not known, and with none this is not a hetros process."""
+    with _lock:
+        mains = list(_mains.values())
+    if len(mains) == 1:
+        return mains[0]
+    if not mains:
         raise NodeError("this rclpy is hetros's: it runs inside `hetros launch` only, as the main() of a node the "
                         "project names (run: package.module:main); outside hetros, use ROS 2's own rclpy")
-    return node
+    raise NodeError(f"a thread of its own asks for its node, in a process running {len(mains)} ROS nodes "
+                    f"({', '.join(sorted(n.name for n in mains))}): hetros cannot tell which one's it is; give that "
+                    "node a process target of its own (kind: process), or make the node in its main thread")
+
+
+def _watch_threads() -> None:
+    """A thread that a node's code started and that raises fails that node (``Node.thread_failure``): the
+    launcher reports it when the node's main returns, instead of the node going quiet."""
+    with _lock:
+        if _hooked:
+            return
+        _hooked.append(threading.excepthook)
+
+    def hook(args: threading.ExceptHookArgs) -> None:
+        with _lock:
+            ident = args.thread.ident if args.thread is not None else None
+            node = _threads.get(ident) if ident is not None else None
+        if node is None or args.exc_type is SystemExit:
+            _hooked[0](args)
+            return
+        import traceback
+
+        node.thread_failure = "".join(traceback.format_exception(args.exc_type, args.exc_value, args.exc_traceback))
+        node.log.error(f"thread {args.thread.name if args.thread else '?'} of node {node.name} raised:\n"
+                       f"{node.thread_failure}")
+    threading.excepthook = hook
 
 
 def shut_down() -> bool:

@@ -452,8 +452,50 @@ class Node:
         return sorted((c.name, [c.type]) for c in plan.channels.values() if c.kind == "topic")
 
     def get_node_names(self) -> list[str]:
+        return [name for name, _ in self.get_node_names_and_namespaces()]
+
+    def get_node_names_and_namespaces(self) -> list[tuple[str, str]]:
+        """Every node of the graph (the plan's, by its ROS name), as rclpy's graph query gives them."""
         plan = self._hetros.graph.plan
-        return sorted(plan.nodes) if plan is not None else [self._name]
+        if plan is None:
+            return [(self._name, self._namespace)]
+        found = set()
+        for key in plan.nodes:
+            if plan.nodes[key].run.startswith("hetros."):
+                continue  # the bridges, gateways and clock followers hetros adds are no ROS nodes
+            namespace, _, name = plan.full_name(key).rpartition("/")
+            found.add((name, namespace or "/"))
+        return sorted(found)
+
+    def get_service_names_and_types(self) -> list[tuple[str, list[str]]]:
+        plan = self._hetros.graph.plan
+        if plan is None:
+            return []
+        services = {s: t for spec in plan.nodes.values() for s, t in spec.services.items() if "/_action/" not in s}
+        services.update({s: t for s, (_, t) in plan.parameter_servers().items()})
+        return sorted((name, [typename]) for name, typename in services.items())
+
+    def get_publishers_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
+        return self._endpoint_infos(topic_name, "publishers")
+
+    def get_subscriptions_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
+        return self._endpoint_infos(topic_name, "subscribers")
+
+    def _endpoint_infos(self, topic: str, role: str) -> list[Any]:
+        """rclpy's TopicEndpointInfo of each planned endpoint of ``topic`` (node, namespace, type, kind, QoS)."""
+        from .topic_endpoint_info import TopicEndpointInfo, TopicEndpointTypeEnum
+
+        plan = self._hetros.graph.plan
+        channel = None if plan is None else plan.channels.get(self.resolve_topic_name(topic))
+        if plan is None or channel is None:
+            return []
+        kind = TopicEndpointTypeEnum.PUBLISHER if role == "publishers" else TopicEndpointTypeEnum.SUBSCRIPTION
+        infos = []
+        for key in getattr(channel, role):
+            namespace, _, name = plan.full_name(key).rpartition("/")
+            infos.append(TopicEndpointInfo(node_name=name, node_namespace=namespace or "/", topic_type=channel.type,
+                                           endpoint_type=kind, qos=channel.qos))
+        return infos
 
     # -- parameters ----------------------------------------------------------------------------
 

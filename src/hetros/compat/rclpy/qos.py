@@ -103,6 +103,16 @@ def to_hetros(profile: QoSProfile | int | None) -> QoS | None:
                lease_duration=_seconds(getattr(profile, "liveliness_lease_duration", None)))
 
 
+def from_hetros(qos: QoS) -> QoSProfile:
+    """hetros's QoS as rclpy's profile (what graph queries report of an endpoint)."""
+    return QoSProfile(depth=qos.depth,
+                      history=HistoryPolicy.KEEP_ALL if qos.history == "keep_all" else HistoryPolicy.KEEP_LAST,
+                      reliability=ReliabilityPolicy.BEST_EFFORT if qos.reliability == "best_effort"
+                      else ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if qos.durability == "transient_local"
+                      else DurabilityPolicy.VOLATILE)
+
+
 def _seconds(duration: Any) -> float | None:
     """An rclpy Duration as hetros's seconds; zero, absent or rclpy's infinite as None (no bound)."""
     nanoseconds = getattr(duration, "nanoseconds", None)

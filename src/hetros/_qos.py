@@ -136,3 +136,23 @@ def incompatible_policy(offered: QoS, requested: QoS) -> str | None:
         if offer_falls_short(policy, getattr(offered, policy), getattr(requested, policy)):
             return policy
     return None
+
+
+# the policies that decide how a topic delivers: a topic's QoS from the project file applies to every endpoint,
+# so code that chose otherwise for one of these would get what it did not ask for
+DELIVERY_POLICIES = ("reliability", "durability", "history")
+
+
+def delivery_conflicts(chosen: dict[str, str], declared: QoS, subscription: bool) -> list[str]:
+    """Each policy of ``chosen`` (what the code asked for, policy -> value) that the topic's QoS contradicts,
+    as ``policy value (the project file: value)``. A subscription that gets a stronger reliability or
+    durability than it asked (ROS 2 matches those) is no conflict."""
+    found = []
+    for policy in DELIVERY_POLICIES:
+        if policy not in chosen or chosen[policy] == getattr(declared, policy):
+            continue
+        if subscription and policy != "history" and \
+                offer_falls_short(policy, getattr(declared, policy), chosen[policy]) is False:
+            continue
+        found.append(f"{policy} {chosen[policy]} (the project file: {getattr(declared, policy)})")
+    return found

@@ -14,18 +14,13 @@ from pathlib import Path
 
 import yaml
 
+from tests.support.cli import hetros_in, private_env
+
 DATA = Path(__file__).resolve().parents[1] / "data"
 TWINS = DATA / "cpp_twins"
 LIFECYCLE_PY = DATA / "ros2_demos" / "lifecycle_py"
 
 
-def _env(folder: Path) -> dict[str, str]:
-    return dict(os.environ, XDG_RUNTIME_DIR=str(folder))  # this launch alone, whatever else runs
-
-
-def _hetros(*argv: str, cwd: Path, timeout: float = 60) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "hetros", *argv], capture_output=True, text=True, timeout=timeout,
-                          check=False, cwd=cwd, env=_env(cwd))
 
 
 def _said(err: str, node: str) -> list[str]:
@@ -47,7 +42,7 @@ def _heard_only_while_active(err: str) -> list[str]:
 
 
 def test_lifecycle_pys_launch_file_with_the_demos_service_client(tmp_path: Path) -> None:
-    done = _hetros("launch", str(LIFECYCLE_PY / "launch" / "lifecycle_demo_launch.py"), "--package-path", str(TWINS),
+    done = hetros_in("launch", str(LIFECYCLE_PY / "launch" / "lifecycle_demo_launch.py"), "--package-path", str(TWINS),
                    "--duration", "22", cwd=tmp_path, timeout=120)
     assert done.returncode == 0, done.stderr
     client = _said(done.stderr, "lc_client")
@@ -82,28 +77,28 @@ def test_hetros_lifecycle_drives_a_managed_node_as_ros2_lifecycle_does(tmp_path:
     path = _project(tmp_path, "unconfigured")
     launched = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(path), "--duration", "30"],
                                 cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env=_env(tmp_path))
+                                env=private_env(tmp_path))
     try:
         deadline = time.monotonic() + 30
-        while _hetros("lifecycle", "get", "/lc_talker", cwd=tmp_path).stdout.strip() != "unconfigured [1]":
+        while hetros_in("lifecycle", "get", "/lc_talker", cwd=tmp_path).stdout.strip() != "unconfigured [1]":
             assert time.monotonic() < deadline, "the managed node never answered"
             time.sleep(0.3)
-        assert _hetros("lifecycle", "nodes", cwd=tmp_path).stdout == "/lc_talker\n"
-        assert _hetros("lifecycle", "list", "/lc_talker", cwd=tmp_path).stdout == (
+        assert hetros_in("lifecycle", "nodes", cwd=tmp_path).stdout == "/lc_talker\n"
+        assert hetros_in("lifecycle", "list", "/lc_talker", cwd=tmp_path).stdout == (
             "- configure [1]\n\tStart: unconfigured\n\tGoal: configuring\n"
             "- shutdown [5]\n\tStart: unconfigured\n\tGoal: shuttingdown\n")
-        refused = _hetros("lifecycle", "set", "/lc_talker", "activate", cwd=tmp_path)
+        refused = hetros_in("lifecycle", "set", "/lc_talker", "activate", cwd=tmp_path)
         assert refused.returncode == 1
         assert refused.stderr == "Unknown transition requested, available ones are:\n- configure [1]\n- shutdown [5]\n"
         for transition in ("configure", "activate"):
-            done = _hetros("lifecycle", "set", "/lc_talker", transition, cwd=tmp_path)
+            done = hetros_in("lifecycle", "set", "/lc_talker", transition, cwd=tmp_path)
             assert (done.returncode, done.stdout) == (0, "Transitioning successful\n"), done.stderr
-        assert _hetros("lifecycle", "get", cwd=tmp_path).stdout == "/lc_talker: active [3]\n"
+        assert hetros_in("lifecycle", "get", cwd=tmp_path).stdout == "/lc_talker: active [3]\n"
         time.sleep(2.5)  # the talker publishes once a second
         for transition in ("deactivate", "cleanup", "shutdown"):
-            done = _hetros("lifecycle", "set", "/lc_talker", transition, cwd=tmp_path)
+            done = hetros_in("lifecycle", "set", "/lc_talker", transition, cwd=tmp_path)
             assert (done.returncode, done.stdout) == (0, "Transitioning successful\n"), done.stderr
-        assert _hetros("lifecycle", "get", "/lc_talker", cwd=tmp_path).stdout == "finalized [4]\n"
+        assert hetros_in("lifecycle", "get", "/lc_talker", cwd=tmp_path).stdout == "finalized [4]\n"
     finally:
         launched.terminate()
         _, err = launched.communicate(timeout=60)
@@ -111,7 +106,7 @@ def test_hetros_lifecycle_drives_a_managed_node_as_ros2_lifecycle_does(tmp_path:
 
 
 def test_the_project_brings_a_managed_node_to_its_state(tmp_path: Path) -> None:
-    done = _hetros("launch", str(_project(tmp_path, "active")), "--duration", "4", cwd=tmp_path, timeout=90)
+    done = hetros_in("launch", str(_project(tmp_path, "active")), "--duration", "4", cwd=tmp_path, timeout=90)
     assert done.returncode == 0, done.stderr
     assert "on_configure() is called." in _said(done.stderr, "lc_talker")
     assert len(_heard_only_while_active(done.stderr)) >= 2

@@ -3,23 +3,17 @@ worker thread and finds its topics at run time; a thread of a node that raises f
 
 from __future__ import annotations
 
-import os
 import re
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from tests.support.cli import hetros_in
+
 DEMOS = Path(__file__).resolve().parents[1] / "data" / "ros2_demos"
 
-
-def _hetros(*argv: str, cwd: Path, timeout: float = 90) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, XDG_RUNTIME_DIR=str(cwd))  # this launch alone, whatever else runs
-    return subprocess.run([sys.executable, "-m", "hetros", *argv], capture_output=True, text=True, timeout=timeout,
-                          check=False, cwd=cwd, env=env)
 
 
 def test_topic_monitor_with_its_reliability_demo(tmp_path: Path) -> None:
@@ -27,11 +21,11 @@ def test_topic_monitor_with_its_reliability_demo(tmp_path: Path) -> None:
     monitor's endpoints written in as `hetros check` asks (the code names them at run time); the monitor,
     run as `ros2 run topic_monitor topic_monitor` would, makes its node in a thread and subscribes to what
     get_topic_names_and_types() finds."""
-    done = _hetros("import", "ros2launch", str(DEMOS / "topic_monitor" / "launch" / "reliability_demo_launch.py"),
+    done = hetros_in("import", "ros2launch", str(DEMOS / "topic_monitor" / "launch" / "reliability_demo_launch.py"),
                    "-o", str(tmp_path / "project.yaml"), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     project: dict[str, Any] = yaml.safe_load((tmp_path / "project.yaml").read_text())
-    unresolved = _hetros("check", str(tmp_path / "project.yaml"), cwd=tmp_path)
+    unresolved = hetros_in("check", str(tmp_path / "project.yaml"), cwd=tmp_path)
     assert unresolved.returncode != 0 and "placeholder" in unresolved.stdout + unresolved.stderr
     nodes = project["nodes"]
     assert [node["args"] for node in nodes.values()] == [["sensor", "--best-effort"], ["critical"]]
@@ -44,9 +38,9 @@ def test_topic_monitor_with_its_reliability_demo(tmp_path: Path) -> None:
         "publish": {"/reception_rate/sensor_data_best_effort_": "std_msgs/msg/Float32",
                     "/reception_rate/critical_data_": "std_msgs/msg/Float32"}}
     (tmp_path / "project.yaml").write_text(yaml.safe_dump(project))
-    checked = _hetros("check", str(tmp_path / "project.yaml"), cwd=tmp_path)
+    checked = hetros_in("check", str(tmp_path / "project.yaml"), cwd=tmp_path)
     assert checked.returncode == 0, checked.stdout + checked.stderr
-    done = _hetros("launch", str(tmp_path / "project.yaml"), "--duration", "5", cwd=tmp_path)
+    done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "5", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     monitor = re.findall(r"^\[INFO\] \[[\d.]+\] \[topic_monitor\]: (.*)$", done.stderr, re.MULTILINE)
     assert "Subscribing to topic: /critical_data" in monitor and \
@@ -79,7 +73,7 @@ def test_a_thread_of_a_node_that_raises_fails_the_launch(tmp_path: Path) -> None
     (tmp_path / "project.yaml").write_text(
         "name: threads\ntargets: {p: {kind: process}}\n"
         "nodes:\n  worker: {run: nodes:main, target: p, publish: {/chatter: std_msgs/msg/String}}\n")
-    done = _hetros("launch", str(tmp_path / "project.yaml"), "--duration", "10", cwd=tmp_path)
+    done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "10", cwd=tmp_path)
     assert done.returncode != 0, done.stderr
     assert "thread worker-thread of node worker raised" in done.stderr
     assert "ValueError: the worker broke" in done.stderr

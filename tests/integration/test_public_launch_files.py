@@ -5,15 +5,14 @@ ros2/demos packages), imported and launched: the graph each gives is the graph t
 
 from __future__ import annotations
 
-import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
+
+from tests.support.cli import hetros_in
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 LAUNCH = DATA / "ros2_launch"
@@ -21,19 +20,14 @@ TWINS = DATA / "cpp_twins"
 DEMOS = DATA / "ros2_demos"
 
 
-def _hetros(*argv: str, cwd: Path, timeout: float = 60) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, XDG_RUNTIME_DIR=str(cwd))  # this launch alone, whatever else runs
-    return subprocess.run([sys.executable, "-m", "hetros", *argv], capture_output=True, text=True, timeout=timeout,
-                          check=False, cwd=cwd, env=env)
-
 
 def _imported(file: Path, tmp_path: Path, *args: str) -> dict[str, Any]:
     out = tmp_path / "project.yaml"
-    done = _hetros("import", "ros2launch", str(file), "--package-path", str(TWINS), "-o", str(out), *args,
+    done = hetros_in("import", "ros2launch", str(file), "--package-path", str(TWINS), "-o", str(out), *args,
                    cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     project: dict[str, Any] = yaml.safe_load(out.read_text())
-    checked = _hetros("check", str(out), cwd=tmp_path)
+    checked = hetros_in("check", str(out), cwd=tmp_path)
     assert checked.returncode == 0, checked.stdout + checked.stderr
     return project
 
@@ -83,14 +77,14 @@ def test_an_exit_that_shuts_the_launch_down_makes_its_node_required(tmp_path: Pa
     assert project["nodes"]["add_two_ints_client"].get("required") is True
     assert "required" not in project["nodes"]["add_two_ints_server"]
     # ros2 launch: the client's result, then the launch ends with the client, cleanly
-    done = _hetros("launch", str(LAUNCH / "demos" / "add_two_ints_launch.py"), "--package-path", str(TWINS),
+    done = hetros_in("launch", str(LAUNCH / "demos" / "add_two_ints_launch.py"), "--package-path", str(TWINS),
                    cwd=tmp_path, timeout=90)
     assert done.returncode == 0, done.stderr
     assert re.search(r"\[add_two_ints_client\]: Result of add_two_ints: 5", done.stderr), done.stderr
 
 
 def test_hetros_launch_runs_a_python_launch_file_with_its_arguments(tmp_path: Path) -> None:
-    done = _hetros("launch", str(LAUNCH / "ros2launch" / "example.launch.py"), "node_prefix:=pre_",
+    done = hetros_in("launch", str(LAUNCH / "ros2launch" / "example.launch.py"), "node_prefix:=pre_",
                    "--package-path", str(TWINS), "--duration", "4", cwd=tmp_path, timeout=90)
     assert done.returncode == 0, done.stderr
     assert re.search(r"\[pre_talker\]: Publishing: \"Hello World: 1\"", done.stderr), done.stderr
@@ -103,7 +97,7 @@ def test_hetros_launch_runs_a_python_launch_file_with_its_arguments(tmp_path: Pa
 ])
 def test_what_a_public_launch_file_needs_beyond_python_is_refused_at_its_line(file: str, line: int, words: str,
                                                                              tmp_path: Path) -> None:
-    done = _hetros("import", "ros2launch", str(LAUNCH / file), "--package-path", str(TWINS), cwd=tmp_path)
+    done = hetros_in("import", "ros2launch", str(LAUNCH / file), "--package-path", str(TWINS), cwd=tmp_path)
     assert done.returncode != 0
     assert f"{LAUNCH / file}:{line}: " in done.stderr and words in done.stderr, done.stderr
     assert "Traceback" not in done.stderr
@@ -111,7 +105,7 @@ def test_what_a_public_launch_file_needs_beyond_python_is_refused_at_its_line(fi
 
 def test_topic_monitors_launch_files_give_their_publishers(tmp_path: Path) -> None:
     """ExecuteProcess of ExecutableInPackage: the package's node, with the command line the file gives."""
-    done = _hetros("import", "ros2launch", str(DEMOS / "topic_monitor" / "launch" / "depth_demo_launch.py"), "-o",
+    done = hetros_in("import", "ros2launch", str(DEMOS / "topic_monitor" / "launch" / "depth_demo_launch.py"), "-o",
                    str(tmp_path / "p.yaml"), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     nodes = yaml.safe_load((tmp_path / "p.yaml").read_text())["nodes"]

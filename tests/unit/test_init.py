@@ -262,3 +262,39 @@ def test_a_node_with_the_logger_service_serves_its_levels_under_its_name(tmp_pat
     assert project["nodes"]["quiet"]["services"] == {
         "quiet/get_logger_levels": "rcl_interfaces/srv/GetLoggerLevels",
         "quiet/set_logger_levels": "rcl_interfaces/srv/SetLoggerLevels"}
+
+
+def test_init_writes_a_topics_qos_only_where_its_code_fixes_it_alike(tmp_path: Path) -> None:
+    """A QoS computed at run time (in a variable, a policy from the arguments) is not written; nodes that ask
+    one topic different QoS get none for it, and a note says so."""
+    from hetros.project import ros_template
+
+    package = tmp_path / "pkg"
+    (package / "pkg").mkdir(parents=True)
+    (package / "package.xml").write_text("<package><name>pkg</name></package>\n")
+    (package / "pkg" / "__init__.py").write_text("")
+    (package / "pkg" / "nodes.py").write_text(
+        "import rclpy\nfrom rclpy.qos import QoSProfile, ReliabilityPolicy\nfrom std_msgs.msg import String\n\n\n"
+        "def a():\n    node = rclpy.create_node('a')\n    node.create_publisher(String, 'x', 10)\n"
+        "    node.create_publisher(String, 'same', 10)\n\n\n"
+        "def b():\n    node = rclpy.create_node('b')\n    node.create_subscription(String, 'x', print, "
+        "QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT))\n"
+        "    node.create_subscription(String, 'same', print, 10)\n\n\n"
+        "def c(reliable):\n    node = rclpy.create_node('c')\n    node.create_publisher(String, 'computed', "
+        "QoSProfile(depth=10, reliability=reliable))\n")
+    (package / "setup.py").write_text(
+        "from setuptools import setup\nsetup(name='pkg', entry_points={'console_scripts': ['a = pkg.nodes:a', "
+        "'b = pkg.nodes:b', 'c = pkg.nodes:c']})\n")
+    project, notes = ros_template([package], "p", tmp_path)
+    assert project["topics"] == {"/same": {"history": "keep_last", "depth": 10}}
+    assert any(note.startswith("topic /x: its nodes ask different QoS in code") for note in notes), notes
+
+
+def test_init_finds_a_managed_nodes_endpoints() -> None:
+    """ros2/demos's lifecycle_py: a LifecycleNode whose publisher is made in on_configure."""
+    from hetros.project import ros_template
+
+    package = Path(__file__).resolve().parents[1] / "data" / "ros2_demos" / "lifecycle_py"
+    project, _ = ros_template([package], "p", package)
+    assert project["nodes"]["lc_talker"]["lifecycle"] == "unconfigured"
+    assert project["nodes"]["lc_talker"]["publish"] == {"lifecycle_chatter": "std_msgs/msg/String"}

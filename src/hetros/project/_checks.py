@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .._errors import DefinitionError, MessageError
 from .._net import is_local_address
-from .._qos import MATCHED_POLICIES, QoS, offer_falls_short
+from .._qos import MATCHED_POLICIES, QoS, delivery_conflicts, offer_falls_short
 from ..msg import TypeRegistry, array_fields, flat_layout, normalize_typename, registry
 from ..plan import (
     ACTION_PREFIX,
@@ -34,7 +34,7 @@ from ._model import Bridged, LoadedProject, NodeSpec
 from ._names import node_name_problem, topic_name_problem
 from ._probe import hardware_problems, module_findable, runnable_problems
 from ._report import CheckReport
-from ._ros_scan import PLACEHOLDER, unsupported_uses
+from ._ros_scan import PLACEHOLDER, code_qos_choices, unsupported_uses, writes_ros
 from ._scan import scan_file
 
 
@@ -241,6 +241,33 @@ def _code_file(project: LoadedProject, node: str, run: str) -> Path | None:
     return None
 
 
+def code_qos_agrees(c: CheckContext) -> None:
+    """ROS code that chooses a delivery policy (reliability, durability, history) the project file's QoS of
+    the topic contradicts is refused naming both: the topic's QoS is every endpoint's, and the code would
+    get what it did not ask for. The launch refuses what only shows at run time the same way."""
+    for nname, spec in c.project.model.nodes.items():
+        path = _code_file(c.project, nname, spec.run)
+        if path is None or not writes_ros(path):
+            continue
+        name = spec.name or nname
+        remap = {resolve_name(k, spec.namespace, name): resolve_name(v, spec.namespace, name)
+                 for k, v in spec.remap.items()}
+        root = Path(c.project.node_roots.get(nname) or c.project.root)
+        for folder in (root, *c.project.import_folders):
+            if ":" in spec.run and folder.joinpath(*spec.run.partition(":")[0].split(".")).with_suffix(".py") == path:
+                root = folder
+                break
+        for section, topic, chosen, place in code_qos_choices(path, spec.run, root):
+            if topic.startswith(PLACEHOLDER):
+                continue
+            full = resolve_name(topic, spec.namespace, name, remap)
+            declared = c.project.model.topics.get(full)
+            conflicts = [] if declared is None else delivery_conflicts(chosen, declared, section == "subscribe")
+            if conflicts:
+                c.error(f"{c.project.where('topics', full)}: {place}: node {nname}'s {section} endpoint asks "
+                        f"{'; '.join(conflicts)}; the topic's QoS is every endpoint's: make the two agree")
+
+
 def actions_pair(c: CheckContext) -> None:
     _check_action_pairs(c.project, {a for spec in c.external.values() for a in spec.import_actions}, c.report)
 
@@ -351,9 +378,9 @@ def chains_name_topics(c: CheckContext) -> None:
 # the order matters where a rule reads what an earlier one gathered (gather_endpoints, nodes_are_well_formed)
 RULES: tuple[Callable[[CheckContext], None], ...] = (
     cpus_exist, hosts_and_env, bridge_names_reserved, import_folders_exist, nodes_are_well_formed,
-    gather_endpoints, code_runs, actions_pair, subscriptions_have_publishers, one_type_per_topic, clients_have_servers,
-    one_server_one_type_per_service, topic_entries_are_used, qos_compatible, hardware_topics, shm_within_budget,
-    ros1_nodes_fit, sources_exist, bridged_endpoints_fit, chains_name_topics,
+    gather_endpoints, code_runs, code_qos_agrees, actions_pair, subscriptions_have_publishers, one_type_per_topic,
+    clients_have_servers, one_server_one_type_per_service, topic_entries_are_used, qos_compatible, hardware_topics,
+    shm_within_budget, ros1_nodes_fit, sources_exist, bridged_endpoints_fit, chains_name_topics,
 )
 
 

@@ -52,6 +52,8 @@ class RosNode:
     qos: dict[str, dict[str, Any]] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     managed: bool = False  # a managed node (an rclpy.lifecycle Node): it starts unconfigured
+    # the delivery policies its endpoints choose in code: (section, topic, policies, file:line)
+    chosen: list[tuple[str, str, dict[str, str], str]] = field(default_factory=list)
 
 
 def entry_points(package: Path) -> dict[str, str]:
@@ -282,6 +284,8 @@ class _Reader:
             described = _qos(qos)
             if described:
                 node.qos[name] = described
+            if chosen := chosen_delivery(qos):
+                node.chosen.append((section, name, chosen, self.where(call)))
 
 
 def _constants(tree: ast.AST) -> dict[str, str]:
@@ -400,8 +404,22 @@ def _string(expr: ast.expr) -> str | None:
     return expr.value if isinstance(expr, ast.Constant) and isinstance(expr.value, str) else None
 
 
+# the literal values of rclpy's delivery policies, as the QoS they choose
+_LITERALS = {"reliability": {"BEST_EFFORT": "best_effort", "RELIABLE": "reliable"},
+             "history": {"KEEP_ALL": "keep_all", "KEEP_LAST": "keep_last"},
+             "durability": {"TRANSIENT_LOCAL": "transient_local", "VOLATILE": "volatile"}}
+
+
+def _literal(policy: str, value: ast.expr) -> str | None:
+    """``ReliabilityPolicy.BEST_EFFORT`` (or QoSReliabilityPolicy's) as ``best_effort``; None for a value
+    computed at run time."""
+    text = ast.unparse(value).rsplit(".", 1)[-1]
+    return _LITERALS[policy].get(text)
+
+
 def _qos(expr: ast.expr) -> dict[str, Any]:
-    """A QoS the code asks for, as the project's topics: section writes it (what the scan can read)."""
+    """A QoS the code asks for, as the project's topics: section writes it; {} where the code computes it at
+    run time (a QoS in a variable, a policy from its arguments): the scan cannot know it."""
     if isinstance(expr, ast.Constant) and isinstance(expr.value, int) and not isinstance(expr.value, bool):
         return {"history": "keep_last", "depth": max(expr.value, 1)}
     preset = expr.id if isinstance(expr, ast.Name) else expr.attr if isinstance(expr, ast.Attribute) else ""
@@ -410,16 +428,29 @@ def _qos(expr: ast.expr) -> dict[str, Any]:
     if isinstance(expr, ast.Call) and getattr(expr.func, "id", getattr(expr.func, "attr", "")) == "QoSProfile":
         out: dict[str, Any] = {"history": "keep_last", "depth": 10}
         for keyword in expr.keywords:
-            value = ast.unparse(keyword.value)
-            if keyword.arg == "depth" and isinstance(keyword.value, ast.Constant):
+            if keyword.arg == "depth":
+                if not isinstance(keyword.value, ast.Constant):
+                    return {}
                 out["depth"] = keyword.value.value
-            elif keyword.arg == "reliability":
-                out["reliability"] = "best_effort" if "BEST_EFFORT" in value else "reliable"
-            elif keyword.arg == "history":
-                out["history"] = "keep_all" if "KEEP_ALL" in value else "keep_last"
-            elif keyword.arg == "durability":
-                out["durability"] = "transient_local" if "TRANSIENT_LOCAL" in value else "volatile"
+            elif keyword.arg in _LITERALS:
+                value = _literal(keyword.arg, keyword.value)
+                if value is None:
+                    return {}
+                out[keyword.arg] = value
         return out
+    return {}
+
+
+def chosen_delivery(expr: ast.expr | None) -> dict[str, str]:
+    """The delivery policies a QoS argument chooses as literals (a preset's reliability and durability, a
+    QoSProfile's given ones); a bare depth chooses none."""
+    if expr is None:
+        return {}
+    preset = expr.id if isinstance(expr, ast.Name) else expr.attr if isinstance(expr, ast.Attribute) else ""
+    if preset in _PRESETS:
+        return {k: str(v) for k, v in _PRESETS[preset].items() if k in ("reliability", "durability")}
+    if isinstance(expr, ast.Call) and getattr(expr.func, "id", getattr(expr.func, "attr", "")) == "QoSProfile":
+        return {k.arg: value for k in expr.keywords if k.arg in _LITERALS and (value := _literal(k.arg, k.value))}
     return {}
 
 
@@ -480,6 +511,16 @@ def unsupported_uses(path: Path) -> list[str]:
             for name, line in sorted(first.items(), key=lambda item: item[1])]
 
 
+def code_qos_choices(path: Path, run: str, root: Path) -> list[tuple[str, str, dict[str, str], str]]:
+    """The delivery policies the ROS code of a node (``run``, found at ``path`` under ``root``) chooses for its
+    endpoints, as literals: (section, topic as the code names it, policies, file:line)."""
+    if ":" in run:
+        found = scan_ros_entry(root, run.partition(":")[0], run)
+    else:
+        found = scan_ros_script(path, _package_root(path), root)
+    return found.chosen
+
+
 def writes_ros(path: Path) -> bool:
     """Whether ``path`` is code written for rclpy or rospy."""
     try:
@@ -529,6 +570,7 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
     project: dict[str, Any] = {"name": name, **code_folders(base, imported_from, interfaces),
                                "targets": {}, "nodes": {}, "topics": {}}
     notes: list[str] = []
+    asked: dict[str, dict[str, dict[str, Any]]] = {}  # topic -> node -> the QoS its code asks
     named = [n.ros_names[0] if len(set(n.ros_names)) == 1 else "" for n in nodes]
     for node, ros_name in zip(nodes, named, strict=True):
         # a main that makes one node is named after it; one that makes several (composed), or whose node name
@@ -538,11 +580,27 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
         project["nodes"][key] = _template_entry(node, key, ros_name)
         for topic, qos in node.qos.items():
             if not topic.startswith((PLACEHOLDER, "~")):
-                project["topics"].setdefault(topic if topic.startswith("/") else f"/{topic}", qos)
+                asked.setdefault(topic if topic.startswith("/") else f"/{topic}", {})[key] = qos
         notes += [note.replace("{node}", key) for note in node.notes]
+    project["topics"] = _template_topics(asked, notes)
     if not project["topics"]:
         del project["topics"]
     return project, notes
+
+
+def _template_topics(asked: dict[str, dict[str, dict[str, Any]]], notes: list[str]) -> dict[str, Any]:
+    """A topic's QoS where every node that names it asks the same in code; where they differ, none (a
+    topic's QoS is every endpoint's), said in a note."""
+    topics: dict[str, Any] = {}
+    for topic, by_node in asked.items():
+        kinds = {repr(sorted(qos.items())) for qos in by_node.values()}
+        if len(kinds) == 1:
+            topics[topic] = next(iter(by_node.values()))
+        else:
+            told = "; ".join(f"{node}: {qos}" for node, qos in by_node.items())
+            notes.append(f"topic {topic}: its nodes ask different QoS in code ({told}); none written under "
+                         "topics: (a topic's QoS is every endpoint's): give it the one it should have there")
+    return topics
 
 
 def _template_entry(node: RosNode, key: str, ros_name: str) -> dict[str, Any]:

@@ -10,22 +10,12 @@ Every entity remembers the launch-file line that made it, so a refusal names it.
 from __future__ import annotations
 
 import os
-import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
 from ..._errors import LaunchFileError
-
-_HERE = (str(Path(__file__).resolve().parents[1]),)  # hetros/compat: the shims' own frames are skipped
-
-
-def caller_place() -> str:
-    """``file:line`` of the launch-file code that is making the current entity."""
-    frame = sys._getframe(1)
-    while frame is not None and frame.f_code.co_filename.startswith(_HERE):
-        frame = frame.f_back  # type: ignore[assignment]
-    return f"{frame.f_code.co_filename}:{frame.f_lineno}" if frame is not None else "<launch>"
+from .._where import caller_place
 
 
 class LaunchDescriptionEntity:

@@ -19,10 +19,11 @@ from ...plan import join_namespace
 from ...runtime import Clock, Ticker, bound_node, listed, type_change_problem
 from ...runtime import Node as HetrosNode
 from .._flavour import copied, keepable, received
+from .._where import caller_place
 from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
 from .parameter import Parameter
-from .qos import QoSProfile, to_hetros
+from .qos import QoSProfile, delivery_conflicts, to_hetros
 from .task import Future, Task
 
 
@@ -367,6 +368,7 @@ class Node:
             supported(event_callbacks, f"publisher of {name}")
             deadline, matched, lost = event_callbacks.deadline, event_callbacks.matched, event_callbacks.liveliness
         _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}", qos_profile)
+        self._refuse_contradicted_qos(name, qos_profile, "publisher")
         inner = self._hetros.create_publisher(
             msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline, on_matched=matched,
             on_liveliness_lost=lost,
@@ -386,6 +388,7 @@ class Node:
             deadline, liveliness = event_callbacks.deadline, event_callbacks.liveliness
             lost, matched = event_callbacks.message_lost, event_callbacks.matched
         _refuse_overrides(qos_overriding_options, subscription_class, f"subscription to {name}", qos_profile)
+        self._refuse_contradicted_qos(name, qos_profile, "subscription")
         if content_filter_options is not None:
             raise NodeError(f"subscription to {name}: content filters are not supported by hetros; filter in the "
                             "callback")
@@ -405,6 +408,19 @@ class Node:
         subscription = Subscription(inner, msg_type, name, callback)
         entity.append(subscription)
         return self._own(subscription)
+
+    def _refuse_contradicted_qos(self, topic: str, profile: QoSProfile | int, role: str) -> None:
+        """Where the project file gives the topic a QoS, a delivery policy the code chose that it contradicts
+        (reliability, durability, history) is refused, naming both: the topic's QoS applies to every
+        endpoint, and the code would otherwise get what it did not ask for."""
+        plan = self._hetros.graph.plan
+        channel = plan.channels.get(topic) if plan is not None else None
+        conflicts = [] if channel is None or not channel.qos_given else \
+            delivery_conflicts(profile, channel.qos, subscription=role == "subscription")
+        if not conflicts:
+            return
+        raise NodeError(f"{caller_place()}: the {role} of {topic} asks {'; '.join(conflicts)}: the project file's "
+                        f"topics.{topic} is every endpoint's QoS; make the two agree")
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any],
                      callback_group: CallbackGroup | None = None, clock: Any = None, autostart: bool = True) -> Timer:

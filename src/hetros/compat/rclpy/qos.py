@@ -5,7 +5,8 @@ from __future__ import annotations
 import enum
 from typing import Any
 
-from ..._qos import QoS
+from ..._qos import DELIVERY_POLICIES, QoS
+from ..._qos import delivery_conflicts as conflicts_of
 
 
 class HistoryPolicy(enum.IntEnum):
@@ -65,25 +66,46 @@ QoSLivelinessPolicy = LivelinessPolicy
 
 
 class QoSProfile:
-    """rclpy's QoSProfile: keep_last depth 10, reliable, volatile unless told otherwise."""
+    """rclpy's QoSProfile: keep_last depth 10, reliable, volatile unless told otherwise. It remembers which
+    delivery policies the code chose (given, or set after), so that only those are held against the
+    project file's QoS of the topic (:func:`delivery_conflicts`)."""
 
-    def __init__(self, *, history: HistoryPolicy = HistoryPolicy.KEEP_LAST, depth: int | None = None,
-                 reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE,
-                 durability: DurabilityPolicy = DurabilityPolicy.VOLATILE,
+    _DELIVERY = DELIVERY_POLICIES
+
+    def __init__(self, *, history: HistoryPolicy | None = None, depth: int | None = None,
+                 reliability: ReliabilityPolicy | None = None, durability: DurabilityPolicy | None = None,
                  liveliness: LivelinessPolicy = LivelinessPolicy.SYSTEM_DEFAULT, deadline: Any = None,
                  lifespan: Any = None, liveliness_lease_duration: Any = None, **_ignored: Any) -> None:
-        self.history = HistoryPolicy(history)
+        chosen = {name for name, value in (("history", history), ("reliability", reliability),
+                                           ("durability", durability)) if value is not None}
+        self.history = HistoryPolicy(HistoryPolicy.KEEP_LAST if history is None else history)
         self.depth = 10 if depth is None else int(depth)
-        self.reliability = ReliabilityPolicy(reliability)
-        self.durability = DurabilityPolicy(durability)
+        self.reliability = ReliabilityPolicy(ReliabilityPolicy.RELIABLE if reliability is None else reliability)
+        self.durability = DurabilityPolicy(DurabilityPolicy.VOLATILE if durability is None else durability)
         self.liveliness = LivelinessPolicy(liveliness)
         # rclpy Durations (zero or absent: infinite, ROS 2's default)
         self.deadline, self.lifespan = deadline, lifespan
         self.liveliness_lease_duration = liveliness_lease_duration
+        self.chosen = chosen
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        object.__setattr__(self, name, value)
+        if name in self._DELIVERY and "chosen" in self.__dict__:
+            self.chosen.add(name)
 
     def __repr__(self) -> str:
         return (f"QoSProfile(history={self.history.name}, depth={self.depth}, reliability={self.reliability.name}, "
                 f"durability={self.durability.name})")
+
+
+def delivery_conflicts(profile: QoSProfile | int, declared: QoS, subscription: bool = False) -> list[str]:
+    """The delivery policies the code chose (:class:`QoSProfile` remembers them; a bare depth chooses
+    none) that the topic's QoS from the project file contradicts (:func:`hetros._qos.delivery_conflicts`)."""
+    if isinstance(profile, int):
+        return []
+    asked = to_hetros(profile)
+    assert asked is not None
+    return conflicts_of({name: getattr(asked, name) for name in profile.chosen}, declared, subscription)
 
 
 def to_hetros(profile: QoSProfile | int | None) -> QoS | None:

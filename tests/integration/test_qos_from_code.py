@@ -1,0 +1,73 @@
+"""QoS written in code against the project file's: a delivery policy the code chose that the topic's QoS
+contradicts is refused, by `hetros check` where the code fixes it and by the launch where the code
+computes it (ros2/demos's talker_qos, best effort unless --reliable), naming both places."""
+
+from __future__ import annotations
+
+import os
+import textwrap
+from pathlib import Path
+
+import yaml
+
+from tests.support.cli import hetros_in
+
+DEMOS = Path(__file__).resolve().parents[1] / "data" / "ros2_demos"
+
+
+
+def test_check_refuses_a_topic_qos_the_code_contradicts(tmp_path: Path) -> None:
+    (tmp_path / "nodes.py").write_text(textwrap.dedent("""\
+        import rclpy
+        from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+        from std_msgs.msg import String
+
+
+        def talker():
+            rclpy.init()
+            node = rclpy.create_node('talker')
+            node.create_publisher(String, 'chatter', QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT))
+            rclpy.spin(node)
+
+
+        def listener():
+            rclpy.init()
+            node = rclpy.create_node('listener')
+            node.create_subscription(String, 'chatter', print, qos_profile_sensor_data)
+            rclpy.spin(node)
+        """))
+    project = {"name": "qos", "nodes": {
+        "talker": {"run": "nodes:talker", "publish": {"/chatter": "std_msgs/msg/String"}},
+        "listener": {"run": "nodes:listener", "subscribe": {"/chatter": "std_msgs/msg/String"}}},
+        "topics": {"/chatter": {"reliability": "reliable", "history": "keep_last", "depth": 5}}}
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump(project, sort_keys=False))
+    done = hetros_in("check", str(tmp_path / "project.yaml"), cwd=tmp_path)
+    assert done.returncode == 1
+    text = done.stdout + done.stderr
+    # the publisher's best effort is refused; the subscription's is served by a stronger offer, as ROS 2 does
+    assert "topics./chatter: nodes.py:9: node talker's publish endpoint asks reliability best_effort (the project " \
+           "file: reliable)" in text, text
+    assert "project.yaml:" in text and "topics./chatter" in text, text
+    assert "node listener's" not in text
+
+
+def test_the_launch_refuses_qos_the_code_computes_against_the_projects(tmp_path: Path) -> None:
+    """talker_qos is best effort unless --reliable: only the run knows."""
+    talker_qos = DEMOS / "demo_nodes_py" / "demo_nodes_py" / "topics" / "talker_qos.py"
+    project = {"name": "qos", "python_path": [os.path.relpath(DEMOS / "demo_nodes_py", tmp_path)],
+               "targets": {"p": {"kind": "process"}},
+               "nodes": {"talker_qos": {"run": "demo_nodes_py.topics.talker_qos:main", "target": "p",
+                                        "args": ["-n", "2"], "publish": {"/chatter": "std_msgs/msg/String"}}},
+               "topics": {"/chatter": {"reliability": "reliable", "history": "keep_last", "depth": 10}}}
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump(project, sort_keys=False))
+    assert hetros_in("check", str(tmp_path / "project.yaml"), cwd=tmp_path).returncode == 0  # static: unknown
+    done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "10", cwd=tmp_path)
+    assert done.returncode != 0
+    line = next(i for i, text in enumerate(talker_qos.read_text().splitlines(), 1) if "create_publisher" in text)
+    assert f"{talker_qos}:{line}: the publisher of /chatter asks reliability best_effort (the project file: " \
+           "reliable)" in done.stderr, done.stderr
+    project["nodes"]["talker_qos"]["args"] = ["--reliable", "-n", "2"]  # what the project says: it runs
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump(project, sort_keys=False))
+    done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "3", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert 'Publishing: "Hello World: 1"' in done.stderr

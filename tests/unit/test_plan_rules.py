@@ -23,6 +23,7 @@ from hetros.project._report import CheckReport
 
 HEAD = "name: rules\ntargets: {main: {kind: thread}, p: {kind: process}, f: {kind: fpga}}\n"
 STRING = "std_msgs/msg/String"
+CASES = Path(__file__).resolve().parents[1] / "cases"
 
 BROKEN = {
     "cpus_exist": "targets: {main: {kind: process, cpus: [4096]}}\nnodes: {a: {run: json:dumps, target: main}}",
@@ -31,6 +32,8 @@ BROKEN = {
     "nodes_are_well_formed": "nodes: {a: {run: json:dumps, target: nowhere}}",
     "gather_endpoints": "nodes: {a: {run: json:dumps, target: main, publish: {/x: std_msgs/msg/Nothing}}}",
     "code_runs": "nodes: {a: {run: json:nobody_here, target: main}}",
+    "code_qos_agrees": (f"python_path: [{CASES}]\nnodes: {{a: {{run: qos_choice_module:main, target: main, "
+                        f"publish: {{/x: {STRING}}}}}}}\ntopics: {{/x: {{reliability: reliable}}}}"),
     "subscriptions_have_publishers": f"nodes: {{a: {{run: json:dumps, target: main, subscribe: {{/x: {STRING}}}}}}}",
     "one_type_per_topic": (f"nodes: {{a: {{run: json:dumps, target: main, publish: {{/x: {STRING}}}}},\n"
                            "        b: {run: json:dumps, target: main, subscribe: {/x: std_msgs/msg/Int32}}}"),

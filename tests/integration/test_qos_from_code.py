@@ -5,6 +5,7 @@ computes it (ros2/demos's talker_qos, best effort unless --reliable), naming bot
 from __future__ import annotations
 
 import os
+import re
 import textwrap
 from pathlib import Path
 
@@ -71,3 +72,56 @@ def test_the_launch_refuses_qos_the_code_computes_against_the_projects(tmp_path:
     done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "3", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert 'Publishing: "Hello World: 1"' in done.stderr
+
+
+def test_a_best_effort_publisher_never_waits_for_a_slow_subscriber(tmp_path: Path) -> None:
+    """On a topic the project gives no QoS (its transport: reliable, keep_all), a publisher whose code chose
+    best effort drops what a full subscriber has no room for, as a ROS 2 best-effort writer, instead of
+    waiting; the same talker asking nothing waits, and the listener hears every message."""
+    (tmp_path / "nodes.py").write_text(textwrap.dedent("""\
+        import sys
+        import time
+
+        import rclpy
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from std_msgs.msg import Int32
+
+
+        def talker():
+            rclpy.init()
+            node = rclpy.create_node('talker')
+            best_effort = sys.argv[1:] == ['best_effort']
+            qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT) if best_effort else 10
+            publisher = node.create_publisher(Int32, '/numbers', qos)
+            time.sleep(0.5)
+            for i in range(200):
+                publisher.publish(Int32(data=i))
+            node.get_logger().info(f'sent 200, dropped {publisher.dropped}')
+
+
+        def listener():
+            rclpy.init()
+            node = rclpy.create_node('listener')
+
+            def slow(message):
+                node.get_logger().info(f'heard {message.data}')
+                time.sleep(0.01)
+            node.create_subscription(Int32, '/numbers', slow, 10)
+            rclpy.spin(node)
+        """))
+    for args, dropping in ((["best_effort"], True), ([], False)):
+        project = {"name": "be", "targets": {"t": {"kind": "process"}, "l": {"kind": "process"}}, "nodes": {
+            "talker": {"run": "nodes:talker", "target": "t", "args": args,
+                       "publish": {"/numbers": "std_msgs/msg/Int32"}},
+            "listener": {"run": "nodes:listener", "target": "l", "subscribe": {"/numbers": "std_msgs/msg/Int32"}}}}
+        (tmp_path / "project.yaml").write_text(yaml.safe_dump(project, sort_keys=False))
+        done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "5", cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        sent = re.search(r"\[talker\]: sent 200, dropped (\d+)", done.stderr)
+        assert sent is not None, done.stderr
+        heard = [int(n) for n in re.findall(r"\[listener\]: heard (\d+)$", done.stderr, re.MULTILINE)]
+        assert heard == sorted(heard) and heard, done.stderr
+        if dropping:
+            assert int(sent.group(1)) > 0 and len(heard) + int(sent.group(1)) == 200, done.stderr
+        else:
+            assert sent.group(1) == "0" and heard == list(range(200)), done.stderr

@@ -23,7 +23,7 @@ from .._where import caller_place
 from .callback_groups import BUILT_IN_GROUPS, CallbackGroup, MutuallyExclusiveCallbackGroup
 from .logging import RcutilsLogger
 from .parameter import Parameter
-from .qos import QoSProfile, delivery_conflicts, to_hetros
+from .qos import QoSProfile, ReliabilityPolicy, delivery_conflicts, to_hetros
 from .task import Future, Task
 
 
@@ -111,12 +111,19 @@ class Publisher:
         self._where = f"topic {topic}"  # for a wrong type's error, made once: publish is the hot path
         self._class: type[Any] | None = None  # the class last published, and whether its messages go as they are
         self._keepable: Callable[[Any], bool] = bool
+        # best effort chosen in code on a topic the project gives no QoS (its transport then blocks a
+        # publisher while a reliable subscriber's FIFO is full): the message is dropped instead, counted
+        self.best_effort = False
+        self.dropped = 0
 
     @property
     def topic(self) -> str:
         return self.topic_name
 
     def publish(self, msg: Any) -> None:
+        if self.best_effort and not self._inner.has_room():
+            self.dropped += 1  # as a best-effort writer does: never waits for a subscriber
+            return
         if type(msg) is not self._class:
             self._class, self._keepable = type(msg), keepable(type(msg))
         if self._keepable(msg):
@@ -373,7 +380,13 @@ class Node:
             msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline, on_matched=matched,
             on_liveliness_lost=lost,
             on_incompatible_qos=incompatible_qos_handler(event_callbacks, self._logger, name, publisher=True))
-        return self._own(Publisher(self, inner, msg_type, name))
+        publisher = Publisher(self, inner, msg_type, name)
+        plan = self._hetros.graph.plan
+        channel = plan.channels.get(name) if plan is not None else None
+        publisher.best_effort = isinstance(qos_profile, QoSProfile) and "reliability" in qos_profile.chosen and \
+            qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT and channel is not None and \
+            not channel.qos_given and channel.qos.blocks_publisher
+        return self._own(publisher)
 
     def create_subscription(self, msg_type: type[Any], topic: str, callback: Callable[[Any], None],
                             qos_profile: QoSProfile | int, *, callback_group: CallbackGroup | None = None,

@@ -97,6 +97,7 @@ class LifecycleNodeMixin(ManagedEntity):
         assert isinstance(self, Node)
         plain = Node.create_publisher(self, msg_type, topic, qos_profile, **kwargs)
         publisher = LifecyclePublisher(self, plain._inner, msg_type, plain.topic_name)
+        publisher.best_effort = plain.best_effort
         self._owned[self._owned.index(plain)] = publisher  # disabled until the next activation, as in rclpy
         self._managed_entities.add(publisher)
         return publisher

@@ -83,6 +83,18 @@ def test_an_exit_that_shuts_the_launch_down_makes_its_node_required(tmp_path: Pa
     assert re.search(r"\[add_two_ints_client\]: Result of add_two_ints: 5", done.stderr), done.stderr
 
 
+def test_the_c_plus_plus_lifecycle_demos_launch_file(tmp_path: Path) -> None:
+    """lifecycle's launch file: a LifecycleNode (managed, unconfigured), the listener, and the service client
+    whose exit (on_exit=Shutdown()) ends the launch; nodes keep their code's names where it gives none."""
+    project = _imported(LAUNCH / "demos" / "lifecycle_cpp_demo_launch.py", tmp_path)
+    nodes = project["nodes"]
+    assert sorted(nodes) == ["lc_client", "lc_listener", "lc_talker"]
+    assert nodes["lc_talker"]["lifecycle"] == "unconfigured" and nodes["lc_talker"]["run"] == "lifecycle_py.talker:main"
+    assert nodes["lc_client"].get("required") is True and "required" not in nodes["lc_listener"]
+    assert nodes["lc_client"]["clients"] == {"/lc_talker/get_state": "lifecycle_msgs/srv/GetState",
+                                             "/lc_talker/change_state": "lifecycle_msgs/srv/ChangeState"}
+
+
 def test_hetros_launch_runs_a_python_launch_file_with_its_arguments(tmp_path: Path) -> None:
     done = hetros_in("launch", str(LAUNCH / "ros2launch" / "example.launch.py"), "node_prefix:=pre_",
                    "--package-path", str(TWINS), "--duration", "4", cwd=tmp_path, timeout=90)

@@ -78,3 +78,41 @@ def test_a_thread_of_a_node_that_raises_fails_the_launch(tmp_path: Path) -> None
     assert "thread worker-thread of node worker raised" in done.stderr
     assert "ValueError: the worker broke" in done.stderr
     assert "a thread node worker started raised" in done.stderr
+
+
+def test_an_optional_nodes_failure_ends_nothing(tmp_path: Path) -> None:
+    """`optional: true`: the node's failure (here, a thread of it) is reported, the graph goes on and the
+    launch exits 0; the same node without it ends the launch non-zero."""
+    (tmp_path / "nodes.py").write_text(textwrap.dedent("""\
+        import threading
+
+        import rclpy
+
+
+        def broken():
+            def work():
+                rclpy.create_node('worker')
+                raise ValueError('the worker broke')
+            rclpy.init()
+            thread = threading.Thread(target=work, name='worker-thread')
+            thread.start()
+            thread.join()
+
+
+        def steady(node):
+            for i in node.rate(10.0):
+                if i == 15:
+                    node.log.info('still running')
+        """))
+    for optional in (True, False):
+        (tmp_path / "project.yaml").write_text(
+            "name: optional\ntargets: {a: {kind: process}, b: {kind: process}}\nnodes:\n"
+            f"  broken: {{run: nodes:broken, target: a, optional: {str(optional).lower()}}}\n"
+            "  steady: {run: nodes:steady, target: b}\n")
+        done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "3", cwd=tmp_path)
+        assert "ValueError: the worker broke" in done.stderr
+        if optional:
+            assert done.returncode == 0, done.stderr
+            assert "it is optional: the graph goes on" in done.stderr and "still running" in done.stderr
+        else:
+            assert done.returncode != 0 and "still running" not in done.stderr, done.stderr

@@ -125,6 +125,8 @@ class NodePlan:
     memory: tuple[str, ...] = ()
     # a managed node: the lifecycle state the launch brings it to ("" = not managed by the project)
     lifecycle: str = ""
+    # its failure is reported and ends nothing (``optional:``)
+    optional: bool = False
 
 
 @dataclass(frozen=True)

@@ -149,6 +149,9 @@ class NodeSpec(_Strict):
     restart: Literal["never", "on-failure"] = Field(default="never", description="on-failure: a node that raised "
                                                    "starts again, its subscriptions kept")
     required: bool = Field(default=False, description="when this node returns, the whole launch ends")
+    optional: bool = Field(default=False, description="a node whose failure (it raised, or a thread of it did) "
+                           "is reported but ends nothing: the graph goes on, and the launch's exit code is not "
+                           "non-zero for it")
     lifecycle: Literal["unconfigured", "inactive", "active"] | None = Field(
         default=None, description="a managed node (rclpy.lifecycle): the state the launch brings it to before the "
         "graph runs, as launch_ros's transitions do (absent: it stays where its code puts it)")

@@ -199,7 +199,7 @@ def _node_plan(project: LoadedProject, name: str, spec: NodeSpec) -> NodePlan:
         action_clients={a: normalize_typename(t, "action") for a, t in spec.types("action_clients").items()},
         max_goals=spec.max_goals(), hw=spec.hw or "", args=tuple(spec.args), namespace=spec.namespace,
         remap=dict(spec.remap), ros_name=spec.name or "", env=dict(spec.env), root=project.node_roots.get(name, ""),
-        memory=tuple(spec.memory), lifecycle=spec.lifecycle or "")
+        memory=tuple(spec.memory), lifecycle=spec.lifecycle or "", optional=spec.optional)
 
 
 def _gateway_plan(channels: dict[str, ChannelPlan], gateway: str, target: str) -> NodePlan:

@@ -347,11 +347,13 @@ class Launcher:
             if kind == "finished":  # something driving the launch from inside (``hetros play --launch``)
                 return LaunchResult(1 if self.failures or not event["ok"] else 0, self.failures, event["why"])
             if kind == "node_failed":
-                what = "restarting it" if event["restarting"] else "shutting the graph down"
+                optional = (spec := self.plan.nodes.get(event["node"])) is not None and spec.optional
+                what = "restarting it" if event["restarting"] else \
+                    "it is optional: the graph goes on" if optional else "shutting the graph down"
                 sys.stderr.write(f"[ERROR] [launch]: node {event['node']} (target {event['target']}) "
                                  f"raised; {what}:\n{event['traceback']}")
                 sys.stderr.flush()
-                if not event["restarting"]:
+                if not event["restarting"] and not optional:
                     self.failures.append(event["node"])
                     return LaunchResult(1, self.failures, f"node {event['node']} failed")
             elif kind == "exited":
@@ -444,7 +446,7 @@ class Launcher:
             if child.reader is not None:
                 child.reader.join(timeout=5.0)  # its last lines are forwarded then (a loaded machine is slow)
         if self.host is not None:
-            self._failed_at_shutdown(t.spec.name for t in self.host.threads if t.failed)
+            self._failed_at_shutdown(t.spec.name for t in self.host.threads if t.failed and not t.spec.optional)
         while (event := self._next_event(0)) is not None:
             if event["event"] == "stopped":
                 stuck.extend(f"node {node} (target {event['target']})" for node in event.get("stuck", []))

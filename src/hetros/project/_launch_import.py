@@ -114,7 +114,6 @@ class NodeRequest:
     required: bool = False
     respawn: bool = False
     lifecycle: str | None = None  # a managed node's state once the launch has started it
-    target: str | None = None  # a component's container (else a process of its own)
 
     @property
     def full_name(self) -> str:
@@ -337,8 +336,7 @@ class LaunchImporter:
         code_name = found.ros_names[0] if len(set(found.ros_names)) == 1 else ""
         key_name = request.name or code_name or found.key
         key = unique_key(key_name, self.project["nodes"])
-        target = request.target or key
-        node: dict[str, Any] = {"run": found.run, "target": target}
+        node: dict[str, Any] = {"run": found.run, "target": key}
         namespace = request.namespace
         if namespace:
             node["namespace"] = namespace
@@ -346,7 +344,7 @@ class LaunchImporter:
         # without one the node keeps its code's, as in ROS
         if request.name:
             node["name"] = request.name
-        elif not request.name and code_name and code_name != key:
+        elif code_name and code_name != key:
             node["name"] = code_name
         for section, endpoints in found.endpoints.items():
             if endpoints:
@@ -362,7 +360,7 @@ class LaunchImporter:
         if request.lifecycle is not None or found.managed:
             node["lifecycle"] = request.lifecycle or "unconfigured"
         self.project["nodes"][key] = node
-        self.project["targets"].setdefault(target, {"kind": "process"})
+        self.project["targets"][key] = {"kind": "process"}
         resolved = {resolve_name(k, namespace, key_name): resolve_name(v, namespace, key_name)
                     for k, v in request.remap.items()}
         topics = self.project.setdefault("topics", {})

@@ -381,6 +381,12 @@ LIFECYCLE_SERVICES = {"change_state": "lifecycle_msgs/srv/ChangeState",
                       "get_available_transitions": "lifecycle_msgs/srv/GetAvailableTransitions",
                       "get_transition_graph": "lifecycle_msgs/srv/GetAvailableTransitions"}
 LIFECYCLE_EVENTS = ("transition_event", "lifecycle_msgs/msg/TransitionEvent")
+# the transitions one asks of a managed node (lifecycle_msgs/Transition ids): id -> (label, the primary state
+# it starts from, the one it ends in when its callback succeeds)
+LIFECYCLE_TRANSITIONS = {1: ("configure", "unconfigured", "inactive"), 2: ("cleanup", "inactive", "unconfigured"),
+                         3: ("activate", "inactive", "active"), 4: ("deactivate", "active", "inactive"),
+                         5: ("shutdown", "unconfigured", "finalized"), 6: ("shutdown", "inactive", "finalized"),
+                         7: ("shutdown", "active", "finalized")}
 
 
 def lifecycle_services(full_name: str) -> dict[str, str]:

@@ -28,7 +28,7 @@ from typing import Any
 import yaml
 
 from .._errors import ProjectError
-from ..plan import join_namespace, resolve_name
+from ..plan import LIFECYCLE_TRANSITIONS, join_namespace, resolve_name
 from ._expand import flatten, parameters_from_files
 from ._ros_scan import code_folders, entry_points, package_name, scan_ros_entry, scan_ros_script, unique_key
 
@@ -591,18 +591,12 @@ class LaunchImporter:
 _PYTHON_LAUNCH_SECONDS = 60
 _MARKER = "\n@@hetros-launch@@"  # hetros.compat.launch_eval's: that module is not imported here
 
-# lifecycle_msgs/Transition ids -> (the state each starts from, the state it ends in)
-_TRANSITIONS = {1: ("unconfigured", "inactive"), 2: ("inactive", "unconfigured"), 3: ("inactive", "active"),
-                4: ("active", "inactive"), 5: ("unconfigured", "finalized"), 6: ("inactive", "finalized"),
-                7: ("active", "finalized")}
-
-
 def lifecycle_state_after(state: str, transition: int, where: str) -> str:
     """The state a managed node is in after ``transition`` from ``state``, as the launch asks it."""
-    if transition not in _TRANSITIONS:
+    if transition not in LIFECYCLE_TRANSITIONS:
         raise ProjectError(f"{where}: transition {transition} is not one a launch asks (1 configure, 2 cleanup, "
                            "3 activate, 4 deactivate, 5-7 shutdown)")
-    start, end = _TRANSITIONS[transition]
+    _, start, end = LIFECYCLE_TRANSITIONS[transition]
     if start != state:
         raise ProjectError(f"{where}: transition {transition} starts from {start}, but the node is {state} then")
     return end

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from .._errors import NodeError
 from ..msg import registry
-from ..plan import LIFECYCLE_EVENTS, LIFECYCLE_SERVICES
+from ..plan import LIFECYCLE_EVENTS, LIFECYCLE_SERVICES, LIFECYCLE_TRANSITIONS
 
 if TYPE_CHECKING:
     from ..msg import ServiceType
@@ -39,11 +39,12 @@ class Transition(NamedTuple):
     goal: int
 
 
-# the transitions one asks for, from a primary state to a transition state
-REQUESTED = (Transition(1, "configure", UNCONFIGURED, CONFIGURING), Transition(2, "cleanup", INACTIVE, CLEANINGUP),
-             Transition(3, "activate", INACTIVE, ACTIVATING), Transition(4, "deactivate", ACTIVE, DEACTIVATING),
-             Transition(5, "shutdown", UNCONFIGURED, SHUTTINGDOWN), Transition(6, "shutdown", INACTIVE, SHUTTINGDOWN),
-             Transition(7, "shutdown", ACTIVE, SHUTTINGDOWN))
+# the transitions one asks for (the plan's table), from a primary state to the transition state its label runs
+_DOING = {"configure": CONFIGURING, "cleanup": CLEANINGUP, "activate": ACTIVATING, "deactivate": DEACTIVATING,
+          "shutdown": SHUTTINGDOWN}
+_STATE_IDS = {label: state for state, label in LABELS.items()}
+REQUESTED = tuple(Transition(tid, label, _STATE_IDS[start], _DOING[label])
+                  for tid, (label, start, _) in LIFECYCLE_TRANSITIONS.items())
 # the transitions a callback's result takes, from a transition state: (state, result) -> transition
 _RESULTS = {(CONFIGURING, SUCCESS): (10, INACTIVE), (CONFIGURING, FAILURE): (11, UNCONFIGURED),
             (CONFIGURING, ERROR): (12, ERRORPROCESSING), (CLEANINGUP, SUCCESS): (20, UNCONFIGURED),

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
 from ..._errors import NodeError, ParameterError
-from ...plan import join_namespace
+from ...plan import ChannelPlan, join_namespace
 from ...runtime import Clock, Ticker, bound_node, listed, type_change_problem
 from ...runtime import Node as HetrosNode
 from .._flavour import copied, keepable, received
@@ -375,14 +375,12 @@ class Node:
             supported(event_callbacks, f"publisher of {name}")
             deadline, matched, lost = event_callbacks.deadline, event_callbacks.matched, event_callbacks.liveliness
         _refuse_overrides(qos_overriding_options, publisher_class, f"publisher of {name}", qos_profile)
-        self._refuse_contradicted_qos(name, qos_profile, "publisher")
+        channel = self._checked_channel(name, qos_profile, "publisher")
         inner = self._hetros.create_publisher(
             msg_type, name, qos=to_hetros(qos_profile), on_deadline_missed=deadline, on_matched=matched,
             on_liveliness_lost=lost,
             on_incompatible_qos=incompatible_qos_handler(event_callbacks, self._logger, name, publisher=True))
         publisher = Publisher(self, inner, msg_type, name)
-        plan = self._hetros.graph.plan
-        channel = plan.channels.get(name) if plan is not None else None
         publisher.best_effort = isinstance(qos_profile, QoSProfile) and "reliability" in qos_profile.chosen and \
             qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT and channel is not None and \
             not channel.qos_given and channel.qos.blocks_publisher
@@ -401,7 +399,7 @@ class Node:
             deadline, liveliness = event_callbacks.deadline, event_callbacks.liveliness
             lost, matched = event_callbacks.message_lost, event_callbacks.matched
         _refuse_overrides(qos_overriding_options, subscription_class, f"subscription to {name}", qos_profile)
-        self._refuse_contradicted_qos(name, qos_profile, "subscription")
+        self._checked_channel(name, qos_profile, "subscription")
         if content_filter_options is not None:
             raise NodeError(f"subscription to {name}: content filters are not supported by hetros; filter in the "
                             "callback")
@@ -422,8 +420,9 @@ class Node:
         entity.append(subscription)
         return self._own(subscription)
 
-    def _refuse_contradicted_qos(self, topic: str, profile: QoSProfile | int, role: str) -> None:
-        """Where the project file gives the topic a QoS, a delivery policy the code chose that it contradicts
+    def _checked_channel(self, topic: str, profile: QoSProfile | int, role: str) -> ChannelPlan | None:
+        """The plan's channel of ``topic`` (None without a plan), once the code's QoS is checked against it:
+        where the project file gives the topic a QoS, a delivery policy the code chose that it contradicts
         (reliability, durability, history) is refused, naming both: the topic's QoS applies to every
         endpoint, and the code would otherwise get what it did not ask for."""
         plan = self._hetros.graph.plan
@@ -431,7 +430,7 @@ class Node:
         conflicts = [] if channel is None or not channel.qos_given else \
             delivery_conflicts(profile, channel.qos, subscription=role == "subscription")
         if not conflicts:
-            return
+            return channel
         raise NodeError(f"{caller_place()}: the {role} of {topic} asks {'; '.join(conflicts)}: the project file's "
                         f"topics.{topic} is every endpoint's QoS; make the two agree")
 

@@ -92,7 +92,7 @@ fast: install-test
 # default run must stay under on 2 cores), and a launch's workers were never traced
 test: lint
 	HETROS_PURE_PYTHON=1 $(VENV)/bin/pytest -q -p no:cacheprovider tests/conformance
-	$(VENV)/bin/pytest -q -p no:cacheprovider --cov=hetros --cov-report= tests/unit tests/conformance tests/fuzz
+	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 --cov=hetros --cov-report= tests/unit tests/conformance tests/fuzz
 	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 --dist loadfile -m "not machine_wide" tests/integration tests/interop
 	$(VENV)/bin/pytest -q -p no:cacheprovider -m machine_wide tests/integration tests/interop
 	@$(VENV)/bin/coverage report --format=total | xargs printf "coverage: %s%% of src/hetros's lines ran in the test process\n"

@@ -55,11 +55,8 @@ def _demos_project(tmp_path: Path) -> dict[str, Any]:
     project["targets"] = {node["target"]: {"kind": "process"} for node in nodes.values()}
     project["topics"] = {"/chatter": {"history": "keep_last", "depth": 10},
                          "/qos/chatter": {"history": "keep_last", "depth": 10},
-                         "/qos_overrides_chatter": {"history": "keep_last", "depth": 10},
-                         # what lifespan's code asks for at run time (a static plan takes it from here; the
-                         # launch warns that the project's QoS applies where it differs)
-                         "/ls/qos_lifespan_chatter": {"history": "keep_last", "depth": 10,
-                                                      "durability": "transient_local", "lifespan": 1.0}}
+                         "/qos_overrides_chatter": {"history": "keep_last", "depth": 10}}
+    # lifespan's topic has no QoS here: its endpoints keep what the code asks (transient_local, 1 s)
     return project
 
 

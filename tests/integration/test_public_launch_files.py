@@ -6,6 +6,7 @@ ros2/demos packages), imported and launched: the graph each gives is the graph t
 from __future__ import annotations
 
 import re
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -104,7 +105,6 @@ def test_hetros_launch_runs_a_python_launch_file_with_its_arguments(tmp_path: Pa
 
 
 @pytest.mark.parametrize(("file", "line", "words"), [
-    ("demos/composition_demo_launch.py", 30, "ComposableNode(plugin='composition::Talker') is a C++ component"),
     ("demos/dummy_robot_bringup_launch.py", 24, "package 'dummy_robot_bringup' not found"),
 ])
 def test_what_a_public_launch_file_needs_beyond_python_is_refused_at_its_line(file: str, line: int, words: str,
@@ -113,6 +113,41 @@ def test_what_a_public_launch_file_needs_beyond_python_is_refused_at_its_line(fi
     assert done.returncode != 0
     assert f"{LAUNCH / file}:{line}: " in done.stderr and words in done.stderr, done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_a_containers_components_run_as_threads_of_one_process(tmp_path: Path) -> None:
+    """composition's launch file: a ComposableNodeContainer with the Talker and Listener components, given
+    by a Python package under the rclpy_components entry point group (tests/data/cpp_twins/composition)."""
+    project = _imported(LAUNCH / "demos" / "composition_demo_launch.py", tmp_path)
+    assert {key: (node["run"], node["target"]) for key, node in project["nodes"].items()} == {
+        "talker": ("cpp_twins_composition.talker_component:Talker", "my_container"),
+        "listener": ("cpp_twins_composition.listener_component:Listener", "my_container")}
+    assert project["targets"] == {"my_container": {"kind": "process"}}
+    done = hetros_in("launch", str(LAUNCH / "demos" / "composition_demo_launch.py"), "--package-path", str(TWINS),
+                     "--duration", "4", cwd=tmp_path, timeout=90)
+    assert done.returncode == 0, done.stderr
+    assert re.search(r"\[talker\]: Publishing: 'Hello World: 1'", done.stderr), done.stderr
+    assert re.search(r"\[listener\]: I heard: \[Hello World: 1\]", done.stderr), done.stderr
+
+
+def test_a_component_no_package_offers_is_refused_at_its_line(tmp_path: Path) -> None:
+    launch = tmp_path / "components_launch.py"
+    launch.write_text(textwrap.dedent("""\
+        from launch import LaunchDescription
+        from launch_ros.actions import ComposableNodeContainer
+        from launch_ros.descriptions import ComposableNode
+
+
+        def generate_launch_description():
+            return LaunchDescription([ComposableNodeContainer(
+                name='c', namespace='', package='rclcpp_components', executable='component_container',
+                composable_node_descriptions=[
+                    ComposableNode(package='composition', plugin='composition::Server', name='server')])])
+        """))
+    done = hetros_in("import", "ros2launch", str(launch), "--package-path", str(TWINS), cwd=tmp_path)
+    assert done.returncode != 0 and "Traceback" not in done.stderr
+    assert f"{launch}:10: package composition offers no component 'composition::Server' (its rclpy_components: " \
+           "composition::Listener, composition::Talker)" in done.stderr, done.stderr
 
 
 def test_topic_monitors_launch_files_give_their_publishers(tmp_path: Path) -> None:

@@ -125,3 +125,59 @@ def test_a_best_effort_publisher_never_waits_for_a_slow_subscriber(tmp_path: Pat
             assert int(sent.group(1)) > 0 and len(heard) + int(sent.group(1)) == 200, done.stderr
         else:
             assert sent.group(1) == "0" and heard == list(range(200)), done.stderr
+
+
+def test_a_subscription_made_late_joins_as_ros2s_late_joiner(tmp_path: Path) -> None:
+    """On a topic the project gives no QoS, a subscription the code makes after spinning for a while
+    (in another process than the publisher) holds no publisher back before it exists, and gets of the
+    earlier messages what its durability asks: none when volatile, the newest `depth` when
+    transient_local."""
+    (tmp_path / "nodes.py").write_text(textwrap.dedent("""\
+        import sys
+
+        import rclpy
+        from rclpy.qos import DurabilityPolicy, QoSProfile
+        from std_msgs.msg import Int32
+
+
+        def talker():
+            rclpy.init()
+            node = rclpy.create_node('talker')
+            publisher = node.create_publisher(
+                Int32, '/numbers', QoSProfile(depth=3, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+            count = iter(range(40))
+
+            def tick():
+                number = next(count, None)
+                if number is not None:
+                    publisher.publish(Int32(data=number))
+                    node.get_logger().info(f'sent {number}')
+            node.create_timer(0.02, tick)
+            rclpy.spin(node)
+
+
+        def listener():
+            rclpy.init()
+            node = rclpy.create_node('listener')
+            durability = DurabilityPolicy.TRANSIENT_LOCAL if sys.argv[1:] == ['transient_local'] \\
+                else DurabilityPolicy.VOLATILE
+
+            def subscribe():
+                timer.cancel()
+                node.create_subscription(Int32, '/numbers', lambda m: node.get_logger().info(f'heard {m.data}'),
+                                         QoSProfile(depth=3, durability=durability))
+            timer = node.create_timer(3.0, subscribe)
+            rclpy.spin(node)
+        """))
+    for args, expected in ((["volatile"], []), (["transient_local"], [37, 38, 39])):
+        project = {"name": "late", "targets": {"t": {"kind": "process"}, "l": {"kind": "process"}}, "nodes": {
+            "talker": {"run": "nodes:talker", "target": "t", "publish": {"/numbers": "std_msgs/msg/Int32"}},
+            "listener": {"run": "nodes:listener", "target": "l", "args": args,
+                         "subscribe": {"/numbers": "std_msgs/msg/Int32"}}}}
+        (tmp_path / "project.yaml").write_text(yaml.safe_dump(project, sort_keys=False))
+        done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "6", cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        sent = [int(n) for n in re.findall(r"\[talker\]: sent (\d+)$", done.stderr, re.MULTILINE)]
+        assert sent == list(range(40)), done.stderr  # the talker never waited for a listener not there yet
+        heard = [int(n) for n in re.findall(r"\[listener\]: heard (\d+)$", done.stderr, re.MULTILINE)]
+        assert heard == expected, done.stderr

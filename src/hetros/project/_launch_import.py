@@ -114,6 +114,8 @@ class NodeRequest:
     required: bool = False
     respawn: bool = False
     lifecycle: str | None = None  # a managed node's state once the launch has started it
+    plugin: str = ""  # a component's plugin name (``executable`` is then empty)
+    container: str = ""  # the container a component is loaded into: the process target it shares
 
     @property
     def full_name(self) -> str:
@@ -331,12 +333,14 @@ class LaunchImporter:
         """One node of the launch (any of its forms) into the project: its code found in its package, its
         command line's ROS arguments applied as ROS applies them; its key."""
         args = self._ros_arguments(request)
-        found = self._code(request.package, self.find_package(request.package, request.where), request.executable,
-                           request.where, request.params)
+        found = self._code(request.package, self.find_package(request.package, request.where),
+                           request.plugin or request.executable, request.where, request.params,
+                           "rclpy_components" if request.plugin else "console_scripts")
         code_name = found.ros_names[0] if len(set(found.ros_names)) == 1 else ""
         key_name = request.name or code_name or found.key
         key = unique_key(key_name, self.project["nodes"])
-        node: dict[str, Any] = {"run": found.run, "target": key}
+        target = unique_key(request.container.strip("/").replace("/", "_"), {}) if request.container else key
+        node: dict[str, Any] = {"run": found.run, "target": target}
         namespace = request.namespace
         if namespace:
             node["namespace"] = namespace
@@ -360,7 +364,7 @@ class LaunchImporter:
         if request.lifecycle is not None or found.managed:
             node["lifecycle"] = request.lifecycle or "unconfigured"
         self.project["nodes"][key] = node
-        self.project["targets"][key] = {"kind": "process"}
+        self.project["targets"][target] = {"kind": "process"}
         resolved = {resolve_name(k, namespace, key_name): resolve_name(v, namespace, key_name)
                     for k, v in request.remap.items()}
         topics = self.project.setdefault("topics", {})
@@ -452,10 +456,10 @@ class LaunchImporter:
                     continue
                 keys[record["id"]] = self.add_node(request)
             elif kind == "container":
-                self.notes.append(f"{where}: container {record['name']}: its components are refused or started "
-                                  "as listed; the container process itself is not started")
+                self.notes.append(f"{where}: container {record['name']}: its components run as threads of one "
+                                  "process target; the container program itself is not started")
             elif kind == "component":
-                self._component(record)
+                self.add_node(self._component(record))
             elif kind == "include":
                 inner = _Scope(record["namespace"], dict(map(tuple, record["remap"])), dict(record["env"]),
                                dict(record["args"]), self._merged(record["params"], "", where))
@@ -507,12 +511,22 @@ class LaunchImporter:
             request.params = self._merged(record["parameters"], join_namespace(request.namespace, name), where)
         return request
 
-    def _component(self, record: dict[str, Any]) -> None:
-        """A component of a container: ROS 2's components are C++ plugins (rclcpp_components); rclpy has
-        none, so the launch is refused at the component's line with the form hetros runs."""
-        raise ProjectError(f"{record['where']}: ComposableNode(plugin={record['plugin']!r}) is a C++ component, "
-                           "which hetros cannot load; start its Python counterpart as launch_ros.actions.Node (the "
-                           "nodes of one process target of the project run as threads of one process)")
+    def _component(self, record: dict[str, Any]) -> NodeRequest:
+        """A component of a container (launch_ros's ComposableNode). ROS 2's components are C++ plugins
+        that rclcpp_components loads into one process; a Python package offers its node classes under the
+        ``rclpy_components`` entry point group (``'pkg::Talker = pkg.talker:Talker'``), and the
+        components of one container become threads of one process target."""
+        name = record.get("name") or ""
+        request = NodeRequest(where=record["where"], package=record["package"], executable="", name=name,
+                              namespace=join_namespace("", record.get("namespace") or ""),
+                              remap=dict(map(tuple, record["remap"])), plugin=record["plugin"],
+                              container=record["container"])
+        if not name:
+            found = self._code(request.package, self.find_package(request.package, request.where), request.plugin,
+                               request.where, {}, "rclpy_components")
+            name = found.ros_names[0] if len(set(found.ros_names)) == 1 else found.key
+        request.params = self._merged(record["parameters"], join_namespace(request.namespace, name), request.where)
+        return request
 
     def _merged(self, entries: list[Any], full_name: str, where: str) -> dict[str, Any]:
         """A node's parameters from launch_ros's entries, in order: values, and files' values for this node."""
@@ -528,15 +542,22 @@ class LaunchImporter:
 
     # -- helpers -----------------------------------------------------------------------------
 
-    def _code(self, name: str, folders: list[Path], executable: str, where: str, parameters: dict[str, Any]) -> Any:
+    def _code(self, name: str, folders: list[Path], executable: str, where: str, parameters: dict[str, Any],
+              group: str = "console_scripts") -> Any:
         if self.ros2:
             targets: dict[str, str] = {}
             for package in folders:
-                targets = entry_points(package)
+                targets = entry_points(package, group)
                 if executable in targets:
                     self.used_packages[package] = None
                     self.imported_from[package] = None
-                    return scan_ros_entry(package, executable, targets[executable], parameters)
+                    key = executable.rpartition("::")[2].lower() if group == "rclpy_components" else executable
+                    return scan_ros_entry(package, key, targets[executable], parameters)
+            if group == "rclpy_components":
+                raise ProjectError(f"{where}: package {name} offers no component {executable!r} (its "
+                                   f"rclpy_components: {', '.join(sorted(targets)) or 'none'}); a Python package "
+                                   "offers a node class as a component in setup.py: entry_points={'rclpy_components':"
+                                   f" ['{executable} = module:NodeClass']}}")
             raise ProjectError(f"{where}: package {name} has no entry point {executable!r} (its console_scripts: "
                                f"{', '.join(sorted(targets)) or 'none'})")
         for package in folders:

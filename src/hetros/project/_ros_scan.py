@@ -56,8 +56,9 @@ class RosNode:
     chosen: list[tuple[str, str, dict[str, str], str]] = field(default_factory=list)
 
 
-def entry_points(package: Path) -> dict[str, str]:
-    """``console_scripts`` name -> ``module:function`` from setup.py and setup.cfg."""
+def entry_points(package: Path, group: str = "console_scripts") -> dict[str, str]:
+    """An entry point group's name -> ``module:attribute`` from setup.py and setup.cfg: ``console_scripts``
+    (a package's executables) or ``rclpy_components`` (its components: plugin name -> node class)."""
     found: dict[str, str] = {}
     setup_py = package / "setup.py"
     if setup_py.is_file():
@@ -66,7 +67,7 @@ def entry_points(package: Path) -> dict[str, str]:
             if not isinstance(table, ast.Dict):
                 continue
             for key, value in zip(table.keys, table.values, strict=True):
-                if key is not None and _string(key) == "console_scripts" and isinstance(value, ast.List):
+                if key is not None and _string(key) == group and isinstance(value, ast.List):
                     for item in value.elts:
                         name, sep, target = (_joined(item, names) or "").partition("=")
                         if sep:
@@ -75,8 +76,8 @@ def entry_points(package: Path) -> dict[str, str]:
     if setup_cfg.is_file():
         parser = configparser.ConfigParser()
         parser.read(setup_cfg, encoding="utf-8")
-        if parser.has_option("options.entry_points", "console_scripts"):
-            for line in parser.get("options.entry_points", "console_scripts").splitlines():
+        if parser.has_option("options.entry_points", group):
+            for line in parser.get("options.entry_points", group).splitlines():
                 name, sep, target = line.partition("=")
                 if sep:
                     found[name.strip()] = target.strip()
@@ -464,7 +465,7 @@ def scan_ros_entry(root: Path, key: str, target: str, parameters: dict[str, Any]
         node.notes.append(f"{target}: module {module} is not under {root}; add its endpoints by hand")
         return node
     reader = _Reader(path, root, parameters)
-    scope = reader.functions.get(function)
+    scope: ast.AST | None = reader.functions.get(function) or reader.classes.get(function)  # a component's class
     if scope is None:
         node.notes.append(f"{path.name}: no function {function!r} (entry point {key}); add its endpoints by hand")
         return node

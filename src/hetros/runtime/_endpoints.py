@@ -8,7 +8,9 @@ message whose arrays live in a transport's memory (a loan) leaves with that tran
 
 from __future__ import annotations
 
+import math
 import threading
+import time
 from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -213,15 +215,58 @@ class RetainedReader(Reader):
         self.inner = inner
         self.relay = relay
         self._release = release
+        self._lock = threading.Lock()
+        # unclaimed while the node spins (lapse): what it took meanwhile, each with when it was taken
+        self._lapsed: deque[tuple[float, Any]] | None = None
+        self._backlog: deque[Any] = deque()  # what a late joiner keeps of what came before it (join_late)
+
+    def lapse(self, depth: int) -> None:
+        """Its node spins and no subscription claimed this reader: from now on it is not start-up order
+        that keeps the subscription away, and a subscription that does not exist yet makes no publisher
+        wait (as in ROS 2). It drains itself as messages come, keeping the newest ``depth``."""
+        with self._lock:
+            if self._lapsed is None:
+                self._lapsed = deque(maxlen=depth)
+                self.relay.target = self._drain
+        self._drain()
+
+    def _drain(self) -> None:
+        with self._lock:
+            lapsed = self._lapsed
+            if lapsed is None:
+                return
+            while (message := self.inner.try_take()) is not None:
+                lapsed.append((time.monotonic(), message))
+
+    def join_late(self, qos: QoS) -> None:
+        """A subscription made after its node began to spin joins as ROS 2's late joiner would: of what
+        came before it, a volatile one keeps nothing and a transient_local one the newest ``depth``
+        that its lifespan has not expired."""
+        with self._lock:
+            lapsed, self._lapsed = self._lapsed or deque(), None
+            while (message := self.inner.try_take()) is not None:
+                lapsed.append((time.monotonic(), message))
+        oldest = -math.inf if qos.lifespan is None else time.monotonic() - qos.lifespan
+        kept = [message for taken, message in lapsed if taken >= oldest] if qos.keeps_history else []
+        self._backlog = deque(kept[-qos.depth:])
 
     def try_take(self) -> Any | None:
+        if self._backlog:
+            return self._backlog.popleft()
         return self.inner.try_take()
 
     def taker(self) -> Callable[[], Any | None]:
-        return self.inner.taker()
+        fast = self.inner.taker()
+        backlog = self._backlog
+        if not backlog:
+            return fast
+
+        def take() -> Any | None:
+            return backlog.popleft() if backlog else fast()
+        return take
 
     def pending(self) -> bool:
-        return self.inner.pending()
+        return bool(self._backlog) or self.inner.pending()
 
     def liveliness(self) -> tuple[int, int] | None:
         return self.inner.liveliness()

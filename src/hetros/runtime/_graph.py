@@ -119,6 +119,14 @@ class Graph:
             if channel.kind == "topic" and self.process in self.plan.tap_sites(channel.name)[1]:
                 self.tap_point(channel.name, channel.type)
 
+    def spins(self, node: str) -> None:
+        """``node``'s code began to spin: the readers kept for it from start-up that no subscription
+        claimed stop holding messages for it (``RetainedReader.lapse``)."""
+        with self._lock:
+            unclaimed = [(name, reader) for (name, owner), reader in self._prepared.items() if owner == node]
+        for name, reader in unclaimed:
+            reader.lapse(self._declared_qos(name).depth)
+
     def _give_back(self, channel: str, node: str) -> Callable[[RetainedReader], None]:
         def release(reader: RetainedReader) -> None:
             with self._lock:
@@ -253,6 +261,10 @@ class Graph:
                     # ROS code's plain depth (``create_publisher(T, name, 10)``) asks for no policy: hetros's
                     # default keeps every message of a reliable topic, which loses nothing the code expects
                     requested = replace(requested, history=declared.history)
+                # a lifespan is the endpoint's own (a writer's messages expire by it), shaping no transport;
+                # a durability is served per subscription by the reader kept from start-up (join_late)
+                declared = replace(declared, lifespan=requested.lifespan)
+                requested = replace(requested, durability=declared.durability)
             if requested is not None and requested != declared and name not in self._qos_told:
                 self._qos_told.add(name)
                 log.warning("%s: the code asks for %s but the project file's QoS applies: %s "
@@ -323,13 +335,18 @@ class Graph:
         return endpoint_writer(parts, self.types)
 
     def open_reader(self, name: str, node: str, typename: str, wake: Wake, *,
-                    qos: QoS | None = None, envelope: bool = False) -> Reader:
+                    qos: QoS | None = None, envelope: bool = False, late: bool = False) -> Reader:
+        """``node``'s reader of ``name``: the one opened at start-up where there is one, so that nothing
+        published before the code subscribed is lost to start-up order; ``late`` (the node already
+        spins) keeps of that only what a late joiner gets (``RetainedReader.join_late``)."""
         if not self._speaks_ros1(node) and self.channel(name, node, "subscribe") is None:
             endpoint = Endpoint(name, node, typename, self.qos_of(name, qos), envelope)
             return self.transport(_STANDALONE).open_reader(endpoint, wake)
         with self._lock:
             prepared = self._prepared.pop((name, node), None)
         if prepared is not None:
+            if late:
+                prepared.join_late(self.endpoint_qos(name, qos))
             prepared.relay.target = wake
             wake()
             return prepared

@@ -110,7 +110,10 @@ def _give_thread_an_event_loop() -> Any:
 def run_node_body(factory: Callable[..., Any], node: Node) -> None:
     """Call a node function or construct a node class; spin when it left callbacks behind
     that it never spun itself (one that ran its own spin loop and returned is done). A ROS
-    ``main()`` (no argument) runs with the node bound to this thread (``_ros_main``)."""
+    ``main()`` (no argument) runs with the node bound to this thread (``_ros_main``), and so does a ROS node
+    class loaded as a component (one offering ``run_as_component``, as rclpy's ``Node`` does)."""
+    if inspect.isclass(factory) and callable(component := getattr(factory, "run_as_component", None)):
+        factory = component
     if runs_as_ros_main(factory):
         with ros_main(node):
             try:

@@ -83,8 +83,7 @@ class Node:
         # set when the node raised and the graph will stop for it: what it leaves unfinished is
         # then explained by the graph's stop reason rather than answered
         self.failing = False
-        # whether the node's own code spun its executor (else a function that returns is spun for it)
-        self.spun = False
+        self._spun = False
         # the subscription whose message a take loop works on now, and since when (its node time)
         self.taken_by: Subscription[Any] | None = None
         self.taken_at = 0.0
@@ -214,7 +213,7 @@ class Node:
         if shared is None or shared.closed:
             relay = Relay()
             relay.target = subscription._on_wake  # before opening: a reader with messages waiting wakes at once
-            inner = self.graph.open_reader(topic, self.name, typename, relay, qos=qos)
+            inner = self.graph.open_reader(topic, self.name, typename, relay, qos=qos, late=self.spun)
             shared = TopicReaders(inner, relay, lambda: self._forget_topic(topic))
             self._topic_readers[topic] = shared
             self._first_subscription[topic] = subscription
@@ -352,6 +351,18 @@ class Node:
             yield tick
             if not ticker.sleep(self.graph.stop):
                 return
+
+    @property
+    def spun(self) -> bool:
+        """Whether the node's own code spun its executor (else a function that returns is spun for it);
+        a subscription made after that joins late (``Graph.open_reader``)."""
+        return self._spun
+
+    @spun.setter
+    def spun(self, value: bool) -> None:
+        if value and not self._spun:
+            self._spun = True
+            self.graph.spins(self.name)
 
     def spin(self, timeout: float | None = None) -> None:
         """Run this node's callbacks, one at a time, until shutdown (or ``timeout``)."""

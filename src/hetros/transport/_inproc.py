@@ -2,10 +2,14 @@
 
 The publisher's message is frozen (read-only) and the very same object goes to
 every subscriber's FIFO: no copy, no serialization, whatever the size.
+
+A lifespan is the publishing endpoint's, as in DDS: each writer stamps what it delivers with the
+moment it expires, so two publishers of one topic may keep their messages for different times.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections import deque
@@ -26,9 +30,8 @@ class Mailbox(Reader):
         self.qos = qos
         self._wake = wake
         self._items: deque[Any] = deque()
-        # when each item was published, kept only for a topic with a lifespan
-        self._born: deque[float] | None = None if qos.lifespan is None else deque()
-        self._lifespan = qos.lifespan or 0.0
+        # when each item expires (its writer's lifespan), kept from the first item that does
+        self._expires: deque[float] | None = None
         self._cond = threading.Condition()
         self._closed = False
         self.dropped = 0  # keep_last: items replaced by newer ones before the owner took them
@@ -36,15 +39,15 @@ class Mailbox(Reader):
         self.expired = 0  # items dropped unread for being older than the lifespan
         self.source: InprocTopic | None = None  # whose writers' liveliness this mailbox reports
 
-    def put(self, item: Any, deadline: float, stop: threading.Event | None, born: float = 0.0) -> None:
+    def put(self, item: Any, deadline: float, stop: threading.Event | None, expires: float = math.inf) -> None:
         with self._cond:
             if self._closed:
                 return
             if len(self._items) >= self.qos.depth:
                 if not self.qos.blocks_publisher:
                     self._items.popleft()
-                    if self._born is not None:
-                        self._born.popleft()
+                    if self._expires is not None:
+                        self._expires.popleft()
                     self.dropped += 1
                 else:
                     self.stalls += 1
@@ -62,9 +65,11 @@ class Mailbox(Reader):
                         self._cond.wait(min(remaining, 0.1))
                     if self._closed:
                         return
+            if self._expires is None and expires != math.inf:
+                self._expires = deque(math.inf for _ in self._items)
             self._items.append(item)
-            if self._born is not None:
-                self._born.append(born or time.monotonic())
+            if self._expires is not None:
+                self._expires.append(expires)
         self._wake()
 
     def counters(self) -> dict[str, int]:
@@ -75,9 +80,7 @@ class Mailbox(Reader):
             while self._items:
                 item = self._items.popleft()
                 self._cond.notify_all()
-                if self._born is None:
-                    return item
-                if time.monotonic() - self._born.popleft() <= self._lifespan:
+                if self._expires is None or time.monotonic() <= self._expires.popleft():
                     return item
                 self.expired += 1
             return None
@@ -109,7 +112,7 @@ class InprocTopic:
         self._stop = stop
         self._lock = threading.RLock()
         self._mailboxes: list[Mailbox] = []
-        self._history: deque[tuple[Any, float]] = deque(maxlen=qos.depth)
+        self._history: deque[tuple[Any, float]] = deque(maxlen=qos.depth)  # (item, when it expires)
         self._writers: list[InprocWriter] = []
 
     def open_reader(self, owner: str, wake: Wake, qos: QoS | None = None) -> Mailbox:
@@ -118,12 +121,12 @@ class InprocTopic:
         with self._lock:
             self._mailboxes.append(mailbox)
             if self.qos.keeps_history:
-                for item, born in self._history:  # a late joiner's history keeps its age (lifespan)
-                    mailbox.put(item, time.monotonic() + self.qos.publish_timeout, self._stop, born)
+                for item, expires in self._history:  # a late joiner's history expires when it would have
+                    mailbox.put(item, time.monotonic() + self.qos.publish_timeout, self._stop, expires)
         return mailbox
 
-    def open_writer(self) -> InprocWriter:
-        writer = InprocWriter(self)
+    def open_writer(self, lifespan: float | None = None) -> InprocWriter:
+        writer = InprocWriter(self, lifespan)
         with self._lock:
             self._writers.append(writer)
         return writer
@@ -152,26 +155,28 @@ class InprocTopic:
         with self._lock:
             return all(mailbox.has_room() for mailbox in self._mailboxes)
 
-    def deliver(self, item: Any) -> None:
+    def deliver(self, item: Any, lifespan: float | None = None) -> None:
         now = time.monotonic()
         deadline = now + self.qos.publish_timeout
+        expires = math.inf if lifespan is None else now + lifespan
         with self._lock:
             if self.qos.keeps_history:
-                self._history.append((item, now))
+                self._history.append((item, expires))
             for mailbox in list(self._mailboxes):
-                mailbox.put(item, deadline, self._stop, now)
+                mailbox.put(item, deadline, self._stop, expires)
 
 
 class InprocWriter(Writer):
     shares_objects = True  # the publisher's object goes into each subscriber's mailbox
 
-    def __init__(self, topic: InprocTopic) -> None:
+    def __init__(self, topic: InprocTopic, lifespan: float | None) -> None:
         self._topic = topic
+        self._lifespan = lifespan
         self.closed = False
         self.asserted: float | None = None  # when it last said it is alive (manual_by_topic)
 
     def write(self, message: Any) -> None:
-        self._topic.deliver(message)
+        self._topic.deliver(message, self._lifespan)
 
     def has_room(self) -> bool:
         return self._topic.has_room()
@@ -204,7 +209,7 @@ class InprocTransport(Transport):
             return topic
 
     def open_writer(self, endpoint: Endpoint) -> InprocWriter:
-        return self.topic(endpoint.name, endpoint.qos).open_writer()
+        return self.topic(endpoint.name, endpoint.qos).open_writer(endpoint.qos.lifespan)
 
     def open_reader(self, endpoint: Endpoint, wake: Wake) -> Mailbox:
         return self.topic(endpoint.name, endpoint.qos).open_reader(endpoint.node, wake)

@@ -277,6 +277,22 @@ class Node:
 
     PARAM_REL_TOL = 1e-6
 
+    @classmethod
+    def run_as_component(cls) -> None:
+        """How a node class that a launch file loads as a component (launch_ros's ComposableNode) runs:
+        made with no argument, as rclcpp_components makes a C++ one, and spun until shutdown; the
+        container's other components are other nodes' threads of the same process."""
+        from . import init, spin, try_shutdown
+
+        init()
+        make: Callable[[], Node] = cls  # a component's class takes no argument
+        node = make()
+        try:
+            spin(node)
+        finally:
+            node.destroy_node()
+            try_shutdown()
+
     def __init__(self, node_name: str, *, context: Any = None, cli_args: list[str] | None = None,
                  namespace: str | None = None, use_global_arguments: bool = True, enable_rosout: bool = True,
                  start_parameter_services: bool = True, parameter_overrides: list[Parameter] | None = None,

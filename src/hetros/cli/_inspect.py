@@ -692,7 +692,8 @@ def cmd_record(args: argparse.Namespace) -> int:
     print(f"recording {', '.join(topics)} of launch {launch.record.session} into {out}; Ctrl-C stops",
           file=sys.stderr)
     # Ctrl-C ends the recording with its file whole (record closes it on the way out)
-    print(record(launch, topics, out, duration=args.duration).describe())
+    compression = "" if args.compression_mode == "none" else args.compression_mode
+    print(record(launch, topics, out, duration=args.duration, compression=compression).describe())
     return 0
 
 
@@ -885,13 +886,16 @@ def add_commands(sub: Any) -> None:
     p.add_argument("-a", "--all", action="store_true", help="every topic this machine sees")
     p.add_argument("-o", "--output", help="run.mcap (one file), or a folder for a rosbag2 bag")
     p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--compression-mode", choices=["none", "file", "message"], default="none",
+                   help="compress each file whole or each message (a rosbag2 folder only; default none)")
+    p.add_argument("--compression-format", choices=["zstd"], default="zstd", help="rosbag2's: zstd")
     p.set_defaults(func=cmd_record)
     bag = sub.add_parser("bag", help="recordings (ros2 bag)").add_subparsers(dest="bag_command", required=True)
     p = bag.add_parser("info", help="a recording's files, size, duration, and per topic its type and count")
-    p.add_argument("bag", help="an .mcap file or a rosbag2 folder")
+    p.add_argument("bag", help="a rosbag2 folder (MCAP or sqlite3 storage), or an .mcap, .db3 or ROS 1 .bag file")
     p.set_defaults(func=cmd_bag_info)
     p = sub.add_parser("play", help="play a recording into a running launch (ros2 bag play)")
-    p.add_argument("bag", help="an .mcap file or a rosbag2 folder")
+    p.add_argument("bag", help="a rosbag2 folder (MCAP or sqlite3 storage), or an .mcap, .db3 or ROS 1 .bag file")
     p.add_argument("-r", "--rate", type=float, default=1.0, help="speed factor (default 1)")
     p.add_argument("-l", "--loop", action="store_true", help="play again and again")
     p.add_argument("--clock", action="store_true", help="publish the recording's time on /clock (use_sim_time)")

@@ -25,6 +25,7 @@ from typing import Any
 from ..._errors import InspectError
 from ..._qos import QoS
 from ...plan import CLOCK_TOPIC, CLOCK_TYPE
+from ._bagfiles import Bag
 from ._inspect import RunningLaunch
 from ._mcap import check, mcap_files, seal, whole_messages
 
@@ -60,14 +61,21 @@ def recordable(launch: RunningLaunch, topics: list[str] | None) -> list[str]:
 
 
 def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: float | None = None,
-           stop: threading.Event | None = None, attached: Callable[[], None] = lambda: None) -> RecordSummary:
+           stop: threading.Event | None = None, attached: Callable[[], None] = lambda: None,
+           compression: str = "") -> RecordSummary:
     """Record ``topics`` into ``out`` (an ``.mcap`` file, or a rosbag2 folder otherwise) until ``duration``
-    passed, ``stop`` is set, or the launch ends."""
-    from rosbags.rosbag2 import StoragePlugin, Writer
+    passed, ``stop`` is set, or the launch ends; ``compression`` ``file`` or ``message`` compresses a
+    folder's storage with zstd, as ``ros2 bag record --compression-mode`` does."""
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
     if out.exists():
         raise InspectError(f"{out} exists already: hetros record does not overwrite; choose another -o")
     single = out.suffix == ".mcap"
+    if compression not in ("", "file", "message"):
+        raise InspectError(f"--compression-mode must be none, file or message, not {compression!r}")
+    if compression and single:
+        raise InspectError(f"--compression-mode {compression}: a compressed bag is a rosbag2 folder (its metadata "
+                           f"says how it is compressed); give -o a folder, not {out.name}")
     # rosbags names the file after its folder, and the metadata inside names the file: a folder named
     # as the recording's stem, in a hidden one beside it, gives a file whose metadata names it truly
     scratch = out.with_name(f".{out.name}.recording")
@@ -76,6 +84,8 @@ def record(launch: RunningLaunch, topics: list[str], out: Path, *, duration: flo
         shutil.rmtree(scratch, ignore_errors=True)
         scratch.mkdir(parents=True)
     writer = Writer(folder, version=9, storage_plugin=StoragePlugin.MCAP)
+    if compression:
+        writer.set_compression(CompressionMode[compression.upper()], CompressionFormat.ZSTD)
     writer.open()
     summary = RecordSummary(out)
     stop = stop or threading.Event()
@@ -193,25 +203,33 @@ def describe_played(counts: dict[str, int]) -> str:
 
 
 def recording_info(path: Path) -> str:
-    """What ``ros2 bag info`` prints of a recording: its files and size, its time span, and per topic its
-    type and message count (read from the messages, so a damaged file is described as far as it is whole)."""
-    counts: dict[str, int] = {}
-    first = last = None
+    """What ``ros2 bag info`` prints of a bag: its files and size, its storage, its time span, and per topic
+    its type and message count (a rosbag2 folder's from its metadata; a file's counted from its messages,
+    so a damaged MCAP file is described as far as it is whole)."""
     with Recording(path) as recording:
+        bag = recording.bag
+        if bag is not None and bag.metadata is not None:
+            counts = {name: topic.count for name, topic in bag.topics.items()}
+            span = bag.span()
+        else:
+            counts = dict.fromkeys(recording.topics, 0)
+            first = last = None
+            for topic, stamp, _data in recording.messages(set(recording.topics)):
+                counts[topic] += 1
+                first = stamp if first is None else min(first, stamp)
+                last = stamp if last is None else max(last, stamp)
+            span = None if first is None or last is None else (first, last - first)
+        files = bag.files if bag is not None else mcap_files(path)
+        storage = bag.storage if bag is not None else "mcap"
         types = dict(recording.topics)
-        for topic, stamp, _data in recording.messages(set(types)):
-            counts[topic] = counts.get(topic, 0) + 1
-            first = stamp if first is None else min(first, stamp)
-            last = stamp if last is None else max(last, stamp)
-    files = mcap_files(path)
     size = sum(f.stat().st_size for f in files)
     lines = [f"Files:             {', '.join(f.name for f in files)}",
              f"Bag size:          {_size(size)}",
-             "Storage id:        mcap",
-             f"Duration:          {((last or 0) - (first or 0)) / 1e9:.9f}s"]
-    if first is not None and last is not None:
-        lines += [f"Start:             {_when(first)} ({first / 1e9:.9f})",
-                  f"End:               {_when(last)} ({last / 1e9:.9f})"]
+             f"Storage id:        {storage}",
+             f"Duration:          {_seconds(span[1] if span else 0)}s"]
+    if span is not None:
+        lines += [f"Start:             {_when(span[0])} ({_seconds(span[0])})",
+                  f"End:               {_when(span[0] + span[1])} ({_seconds(span[0] + span[1])})"]
     lines.append(f"Messages:          {sum(counts.values())}")
     rows = [f"Topic: {topic} | Type: {types[topic]} | Count: {counts.get(topic, 0)} | Serialization Format: cdr"
             for topic in sorted(types)]
@@ -228,6 +246,11 @@ def _size(count: int) -> str:
     return f"{count} B"
 
 
+def _seconds(stamp_ns: int) -> str:
+    """Nanoseconds as seconds, every digit exact (a float loses the last ones of a stamp)."""
+    return f"{stamp_ns // 1_000_000_000}.{stamp_ns % 1_000_000_000:09d}"
+
+
 def _when(stamp_ns: int) -> str:
     import datetime
 
@@ -242,31 +265,21 @@ def recorded_topics(path: Path) -> dict[str, str]:
 
 
 class Recording:
-    """A recording to play: read by rosbags when every file is whole, else its whole chunks only,
-    with what is damaged or missing named on stderr (never a traceback, nothing skipped uncounted)."""
+    """A bag to play or describe (``_bagfiles.Bag``: rosbag2 folders, MCAP, sqlite3, ROS 1). An MCAP file
+    is checked first: where one is damaged, only its whole chunks are read, with what is damaged or
+    missing named on stderr (never a traceback, nothing skipped uncounted)."""
 
     def __init__(self, path: Path) -> None:
-        from rosbags.rosbag2 import Reader
-
         self.path = path
         if not path.exists():
             raise InspectError(f"{path} does not exist")
-        files = mcap_files(path)
-        self.checks = [check(file) for file in files if file.suffix == ".mcap"]
-        self._reader: Any = None
+        self.checks = [check(file) for file in mcap_files(path) if file.suffix == ".mcap"]
+        self.bag: Bag | None = None
         self.topics: dict[str, str] = {}
         if all(found.whole for found in self.checks):
-            try:
-                self._reader = Reader(path)
-                self._reader.open()
-                self.topics = {c.topic: c.msgtype for c in self._reader.connections}
-                return
-            except Exception as exc:  # rosbags raises its own errors for what it cannot read
-                self._reader = None
-                print(f"{path}: rosbags cannot read it ({type(exc).__name__}: {exc}); playing its whole chunks",
-                      file=sys.stderr)
-        if not self.checks:
-            raise InspectError(f"{path}: no MCAP file to play (hetros plays MCAP recordings)")
+            self.bag = Bag(path)
+            self.topics = {name: topic.type for name, topic in self.bag.topics.items()}
+            return
         for found in self.checks:
             for line in found.lines():
                 print(line, file=sys.stderr)
@@ -274,16 +287,14 @@ class Recording:
         whole = sum(found.messages for found in self.checks)
         print(f"{path}: playing the {whole} messages of its whole chunks; {skipped} messages of damaged chunks "
               "skipped", file=sys.stderr)
-        for file in files:
+        for file in mcap_files(path):
             for topic, msgtype, _time, _data in whole_messages(file):
                 self.topics.setdefault(topic, msgtype)
 
     def messages(self, topics: set[str]) -> Iterator[tuple[str, int, bytes]]:
         """(topic, log time, CDR bytes) of the messages of ``topics``, in order."""
-        if self._reader is not None:
-            wanted = [c for c in self._reader.connections if c.topic in topics]
-            for connection, timestamp, data in self._reader.messages(connections=wanted):
-                yield connection.topic, timestamp, bytes(data)
+        if self.bag is not None:
+            yield from self.bag.messages(topics)
             return
         for file in mcap_files(self.path):
             for topic, _msgtype, timestamp, data in whole_messages(file):
@@ -294,8 +305,8 @@ class Recording:
         return self
 
     def __exit__(self, *_exc: object) -> None:
-        if self._reader is not None:
-            self._reader.close()
+        if self.bag is not None:
+            self.bag.close()
 
 
 def play_launching(path: Path, project_file: Path, *, rate: float = 1.0, clock: bool = False, lockstep: bool = False,

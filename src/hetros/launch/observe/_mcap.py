@@ -111,12 +111,19 @@ def _chunk_records(data: memoryview, body: int, end: int) -> tuple[int, int, mem
         raise _Broken(at, f"a chunk claims {length} bytes of records, past its record")
     raw = memoryview(bytes(data[at + 8:at + 8 + length]))  # a copy: the file's mapping is closed after the walk
     if compression == "zstd":
-        import zstandard  # type: ignore[import-not-found]
+        import zstandard
 
         try:
             raw = memoryview(zstandard.ZstdDecompressor().decompress(bytes(raw), max_output_size=size))
         except zstandard.ZstdError as exc:
             raise _Broken(at, f"its zstd data does not decompress: {exc}") from None
+    elif compression == "lz4":
+        import lz4.frame
+
+        try:
+            raw = memoryview(lz4.frame.decompress(bytes(raw)))
+        except RuntimeError as exc:  # lz4 reports bad frames as RuntimeError
+            raise _Broken(at, f"its lz4 data does not decompress: {exc}") from None
     elif compression:
         raise _Broken(body, f"compression {compression!r} is not one hetros plays")
     if len(raw) != size:

@@ -33,6 +33,11 @@ _ACTION_CALLS = {"ActionServer": ("actions", 1, 2), "ActionClient": ("action_cli
 # rospy: (section, index of the name, index of the type)
 _ROSPY_CALLS = {"Publisher": ("publish", 0, 1), "Subscriber": ("subscribe", 0, 1), "Service": ("services", 0, 1),
                 "ServiceProxy": ("clients", 0, 1)}
+# tf2_ros's classes and the topics each opens (ROS 1's and ROS 2's alike), with the QoS tf2_ros gives them
+_TF2_CALLS = {"TransformListener": (("subscribe", "/tf"), ("subscribe", "/tf_static")),
+              "TransformBroadcaster": (("publish", "/tf"),), "StaticTransformBroadcaster": (("publish", "/tf_static"),)}
+TF2_QOS = {"/tf": {"history": "keep_last", "depth": 100},
+           "/tf_static": {"history": "keep_last", "depth": 100, "durability": "transient_local"}}
 # the services rclpy's enable_logger_service=True gives a node, under its name
 LOGGER_SERVICES = {"get_logger_levels": "rcl_interfaces/srv/GetLoggerLevels",
                    "set_logger_levels": "rcl_interfaces/srv/SetLoggerLevels"}
@@ -213,6 +218,10 @@ class _Reader:
             elif callee in _ACTION_CALLS and len(call.args) >= 3:
                 section, type_at, name_at = _ACTION_CALLS[callee]
                 self._add(node, section, call, call.args[type_at], call.args[name_at], None, names)
+            elif callee in _TF2_CALLS:
+                for section, topic in _TF2_CALLS[callee]:
+                    node.endpoints.setdefault(section, {})[topic] = "tf2_msgs/msg/TFMessage"
+                    node.qos[topic] = dict(TF2_QOS[topic])
             elif callee == "AsyncParameterClient" and len(call.args) >= 2:
                 self._parameter_client(node, call, names)
             elif callee in _ROSPY_CALLS and _is_rospy(call.func) and len(call.args) >= 2:

@@ -9,6 +9,7 @@ from typing import Any
 from ...runtime import bound_node as _bound_node
 from ...runtime import mark_shut_down as _mark_shut_down
 from ...runtime import shut_down as _shut_down
+from . import clock, duration, time, timer  # noqa: F401  (rclpy's own import makes them attributes)
 from .executors import (
     ExternalShutdownException,
     SingleThreadedExecutor,

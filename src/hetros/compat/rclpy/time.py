@@ -1,5 +1,6 @@
 """rclpy.time: hetros's Time (integer nanoseconds, ``to_msg``, ``from_msg``)."""
 
 from ...runtime import Time
+from .duration import Duration
 
-__all__ = ["Time"]
+__all__ = ["Duration", "Time"]

@@ -1,0 +1,54 @@
+"""tf2 in running graphs, with code nobody wrote for hetros: geometry2's examples_tf2_py package (static
+and dynamic broadcasters, a frame dumper, and three ways of waiting for a transform), imported by
+`hetros init` and launched unchanged with every node in a process of its own; and tf2_ros_py's own
+listener-and-broadcaster test, run as a node of a launch."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import yaml
+
+from tests.support.cli import hetros_in
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def test_geometry2s_tf2_examples_run_unchanged_across_processes(tmp_path: Path) -> None:
+    done = hetros_in("init", str(DATA / "examples_tf2_py"), "-o", str(tmp_path / "project.yaml"), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    project = yaml.safe_load((tmp_path / "project.yaml").read_text())
+    nodes = project["nodes"]
+    assert nodes["example_static_frame_publisher"]["publish"] == {"/tf_static": "tf2_msgs/msg/TFMessage"}
+    assert nodes["example_frame_dumper"]["subscribe"] == {"/tf": "tf2_msgs/msg/TFMessage",
+                                                          "/tf_static": "tf2_msgs/msg/TFMessage"}
+    assert project["topics"]["/tf_static"]["durability"] == "transient_local"
+    assert len(set(node["target"] for node in nodes.values())) == len(nodes) == 6
+    launched = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "5", cwd=tmp_path, timeout=120)
+    assert launched.returncode == 0, launched.stderr
+    out = launched.stdout + launched.stderr
+    for node in ("example_waits_for_transform", "example_blocking_waits_for_transform"):
+        assert re.search(rf"\[{node}\]: Got transform$", out, re.MULTILINE), out
+    assert re.search(r"\[example_async_waits_for_transform\]: Got TransformStamped\(.*child_frame_id='sonar_2'", out)
+    dumped = [yaml.safe_load(block) for block in re.findall(r"((?:^\w+: \n(?:  .*\n)+)+)", out, re.MULTILINE)]
+    last = dumped[-1]
+    assert {frame: entry["parent"] for frame, entry in last.items()} == {
+        "platform": "base_link", "camera": "platform", "sonar_0": "platform", "sonar_1": "platform",
+        "sonar_2": "platform", "port_wheel": "base_link", "starboard_wheel": "base_link"}
+    assert 25 < last["port_wheel"]["rate"] < 35  # the fake joint states' 30 Hz
+    assert last["camera"]["rate"] == 10000.0  # tf2's figure for a static frame
+
+
+def test_tf2_ros_pys_listener_and_broadcaster_test_passes_as_a_node(tmp_path: Path) -> None:
+    (tmp_path / "runner.py").write_text(
+        "import sys\n\nimport pytest\n\n\ndef main():\n"
+        "    sys.exit(int(pytest.main(['-q', '-p', 'no:cacheprovider', sys.argv[1]])))\n")
+    tf_topics = {"/tf": "tf2_msgs/msg/TFMessage", "/tf_static": "tf2_msgs/msg/TFMessage"}
+    project = {"name": "tf2test", "nodes": {"test_broadcaster_listener": {
+        "run": "runner:main", "args": [str(DATA / "upstream_tf2" / "test_listener_and_broadcaster.py")],
+        "publish": tf_topics, "subscribe": tf_topics}}}
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump(project))
+    done = hetros_in("launch", str(tmp_path / "project.yaml"), cwd=tmp_path, timeout=120)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "3 passed" in done.stdout + done.stderr

@@ -166,6 +166,10 @@ class _Reader:
                         self.types[local] = f"{parts[0]}/{parts[1]}/{alias.name}"
                     elif _module_file(root, stmt.module) is not None:
                         self.imported[local] = stmt.module
+        # the names message_filters' Subscriber goes by here (``message_filters.Subscriber`` and imported ones)
+        self.filter_subscribers = {alias.asname or alias.name for stmt in ast.walk(self.tree)
+                                   if isinstance(stmt, ast.ImportFrom) and stmt.module == "message_filters"
+                                   for alias in stmt.names if alias.name == "Subscriber"}
         self.from_parameters = _from_parameters(self.tree, self.parameters)
         self.constants = {**_constants(self.tree), **{k: text for k, (text, _) in self.from_parameters.items()}}
         self.classes = {s.name: s for s in self.tree.body if isinstance(s, ast.ClassDef)}
@@ -218,6 +222,12 @@ class _Reader:
             elif callee in _ACTION_CALLS and len(call.args) >= 3:
                 section, type_at, name_at = _ACTION_CALLS[callee]
                 self._add(node, section, call, call.args[type_at], call.args[name_at], None, names)
+            elif self._filter_subscriber(call) and len(call.args) >= 2:
+                rospy_form = isinstance(call.args[0], ast.Constant) and isinstance(call.args[0].value, str)
+                type_at, name_at = (1, 0) if rospy_form else (1, 2)
+                if len(call.args) > max(type_at, name_at):
+                    self._add(node, "subscribe", call, call.args[type_at], call.args[name_at],
+                              None if rospy_form or len(call.args) < 4 else call.args[3], names)
             elif callee in _TF2_CALLS:
                 for section, topic in _TF2_CALLS[callee]:
                     node.endpoints.setdefault(section, {})[topic] = "tf2_msgs/msg/TFMessage"
@@ -246,6 +256,13 @@ class _Reader:
                     if found is not None:
                         init = _init_of(found) if isinstance(found, ast.ClassDef) else found
                         other.collect(found, node, seen | {callee}, _arguments(call, init, names))
+
+    def _filter_subscriber(self, call: ast.Call) -> bool:
+        """``message_filters.Subscriber(...)``, or the class imported under some name."""
+        func = call.func
+        if isinstance(func, ast.Attribute):
+            return func.attr == "Subscriber" and isinstance(func.value, ast.Name) and func.value.id == "message_filters"
+        return isinstance(func, ast.Name) and func.id in self.filter_subscribers
 
     @staticmethod
     def _logger_services(node: RosNode, call: ast.Call, ros_name: str) -> None:

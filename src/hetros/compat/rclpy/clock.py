@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import enum
+from typing import Any
 
-from ...runtime import Clock
+from ..._errors import Error
+from ...runtime import Clock, Time, bound_node
 
 
 class ClockType(enum.IntEnum):
@@ -14,4 +16,22 @@ class ClockType(enum.IntEnum):
     STEADY_TIME = 3
 
 
-__all__ = ["Clock", "ClockType"]
+class ROSClock(Clock):
+    """rclpy's ROSClock: the node's clock (/clock's with use_sim_time), the wall clock outside a node."""
+
+    def _clock(self) -> Any:
+        try:
+            return bound_node().get_clock()
+        except Error:
+            return None
+
+    def now(self) -> Time:
+        clock = self._clock()
+        return Clock.now(self) if clock is None else clock.now()
+
+    def now_ns(self) -> int:
+        clock = self._clock()
+        return Clock.now_ns(self) if clock is None else int(clock.now_ns())
+
+
+__all__ = ["Clock", "ClockType", "ROSClock"]

@@ -9,15 +9,17 @@ PYTHON  ?= python3
 BSTAMP  := $(VENV)/.installed-bench
 # The real peers of the tests and benchmarks, from Debian: ROS 1 (rospy, roscpp, actionlib, the
 # ros* tools), Icarus Verilog (runs the fpga targets' exported Verilog), Verilator (co-simulates fpga
-# targets under `hetros launch`) and iproute2 (the network namespaces of the multi-host tests);
+# targets under `hetros launch`), iproute2 (the network namespaces of the multi-host tests), and ROS 1's
+# rosbag, tf2, message_filters and cv_bridge (the reference peers of hetros's bags and libraries);
 # installed when we may
 PEER_DEBS := iverilog verilator ros-core python3-rospy python3-rostopic python3-rosnode python3-rosparam python3-rosservice \
              python3-std-msgs python3-sensor-msgs python3-std-srvs python3-actionlib libroscpp-dev libstd-srvs-dev \
-             python3-rosbag python3-tf2-ros g++ pkg-config iproute2
+             python3-rosbag python3-tf2-ros python3-message-filters python3-cv-bridge g++ pkg-config iproute2
 define install_peer_debs
 	@if { [ ! -x /usr/bin/rostopic ] || [ ! -d /usr/lib/python3/dist-packages/std_srvs ] || \
 	      [ ! -f /usr/include/std_srvs/SetBool.h ] || [ ! -d /usr/lib/python3/dist-packages/actionlib ] || \
 	      [ ! -d /usr/lib/python3/dist-packages/rosbag ] || [ ! -d /usr/lib/python3/dist-packages/tf2_py ] || \
+	      [ ! -d /usr/lib/python3/dist-packages/message_filters ] || [ ! -d /usr/lib/python3/dist-packages/cv_bridge ] || \
 	      ! command -v iverilog > /dev/null || ! command -v verilator > /dev/null || ! command -v g++ > /dev/null || ! command -v ip > /dev/null; } && \
 	    [ "$$(id -u)" = 0 ]; then \
 		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(PEER_DEBS) > /dev/null; fi

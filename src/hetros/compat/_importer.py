@@ -16,7 +16,7 @@ from . import _flavour
 
 # module names served from hetros.compat (the shims), and their prefix there
 _SHIMS = ("rclpy", "rospy", "ament_index_python", "launch", "launch_ros", "launch_xml", "launch_yaml", "tf2_py",
-          "message_filters",
+          "message_filters", "cv_bridge",
           "tf2_ros", "tf2_geometry_msgs")
 _KINDS = ("msg", "srv", "action")
 # the helpers beside the message packages that ROS code imports: rospy's sensor_msgs.point_cloud2, rclpy's

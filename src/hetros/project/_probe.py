@@ -56,7 +56,7 @@ print("\\n" + sys.argv[3] + json.dumps(out))
 
 # packages of a ROS installation that hetros's rclpy and rospy do not stand in for
 _ROS_ONLY = frozenset({"sensor_msgs_py", "rosidl_runtime_py",
-                       "rclpy_message_converter", "cv_bridge", "rosbag", "rosbag2_py",
+                       "rclpy_message_converter", "rosbag", "rosbag2_py",
                        "roslib", "rosgraph", "rostest", "rosunit", "dynamic_reconfigure", "actionlib"})
 _SHIM = "hetros.compat."
 

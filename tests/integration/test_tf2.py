@@ -6,16 +6,21 @@ listener-and-broadcaster test, run as a node of a launch."""
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import yaml
 
-from tests.support.cli import hetros_in
+from tests.support.cli import hetros_in, private_env
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def test_geometry2s_tf2_examples_run_unchanged_across_processes(tmp_path: Path) -> None:
+    """Also: `hetros tf echo` and `tf frames` on the running graph, the static frames (sent once, before
+    they looked) included."""
     done = hetros_in("init", str(DATA / "examples_tf2_py"), "-o", str(tmp_path / "project.yaml"), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     project = yaml.safe_load((tmp_path / "project.yaml").read_text())
@@ -25,9 +30,23 @@ def test_geometry2s_tf2_examples_run_unchanged_across_processes(tmp_path: Path) 
                                                           "/tf_static": "tf2_msgs/msg/TFMessage"}
     assert project["topics"]["/tf_static"]["durability"] == "transient_local"
     assert len(set(node["target"] for node in nodes.values())) == len(nodes) == 6
-    launched = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "5", cwd=tmp_path, timeout=120)
-    assert launched.returncode == 0, launched.stderr
-    out = launched.stdout + launched.stderr
+    with subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"), "--duration",
+                           "8"], cwd=tmp_path, env=private_env(tmp_path), stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True) as launch:
+        try:
+            echoed = _retrying(tmp_path, "tf", "echo", "base_link", "sonar_0", "--once", "--duration", "5")
+            frames = _retrying(tmp_path, "tf", "frames", "--duration", "2", "-o", str(tmp_path / "frames"))
+            stdout, stderr = launch.communicate(timeout=120)
+        finally:
+            launch.kill()
+    assert launch.returncode == 0, stderr
+    # platform is 0.1 over base_link, sonar_0 0.05 m at 45 degrees on it, turned by its quaternion
+    assert "- Translation: [0.035, 0.035, 0.100]" in echoed and \
+        "- Rotation: in Quaternion (xyzw) [0.000, 0.000, -0.487, -0.873]" in echoed, echoed
+    assert "  sonar_2  (static, broadcaster example_static_frame_publisher)" in frames, frames
+    assert re.search(r"  port_wheel  \(\d+\.\d\d Hz, latest \d+\.\d+, broadcaster dynamic_broadcaster\)", frames)
+    assert (tmp_path / "frames.svg").read_text().lstrip().startswith(("<?xml", "<svg"))
+    out = stdout + stderr
     for node in ("example_waits_for_transform", "example_blocking_waits_for_transform"):
         assert re.search(rf"\[{node}\]: Got transform$", out, re.MULTILINE), out
     assert re.search(r"\[example_async_waits_for_transform\]: Got TransformStamped\(.*child_frame_id='sonar_2'", out)
@@ -38,6 +57,17 @@ def test_geometry2s_tf2_examples_run_unchanged_across_processes(tmp_path: Path) 
         "sonar_2": "platform", "port_wheel": "base_link", "starboard_wheel": "base_link"}
     assert 25 < last["port_wheel"]["rate"] < 35  # the fake joint states' 30 Hz
     assert last["camera"]["rate"] == 10000.0  # tf2's figure for a static frame
+
+
+def _retrying(folder: Path, *argv: str) -> str:
+    """A look at the launch once it is up (its registry entry appears a moment after it starts)."""
+    deadline = time.monotonic() + 30
+    while True:
+        done = hetros_in(*argv, cwd=folder)
+        if done.returncode == 0 or time.monotonic() > deadline:
+            assert done.returncode == 0, done.stdout + done.stderr
+            return done.stdout
+        time.sleep(0.3)
 
 
 def test_tf2_ros_pys_listener_and_broadcaster_test_passes_as_a_node(tmp_path: Path) -> None:

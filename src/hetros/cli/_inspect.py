@@ -911,6 +911,9 @@ def add_commands(sub: Any) -> None:
             _which(parser)
     for name in ("top", "log", "foxglove", "record", "play"):
         _which(sub.choices[name])
+    from ._tf import add_commands as add_tf_commands
+
+    add_tf_commands(sub, _which)
 
 
 def _rate(text: str) -> float:

@@ -14,7 +14,7 @@ from ._scan import scan_file
 from ._template import template_from_sources
 
 if TYPE_CHECKING:
-    from ._graph import describe, write_graph
+    from ._graph import describe, render_svg, write_graph
     from ._reference import reference_markdown
 
 
@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 _LAZY = {
     "describe": "._graph",
     "reference_markdown": "._reference",
+    "render_svg": "._graph",
     "write_graph": "._graph",
 }
 
@@ -43,6 +44,7 @@ __all__ = [
     "plan",
     "plan_file",
     "reference_markdown",
+    "render_svg",
     "ros_template",
     "scan_file",
     "template_from_sources",

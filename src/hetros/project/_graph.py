@@ -119,9 +119,15 @@ def to_dot(plan: Plan, rates: dict[str, float] | None = None) -> str:
 
 def write_graph(plan: Plan, out: Path, rates: dict[str, float] | None = None) -> list[Path]:
     """Write ``<out>.dot`` and render ``<out>.svg`` with Graphviz."""
+    return render_svg(to_dot(plan, rates), out)
+
+
+def render_svg(dot: str, out: Path) -> list[Path]:
+    """Write the Graphviz source ``dot`` to ``<out>.dot`` and render ``<out>.svg``: Graphviz's ``dot`` where
+    installed, else graphviz-pure (a dependency of hetros)."""
     out.parent.mkdir(parents=True, exist_ok=True)
     dot_path = out.with_suffix(".dot")
-    dot_path.write_text(to_dot(plan, rates), encoding="utf-8")
+    dot_path.write_text(dot, encoding="utf-8")
     svg_path = out.with_suffix(".svg")
     beside = Path(sys.executable).parent / "graphviz-pure"
     renderer = shutil.which("dot") or shutil.which("graphviz-pure") or (str(beside) if beside.exists() else None)

@@ -118,7 +118,7 @@ class Publisher(Generic[M]):
                 write = self._writer.write_kept
         tap = self._tap
         tap.published += 1
-        if tap.sinks:  # before the write: a loan's arrays leave with a shared-memory send
+        if tap.sinks or tap.remembers:  # before the write: a loan's arrays leave with a shared-memory send
             tap.offer(message)
         write(message)
         if self.deadline is not None:

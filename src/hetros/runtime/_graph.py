@@ -201,7 +201,9 @@ class Graph:
         point = self._taps.get(topic)
         if point is None:
             with self._lock:
-                point = self._taps.setdefault(topic, TapPoint(topic, typename))
+                qos = self._declared_qos(topic) if self.plan is not None else None
+                history = qos.depth if qos is not None and qos.keeps_history else 0
+                point = self._taps.setdefault(topic, TapPoint(topic, typename, history))
         return point
 
     def subscriber_tap(self, topic: str, typename: str) -> TapPoint | None:

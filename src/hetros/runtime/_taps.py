@@ -119,21 +119,31 @@ class TapSink:
 class TapPoint:
     """A topic as this process publishes it: counters kept always, sinks attached on demand."""
 
-    __slots__ = ("_lock", "published", "sinks", "topic", "typename")
+    __slots__ = ("_history", "_lock", "published", "remembers", "sinks", "topic", "typename")
 
-    def __init__(self, topic: str, typename: str) -> None:
+    def __init__(self, topic: str, typename: str, history: int = 0) -> None:
         self.topic = topic
         self.typename = typename
         self.published = 0  # messages this process' publishers sent on the topic
         self.sinks: tuple[TapSink, ...] = ()
         self._lock = threading.Lock()
+        # a transient_local topic's last messages, which a look that attaches late gets first (as a late
+        # subscriber would: `topic echo /tf_static`, `tf frames`)
+        self._history: deque[Any] | None = deque(maxlen=history) if history else None
+        self.remembers = self._history is not None  # offered every message, looked at or not
 
     def offer(self, message: Any) -> None:
+        # a loaned message's arrays leave with its send: only a look attached now may see it
+        if self._history is not None and getattr(message, "_hetros_loan", None) is None:
+            with self._lock:
+                self._history.append(message)
         for sink in self.sinks:
             sink.offer(message)
 
     def attach(self, sink: TapSink) -> None:
         with self._lock:
+            for message in self._history or ():
+                sink.offer(message)
             self.sinks = (*self.sinks, sink)
 
     def detach(self, sink: TapSink) -> None:

@@ -130,21 +130,28 @@ def rotate(qx: float, qy: float, qz: float, qw: float, x: float, y: float, z: fl
 
 def interpolate(a: Pose, b: Pose, ratio: float) -> Pose:
     """Between two transforms: translation linearly, rotation by tf2's slerp (the shorter way round)."""
-    x = a[0] + (b[0] - a[0]) * ratio
-    y = a[1] + (b[1] - a[1]) * ratio
-    z = a[2] + (b[2] - a[2]) * ratio
-    qa, qb = a[3:], b[3:]
-    magnitude = math.sqrt(sum(v * v for v in qa) * sum(v * v for v in qb))
-    product = sum(u * v for u, v in zip(qa, qb, strict=True)) / magnitude
-    if abs(product) >= 1.0:
-        return (x, y, z, *qa)
+    ax, ay, az, aqx, aqy, aqz, aqw = a
+    bx, by, bz, bqx, bqy, bqz, bqw = b
+    x, y, z = ax + (bx - ax) * ratio, ay + (by - ay) * ratio, az + (bz - az) * ratio
+    magnitude = math.sqrt((aqx * aqx + aqy * aqy + aqz * aqz + aqw * aqw) * (bqx * bqx + bqy * bqy + bqz * bqz
+                                                                             + bqw * bqw))
+    product = (aqx * bqx + aqy * bqy + aqz * bqz + aqw * bqw) / magnitude
+    if product >= 1.0 or product <= -1.0:
+        return (x, y, z, aqx, aqy, aqz, aqw)
     sign = -1.0 if product < 0 else 1.0
     theta = math.acos(sign * product)
-    s1 = math.sin(sign * ratio * theta)
     d = 1.0 / math.sin(theta)
-    s0 = math.sin((1.0 - ratio) * theta)
-    qx, qy, qz, qw = ((u * s0 + v * s1) * d for u, v in zip(qa, qb, strict=True))
-    return (x, y, z, qx, qy, qz, qw)
+    s0 = math.sin((1.0 - ratio) * theta) * d
+    s1 = math.sin(sign * ratio * theta) * d
+    return (x, y, z, aqx * s0 + bqx * s1, aqy * s0 + bqy * s1, aqz * s0 + bqz * s1, aqw * s0 + bqw * s1)
+
+
+def _chain(steps: list[tuple[str, tuple[str, Pose, Pose | None, float]]]) -> Pose:
+    """The first frame of a walk in the last one's parent: its steps, interpolated and composed."""
+    pose = IDENTITY
+    for _frame, (_parent, before, after, ratio) in steps:
+        pose = compose(before if after is None else interpolate(before, after, ratio), pose)
+    return pose
 
 
 # -- the tree -------------------------------------------------------------------------------------
@@ -194,18 +201,24 @@ class _Frame:
 
     def at(self, time: int) -> tuple[str, Pose]:
         """(parent, transform to it) at ``time`` (0: the newest)."""
+        parent, before, after, ratio = self.bracket(time)
+        return parent, before if after is None else interpolate(before, after, ratio)
+
+    def bracket(self, time: int) -> tuple[str, Pose, Pose | None, float]:
+        """(parent, the transform at or before ``time``, the one after it or None, the ratio between them):
+        what ``at`` interpolates, found (and checked against the cache's span) without interpolating."""
         if self.static is not None:
-            return self.static.parent, self.static.pose
+            return self.static.parent, self.static.pose, None, 0.0
         entries = self.entries
         if not entries:
             raise LookupException(f"frame {self.name} holds no data")
         if time == 0:
             newest = entries[-1]
-            return newest.parent, newest.pose
+            return newest.parent, newest.pose, None, 0.0
         if len(entries) == 1:
             only = entries[0]
             if only.stamp == time:
-                return only.parent, only.pose
+                return only.parent, only.pose, None, 0.0
             shown = seconds_text if ros1_flavour() else (lambda ns: f"{ns / 1e9:.6f}")
             raise ExtrapolationException(f"Lookup would require extrapolation at time {shown(time)}, but only time "
                                          f"{shown(only.stamp)} is in the buffer")
@@ -217,12 +230,11 @@ class _Frame:
         at = bisect.bisect_left(stamps, time)
         after = entries[at]
         if after.stamp == time:
-            return after.parent, after.pose
+            return after.parent, after.pose, None, 0.0
         before = entries[at - 1]
         if before.parent != after.parent:
-            return before.parent, before.pose
-        ratio = (time - before.stamp) / (after.stamp - before.stamp)
-        return before.parent, interpolate(before.pose, after.pose, ratio)
+            return before.parent, before.pose, None, 0.0
+        return before.parent, before.pose, after.pose, (time - before.stamp) / (after.stamp - before.stamp)
 
 
 class BufferCore:
@@ -384,50 +396,66 @@ class BufferCore:
         """tf2's walk: from the source up to the top of its tree (or the target), then from the target up
         to that top (or the source). Both walks go past the common ancestor, as tf2's do, so a frame above
         it without data at ``time`` fails the lookup as it fails in tf2; a frame that cannot give its
-        transform ends the source's walk (its error is told only if the target's walk does not meet it)."""
+        transform ends the source's walk (its error is told only if the target's walk does not meet it).
+        Only the steps below the common ancestor are interpolated and composed: the rest cancels."""
         if time == 0:
             time = self._common_time(target, source)
         if target == source:
             return IDENTITY, time
         where = f", when looking up transform from frame [{source}] to frame [{target}]"
-        frame, source_pose, top, failure = source, IDENTITY, source, ""
+        frames = self._frames
+        up_source: list[tuple[str, tuple[str, Pose, Pose | None, float]]] = []
+        frame, top, failure = source, source, ""
         for _ in range(MAX_DEPTH):
-            known = self._frames.get(frame)
+            known = frames.get(frame)
             if known is None or not (known.static or known.entries):
                 top = frame
                 break
             try:
-                parent, step = known.at(time)
+                step = known.bracket(time)
             except ExtrapolationException as exc:
                 top, failure = frame, str(exc)
                 break
             if frame == target:
-                return source_pose, time
-            source_pose = compose(step, source_pose)
-            top, frame = frame, parent
+                return _chain(up_source), time
+            up_source.append((frame, step))
+            top, frame = frame, step[0]
         else:
             raise LookupException(f"The tf tree is invalid because it contains a loop.{where}")
-        frame, target_pose = target, IDENTITY
+        up_target: list[tuple[str, tuple[str, Pose, Pose | None, float]]] = []
+        frame = target
         for _ in range(MAX_DEPTH):
             if frame == top:
-                return compose(inverse(target_pose), source_pose), time
-            known = self._frames.get(frame)
+                return self._meet(up_source, up_target), time
+            known = frames.get(frame)
             if known is None or not (known.static or known.entries):
                 break
             try:
-                parent, step = known.at(time)
+                step = known.bracket(time)
             except ExtrapolationException as exc:
                 raise ExtrapolationException(f"{exc}{where}") from None
             if frame == source:
-                return inverse(target_pose), time
-            target_pose = compose(step, target_pose)
-            frame = parent
+                return inverse(_chain(up_target)), time
+            up_target.append((frame, step))
+            frame = step[0]
         else:
             raise LookupException(f"The tf tree is invalid because it contains a loop.{where}")
         if failure:
             raise ExtrapolationException(f"{failure}{where}")
         raise ConnectivityException(f"Could not find a connection between '{target}' and '{source}' because they "
                                     "are not part of the same tree.Tf has two or more unconnected trees.")
+
+    @staticmethod
+    def _meet(up_source: list[tuple[str, Any]], up_target: list[tuple[str, Any]]) -> Pose:
+        """The source in the target, from both walks to a common top: composed up to the first frame the two
+        share (above it the steps are the same on both sides)."""
+        on_source = {frame: index for index, (frame, _step) in enumerate(up_source)}
+        on_source[up_source[-1][1][0] if up_source else ""] = len(up_source)
+        for index, (frame, _step) in enumerate(up_target):
+            if frame in on_source:
+                return compose(inverse(_chain(up_target[:index])), _chain(up_source[:on_source[frame]]))
+        meet = on_source.get(up_target[-1][1][0] if up_target else "", len(up_source))
+        return compose(inverse(_chain(up_target)), _chain(up_source[:meet]))
 
     def _common_time(self, target: str, source: str) -> int:
         """The latest time every frame between the two has data for (0 where all are static)."""

@@ -36,6 +36,7 @@ class TapEvent:
     size: int
     stamp: int | None
     dropped: int
+    process: str = ""  # the process whose tap saw it
 
 
 def choose(records: list[LaunchRecord], session: str | None, project: str | None) -> LaunchRecord:
@@ -327,6 +328,6 @@ def _pump(sock: socket.socket, process: str, topic: str,
                 continue
             events.put((topic, TapEvent(int(header["t"]), payload if payload else None,
                                         int(header.get("size", len(payload))), header.get("stamp"),
-                                        int(header.get("dropped", 0)))))
+                                        int(header.get("dropped", 0)), process)))
     except (OSError, InspectError) as exc:
         events.put(InspectError(f"the tap of {topic} in {process} ended: {exc}"))

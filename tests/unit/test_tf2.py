@@ -84,3 +84,14 @@ def test_a_batch_of_points_moves_in_one_numpy_product() -> None:
     assert np.allclose([single.point.x, single.point.y, single.point.z], moved[1])
     with pytest.raises(ValueError, match=r"points must be an array of shape \(N, 3\)"):
         tf2_geometry_msgs.transform_points(np.zeros(3), transform)
+
+
+def test_the_libraries_benchmark_runs_hetros_side_on_a_small_scenario() -> None:
+    hetros_bench = pytest.importorskip("hetros_bench.libraries")
+    plan = hetros_bench.scenario(quick=True)
+    plan["tf"]["queries"] = plan["tf"]["queries"][:20]
+    plan["sync"]["arrivals"] = plan["sync"]["arrivals"][:60]
+    for part in ("tf", "sync", "cv"):
+        plan[part]["repeat"] = 1
+    figures = hetros_bench.ours(plan)
+    assert set(figures) == set(hetros_bench.LABELS) and all(v > 0 for v in figures.values())

@@ -58,13 +58,29 @@ def _colour(encoding: str) -> tuple[str, int] | None:
 
 
 def _grey(image: np.ndarray, order: str, bits: int) -> np.ndarray:
-    """OpenCV's RGB-to-grey in its fixed point: 14 fractional bits at 8 bits, 15 at 16."""
+    """OpenCV's RGB-to-grey in its fixed point: 14 fractional bits at 8 bits, 15 at 16 (OpenCV's own where it
+    is installed: the same bytes, about 30 times sooner than numpy's passes over the image)."""
+    try:
+        import cv2  # type: ignore[import-not-found, unused-ignore]
+    except ImportError:
+        cv2 = None
+    if cv2 is not None:
+        code = {"rgb": "COLOR_RGB2GRAY", "bgr": "COLOR_BGR2GRAY", "rgba": "COLOR_RGBA2GRAY",
+                "bgra": "COLOR_BGRA2GRAY"}[order]
+        grey: np.ndarray = cv2.cvtColor(np.ascontiguousarray(image), getattr(cv2, code))
+        return grey
     weights = {"r": 4899, "g": 9617, "b": 1868} if bits == 8 else {"r": 9798, "g": 19235, "b": 3735}
     shift = 14 if bits == 8 else 15
-    total = np.full(image.shape[:2], 1 << (shift - 1), dtype=np.int64)
-    for c in "rgb":
-        total += image[..., order.index(c)].astype(np.int64) * weights[c]
-    return (total >> shift).astype(image.dtype)
+    # in place, in 32 bits: the weights sum to 1 << shift, so 65535 of each stays below 2**32
+    total = image[..., order.index("r")].astype(np.uint32)
+    total *= weights["r"]
+    for c in "gb":
+        channel = image[..., order.index(c)].astype(np.uint32)
+        channel *= weights[c]
+        total += channel
+    total += 1 << (shift - 1)
+    total >>= shift
+    return total.astype(image.dtype)
 
 
 def _convert(image: np.ndarray, source: str, target: str) -> np.ndarray:
@@ -193,7 +209,7 @@ class CvBridge:
 
 def _opencv(what: str) -> Any:
     try:
-        import cv2
+        import cv2  # type: ignore[import-not-found, unused-ignore]
     except ImportError:
         raise CvBridgeError(f"{what} need OpenCV: pip install opencv-python-headless") from None
     return cv2

@@ -708,10 +708,21 @@ def cmd_play(args: argparse.Namespace) -> int:
     launch = _launch(args)
     while True:
         counts = play(launch, Path(args.bag), rate=args.rate, loop=False, clock=args.clock, lockstep=args.lockstep,
-                      topics=args.topics)
+                      topics=args.topics, start_offset=args.start_offset, remap=_remaps(args.remap))
         print(describe_played(counts))
         if not args.loop:
             return 0
+
+
+def _remaps(pairs: list[str] | None) -> dict[str, str]:
+    """``--remap old:=new ...`` as a mapping, each checked."""
+    found: dict[str, str] = {}
+    for pair in pairs or []:
+        old, sep, new = pair.partition(":=")
+        if not sep or not old.startswith("/") or not new.startswith("/"):
+            raise InspectError(f"--remap takes /old:=/new, not {pair!r}")
+        found[old] = new
+    return found
 
 
 def cmd_foxglove(args: argparse.Namespace) -> int:
@@ -903,6 +914,8 @@ def add_commands(sub: Any) -> None:
                    help="deliver each message only when its consumers finished the previous one, in the "
                         "recording's time: the same outputs on every replay and every mapping")
     p.add_argument("--topics", nargs="+", help="play only these topics")
+    p.add_argument("--start-offset", type=float, default=0.0, help="skip this many seconds of the recording")
+    p.add_argument("--remap", nargs="+", metavar="OLD:=NEW", help="play a recorded topic onto another")
     p.add_argument("--launch", metavar="PROJECT", help="launch the part of this project that consumes the recording "
                    "(its nodes that only publish recorded topics stay out), play into it, then stop it")
     p.set_defaults(func=cmd_play)

@@ -136,10 +136,16 @@ def offered_qos(qos: QoS) -> Any:
 
 
 def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = False, clock: bool = False,
-         lockstep: bool = False, topics: list[str] | None = None) -> dict[str, int]:
-    """Deliver a recording's messages into a running launch; the count per topic."""
+         lockstep: bool = False, topics: list[str] | None = None, start_offset: float = 0.0,
+         remap: dict[str, str] | None = None) -> dict[str, int]:
+    """Deliver a recording's messages into a running launch; the count per (launch) topic. ``start_offset``
+    seconds of the recording are skipped; ``remap`` plays a recorded topic onto another (ros2 bag play's
+    ``--remap old:=new``)."""
     if not rate > 0:
         raise InspectError(f"--rate must be positive, not {rate!r}")
+    if not (start_offset >= 0 and start_offset < float("inf")):
+        raise InspectError(f"--start-offset must be zero or positive seconds, not {start_offset!r}")
+    remap = dict(remap or {})
     if (clock or lockstep) and CLOCK_TOPIC not in launch.plan.channels:
         if clock:
             raise InspectError(f"--clock: launch {launch.record.session}'s project does not follow /clock; "
@@ -149,21 +155,28 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
         clock = True  # lockstep replays in the recording's time
     recording = Recording(path)
     with recording:
+        for old in remap:
+            if old not in recording.topics:
+                raise InspectError(f"--remap {old}:={remap[old]}: {path} has no topic {old} (it has "
+                                   f"{', '.join(sorted(recording.topics))})")
         wanted = []
         for topic, msgtype in recording.topics.items():
             if topics and topic not in topics:
                 continue
-            channel = launch.plan.channels.get(topic)
+            target = remap.get(topic, topic)
+            channel = launch.plan.channels.get(target)
             if channel is None or channel.kind != "topic":
-                print(f"skipping {topic}: launch {launch.record.session} has no such topic", file=sys.stderr)
+                print(f"skipping {topic}: launch {launch.record.session} has no topic {target}", file=sys.stderr)
                 continue
             if channel.type != msgtype:
                 raise InspectError(f"{path}: {topic} was recorded as {msgtype}, but the launch carries "
-                                   f"{channel.type} on it")
+                                   f"{channel.type} on {target}")
             wanted.append(topic)
         if not wanted:
             raise InspectError(f"{path}: none of its topics is a topic of launch {launch.record.session}")
-        counts = {topic: 0 for topic in wanted}
+        counts = {remap.get(topic, topic): 0 for topic in wanted}
+        skip_ns = round(start_offset * 1e9)
+        span = recording.bag.span() if recording.bag is not None and recording.bag.metadata is not None else None
         clock_codec = launch.codec(CLOCK_TYPE)
         wait = LOCKSTEP_PATIENCE if lockstep else 0.0
 
@@ -176,7 +189,12 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
             start_wall = time.monotonic()
             first: int | None = None
             last_clock = 0.0
+            begin = (span[0] if span else None)
             for topic, timestamp, data in recording.messages(set(wanted)):
+                begin = timestamp if begin is None else begin
+                if timestamp - begin < skip_ns:
+                    continue
+                topic = remap.get(topic, topic)
                 first = timestamp if first is None else first
                 if not lockstep:
                     due = start_wall + (timestamp - first) / 1e9 / rate

@@ -18,7 +18,13 @@ def ros1_store() -> Typestore:
     global _store
     with _store_lock:
         if _store is None:
-            from rosbags.typesys import Stores, get_typestore
+            from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
             _store = get_typestore(Stores.ROS1_NOETIC)
+            _store.register({name: fields for text, name in ROS1_EXTRAS
+                             for name, fields in get_types_from_msg(text, name).items()})
         return _store
+
+
+# ROS 1 messages every robot's graph carries that rosbags' Noetic store lacks: (definition, name)
+ROS1_EXTRAS = (("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"),)

@@ -22,7 +22,7 @@ from hetros.msg import registry
 REFERENCE = Path(__file__).resolve().parents[1] / "support" / "tf2_reference.py"
 _HAS_TF2 = subprocess.run(["/usr/bin/python3", "-c", "import tf2_py, rospy"], capture_output=True,
                           check=False).returncode == 0 if Path("/usr/bin/python3").exists() else False
-pytestmark = pytest.mark.skipif(not _HAS_TF2, reason="Debian's python3-tf2-ros is not installed")
+
 SECOND = 1_000_000_000
 
 
@@ -101,6 +101,7 @@ def _ns(ns: int) -> _Ns:
     return _Ns(ns)
 
 
+@pytest.mark.skipif(not _HAS_TF2, reason="Debian's python3-tf2-ros is not installed")
 @pytest.mark.parametrize("seed", range(6))
 def test_lookups_agree_with_debians_tf2(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(_core, "ros1_flavour", lambda: True)  # ROS 1's words, as the reference speaks
@@ -120,3 +121,16 @@ def test_lookups_agree_with_debians_tf2(seed: int, monkeypatch: pytest.MonkeyPat
             (query, want, got)
     kinds = {want.get("error") for want in reference}
     assert errors and {"ExtrapolationException", "LookupException", "InvalidArgumentException"} <= kinds
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_compiled_walk_agrees_with_the_python_walk_to_the_bit(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The compiled walk (``_ctf``) answers the lookups that succeed; the Python walk is the reference."""
+    if _core._compiled_walk is None:
+        pytest.skip("the compiled walk is not built here")
+    scenario = _scenario(seed)
+    compiled = _ours(scenario)
+    monkeypatch.setattr(_core, "_compiled_walk", None)
+    reference = _ours(scenario)
+    assert compiled == reference
+    assert sum("error" not in answer for answer in compiled) > 20

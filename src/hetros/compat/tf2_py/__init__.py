@@ -29,7 +29,12 @@ def stamp_of(ns: int) -> Any:
         from ..rospy import Time as Ros1Time
 
         return Ros1Time(0, ns)
-    return registry().get("builtin_interfaces/msg/Time")(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+    if not _TIME:
+        _TIME.append(registry().get("builtin_interfaces/msg/Time"))
+    return _TIME[0](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+_TIME: list[Any] = []
 
 
 def time_of(ns: int) -> Any:
@@ -41,15 +46,20 @@ def time_of(ns: int) -> Any:
     return Time(nanoseconds=ns)
 
 
+_CLASSES: list[Any] = []  # TransformStamped, Header, Transform, Vector3, Quaternion: looked up once
+
+
 def transform_stamped(pose: Pose, target: str, source: str, ns: int) -> Any:
-    message = registry().get("geometry_msgs/msg/TransformStamped")()
-    message.header.frame_id = target
-    message.header.stamp = stamp_of(ns)
-    message.child_frame_id = source
-    translation, rotation = message.transform.translation, message.transform.rotation
-    translation.x, translation.y, translation.z = pose[0], pose[1], pose[2]
-    rotation.x, rotation.y, rotation.z, rotation.w = pose[3], pose[4], pose[5], pose[6]
-    return message
+    """A lookup's answer as tf2's Python API gives it: built in one go (a lookup's cost is mostly this)."""
+    if not _CLASSES:
+        types = registry()
+        _CLASSES.extend(types.get(name) for name in (
+            "geometry_msgs/msg/TransformStamped", "std_msgs/msg/Header", "geometry_msgs/msg/Transform",
+            "geometry_msgs/msg/Vector3", "geometry_msgs/msg/Quaternion"))
+    stamped, header, transform, vector, quaternion = _CLASSES
+    return stamped(header=header(stamp=stamp_of(ns), frame_id=target), child_frame_id=source,
+                   transform=transform(translation=vector(x=pose[0], y=pose[1], z=pose[2]),
+                                       rotation=quaternion(x=pose[3], y=pose[4], z=pose[5], w=pose[6])))
 
 
 class BufferCore(_Core):

@@ -27,6 +27,24 @@ from ..._log import get_logger
 
 log = get_logger("tf2")
 
+
+def _compiled() -> Any:
+    """The compiled walk (``_ctf.walk``) where it is built and wanted (not ``HETROS_PURE_PYTHON``): it
+    answers a lookup that succeeds, bit for bit as ``BufferCore._lookup``, and hands every other case
+    to it (None)."""
+    from ...msg import wanted
+
+    if not wanted():
+        return None
+    try:
+        from ._ctf import walk  # type: ignore[import-not-found, unused-ignore]
+    except ImportError:
+        return None
+    return walk
+
+
+_compiled_walk = _compiled()
+
 Pose = tuple[float, float, float, float, float, float, float]
 IDENTITY: Pose = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 DEFAULT_CACHE_NS = 10_000_000_000
@@ -402,6 +420,10 @@ class BufferCore:
             time = self._common_time(target, source)
         if target == source:
             return IDENTITY, time
+        if _compiled_walk is not None:
+            found = _compiled_walk(self._frames, target, source, time)
+            if found is not None:
+                return found, time
         where = f", when looking up transform from frame [{source}] to frame [{target}]"
         frames = self._frames
         up_source: list[tuple[str, tuple[str, Pose, Pose | None, float]]] = []

@@ -26,7 +26,7 @@ define install_peer_debs
 endef
 
 
-.PHONY: install install-rtl install-examples install-test install-bench run test fast lint bench bench-quick clean
+.PHONY: install install-rtl install-examples install-test install-bench run test coverage fast lint bench bench-quick clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -89,15 +89,18 @@ fast: install-test
 	$(VENV)/bin/mypy --strict src benchmarks/hetros_bench
 	$(VENV)/bin/pytest -q -p no:cacheprovider -m "not rtl and not slow" tests/unit tests/conformance
 
-# the conformance suite once more on the pure-Python path (what runs where no C compiler is)
-# the coverage figure counts the lines the unit, conformance and fuzz suites run; the integration and interop
-# suites run untraced (tracing their in-process parts cost 3.5 of a 23-minute run, over the 20 minutes the
-# default run must stay under on 2 cores), and a launch's workers were never traced
+# the conformance suite once more on the pure-Python path (what runs where no C compiler is), then every
+# suite on two workers; untraced: tracing the unit, conformance and fuzz suites for a coverage figure cost two
+# of the 20 minutes the default run must stay under on 2 cores (`make coverage` gives the figure)
 test: lint
 	HETROS_PURE_PYTHON=1 $(VENV)/bin/pytest -q -p no:cacheprovider tests/conformance
-	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 --cov=hetros --cov-report= tests/unit tests/conformance tests/fuzz
+	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 tests/unit tests/conformance tests/fuzz
 	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 --dist loadfile -m "not machine_wide" tests/integration tests/interop
 	$(VENV)/bin/pytest -q -p no:cacheprovider -m machine_wide tests/integration tests/interop
+
+# the share of src/hetros's lines the unit, conformance and fuzz suites run (a launch's workers are never traced)
+coverage: install-test
+	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 --cov=hetros --cov-report= tests/unit tests/conformance tests/fuzz
 	@$(VENV)/bin/coverage report --format=total | xargs printf "coverage: %s%% of src/hetros's lines ran in the test process\n"
 
 clean:

@@ -169,15 +169,19 @@ def test_a_subscription_made_late_joins_as_ros2s_late_joiner(tmp_path: Path) -> 
             timer = node.create_timer(3.0, subscribe)
             rclpy.spin(node)
         """))
-    for args, expected in ((["volatile"], []), (["transient_local"], [37, 38, 39])):
-        project = {"name": "late", "targets": {"t": {"kind": "process"}, "l": {"kind": "process"}}, "nodes": {
-            "talker": {"run": "nodes:talker", "target": "t", "publish": {"/numbers": "std_msgs/msg/Int32"}},
-            "listener": {"run": "nodes:listener", "target": "l", "args": args,
-                         "subscribe": {"/numbers": "std_msgs/msg/Int32"}}}}
-        (tmp_path / "project.yaml").write_text(yaml.safe_dump(project, sort_keys=False))
-        done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "6", cwd=tmp_path)
-        assert done.returncode == 0, done.stderr
-        sent = [int(n) for n in re.findall(r"\[talker\]: sent (\d+)$", done.stderr, re.MULTILINE)]
-        assert sent == list(range(40)), done.stderr  # the talker never waited for a listener not there yet
-        heard = [int(n) for n in re.findall(r"\[listener\]: heard (\d+)$", done.stderr, re.MULTILINE)]
+    listeners = {"volatile": [], "transient_local": [37, 38, 39]}
+    project = {"name": "late", "targets": {"t": {"kind": "process"}, **{k: {"kind": "process"} for k in listeners}},
+               "nodes": {"talker": {"run": "nodes:talker", "target": "t",
+                                    "publish": {"/numbers": "std_msgs/msg/Int32"}}}}
+    for durability in listeners:
+        project["nodes"][durability] = {"run": "nodes:listener", "target": durability, "args": [durability],
+                                        "name": f"listener_{durability}",
+                                        "subscribe": {"/numbers": "std_msgs/msg/Int32"}}
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump(project, sort_keys=False))
+    done = hetros_in("launch", str(tmp_path / "project.yaml"), "--duration", "5", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    sent = [int(n) for n in re.findall(r"\[talker\]: sent (\d+)$", done.stderr, re.MULTILINE)]
+    assert sent == list(range(40)), done.stderr  # the talker never waited for a listener not there yet
+    for durability, expected in listeners.items():
+        heard = [int(n) for n in re.findall(rf"\[listener_{durability}\]: heard (\d+)$", done.stderr, re.MULTILINE)]
         assert heard == expected, done.stderr

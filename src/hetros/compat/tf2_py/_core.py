@@ -18,7 +18,7 @@ import bisect
 import math
 import sys
 import threading
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -479,6 +479,18 @@ class BufferCore:
         meet = on_source.get(up_target[-1][1][0] if up_target else "", len(up_source))
         return compose(inverse(_chain(up_target)), _chain(up_source[:meet]))
 
+    def _climb(self, start: str) -> Iterator[tuple[str, int, str]]:
+        """(frame, its newest stamp, its parent) from ``start`` up to the top of its tree: the walk of tf2's
+        latest common time, which reads each frame's newest transform and interpolates nothing."""
+        frame = start
+        for _ in range(MAX_DEPTH):
+            known = self._frames.get(frame)
+            newest, parent = known.latest() if known is not None else (0, "")
+            yield frame, newest, parent
+            if not parent:
+                return
+            frame = parent
+
     def _common_time(self, target: str, source: str) -> int:
         """The latest time every frame between the two has data for (0 where all are static)."""
         if target == source:
@@ -486,34 +498,22 @@ class BufferCore:
             return known.latest()[0] if known is not None else 0
         source_chain: dict[str, list[int]] = {}  # frame -> the non-zero newest stamps up to it
         stamps: list[int] = []
-        frame = source
-        for _ in range(MAX_DEPTH):
+        for frame, newest, parent in self._climb(source):
             source_chain[frame] = list(stamps)
             if frame == target:
                 return min(stamps, default=0)
-            known = self._frames.get(frame)
-            if known is None:
-                break
-            newest, parent = known.latest()
             if not parent:
                 break
             if newest:
                 stamps.append(newest)
-            frame = parent
         target_stamps: list[int] = []
-        frame = target
-        for _ in range(MAX_DEPTH):
+        for frame, newest, parent in self._climb(target):
             if frame in source_chain:
                 return min(source_chain[frame] + target_stamps, default=0)
-            known = self._frames.get(frame)
-            if known is None:
-                break
-            newest, parent = known.latest()
             if not parent:
                 break
             if newest:
                 target_stamps.append(newest)
-            frame = parent
         raise ConnectivityException(f"Could not find a connection between '{target}' and '{source}' because they "
                                     "are not part of the same tree.Tf has two or more unconnected trees.")
 

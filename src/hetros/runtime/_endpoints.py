@@ -232,11 +232,13 @@ class RetainedReader(Reader):
 
     def _drain(self) -> None:
         with self._lock:
-            lapsed = self._lapsed
-            if lapsed is None:
-                return
-            while (message := self.inner.try_take()) is not None:
-                lapsed.append((time.monotonic(), message))
+            if self._lapsed is not None:
+                self._take_all(self._lapsed)
+
+    def _take_all(self, into: deque[tuple[float, Any]]) -> None:
+        """Everything the reader holds now, each with when it was taken (the lifespan's clock)."""
+        while (message := self.inner.try_take()) is not None:
+            into.append((time.monotonic(), message))
 
     def join_late(self, qos: QoS) -> None:
         """A subscription made after its node began to spin joins as ROS 2's late joiner would: of what
@@ -244,8 +246,7 @@ class RetainedReader(Reader):
         that its lifespan has not expired."""
         with self._lock:
             lapsed, self._lapsed = self._lapsed or deque(), None
-            while (message := self.inner.try_take()) is not None:
-                lapsed.append((time.monotonic(), message))
+            self._take_all(lapsed)
         oldest = -math.inf if qos.lifespan is None else time.monotonic() - qos.lifespan
         kept = [message for taken, message in lapsed if taken >= oldest] if qos.keeps_history else []
         self._backlog = deque(kept[-qos.depth:])

@@ -375,7 +375,8 @@ class Node:
             self.executor.spin_once(left)
 
     def spin_once(self, timeout: float | None = None) -> bool:
-        self.spun = True
+        if not self._spun:  # the setter's work is once per node, not once per callback
+            self.spun = True
         return self.executor.spin_once(timeout)
 
     # -- parameters ------------------------------------------------------------------------

@@ -60,10 +60,7 @@ def _colour(encoding: str) -> tuple[str, int] | None:
 def _grey(image: np.ndarray, order: str, bits: int) -> np.ndarray:
     """OpenCV's RGB-to-grey in its fixed point: 14 fractional bits at 8 bits, 15 at 16 (OpenCV's own where it
     is installed: the same bytes, about 30 times sooner than numpy's passes over the image)."""
-    try:
-        import cv2  # type: ignore[import-not-found, unused-ignore]
-    except ImportError:
-        cv2 = None
+    cv2 = _installed_opencv()
     if cv2 is not None:
         code = {"rgb": "COLOR_RGB2GRAY", "bgr": "COLOR_BGR2GRAY", "rgba": "COLOR_RGBA2GRAY",
                 "bgra": "COLOR_BGRA2GRAY"}[order]
@@ -109,11 +106,10 @@ def _convert_with_opencv(image: np.ndarray, source: str, target: str) -> np.ndar
         if encoding not in _NAMED:
             raise CvBridgeError(f"[{encoding}] is not a color format; the {name} of a conversion must be one "
                                 "(passthrough keeps an image as it is)")
-    try:
-        import cv2  # type: ignore[import-not-found, unused-ignore]
-    except ImportError:
+    cv2 = _installed_opencv()
+    if cv2 is None:
         raise CvBridgeError(f"converting [{source}] to [{target}] needs OpenCV (pip install "
-                            "opencv-python-headless); numpy converts mono/rgb/bgr/rgba/bgra at 8 and 16 bits") from None
+                            "opencv-python-headless); numpy converts mono/rgb/bgr/rgba/bgra at 8 and 16 bits")
     codes = {("yuv422", "rgb8"): "COLOR_YUV2RGB_UYVY", ("yuv422", "bgr8"): "COLOR_YUV2BGR_UYVY",
              ("yuv422_yuy2", "rgb8"): "COLOR_YUV2RGB_YUY2", ("yuv422_yuy2", "bgr8"): "COLOR_YUV2BGR_YUY2"}
     for pattern, cv_name in (("rggb", "RG"), ("bggr", "BG"), ("gbrg", "GB"), ("grbg", "GR")):
@@ -207,11 +203,19 @@ class CvBridge:
         return message
 
 
-def _opencv(what: str) -> Any:
+def _installed_opencv() -> Any:
+    """OpenCV's module where it is installed, else None."""
     try:
         import cv2  # type: ignore[import-not-found, unused-ignore]
     except ImportError:
-        raise CvBridgeError(f"{what} need OpenCV: pip install opencv-python-headless") from None
+        return None
+    return cv2
+
+
+def _opencv(what: str) -> Any:
+    cv2 = _installed_opencv()
+    if cv2 is None:
+        raise CvBridgeError(f"{what} need OpenCV: pip install opencv-python-headless")
     return cv2
 
 

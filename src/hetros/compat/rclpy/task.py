@@ -13,7 +13,7 @@ from ..._errors import Error
 _awaited = threading.local()
 
 
-def _graph_stop() -> threading.Event | None:
+def graph_stop() -> threading.Event | None:
     """The stop event of the graph this thread's node belongs to (None outside a node's thread)."""
     from ...runtime import bound_node
 
@@ -111,7 +111,7 @@ class Future:
         return self._finished.wait(timeout)
 
     def __await__(self) -> Any:
-        stop = _graph_stop()
+        stop = graph_stop()
         while not self._done:
             if stop is not None and stop.is_set():
                 from .executors import ExternalShutdownException

@@ -12,17 +12,9 @@ from collections.abc import Callable
 from typing import Any
 
 from ..._errors import Error
+from ..rclpy.task import graph_stop
 from ..tf2_py import BufferCore, to_ns
 from .buffer_interface import BufferInterface
-
-
-def _graph_stop() -> threading.Event | None:
-    from ...runtime import bound_node
-
-    try:
-        return bound_node().graph.stop
-    except Error:
-        return None
 
 
 def _node_schedule() -> Callable[[Callable[[], None]], None] | None:
@@ -63,7 +55,7 @@ class Buffer(BufferCore, BufferInterface):
         if seconds <= 0:
             return False
         deadline = _time.monotonic() + seconds
-        stop = _graph_stop()
+        stop = graph_stop()
         with self._changed:
             while not ready():
                 left = deadline - _time.monotonic()

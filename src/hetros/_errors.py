@@ -31,6 +31,8 @@ one root and still tell the kinds apart::
     ├── LaunchError            starting or supervising the graph
     ├── MachineError           the machine around a launch: a private folder squatted or foreign,
     │                          shared memory full (named, with the fix)
+    ├── InputFileError         a file a user named is not what it must be: a FIFO, a device, a
+    │                          folder, too large, too deeply nested, not text (named, with the fix)
     ├── InspectError           looking inside a running launch (which one, what, refused)
     ├── AdviseError            the mapping advisor: no such chain, a profile of another project or
     │                          machine, a deadline no mapping meets (by how much, and why)
@@ -163,6 +165,13 @@ class MachineError(Error):
     """The machine around a launch cannot be used safely as it is: one of this user's private
     folders belongs to someone else or is a link, or shared memory has no room; the message
     names the path and what to do."""
+
+
+class InputFileError(Error):
+    """A file a user or another account can name (a project, record, plan, profile, launch file,
+    parameter file, recording) cannot be read as what it must be: it is not a regular file, is
+    larger or more deeply nested than such a file can be, or does not decode; the message names
+    the file and what to do."""
 
 
 class InspectError(Error):

@@ -682,10 +682,33 @@ def test_rosbag2s_own_talker_bag_plays_every_message_in_order(storage: str, tmp_
         played = hetros(env, "play", str(bag), "--rate", "8", "--topics", "/topic", "--start-offset", "2.2",
                         "--remap", "/topic:=/chatter")
         assert played.stdout == "played 5 messages: /chatter 5\n", played.stderr
+        # a running graph's QoS is planned: an override that contradicts it is refused, naming the file
+        overrides = tmp_path / "overrides.yaml"
+        overrides.write_text("/chatter: {reliability: best_effort, history: keep_last, depth: 5}\n")
+        refused = hetros(env, "play", str(bag), "--topics", "/topic", "--remap", "/topic:=/chatter",
+                         "--qos-profile-overrides-path", str(overrides), check=False)
+        assert refused.returncode != 0, refused.stdout
+        assert f"{overrides}: /chatter.reliability is best_effort, but launch" in refused.stderr, refused.stderr
+        assert "hetros play --launch" in refused.stderr
         deadline = time.monotonic() + 10
         while log2.read_text().count("heard Hello") < 5 and time.monotonic() < deadline:
             time.sleep(0.1)
     assert re.findall(r"heard (Hello, world! \d+)", log2.read_text()) == [f"Hello, world! {i}" for i in range(5, 10)]
+    # with --launch the override is the QoS the topic is launched with: a subscription that asks for
+    # reliable delivery cannot be served by a best-effort player, reported as ROS 2 reports it
+    (tmp_path / "asks.yaml").write_text(yaml.safe_dump({"name": "bagplay3", "nodes": {"listener": {
+        "run": "nodes:listener", "subscribe": {"/topic": {"type": "std_msgs/msg/String",
+                                                          "reliability": "reliable"}}}}}))
+    (tmp_path / "best_effort.yaml").write_text("/topic:\n  reliability: best_effort\n  history: keep_last\n"
+                                               "  depth: 10\n  deadline: {sec: 2147483647, nsec: 4294967295}\n")
+    asks = hetros(env, "play", str(bag), "--launch", str(tmp_path / "asks.yaml"), "--rate", "8",
+                  "--qos-profile-overrides-path", str(tmp_path / "best_effort.yaml"), check=False)
+    assert asks.returncode != 0 and "RELIABILITY" in asks.stderr.upper(), asks.stderr
+    (tmp_path / "reliable.yaml").write_text("/topic: {reliability: reliable, durability: volatile}\n")
+    served = hetros(env, "play", str(bag), "--launch", str(tmp_path / "asks.yaml"), "--rate", "8",
+                    "--qos-profile-overrides-path", str(tmp_path / "reliable.yaml"), check=False)
+    assert served.returncode == 0, served.stderr
+    assert re.findall(r"heard (Hello, world! \d+)", served.stderr) == [f"Hello, world! {i}" for i in range(10)]
 
 
 @pytest.mark.parametrize("mode", ["file", "message"])

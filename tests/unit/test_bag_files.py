@@ -131,3 +131,48 @@ def test_a_bag_debians_rosbag_writes_reads_message_for_message(tmp_path: Path) -
         got = [(stamp, STORE.deserialize_cdr(data, "std_msgs/msg/String").data)
                for _t, stamp, data in read.messages(None)]
     assert got == [(100_000_000_000 + i * 1000, f"from rosbag {i}") for i in range(7)]
+
+
+def test_rosbag2s_qos_override_file_reads_as_the_qos_it_names(tmp_path: Path) -> None:
+    """The file `ros2 bag play --qos-profile-overrides-path` takes: rosbag2's words, its infinite
+    duration ({sec: 2147483647, nsec: 4294967295}) and system_default kept as hetros's default."""
+    from hetros.launch.observe._bag import read_qos_overrides
+
+    path = tmp_path / "overrides.yaml"
+    path.write_text(textwrap.dedent("""\
+        /scan:
+          history: keep_last
+          depth: 5
+          reliability: best_effort
+          durability: system_default
+          deadline: {sec: 2147483647, nsec: 4294967295}
+          lifespan: {sec: 1, nsec: 500000000}
+          liveliness: automatic
+          liveliness_lease_duration: {sec: 0, nsec: 0}
+          avoid_ros_namespace_conventions: false
+        /map: {durability: transient_local, history: keep_last, depth: 1}
+        """))
+    found = read_qos_overrides(path)
+    assert (found["/scan"].reliability, found["/scan"].history, found["/scan"].depth) == ("best_effort", "keep_last", 5)
+    assert found["/scan"].durability == "volatile" and found["/scan"].deadline is None
+    assert found["/scan"].lifespan == 1.5 and found["/scan"].lease_duration is None
+    assert found["/map"].keeps_history and found["/map"].depth == 1
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("/a: {reliability: sometimes}", "reliability must be"),
+    ("/a: {depht: 3}", r"/a\.depht is not a QoS policy rosbag2 overrides"),
+    ("/a: {deadline: 2.5}", r"/a\.deadline must be \{sec: N, nsec: N\}"),
+    ("/a: keep_last", "must map to a profile"),
+    ("- /a", "maps each topic to its profile"),
+    ("/a: {depth: [", "is not valid YAML"),
+])
+def test_a_bad_qos_override_file_is_named(text: str, words: str, tmp_path: Path) -> None:
+    from hetros.launch.observe._bag import read_qos_overrides
+
+    path = tmp_path / "overrides.yaml"
+    path.write_text(text)
+    with pytest.raises(InspectError, match=words):
+        read_qos_overrides(path)
+    with pytest.raises(InspectError, match="is a folder, not a file"):
+        read_qos_overrides(tmp_path)

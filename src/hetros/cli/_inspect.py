@@ -700,15 +700,18 @@ def cmd_record(args: argparse.Namespace) -> int:
 def cmd_play(args: argparse.Namespace) -> int:
     from ..launch import describe_played, play
 
+    overrides = Path(args.qos_profile_overrides_path) if args.qos_profile_overrides_path else None
     if args.launch:
         from ..launch import play_launching
 
         return play_launching(Path(args.bag), Path(args.launch), rate=args.rate, clock=args.clock,
-                              lockstep=args.lockstep, topics=args.topics)
+                              lockstep=args.lockstep, topics=args.topics, start_offset=args.start_offset,
+                              remap=_remaps(args.remap), qos_overrides=overrides)
     launch = _launch(args)
     while True:
         counts = play(launch, Path(args.bag), rate=args.rate, loop=False, clock=args.clock, lockstep=args.lockstep,
-                      topics=args.topics, start_offset=args.start_offset, remap=_remaps(args.remap))
+                      topics=args.topics, start_offset=args.start_offset, remap=_remaps(args.remap),
+                      qos_overrides=overrides)
         print(describe_played(counts))
         if not args.loop:
             return 0
@@ -916,6 +919,9 @@ def add_commands(sub: Any) -> None:
     p.add_argument("--topics", nargs="+", help="play only these topics")
     p.add_argument("--start-offset", type=float, default=0.0, help="skip this many seconds of the recording")
     p.add_argument("--remap", nargs="+", metavar="OLD:=NEW", help="play a recorded topic onto another")
+    p.add_argument("--qos-profile-overrides-path", metavar="FILE", help="rosbag2's QoS override file (topic -> "
+                   "reliability, history, depth, durability, deadline, lifespan, ...): with --launch the QoS the "
+                   "topics are launched with; into a running launch, checked against its QoS")
     p.add_argument("--launch", metavar="PROJECT", help="launch the part of this project that consumes the recording "
                    "(its nodes that only publish recorded topics stay out), play into it, then stop it")
     p.set_defaults(func=cmd_play)

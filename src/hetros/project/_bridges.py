@@ -107,6 +107,8 @@ def check_bridged(project: LoadedProject, graph: str, spec: Bridged,
         for index, topic in enumerate(getattr(spec, attr)):
             here = where("external", graph, section, index)
             endpoints = table.get(topic)
+            if not endpoints and section == "export" and topic in project.replayed:
+                endpoints = subscribers.get(topic)  # a recording played into the launch publishes it
             if not endpoints:
                 report.errors.append(f"{here}: {topic} has no hetros {needs} to {section} for; declare one "
                                      f"under a node's {'publish' if needs == 'publisher' else 'subscribe'}")

@@ -628,15 +628,18 @@ def _check_qos_compatibility(project: LoadedProject, publishers: dict[str, list[
                 periodic = policy in ("deadline", "lease_duration")
                 return ("none" if value is None else f"{value:g} s") if periodic else str(value)
 
-            for pub, _ in publishers.get(topic, []):
-                offered = effective(pub, "publish")
+            offers = [(pub, effective(pub, "publish"), project.where("nodes", pub, "publish", topic))
+                      for pub, _ in publishers.get(topic, [])]
+            if topic in project.replayed:  # the player offers the topic's QoS (a --qos-profile-overrides-path's)
+                offers.append(("the recording played into it", default, project.where("topics", topic)))
+            for pub, offered, where in offers:
                 for sub, _ in subscribed:
                     requested = effective(sub, "subscribe")
                     if offer_falls_short(policy, offered, requested):
                         report.errors.append(
                             f"{project.where('nodes', sub, 'subscribe', topic)}: incompatible QoS on "
                             f"{topic}: {sub} requests {policy} {shown(requested)} but {pub} offers "
-                            f"{shown(offered)} ({project.where('nodes', pub, 'publish', topic)}); make them agree"
+                            f"{shown(offered)} ({where}); make them agree"
                         )
 
 

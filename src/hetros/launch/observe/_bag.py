@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from ..._errors import InspectError
+from ..._files import load_yaml
 from ..._qos import QoS
 from ...plan import CLOCK_TOPIC, CLOCK_TYPE
 from ._bagfiles import Bag
@@ -137,10 +138,12 @@ def offered_qos(qos: QoS) -> Any:
 
 def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = False, clock: bool = False,
          lockstep: bool = False, topics: list[str] | None = None, start_offset: float = 0.0,
-         remap: dict[str, str] | None = None) -> dict[str, int]:
+         remap: dict[str, str] | None = None, qos_overrides: Path | None = None) -> dict[str, int]:
     """Deliver a recording's messages into a running launch; the count per (launch) topic. ``start_offset``
     seconds of the recording are skipped; ``remap`` plays a recorded topic onto another (ros2 bag play's
-    ``--remap old:=new``)."""
+    ``--remap old:=new``); ``qos_overrides`` (rosbag2's override file) must agree with the launch's QoS."""
+    if qos_overrides is not None:
+        _check_overrides(launch, read_qos_overrides(qos_overrides), qos_overrides)
     if not rate > 0:
         raise InspectError(f"--rate must be positive, not {rate!r}")
     if not (start_offset >= 0 and start_offset < float("inf")):
@@ -214,6 +217,74 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
                 counts[topic] += 1
             if not loop:
                 return counts
+
+
+# rosbag2's "infinite" duration in a QoS override file: {sec: 2147483647, nsec: 4294967295}
+_INFINITE_SEC = 2147483647
+_OVERRIDE_KEYS = {"history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
+                  "liveliness_lease_duration", "avoid_ros_namespace_conventions"}
+
+
+def read_qos_overrides(path: Path) -> dict[str, QoS]:
+    """``ros2 bag play --qos-profile-overrides-path``'s file: topic -> the QoS the player offers, in
+    rosbag2's words (``system_default`` keeps hetros's default; durations as ``{sec, nsec}``)."""
+    raw = load_yaml(path, "QoS override file", error=InspectError)
+    if not isinstance(raw, dict):
+        raise InspectError(f"{path}: a QoS override file maps each topic to its profile, not {type(raw).__name__}")
+    found: dict[str, QoS] = {}
+    for topic, profile in raw.items():
+        if not isinstance(profile, dict):
+            raise InspectError(f"{path}: {topic} must map to a profile (reliability:, durability:, ...), "
+                               f"not {profile!r}")
+        unknown = sorted(set(map(str, profile)) - _OVERRIDE_KEYS)
+        if unknown:
+            raise InspectError(f"{path}: {topic}.{unknown[0]} is not a QoS policy rosbag2 overrides "
+                               f"({', '.join(sorted(_OVERRIDE_KEYS))})")
+        given: dict[str, Any] = {}
+        for key in ("history", "reliability", "durability", "liveliness"):
+            value = profile.get(key)
+            if value is not None and value != "system_default":
+                given[key] = value
+        if profile.get("depth"):
+            given["depth"] = profile["depth"]
+        for key, field_name in (("deadline", "deadline"), ("lifespan", "lifespan"),
+                                ("liveliness_lease_duration", "lease_duration")):
+            if (seconds := _override_seconds(path, f"{topic}.{key}", profile.get(key))) is not None:
+                given[field_name] = seconds
+        try:
+            found[str(topic)] = QoS(**given)
+        except (TypeError, ValueError) as exc:
+            raise InspectError(f"{path}: {topic}: {exc}") from None
+    return found
+
+
+def _override_seconds(path: Path, where: str, value: Any) -> float | None:
+    if value is None:
+        return None
+    if not isinstance(value, dict) or set(value) - {"sec", "nsec"} or not all(
+            isinstance(value.get(k, 0), int) and not isinstance(value.get(k, 0), bool) and value.get(k, 0) >= 0
+            for k in ("sec", "nsec")):
+        raise InspectError(f"{path}: {where} must be {{sec: N, nsec: N}} with whole non-negative numbers, "
+                           f"not {value!r}")
+    sec, nsec = int(value.get("sec", 0)), int(value.get("nsec", 0))
+    if sec >= _INFINITE_SEC or sec == nsec == 0:
+        return None  # rosbag2's infinite, or ROS 2's "default" zero
+    return sec + nsec / 1e9
+
+
+def _check_overrides(launch: RunningLaunch, overrides: dict[str, QoS], source: Path) -> None:
+    """A running launch's transports are planned: an override must agree with what they deliver."""
+    for topic, wanted in sorted(overrides.items()):
+        channel = launch.plan.channels.get(topic)
+        if channel is None:
+            continue
+        planned = channel.qos
+        for policy in ("reliability", "history", "durability"):
+            if getattr(wanted, policy) != getattr(planned, policy):
+                raise InspectError(
+                    f"{source}: {topic}.{policy} is {getattr(wanted, policy)}, but launch {launch.record.session} "
+                    f"delivers {topic} {getattr(planned, policy)}; a running graph's QoS is planned, so play "
+                    f"with `hetros play --launch PROJECT` to launch it with the override")
 
 
 def describe_played(counts: dict[str, int]) -> str:
@@ -328,18 +399,24 @@ class Recording:
 
 
 def play_launching(path: Path, project_file: Path, *, rate: float = 1.0, clock: bool = False, lockstep: bool = False,
-                   topics: list[str] | None = None) -> int:
+                   topics: list[str] | None = None, start_offset: float = 0.0, remap: dict[str, str] | None = None,
+                   qos_overrides: Path | None = None) -> int:
     """``hetros play --launch``: launch ``project_file`` without the nodes the recording stands in for (those
-    that publish only recorded topics), play the recording into it, and stop it; the launch's exit code."""
+    that publish only recorded topics), play the recording into it, and stop it; the launch's exit code.
+    ``qos_overrides`` sets the QoS of the topics it names in the launched project, as the player offers it."""
     from ...project import load_project
     from ...project import plan as make_plan
     from ..launcher._launcher import Launcher
 
-    fed = set(topics or recorded_topics(path))
+    remap = dict(remap or {})
+    fed = {remap.get(topic, topic) for topic in (topics or recorded_topics(path))}
+    overrides = read_qos_overrides(qos_overrides) if qos_overrides is not None else {}
     project = load_project(project_file)
     nodes = project.model.nodes
     standing_in = {n for n, spec in nodes.items() if spec.publish and set(spec.types("publish")) <= fed}
-    project.model = project.model.model_copy(update={"nodes": {n: s for n, s in nodes.items() if n not in standing_in}})
+    qos = {**project.model.topics, **{t: q for t, q in overrides.items() if t in fed}}
+    project.model = project.model.model_copy(update={"nodes": {n: s for n, s in nodes.items() if n not in standing_in},
+                                                     "topics": qos})
     project.replayed = frozenset(fed)
     if standing_in:
         print(f"the recording stands in for node(s) {', '.join(sorted(standing_in))}", file=sys.stderr)
@@ -358,7 +435,8 @@ def play_launching(path: Path, project_file: Path, *, rate: float = 1.0, clock: 
                     if time.monotonic() > deadline or launcher.stop.is_set():
                         raise
                 time.sleep(0.1)
-            counts = play(looking, path, rate=rate, clock=clock, lockstep=lockstep, topics=topics)
+            counts = play(looking, path, rate=rate, clock=clock, lockstep=lockstep, topics=topics,
+                          start_offset=start_offset, remap=remap)
             ok, why = True, f"the recording was played ({sum(counts.values())} messages)"
             print(describe_played(counts), flush=True)
         except Exception as exc:

@@ -112,7 +112,8 @@ def _convert_with_opencv(image: np.ndarray, source: str, target: str) -> np.ndar
                             "opencv-python-headless); numpy converts mono/rgb/bgr/rgba/bgra at 8 and 16 bits")
     codes = {("yuv422", "rgb8"): "COLOR_YUV2RGB_UYVY", ("yuv422", "bgr8"): "COLOR_YUV2BGR_UYVY",
              ("yuv422_yuy2", "rgb8"): "COLOR_YUV2RGB_YUY2", ("yuv422_yuy2", "bgr8"): "COLOR_YUV2BGR_YUY2"}
-    for pattern, cv_name in (("rggb", "RG"), ("bggr", "BG"), ("gbrg", "GB"), ("grbg", "GR")):
+    # OpenCV names a Bayer pattern by its second row's middle pair, so ROS's rggb is OpenCV's BG
+    for pattern, cv_name in (("rggb", "BG"), ("bggr", "RG"), ("gbrg", "GR"), ("grbg", "GB")):
         for bits in ("8", "16"):
             codes[(f"bayer_{pattern}{bits}", f"bgr{bits}")] = f"COLOR_Bayer{cv_name}2BGR"
             codes[(f"bayer_{pattern}{bits}", f"rgb{bits}")] = f"COLOR_Bayer{cv_name}2RGB"

@@ -711,8 +711,13 @@ def test_rosbag2s_own_talker_bag_plays_every_message_in_order(storage: str, tmp_
     assert re.findall(r"heard (Hello, world! \d+)", served.stderr) == [f"Hello, world! {i}" for i in range(10)]
 
 
-@pytest.mark.parametrize("mode", ["file", "message"])
-def test_a_compressed_recording_reads_back_with_rosbags(mode: str, tmp_path: Path, env: dict[str, str]) -> None:
+@pytest.mark.parametrize("mode", ["none", "file", "message"])
+def test_a_recording_reads_back_with_rosbags_and_the_mcap_library(mode: str, tmp_path: Path,
+                                                                  env: dict[str, str]) -> None:
+    import io
+
+    import zstandard
+    from mcap.reader import make_reader
     from rosbags.rosbag2 import Reader
 
     recorded = tmp_path / "run"
@@ -722,7 +727,16 @@ def test_a_compressed_recording_reads_back_with_rosbags(mode: str, tmp_path: Pat
     written = int(re.search(r"wrote .*: (\d+) messages", done.stdout).group(1))  # type: ignore[union-attr]
     assert written >= 5, done.stdout + done.stderr
     with Reader(recorded) as reader:
-        assert reader.compression_mode == mode and reader.compression_format == "zstd"
+        assert reader.compression_mode == ("" if mode == "none" else mode)
         assert sum(1 for _ in reader.messages()) == written == reader.message_count
+    files = sorted(recorded.glob("*.mcap*")) if recorded.is_dir() else [recorded]
+    assert len(files) == 1, files
+    raw = files[0].read_bytes()
+    if mode == "file":
+        assert files[0].name.endswith(".mcap.zstd")
+        raw = zstandard.ZstdDecompressor().decompressobj().decompress(raw)
+    seen = [(channel.topic, schema.name if schema else "")
+            for schema, channel, _message in make_reader(io.BytesIO(raw)).iter_messages()]
+    assert seen == [("/chatter", "std_msgs/msg/String")] * written
     info = hetros(env, "bag", "info", str(recorded)).stdout
     assert f"Messages:          {written}\n" in info, info

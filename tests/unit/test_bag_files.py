@@ -10,6 +10,7 @@ import textwrap
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 from rosbags.rosbag1 import Writer as Ros1Writer
@@ -96,6 +97,29 @@ def test_a_ros1_bag_reads_as_cdr(tmp_path: Path) -> None:
         assert read.storage == "rosbag1" and read.topics["/chatter"].type == "std_msgs/msg/String"
         said = [STORE.deserialize_cdr(data, "std_msgs/msg/String").data for _t, _s, data in read.messages(None)]
     assert said == [f"hi {i}" for i in range(5)]
+
+
+def test_a_ros1_bag_of_a_type_hetros_does_not_know_reads_from_its_own_definitions(tmp_path: Path) -> None:
+    """No .msg file of ``rover_msgs/Wheel`` exists anywhere hetros looks: the bag's connection record carries
+    the definition, and that is what turns its messages into CDR."""
+    from rosbags.typesys import get_types_from_msg
+
+    definition = "string name\nfloat64 speed\nint32[] ticks\n"
+    ros1 = get_typestore(Stores.ROS1_NOETIC)
+    ros1.register(get_types_from_msg(definition, "rover_msgs/msg/Wheel"))
+    wheel = ros1.types["rover_msgs/msg/Wheel"]
+    path = tmp_path / "wheels.bag"
+    with Ros1Writer(path) as writer:
+        connection = writer.add_connection("/wheel", "rover_msgs/msg/Wheel", typestore=ros1)
+        for i in range(3):
+            message = wheel(name=f"w{i}", speed=0.5 * i, ticks=np.array([i, i + 1], dtype=np.int32))
+            writer.write(connection, 10 + i, ros1.serialize_ros1(message, "rover_msgs/msg/Wheel"))
+    reader = get_typestore(Stores.EMPTY)
+    reader.register(get_types_from_msg(definition, "rover_msgs/msg/Wheel"))
+    with Bag(path) as read:
+        assert read.topics["/wheel"].type == "rover_msgs/msg/Wheel"
+        got = [reader.deserialize_cdr(data, "rover_msgs/msg/Wheel") for _t, _s, data in read.messages(None)]
+    assert [(m.name, m.speed, m.ticks.tolist()) for m in got] == [(f"w{i}", 0.5 * i, [i, i + 1]) for i in range(3)]
 
 
 @pytest.mark.parametrize(("make", "words"), [

@@ -175,6 +175,51 @@ def test_a_service_is_called_and_bad_requests_are_refused(tmp_path: Path, env: d
                                  "{a: 1, b: 2}").stdout
 
 
+def test_service_echo_shows_ros2_demos_introspection_as_its_parameters_set_it(tmp_path: Path,
+                                                                              env: dict[str, str]) -> None:
+    """ros2/demos' introspection demo, unchanged: its client and service start with introspection
+    'disabled' (nothing to echo); `param set ... contents` on both gives every call's four events with
+    request and response, `metadata` the events alone, as `ros2 service echo` prints them."""
+    demos = Path(__file__).resolve().parents[1] / "data" / "ros2_demos" / "demo_nodes_py"
+    made = hetros(env, "init", str(demos), "-o", str(tmp_path / "all.yaml"), "--name", "intro")
+    project = yaml.safe_load((tmp_path / "all.yaml").read_text())
+    project["nodes"] = {"introspection": project["nodes"]["introspection"]}
+    project["targets"] = {project["nodes"]["introspection"]["target"]: {"kind": "process"}}
+    project.pop("topics", None)
+    (tmp_path / "project.yaml").write_text(yaml.safe_dump(project))
+    assert made.returncode == 0
+    with running(tmp_path / "project.yaml", env, tmp_path / "launch.log"):
+        quiet = hetros(env, "service", "echo", "/add_two_ints", "--duration", "1.5")
+        assert quiet.stdout == "", quiet.stdout
+        # one main made both nodes: each is found by its own name, its parameters its own
+        listed = hetros(env, "node", "list").stdout.split()
+        assert {"/introspection_client", "/introspection_service"} <= set(listed), listed
+        got = hetros(env, "param", "get", "/introspection_service", "service_configure_introspection").stdout
+        assert got == "String value is: disabled\n", got
+        assert hetros(env, "param", "get", "/introspection_service", "client_configure_introspection",
+                      check=False).stdout == "Parameter not set\n"
+        for node, side in (("/introspection_client", "client"), ("/introspection_service", "service")):
+            hetros(env, "param", "set", node, f"{side}_configure_introspection", "contents")
+        echoed = hetros(env, "service", "echo", "/add_two_ints", "example_interfaces/srv/AddTwoInts", "-n", "8",
+                        "--duration", "20").stdout
+        events = [yaml.safe_load(block) for block in echoed.split("---\n") if block.strip()]
+        assert len(events) == 8, echoed
+        kinds = [event["info"]["event_type"] for event in events]
+        first = kinds.index("REQUEST_SENT")
+        call = events[first:first + 4]
+        assert kinds[first:first + 4] == ["REQUEST_SENT", "REQUEST_RECEIVED", "RESPONSE_SENT", "RESPONSE_RECEIVED"]
+        assert len({event["info"]["sequence_number"] for event in call}) == 1
+        assert len({tuple(event["info"]["client_gid"]) for event in call}) == 1
+        assert [event["request"] for event in call[:2]] == [[{"a": 2, "b": 3}]] * 2
+        assert [event["response"] for event in call[2:]] == [[{"sum": 5}]] * 2
+        for node, side in (("/introspection_client", "client"), ("/introspection_service", "service")):
+            hetros(env, "param", "set", node, f"{side}_configure_introspection", "metadata")
+        bare = hetros(env, "service", "echo", "/add_two_ints", "--once", "--duration", "20", "--flow-style").stdout
+        assert "request: []" in bare and "response: []" in bare and "event_type: " in bare, bare
+        wrong = hetros(env, "service", "echo", "/add_two_ints", "std_srvs/srv/Empty", check=False)
+        assert wrong.returncode != 0 and "is a example_interfaces/srv/AddTwoInts, not a" in wrong.stderr
+
+
 def test_an_action_goal_is_sent_and_its_result_printed(tmp_path: Path, env: dict[str, str]) -> None:
     example = EXAMPLES / "sort_action"
     data = yaml.safe_load((example / "project.yaml").read_text())

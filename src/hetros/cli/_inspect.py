@@ -20,9 +20,10 @@ from typing import Any, cast
 import yaml
 
 from .._errors import Error, InspectError
+from .._files import load_yaml
 from ..launch import LaunchLogs, RunningLaunch, TapEvent
 from ..msg import DEFAULT_TRUNCATE_LENGTH, Message, from_plain, normalize_typename, to_plain
-from ..plan import ACTION_PREFIX, Plan, join_namespace
+from ..plan import ACTION_PREFIX, PARAMETER_SERVICES, Plan, join_namespace
 
 # ros2 topic hz's default window (messages)
 HZ_WINDOW = 10000
@@ -262,7 +263,7 @@ def cmd_topic_pub(args: argparse.Namespace) -> int:
 def ros_name(plan: Plan, node: str) -> str:
     """A node's full ROS name, namespace and name (``/r2/talker``, the project's ``name:`` where it gives
     one): what the CLI shows and accepts."""
-    return plan.full_name(node)
+    return node if node not in plan.nodes and node.startswith("/") else plan.full_name(node)
 
 
 def node_key(launch: RunningLaunch, given: str) -> str:
@@ -273,15 +274,19 @@ def node_key(launch: RunningLaunch, given: str) -> str:
     found = by_ros_name.get(given)
     if found is None and not given.startswith("/"):
         found = given if given in plan.nodes else by_ros_name.get(f"/{given}")
-    if found is None:
-        raise InspectError(f"launch {launch.record.session} has no node {given} (its nodes: "
-                           f"{', '.join(sorted(by_ros_name))})")
+    if found is None:  # a node the code made beside the plan's (rclpy's Node('other') in the same main)
+        live = launch.live_nodes()
+        found = next((name for name in (given, f"/{given}") if name in live), None)
+        if found is None:
+            raise InspectError(f"launch {launch.record.session} has no node {given} (its nodes: "
+                               f"{', '.join(sorted(set(by_ros_name) | set(live)))})")
     return found
 
 
 def cmd_node_list(args: argparse.Namespace) -> int:
     launch = _launch(args)
-    for name in sorted(ros_name(launch.plan, node) for node in launch.plan.nodes):
+    planned = {ros_name(launch.plan, node) for node in launch.plan.nodes}
+    for name in sorted(planned | set(launch.live_nodes())):
         print(name)
     return 0
 
@@ -289,7 +294,7 @@ def cmd_node_list(args: argparse.Namespace) -> int:
 def cmd_node_info(args: argparse.Namespace) -> int:
     launch = _launch(args)
     name = node_key(launch, args.node)
-    spec = launch.plan.nodes[name]
+    spec = launch.plan.nodes.get(name)
 
     def section(title: str, entries: dict[str, str]) -> None:
         print(f"  {title}:")
@@ -298,6 +303,13 @@ def cmd_node_info(args: argparse.Namespace) -> int:
                 print(f"    {entry}: {typename}")
 
     print(ros_name(launch.plan, name))
+    if spec is None:  # a node the code made beside the plan's: its endpoints are counted as the plan node's
+        section("Subscribers", {})
+        section("Publishers", {})
+        section("Service Servers", {f"{name}/{service}": typename for service, typename in PARAMETER_SERVICES.items()})
+        for title in ("Service Clients", "Action Servers", "Action Clients"):
+            section(title, {})
+        return 0
     section("Subscribers", spec.subscribe)
     section("Publishers", spec.publish)
     builtin = {service: typename for service, (node, typename) in launch.plan.parameter_servers().items()
@@ -328,6 +340,40 @@ def cmd_service_find(args: argparse.Namespace) -> int:
     for name in launch.services():
         if launch.server_of(name)[1] == wanted:
             print(name)
+    return 0
+
+
+def cmd_service_echo(args: argparse.Namespace) -> int:
+    """ros2 service echo: each call of a service as its four events (client sent, server received,
+    server sent, client received), ``info.event_type`` by name."""
+    launch = _launch(args)
+    _node, typename = launch.server_of(args.service)
+    if args.service_type is not None and normalize_typename(args.service_type, "srv") != typename:
+        raise InspectError(f"{args.service} is a {typename}, not a {args.service_type}")
+    event_type = f"{typename}_Event"
+    launch.types.service_event(typename)
+    info_type = launch.types.get("service_msgs/msg/ServiceEventInfo")
+    names = {getattr(info_type, name): name for name in ("REQUEST_SENT", "REQUEST_RECEIVED", "RESPONSE_SENT",
+                                                          "RESPONSE_RECEIVED")}
+    truncate = None if args.full_length else args.truncate_length
+    wanted = 1 if args.once else args.times
+    shown = 0
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    for event in launch.tap_service(args.service):
+        if deadline is not None and time.monotonic() > deadline:
+            break
+        if event is None or event.data is None:
+            continue
+        plain: Any = to_plain(launch.types, launch.decode(event_type, event.data), truncate_length=truncate,
+                              no_arr=args.no_arr, no_str=args.no_str)
+        info = plain.get("info")
+        if isinstance(info, dict) and "event_type" in info:
+            info["event_type"] = names.get(info["event_type"], info["event_type"])
+        sys.stdout.write(_dump(plain, args.flow_style) + "---\n")
+        sys.stdout.flush()
+        shown += 1
+        if wanted and shown >= wanted:
+            break
     return 0
 
 
@@ -537,10 +583,7 @@ def cmd_param_load(args: argparse.Namespace) -> int:
     node's name, ``/**`` or the bare mapping)."""
     launch = _launch(args)
     node = node_key(launch, args.node)
-    try:
-        loaded = yaml.safe_load(Path(args.file).read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        raise InspectError(f"{args.file}: not a readable parameter file ({exc})") from None
+    loaded = load_yaml(args.file, "parameter file", error=InspectError)
     name = ros_name(launch.plan, node)
     section = loaded.get(name, loaded.get(name.lstrip("/"), loaded.get("/**"))) if isinstance(loaded, dict) else None
     values = section.get("ros__parameters") if isinstance(section, dict) else None
@@ -833,6 +876,19 @@ def add_commands(sub: Any) -> None:
     p = groups["service"].add_parser("type", help="a service's type")
     p.add_argument("service")
     p.set_defaults(func=cmd_service_type)
+    p = groups["service"].add_parser("echo", help="each call of a service as its events (ros2 service echo)")
+    p.add_argument("service")
+    p.add_argument("service_type", nargs="?", help="its type, checked (pkg/srv/Type)")
+    p.add_argument("--no-arr", action="store_true", help="print arrays' types and lengths instead of their values")
+    p.add_argument("--no-str", action="store_true", help="print strings' lengths instead of their values")
+    p.add_argument("-l", "--truncate-length", type=int, default=DEFAULT_TRUNCATE_LENGTH,
+                   help="cut arrays and strings at this length (default %(default)s)")
+    p.add_argument("-f", "--full-length", action="store_true", help="do not cut arrays and strings")
+    p.add_argument("--flow-style", action="store_true")
+    p.add_argument("--once", action="store_true", help="print one event and exit")
+    p.add_argument("-n", "--times", type=int, default=0, help="print this many events and exit")
+    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.set_defaults(func=cmd_service_echo)
     p = groups["service"].add_parser("find", help="the services of a type")
     p.add_argument("type")
     p.set_defaults(func=cmd_service_find)

@@ -35,6 +35,19 @@ if TYPE_CHECKING:
 
     from ._definitions import FieldUse, PackageDefinitions, ParsedDefinition, Typesdict
 
+
+SERVICE_EVENT = "_Event"
+
+
+def _service_event_typedef(service: str) -> tuple[list[Any], list[Any]]:
+    """ROS 2's ``<srv>_Event``: what one call looked like at one end (rosidl derives it; so does hetros,
+    for the services it knows, on first use)."""
+    one = 1  # request and response are sequences of at most one: the event is about one of them
+    return [], [("info", (Nodetype.NAME, "service_msgs/msg/ServiceEventInfo")),
+                ("request", (Nodetype.SEQUENCE, ((Nodetype.NAME, f"{service}_Request"), one))),
+                ("response", (Nodetype.SEQUENCE, ((Nodetype.NAME, f"{service}_Response"), one)))]
+
+
 _SCALAR_DEFAULTS = {"bool": "False", "string": "''", "float32": "0.0", "float64": "0.0"}
 
 
@@ -247,12 +260,20 @@ class TypeRegistry:
         if cls is not None:
             return cls
         with self._lock:
+            base = full.removesuffix(SERVICE_EVENT)
+            if full not in self.fielddefs and base != full and base in self.services:
+                self._add_definitions("service events", {full: _service_event_typedef(base)})
             if full not in self.fielddefs:
                 raise UnknownTypeError(
                     f"unknown message type {name!r}: add the package folder that defines it to "
                     "'messages:' in the project file (see `hetros msg show` for known types)"
                 )
             return self._generate(full)
+
+    def service_event(self, service_type: str) -> type[Any]:
+        """The ``<srv>_Event`` message ROS 2 derives from a service for its introspection
+        (``<service>/_service_event``: ServiceEventInfo, and the request or response it is about)."""
+        return self.get(f"{self.get_service(service_type).name}{SERVICE_EVENT}")
 
     def get_service(self, name: str) -> ServiceType:
         full = normalize_typename(name, "srv")

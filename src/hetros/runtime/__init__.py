@@ -30,6 +30,7 @@ from ._parameters import (
     type_change_problem,
 )
 from ._qos_events import DeadlineMissedStatus, LivelinessChangedStatus, LivelinessLostStatus, MessageLostStatus
+from ._service_events import EVENT_TOPIC_SUFFIX, EventKind, Introspection, client_gid
 
 if TYPE_CHECKING:
     from ._action import ActionClient, ActionServer, ClientGoalHandle, GoalStatus, ServerGoalHandle, uuid_message
@@ -73,6 +74,7 @@ __getattr__ = lazy_exports(__name__, _LAZY)
 
 
 __all__ = [
+    "EVENT_TOPIC_SUFFIX",
     "LIFECYCLE_LABELS",
     "NODE_TIMES_VARIABLE",
     "PROFILE_VARIABLE",
@@ -86,11 +88,13 @@ __all__ = [
     "Clock",
     "DeadlineMissedStatus",
     "Duration",
+    "EventKind",
     "GoalStatus",
     "Graph",
     "HandlingStats",
     "Host",
     "IncompatibleQosStatus",
+    "Introspection",
     "Lifecycle",
     "LivelinessChangedStatus",
     "LivelinessLostStatus",
@@ -112,6 +116,7 @@ __all__ = [
     "bound_node",
     "check_rate",
     "check_type",
+    "client_gid",
     "from_value_message",
     "header_stamp",
     "kind_of",

@@ -36,6 +36,7 @@ from ._qos_events import (
     MessageLostWatch,
     WatchedReader,
 )
+from ._service_events import EventKind, ServiceEvents
 from ._taps import taking_tap
 
 if TYPE_CHECKING:
@@ -511,6 +512,7 @@ class Service:
         self._replies = Replies(node, name, self._response_type)
         self._closed = False
         self.stats = HandlingStats()
+        self.events = ServiceEvents(node, name, srv_type)
         self._reader = node.graph.open_reader(
             request_channel(name), node.name, self._request_type,
             lambda: node.executor.notify(self), envelope=True,
@@ -521,16 +523,20 @@ class Service:
         if envelope is None:
             return False
         request_id, client, request = envelope
-        self._replies.send(request_id, client, self.handle(request))
+        self._replies.send(request_id, client, self.handle(request, request_id, client))
         return True
 
-    def handle(self, request: Any) -> Any:
-        """The handler's checked response to ``request`` (run in the node's executor)."""
+    def handle(self, request: Any, request_id: int | None = None, client: str = "") -> Any:
+        """The handler's checked response to ``request`` (run in the node's executor); a call from the
+        command line comes with no id, and gets one for its events."""
+        sequence = self.events.next_sequence() if request_id is None else request_id
+        self.events.offer(EventKind.REQUEST_RECEIVED, sequence, client, request)
         start = time.perf_counter()
         response = self.handler(request)
         self.stats.add(time.perf_counter() - start)
         check_type(response, self._response_type, f"the response of service {self.name}")
         response._hetros_validate(response, f"the response of {self.name}")
+        self.events.offer(EventKind.RESPONSE_SENT, sequence, client, response)
         return response
 
     def pending(self) -> bool:
@@ -563,6 +569,7 @@ class Client:
         self._reader = node.graph.open_reader(
             reply_channel(name, node.name), node.name, self._response_type, self._reply_arrived, envelope=True
         )
+        self.events = ServiceEvents(node, name, srv_type)
 
     def _reply_arrived(self) -> None:
         self._on_reply()
@@ -580,6 +587,7 @@ class Client:
             if isinstance(envelope[2], BaseException):  # a transport that could not deliver the call says why
                 future.set_exception(envelope[2])
             else:
+                self.events.offer(EventKind.RESPONSE_RECEIVED, envelope[0], self.node.name, envelope[2])
                 future.set_result(envelope[2])
 
     def call_async(self, request: Any) -> Future[Any]:
@@ -589,6 +597,7 @@ class Client:
         with self._lock:
             request_id = next(self._ids)
             self._pending[request_id] = future
+        self.events.offer(EventKind.REQUEST_SENT, request_id, self.node.name, request)
         self._writer.write((request_id, self.node.name, request))
         return future
 

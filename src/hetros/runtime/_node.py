@@ -73,6 +73,9 @@ class Node:
         # what the node's parameter services read and set: an rclpy node puts its own in (its callbacks)
         self.parameter_access: ParameterAccess = ProjectParameters(self)
         self._parameter_services: ParameterServices | None = None
+        # ROS nodes the code made beside the project's one (rclpy's Node('other') in the same main), by
+        # full name: each answers its own parameter services, and `hetros node list` and `param` find it
+        self._guests: dict[str, ParameterServices] = {}
         self._closables: list[Publisher[Any] | Subscription[Any] | Service | Client | ActionServer
                               | ActionClient] = []
         self.clients: dict[str, Client] = {}
@@ -431,14 +434,34 @@ class Node:
     # -- what a look from outside finds (``hetros node info``, ``top``, ``service call``) ----
 
     @property
+    def full_name(self) -> str:
+        """Namespace and name, as the plan gives them (``/r2/talker``)."""
+        plan = self.graph.plan
+        return plan.full_name(self.name) if plan is not None and self.name in plan.nodes else f"/{self.name}"
+
+    @property
     def parameter_services(self) -> dict[str, tuple[ServiceType, Callable[[Any], Any]]]:
-        """This node's parameter services: name -> (srv type, handler), under its full ROS name."""
+        """This node's parameter services, and those of the ROS nodes its code made beside it: name ->
+        (srv type, handler), under each one's full ROS name."""
         if self._parameter_services is None:
-            plan = self.graph.plan
-            planned = plan is not None and self.name in plan.nodes
-            full_name = plan.full_name(self.name) if plan is not None and planned else f"/{self.name}"
-            self._parameter_services = ParameterServices(self, full_name)
-        return dict(self._parameter_services.handlers)
+            self._parameter_services = ParameterServices(self, self.full_name)
+        found = dict(self._parameter_services.handlers)
+        for guest in list(self._guests.values()):
+            found.update(guest.handlers)
+        return found
+
+    def add_ros_node(self, full_name: str, access: ParameterAccess) -> None:
+        """A ROS node the code made beside this one, named ``full_name``: it answers its own parameter
+        services through ``access``. The node itself stays this node's: its endpoints are the plan's."""
+        if full_name != self.full_name:
+            self._guests[full_name] = ParameterServices(self, full_name, access)
+
+    def remove_ros_node(self, full_name: str) -> None:
+        self._guests.pop(full_name, None)
+
+    def ros_nodes(self) -> list[str]:
+        """The full ROS names this node answers to: its own, then those its code made."""
+        return [self.full_name, *sorted(self._guests)]
 
     def create_lifecycle(self, on_configure: Callable[[], bool | None] | None = None,
                          on_activate: Callable[[], bool | None] | None = None,

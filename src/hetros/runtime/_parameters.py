@@ -169,8 +169,9 @@ class ParameterServices:
     """The handlers of one node's six parameter services, by service name; each takes the request and
     returns the response, as a hetros service handler does."""
 
-    def __init__(self, node: Node, full_name: str) -> None:
+    def __init__(self, node: Node, full_name: str, access: ParameterAccess | None = None) -> None:
         self._node = node
+        self._fixed = access  # a ROS node the code made beside the project's (else the node's own access)
         handlers: dict[str, Callable[[Any], Any]] = {
             "describe_parameters": self._describe, "get_parameter_types": self._types,
             "get_parameters": self._get, "list_parameters": self._list, "set_parameters": self._set,
@@ -181,7 +182,7 @@ class ParameterServices:
 
     @property
     def _access(self) -> ParameterAccess:
-        return self._node.parameter_access
+        return self._fixed if self._fixed is not None else self._node.parameter_access
 
     def _values(self, names: list[str]) -> list[Any] | None:
         """The values of ``names``; None when one of them is not there (ROS 2 then answers with none)."""

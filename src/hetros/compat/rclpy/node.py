@@ -16,7 +16,7 @@ from typing import Any, TypeVar
 
 from ..._errors import NodeError, ParameterError
 from ...plan import ChannelPlan, join_namespace
-from ...runtime import Clock, Ticker, bound_node, listed, type_change_problem
+from ...runtime import Clock, ProjectParameters, Ticker, bound_node, listed, type_change_problem
 from ...runtime import Node as HetrosNode
 from .._flavour import copied, keepable, received
 from .._where import caller_place
@@ -223,7 +223,7 @@ class Client:
     def configure_introspection(self, clock: Any, service_event_qos_profile: Any, introspection_state: Any) -> None:
         from .service_introspection import configure
 
-        configure(self.srv_name, introspection_state)
+        configure(self._inner, self.srv_name, introspection_state)
 
     def destroy(self) -> None:
         self._inner.close()
@@ -238,7 +238,7 @@ class Service:
     def configure_introspection(self, clock: Any, service_event_qos_profile: Any, introspection_state: Any) -> None:
         from .service_introspection import configure
 
-        configure(self.srv_name, introspection_state)
+        configure(self._inner, self.srv_name, introspection_state)
 
     def destroy(self) -> None:
         self._inner.close()
@@ -315,7 +315,11 @@ class Node:
         # the parameters declared dynamically typed (set while undeclared ones are allowed)
         self._dynamic: set[str] = set()
         # the node's parameter services (`ros2 param`, parameter clients) go through rclpy's rules and callbacks
-        self._hetros.parameter_access = self
+        # the first rclpy node of the project's node answers its parameter services; each one is also
+        # found by its own full name (a main that makes a service node and a client node has both)
+        if isinstance(self._hetros.parameter_access, ProjectParameters):
+            self._hetros.parameter_access = self
+        self._hetros.add_ros_node(self.get_fully_qualified_name(), self)
         self.default_callback_group: CallbackGroup = MutuallyExclusiveCallbackGroup()
         self._owned: list[Publisher | Subscription | Timer | Service] = []  # closed by destroy_node
         self.executor: Any = None
@@ -715,6 +719,9 @@ class Node:
         owned, self._owned = self._owned, []
         for entity in reversed(owned):
             entity.destroy()
+        self._hetros.remove_ros_node(self.get_fully_qualified_name())
+        if self._hetros.parameter_access is self:
+            self._hetros.parameter_access = ProjectParameters(self._hetros)
 
     def destroy_publisher(self, publisher: Publisher) -> bool:
         publisher.destroy()

@@ -1,8 +1,10 @@
 """rclpy.service_introspection: the states a client or service may be put in.
 
 ROS 2 publishes each call as an event on ``<service>/_service_event`` when a side is switched to
-METADATA or CONTENTS. hetros plans every topic from the project file and publishes no such events,
-so switching introspection on is refused, naming the service; OFF (every node's start) is kept.
+METADATA or CONTENTS. hetros makes the same events for `hetros service echo` (while it looks,
+never onto a transport); the state set here decides what a side shows: OFF nothing, METADATA
+the events without request or response, CONTENTS everything (a side never configured shows
+CONTENTS).
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from enum import IntEnum
 from typing import Any
 
 from ..._errors import NodeError
+from ...runtime import Introspection
 
 
 class ServiceIntrospectionState(IntEnum):
@@ -19,12 +22,13 @@ class ServiceIntrospectionState(IntEnum):
     CONTENTS = 2
 
 
-def configure(service: str, state: Any) -> None:
-    """What ``configure_introspection`` does on either side."""
-    if ServiceIntrospectionState(int(state)) != ServiceIntrospectionState.OFF:
-        raise NodeError(f"{service}: service introspection ({ServiceIntrospectionState(int(state)).name}) is not "
-                        f"supported by hetros (it publishes no {service}/_service_event); keep it OFF, and watch the "
-                        "service's calls with `hetros top` or `hetros node info`")
+def configure(side: Any, service: str, state: Any) -> None:
+    """What ``configure_introspection`` does on either side (``side``: hetros's client or server)."""
+    try:
+        side.events.state = Introspection(int(state))
+    except (TypeError, ValueError):
+        raise NodeError(f"{service}: introspection_state must be one of ServiceIntrospectionState's (OFF, "
+                        f"METADATA, CONTENTS), not {state!r}") from None
 
 
 __all__ = ["ServiceIntrospectionState"]

@@ -208,6 +208,11 @@ class ControlServer:
                                 "cpu_s": sum(os.times()[:2]), "rss": _resident_bytes(), "nodes": nodes,
                                 "topics": topics})
 
+    def _op_nodes(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        """The full ROS names of the nodes alive here: the plan's, and those their code made beside them."""
+        names = sorted({name for live in list(self.graph.nodes.values()) for name in live.ros_nodes()})
+        send_frame(connection, {"process": self.process, "nodes": names})
+
     def _op_tap(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
         topic = _text(request, "topic")
         points = self.graph.taps()

@@ -20,7 +20,8 @@ from typing import Any, cast
 from ..._errors import InspectError, LaunchError
 from ..._signals import next_item
 from ...msg import Message, TypeRegistry, registry
-from ...plan import Plan
+from ...plan import PARAMETER_SERVICES, Plan
+from ...runtime import EVENT_TOPIC_SUFFIX
 from ...transport import MessageCodec
 from ..launcher._registry import LaunchRecord, registry_folder, running
 from ._control import receive_frame, send_frame, short_path
@@ -170,18 +171,35 @@ class RunningLaunch:
                 where = ", ".join(sorted({self.plan.host_of(n) for n in self.plan.channels[topic].publishers}))
                 raise InspectError(f"{topic} is neither published nor subscribed on this machine (host "
                                    f"{self.record.host or '-'}); look at it on {where or '?'}")
+        sites = [(topic, process) for topic in topics for process in self.plan.tap_sites(topic)[1]]
+        yield from self._tap_sites(sites, data=data, max_rate=max_rate, attached=attached)
+
+    def tap_service(self, service: str) -> Iterator[TapEvent | None]:
+        """The events of ``service``'s calls (``<srv>_Event``, ROS 2's introspection) from every process
+        here that serves or calls it; None every half second when nothing came."""
+        self.server_of(service)
+        plan = self.plan
+        processes = sorted({plan.process_of(name) for name, spec in plan.nodes.items()
+                            if (service in spec.services or service in spec.clients) and plan.runs_here(name)
+                            and not plan.in_hardware(name)})
+        if not processes:
+            raise InspectError(f"neither the server nor a client of {service} runs in software on this machine")
+        for _topic, event in self._tap_sites([(service + EVENT_TOPIC_SUFFIX, p) for p in processes], data=True):
+            yield event
+
+    def _tap_sites(self, sites: list[tuple[str, str]], *, data: bool, max_rate: float = 0.0,
+                   attached: Callable[[], None] = lambda: None) -> Iterator[tuple[str, TapEvent | None]]:
         events: queue.Queue[tuple[str, TapEvent | None] | Exception] = queue.Queue()
         sockets = []
         try:
-            for topic in topics:
-                for process in self.plan.tap_sites(topic)[1]:
-                    sock = self.connect(process, {"op": "tap", "topic": topic, "data": data,
-                                                  "max_rate": max_rate}, timeout=None)
-                    sockets.append(sock)
-                    answer, _ = receive_frame(sock)
-                    if "error" in answer:
-                        raise InspectError(f"{process}: {answer['error']}")
-                    threading.Thread(target=_pump, args=(sock, process, topic, events), daemon=True).start()
+            for topic, process in sites:
+                sock = self.connect(process, {"op": "tap", "topic": topic, "data": data,
+                                              "max_rate": max_rate}, timeout=None)
+                sockets.append(sock)
+                answer, _ = receive_frame(sock)
+                if "error" in answer:
+                    raise InspectError(f"{process}: {answer['error']}")
+                threading.Thread(target=_pump, args=(sock, process, topic, events), daemon=True).start()
             attached()
             while True:
                 event = next_item(events)
@@ -237,9 +255,34 @@ class RunningLaunch:
 
     def call(self, service: str, request: Message, timeout: float = 10.0) -> Message:
         node, typename = self.server_of(service)
-        _, data = self.ask(self.plan.process_of(node), {"op": "call", "service": service, "timeout": timeout},
+        return self._call_at(self.plan.process_of(node), service, typename, request, timeout)
+
+    def _call_at(self, process: str, service: str, typename: str, request: Message, timeout: float = 10.0) -> Message:
+        _, data = self.ask(process, {"op": "call", "service": service, "timeout": timeout},
                            bytes(self.codec(f"{typename}_Request").encode(request)), timeout + 5.0)
         return self.decode(f"{typename}_Response", data)
+
+    def live_nodes(self) -> dict[str, str]:
+        """Full ROS name -> process of every node alive on this machine: the plan's, and the ones their
+        code made beside them (rclpy's Node('other') in the same main); a silent process is left out."""
+        found: dict[str, str] = {}
+        for process in self.processes():
+            with contextlib.suppress(InspectError, LaunchError):
+                answer = self.ask(process, {"op": "nodes"}, timeout=5.0)[0]
+                for name in answer.get("nodes", []):
+                    if isinstance(name, str):
+                        found.setdefault(name, process)
+        return found
+
+    def _parameter_node(self, node: str) -> tuple[str, str]:
+        """(process, full ROS name) of a node by its plan key, or by the full name of a node the code made."""
+        if node in self.plan.nodes:
+            return self.node_process(node), self.plan.full_name(node)
+        process = self.live_nodes().get(node)
+        if process is None:
+            known = ", ".join(sorted(self.plan.nodes))
+            raise InspectError(f"launch {self.record.session} has no node {node} (its nodes: {known})")
+        return process, node
 
     def actions(self) -> dict[str, str]:
         """Action name -> type, of every action served in the launch."""
@@ -289,11 +332,12 @@ class RunningLaunch:
         from ...interfaces.rcl_interfaces.srv import GetParameters, ListParameters
         from ...runtime import from_value_message
 
-        base = self.plan.full_name(node)
-        self.node_process(node)
-        listed: Any = self.call(f"{base}/list_parameters", ListParameters.Request())
+        process, base = self._parameter_node(node)
+        listed: Any = self._call_at(process, f"{base}/list_parameters", PARAMETER_SERVICES["list_parameters"],
+                                    ListParameters.Request())
         names = list(listed.result.names)
-        values = cast(Any, self.call(f"{base}/get_parameters", GetParameters.Request(names=names))).values
+        values = cast(Any, self._call_at(process, f"{base}/get_parameters", PARAMETER_SERVICES["get_parameters"],
+                                         GetParameters.Request(names=names))).values
         return {name: from_value_message(value) for name, value in zip(names, values, strict=True)}
 
     def set_parameter(self, node: str, name: str, value: Any) -> None:
@@ -303,9 +347,10 @@ class RunningLaunch:
         from ...interfaces.rcl_interfaces.srv import SetParameters
         from ...runtime import to_value_message
 
-        self.node_process(node)
+        process, base = self._parameter_node(node)
         request = SetParameters.Request(parameters=[Parameter(name=name, value=to_value_message(value))])
-        result = cast(Any, self.call(f"{self.plan.full_name(node)}/set_parameters", request)).results[0]
+        result = cast(Any, self._call_at(process, f"{base}/set_parameters", PARAMETER_SERVICES["set_parameters"],
+                                         request)).results[0]
         if not result.successful:
             raise InspectError(result.reason or f"node {node} refused {name}={value!r} without a reason")
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+from hetros.cli import CRASH_DIR_VARIABLE
 from hetros.transport import SESSION_TAG_VARIABLE, cleanup_stale, new_session
 from hetros.transport.shm._iceoryx import iceoryx_root
 from hetros.transport.shm._sample import FILE_PREFIX
@@ -18,6 +19,9 @@ SHM = Path("/dev/shm")
 # leak check looks at what the suite made and nothing else the machine runs
 TAG = f"t{os.getpid():07d}"  # fixed width: no tag is the start of another
 os.environ[SESSION_TAG_VARIABLE] = TAG
+# where `hetros` writes the traceback of an exception it did not expect (a defect): any file there when
+# the run ends fails it, whichever test's command hit it (the workers and their launches inherit this)
+CRASHES = Path(os.environ.setdefault(CRASH_DIR_VARIABLE, f"/tmp/hetros-test-crashes-{TAG}"))
 
 
 @pytest.fixture
@@ -47,3 +51,10 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     if left:
         print(f"\nshared memory left behind by the test run: {left}")
         session.exitstatus = pytest.ExitCode.TESTS_FAILED
+    if not hasattr(session.config, "workerinput") and CRASHES.is_dir():
+        reports = sorted(CRASHES.iterdir())
+        if reports:
+            print(f"\nhetros failed unexpectedly (a traceback where an error belongs) {len(reports)} time(s):")
+            for report in reports[:5]:
+                print(f"--- {report}\n{report.read_text(errors='replace')[-3000:]}")
+            session.exitstatus = pytest.ExitCode.TESTS_FAILED

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import stat
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +31,15 @@ NODE_LIMIT = 1_000_000
 
 _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
           (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+_CONTROL = {code: f"\\x{code:02x}" for code in [*range(0x20), 0x7F, *range(0x80, 0xA0)] if code not in (0x09, 0x0A)}
+
+
+def printable(text: str) -> str:
+    """``text`` with control characters escaped (``\\x1b``): text read from files or records goes to a
+    terminal, where an escape sequence could clear the screen or retitle the window."""
+    return text.translate(_CONTROL)
 
 
 def _kind(mode: int) -> str:
@@ -169,6 +179,79 @@ def parse_yaml(text: str, what: str, *, error: type[Error] = InputFileError) -> 
     return value
 
 
+def parse_python(path: str | Path, what: str, *, limit: int = TEXT_LIMIT, error: type[Error] = InputFileError) -> Any:
+    """The syntax tree (``ast.Module``) of the Python file ``path``; a syntax error named by its line,
+    code nested past what the parser takes refused."""
+    import ast
+
+    text = read_text(path, what, limit=limit, error=error)
+    try:
+        return ast.parse(text, filename=str(path))
+    except SyntaxError as exc:
+        raise error(f"{path}:{exc.lineno or 1}: {what} is not valid Python ({exc.msg}); fix it, or name "
+                    "another file") from None
+    except (RecursionError, MemoryError, ValueError) as exc:
+        raise error(f"{what} {path} cannot be parsed ({type(exc).__name__}: {exc}); is it the right file?") from None
+
+
+def dataclass_problem(value: Any, where: str) -> str | None:
+    """Where a dataclass built from a file (a plan, a profile) holds a value its annotations do not allow
+    (``plan.nodes.x.args.0: 3 is not str``), else None: checked once, where the file is read, so that a
+    changed or forged file is named there and not where a value of the wrong kind is first used."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        for name, hint in _field_hints(type(value)):
+            found = _value_problem(getattr(value, name), hint, f"{where}.{name}")
+            if found is not None:
+                return found
+    return None
+
+
+@cache
+def _field_hints(kind: type) -> tuple[tuple[str, Any], ...]:
+    import dataclasses
+    import typing
+
+    hints = typing.get_type_hints(kind)
+    return tuple((item.name, hints[item.name]) for item in dataclasses.fields(kind))
+
+
+def _value_problem(value: Any, hint: Any, where: str) -> str | None:
+    import dataclasses
+    import types
+    import typing
+
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if hint is Any:
+        return None
+    if origin in (typing.Union, types.UnionType):
+        problems = [_value_problem(value, option, where) for option in args]
+        return None if any(p is None for p in problems) else problems[0]
+    if origin is typing.Literal:
+        return None if value in args else f"{where}: {value!r} is not one of {args}"
+    if origin is tuple:
+        if not isinstance(value, tuple):
+            return f"{where}: {value!r} is not a list"
+        return next((p for i, v in enumerate(value) if (p := _value_problem(v, args[0], f"{where}.{i}"))), None)
+    if origin is dict:
+        if not isinstance(value, dict):
+            return f"{where}: {value!r} is not a mapping"
+        return next((p for k, v in value.items() if (p := _value_problem(k, args[0], f"{where}.{k}") or
+                                                      _value_problem(v, args[1], f"{where}.{k}"))), None)
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        if not isinstance(value, hint):
+            return f"{where}: {value!r} is not a {hint.__name__}"
+        return dataclass_problem(value, where)
+    if hint is float:
+        ok = isinstance(value, int | float) and not isinstance(value, bool)
+    elif hint is int:
+        ok = isinstance(value, int) and not isinstance(value, bool)
+    else:
+        ok = isinstance(value, hint) if isinstance(hint, type) else True
+    return None if ok else f"{where}: {value!r} is not {getattr(hint, '__name__', hint)}"
+
+
 def load_json(path: str | Path, what: str, *, limit: int = TEXT_LIMIT, error: type[Error] = InputFileError) -> Any:
     return parse_json(read_bytes(path, what, limit=limit, error=error), f"{what} {path}", error=error)
 
@@ -177,5 +260,5 @@ def load_yaml(path: str | Path, what: str, *, limit: int = TEXT_LIMIT, error: ty
     return parse_yaml(read_text(path, what, limit=limit, error=error), f"{what} {path}", error=error)
 
 
-__all__ = ["DEPTH_LIMIT", "TEXT_LIMIT", "check_depth", "load_json", "load_yaml", "parse_json", "parse_yaml",
-           "read_bytes", "read_text"]
+__all__ = ["DEPTH_LIMIT", "TEXT_LIMIT", "check_depth", "dataclass_problem", "load_json", "load_yaml", "parse_json",
+           "parse_python", "parse_yaml", "printable", "read_bytes", "read_text"]

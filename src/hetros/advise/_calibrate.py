@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import AdviseError
+from .._files import load_json
 from ._profile import machine
 
 SYSTEMS = {"inproc": "hetros-inproc", "shm": "hetros-shm-cb", "copy": "numpy-copy"}
@@ -82,13 +83,13 @@ class Calibration:
 
     @classmethod
     def load(cls, path: Path) -> Calibration:
+        raw = load_json(path, "calibration", error=AdviseError)
         try:
-            raw = json.loads(path.read_text(encoding="utf-8"))
             table = {name: [(int(s), float(p50), float(p99)) for s, p50, p99 in rows]
                      for name, rows in raw["table"].items()}
             wake = {str(k): float(v) for k, v in raw.get(WAKE_KEY, {}).items()}
             return cls(dict(raw["machine"]), table, wake)
-        except (OSError, ValueError, KeyError, TypeError) as exc:
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
             raise AdviseError(f"{path}: not a readable calibration ({exc!r}); calibrate again "
                               "(`hetros advise --calibrate`)") from None
 

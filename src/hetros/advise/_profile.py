@@ -24,6 +24,7 @@ import numpy as np
 
 from .. import __version__
 from .._errors import AdviseError
+from .._files import dataclass_problem, load_json
 from ..plan import Plan
 from ..runtime import HandlingStats
 from ._chains import Chain, ChainLatency, measure, over_launches
@@ -114,11 +115,7 @@ class Profile:
 
     @classmethod
     def load(cls, path: Path) -> Profile:
-        try:
-            raw = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise AdviseError(f"{path}: not a readable profile ({exc}); make one with `hetros advise --profile-only`") \
-                from None
+        raw = load_json(path, "profile", error=AdviseError)
         if not isinstance(raw, dict) or raw.get("format") != FORMAT:
             raise AdviseError(f"{path}: a profile of format {FORMAT} expected, not "
                               f"{raw.get('format') if isinstance(raw, dict) else type(raw).__name__!r}; profile again")
@@ -127,9 +124,13 @@ class Profile:
                                           "one_core": {t: Handling(**h) for t, h in spec.get("one_core", {}).items()}})
                      for name, spec in raw["nodes"].items()}
             topics = {name: TopicProfile(**spec) for name, spec in raw["topics"].items()}
-            return cls(**{**raw, "nodes": nodes, "topics": topics})
-        except (KeyError, TypeError, AttributeError) as exc:
+            profile = cls(**{**raw, "nodes": nodes, "topics": topics})
+        except (KeyError, TypeError, AttributeError, ValueError) as exc:
             raise AdviseError(f"{path}: a damaged profile ({exc!r}); profile again") from None
+        problem = dataclass_problem(profile, "profile")
+        if problem is not None:
+            raise AdviseError(f"{path}: a damaged profile ({problem}); profile again")
+        return profile
 
     def fits(self, plan: Plan) -> list[str]:
         """Why this profile may not describe ``plan`` on this machine: warnings, empty when it does."""

@@ -9,6 +9,7 @@ from typing import Any
 import yaml
 
 from .._errors import AdviseError
+from .._files import load_yaml
 from ._chains import Chain
 from ._model import Mapping, Placement
 from ._profile import Profile
@@ -61,8 +62,8 @@ def table(rows: list[tuple[str, Candidate]], chains: list[Chain], original: Mapp
 def write_project(source: Path, mapping: Mapping, original: Mapping, targets: dict[str, str], out: Path) -> Path:
     """``source`` with its nodes' targets (and the targets' cpus) as ``mapping`` puts them: nothing else
     changes (comments are not kept: the file is written anew)."""
-    raw: dict[str, Any] = yaml.safe_load(source.read_text(encoding="utf-8"))
-    nodes = raw.get("nodes")
+    raw = load_yaml(source, "project file", error=AdviseError)
+    nodes = raw.get("nodes") if isinstance(raw, dict) else None
     if not isinstance(nodes, dict):
         raise AdviseError(f"{source}: nodes: is not a mapping of node entries; write the advised targets by hand")
     old_targets: dict[str, Any] = dict(raw.get("targets") or {})
@@ -93,8 +94,8 @@ def write_one_core(source: Path, cpu: int, out: Path) -> Path:
     """``source`` with every node of a process or thread target on this machine in one process pinned to
     ``cpu`` (the target ``advise_one_core``): the launch in which the profile measures each node right
     after its publisher on the same awake core. ROS 1, fpga and other machines' targets stay."""
-    raw: dict[str, Any] = yaml.safe_load(source.read_text(encoding="utf-8"))
-    targets, nodes = raw.get("targets"), raw.get("nodes")
+    raw = load_yaml(source, "project file", error=AdviseError)
+    targets, nodes = (raw.get("targets"), raw.get("nodes")) if isinstance(raw, dict) else (None, None)
     if not isinstance(targets, dict) or not isinstance(nodes, dict):
         raise AdviseError(f"{source}: targets: and nodes: must be mappings written out (not from an include) for "
                           "the profile's one-core launch")

@@ -12,6 +12,7 @@ import shlex
 import shutil
 import sys
 import tempfile
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,22 +20,33 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from .._errors import CheckError, Error, HardwareError, ProjectError
+from .._files import printable
 from .._signals import interruptible
 from ..msg import registry
 from ..msg import wanted as compiled_wanted
 from ..plan import Plan
+from ._args import microseconds, milliseconds, port, positive_count, seconds
 
 if TYPE_CHECKING:
     from ..project import LoadedProject
 
 EXIT_ERROR = 1
+# an exception hetros did not expect: a defect (sysexits' EX_SOFTWARE); the tests fail on it
+EXIT_BUG = 70
+# where crash reports go instead of the user's private folder (the test suite collects them there)
+CRASH_DIR_VARIABLE = "HETROS_CRASH_DIR"
 
 
-def _write_yaml(data: object, out: str | None) -> None:
+def _write_yaml(data: object, out: str | None, mode: int = 0o666) -> None:
+    """``data`` as YAML to ``out`` (else stdout), made with ``mode`` under the user's umask: a project that
+    holds a file's text is no more readable than that file."""
     text = yaml.safe_dump(data, sort_keys=False, default_flow_style=False)
     if out:
         Path(out).parent.mkdir(parents=True, exist_ok=True)
-        Path(out).write_text(text, encoding="utf-8")
+        descriptor = os.open(out, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, mode)
+        os.fchmod(descriptor, os.fstat(descriptor).st_mode & mode & 0o7777)  # an existing file narrows too
+        with os.fdopen(descriptor, "w", encoding="utf-8") as written:
+            written.write(text)
         print(f"wrote {out}")
     else:
         sys.stdout.write(text)
@@ -342,7 +354,7 @@ def cmd_import(args: argparse.Namespace) -> int:
         project, notes = import_launch(Path(args.file), args.format == "ros2launch",
                                        [Path(p) for p in args.package_path or []],
                                        Path(args.output).parent if args.output else Path.cwd(), given)
-        _write_yaml(project, args.output)
+        _write_yaml(project, args.output, notes.file_mode)
         for note in notes:
             print(f"warning: {note}", file=sys.stderr)
         print(f"imported {len(project['nodes'])} node(s): {', '.join(project['nodes'])}", file=sys.stderr)
@@ -350,9 +362,9 @@ def cmd_import(args: argparse.Namespace) -> int:
     if args.format == "roslite":
         _write_yaml(import_roslite(Path(args.file), module=args.module), args.output)
         return 0
-    project, notes = import_reconros(Path(args.file), module=args.module)
+    project, reconros_notes = import_reconros(Path(args.file), module=args.module)
     _write_yaml(project, args.output)
-    for note in notes:
+    for note in reconros_notes:
         print(f"note: {note}", file=sys.stderr)
     return 0
 
@@ -526,7 +538,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--package-path", action="append", metavar="DIR",
                    help="a launch file's packages are found under this folder (repeatable; also $HETROS_PACKAGE_PATH, "
                         "and the folder holding the launch file's own package)")
-    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--duration", type=seconds, help="stop after this many seconds")
     p.add_argument("--start-timeout", type=_seconds, default=60.0,
                    help="seconds the targets may take to start, a simulator's announced compilation not counted "
                         "(default 60)")
@@ -541,7 +553,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_advise(sub)
     p = sub.add_parser("deploy", help="start every host of a project (this one directly, the others over ssh)")
     p.add_argument("project")
-    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--duration", type=seconds, help="stop after this many seconds")
     p.add_argument("--remote", default="python3 -m hetros",
                    help="how a remote host runs hetros in the project's folder (default: %(default)s)")
     p.add_argument("--print", action="store_true", help="print each host's command instead of running it")
@@ -568,7 +580,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("reference", help="print the project file's reference (every key, kind and default)")
     p.set_defaults(func=cmd_reference)
     p = sub.add_parser("master", help="run a ROS 1 master (master API + parameter server) for rospy/roscpp nodes")
-    p.add_argument("--port", type=int, default=11311)
+    p.add_argument("--port", type=port, default=11311)
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1 only)")
     p.set_defaults(func=cmd_master)
     bench = sub.add_parser("bench", help="benchmarks against the peers").add_subparsers(dest="bench", required=True)
@@ -577,7 +589,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="fewer sizes and repetitions (about a minute on 2 cores)")
     p.add_argument("--out", help="output folder (default out/bench)")
     p.add_argument("--systems", help="comma-separated subset")
-    p.add_argument("--rounds", type=int, help="interleaved rounds whose samples are pooled (default 1)")
+    p.add_argument("--rounds", type=positive_count, help="interleaved rounds whose samples are pooled (default 1)")
     p.add_argument("--sizes", help=_SIZES_HELP)
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("hw", help="hardware topics: simulated transfer times and Yosys resources vs fpgaDDS")
@@ -590,10 +602,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
     p = bench.add_parser("ros1", help="one-way latency over TCPROS: rospy and hetros nodes, both ways")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")
-    p.add_argument("--settle-us", type=float, default=50.0,
+    p.add_argument("--settle-us", type=microseconds, default=50.0,
                    help="sender's wait, awake, after each reply (default 50; 0: back-to-back exchanges)")
-    p.add_argument("--gap-ms", type=float, default=0.0, help="sender's pause after each reply (isolated messages)")
-    p.add_argument("--rounds", type=int, help="interleaved rounds over every pair and size, pooled (default 3)")
+    p.add_argument("--gap-ms", type=milliseconds, default=0.0,
+                   help="sender's pause after each reply (isolated messages)")
+    p.add_argument("--rounds", type=positive_count,
+                   help="interleaved rounds over every pair and size, pooled (default 3)")
     p.add_argument("--steady-malloc", action="store_true",
                    help="every process keeps large buffers mapped (GLIBC_TUNABLES; see benchmarks/ros1.py)")
     p.add_argument("--sizes", help=_SIZES_HELP)
@@ -634,7 +648,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="instead: the target's hardware nodes as a dataflow chain (hardware topics between them) "
                         "and as a sequential one (each behind its own gateway): latency and CPU copies per message")
     p.add_argument("--image", default="640x480", help="--models: the size of an image message (WIDTHxHEIGHT)")
-    p.add_argument("--size", type=int, default=2048, help="--models: elements of an array message")
+    p.add_argument("--size", type=positive_count, default=2048, help="--models: elements of an array message")
     p.set_defaults(func=cmd_hw_report)
     p = hw.add_parser("synth", help="Yosys resource estimate (LUT/FF/BRAM/DSP) per hardware node and topic network, "
                                        "totals against the part")
@@ -676,7 +690,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         code: int = args.func(args)
         return code
     except Error as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {printable(str(exc))}", file=sys.stderr)
         return EXIT_ERROR
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
@@ -686,3 +700,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 0
+    except (Exception, RecursionError) as exc:  # a defect of hetros: one line here, the traceback in a file
+        where = _write_crash_report(exc)
+        print(f"error: hetros failed unexpectedly ({type(exc).__name__}: {printable(str(exc))[:300]}); this is a "
+              f"bug in hetros, not in your input: the full traceback is in {where}; please report it",
+              file=sys.stderr)
+        return EXIT_BUG
+
+
+def _write_crash_report(exc: BaseException) -> str:
+    """The traceback of ``exc`` in a file of this user's private folder (its path), else on stderr."""
+    import traceback
+
+    text = "".join(traceback.format_exception(exc))
+    try:
+        from .._paths import user_subfolder
+
+        given = os.environ.get(CRASH_DIR_VARIABLE)
+        if given:
+            os.makedirs(given, mode=0o700, exist_ok=True)
+        folder = Path(given) if given else user_subfolder("crashes")
+        path = folder / f"hetros-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.txt"
+        descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        with os.fdopen(descriptor, "w", encoding="utf-8") as out:
+            out.write(f"hetros {' '.join(sys.argv[1:])}\n\n{text}")
+        return str(path)
+    except (OSError, Error):
+        sys.stderr.write(text)
+        return "the lines above"

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .._errors import AdviseError
+from ._args import count, positive_count, positive_seconds, seconds
 
 if TYPE_CHECKING:
     from ..advise import Advice, Options
@@ -25,21 +26,21 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--profile", metavar="PROFILE.json",
                    help="advise from this profile instead of running the project (see --profile-only)")
     p.add_argument("--profile-only", action="store_true", help="run the project, write OUT/profile.json, stop there")
-    p.add_argument("--duration", type=float, default=20.0, help="seconds each run lasts (default 20)")
-    p.add_argument("--warmup", type=float, default=5.0, help="seconds of each run not counted (default 5)")
-    p.add_argument("--cores", type=int, default=0, help="cores a mapping may use (default: this machine's)")
+    p.add_argument("--duration", type=seconds, default=20.0, help="seconds each run lasts (default 20)")
+    p.add_argument("--warmup", type=seconds, default=5.0, help="seconds of each run not counted (default 5)")
+    p.add_argument("--cores", type=count, default=0, help="cores a mapping may use (default: this machine's)")
     p.add_argument("--pin", action="append", default=[], metavar="NODE",
                    help="a node that stays where the project puts it (repeatable)")
     p.add_argument("--fpga", action="store_true",
                    help="nodes with a hw: implementation may go into the project's fpga target")
-    p.add_argument("--top", type=int, default=3, help="how many mappings to show (default 3)")
+    p.add_argument("--top", type=positive_count, default=3, help="how many mappings to show (default 3)")
     p.add_argument("--calibration", metavar="FILE", help="transport costs from this file instead of this machine's")
     p.add_argument("--calibrate", action="store_true", help="measure this machine's transport costs again")
-    p.add_argument("--time-limit", type=float, default=60.0, help="seconds the solver may take (default 60)")
+    p.add_argument("--time-limit", type=positive_seconds, default=60.0, help="seconds the solver may take (default 60)")
     p.add_argument("--out", default="out/advise", help="folder for the profile, the timeline and logs")
     p.add_argument("--verify", action="store_true",
                    help="launch the advised mapping and the project's own, and print predicted beside measured")
-    p.add_argument("--rounds", type=int, default=1,
+    p.add_argument("--rounds", type=positive_count, default=1,
                    help="profile over this many launches (node times pooled, the chains' median p50) and, with "
                         "--verify, launch each mapping this many times, interleaved, taking the median of their "
                         "chain p50s (a chain under a millisecond varies from launch to launch)")

@@ -24,6 +24,7 @@ from .._files import load_yaml
 from ..launch import LaunchLogs, RunningLaunch, TapEvent
 from ..msg import DEFAULT_TRUNCATE_LENGTH, Message, from_plain, normalize_typename, to_plain
 from ..plan import ACTION_PREFIX, PARAMETER_SERVICES, Plan, join_namespace
+from . import _args as numbers
 
 # ros2 topic hz's default window (messages)
 HZ_WINDOW = 10000
@@ -828,32 +829,33 @@ def add_commands(sub: Any) -> None:
     p = topic.add_parser("echo", help="print a topic's messages as YAML")
     p.add_argument("topic")
     p.add_argument("--once", action="store_true", help="print one message and exit")
-    p.add_argument("-n", "--times", type=int, default=0, help="print this many messages and exit")
+    p.add_argument("-n", "--times", type=numbers.count, default=0, help="print this many messages and exit")
     p.add_argument("--field", help="print one field (header.stamp)")
     p.add_argument("--no-arr", action="store_true", help="print arrays' types and lengths instead of their values")
     p.add_argument("--no-str", action="store_true", help="print strings' lengths instead of their values")
-    p.add_argument("-l", "--truncate-length", type=int, default=DEFAULT_TRUNCATE_LENGTH,
+    p.add_argument("-l", "--truncate-length", type=numbers.count, default=DEFAULT_TRUNCATE_LENGTH,
                    help="cut arrays and strings at this length (default %(default)s)")
     p.add_argument("-f", "--full-length", action="store_true", help="do not cut arrays and strings")
     p.add_argument("--flow-style", action="store_true")
     p.add_argument("--lost-messages", action="store_true", help="report messages the tap dropped")
-    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--duration", type=numbers.seconds, help="stop after this many seconds")
     p.set_defaults(func=cmd_topic_echo)
     for verb, function, window, what in (("hz", cmd_topic_hz, HZ_WINDOW, "publishing rate"),
                                          ("bw", cmd_topic_bw, BW_WINDOW, "bandwidth"),
                                          ("delay", cmd_topic_delay, HZ_WINDOW, "delay from header stamp")):
         p = topic.add_parser(verb, help=f"a topic's {what}, printed every second")
         p.add_argument("topic")
-        p.add_argument("-w", "--window", type=int, default=window, help="messages per figure (default %(default)s)")
-        p.add_argument("--duration", type=float, help="stop after this many seconds")
+        p.add_argument("-w", "--window", type=numbers.positive_count, default=window,
+                       help="messages per figure (default %(default)s)")
+        p.add_argument("--duration", type=numbers.seconds, help="stop after this many seconds")
         p.set_defaults(func=function)
     p = topic.add_parser("pub", help="publish a message to a topic's subscribers")
     p.add_argument("topic")
     p.add_argument("type")
     p.add_argument("values", nargs="?", default="{}", help="YAML field values: \"{data: hello}\"")
     p.add_argument("-1", "--once", action="store_true", help="publish one message and exit")
-    p.add_argument("-t", "--times", type=int, default=0, help="publish this many messages and exit")
-    p.add_argument("-r", "--rate", type=float, default=1.0, help="messages per second (default 1)")
+    p.add_argument("-t", "--times", type=numbers.count, default=0, help="publish this many messages and exit")
+    p.add_argument("-r", "--rate", type=numbers.hertz, default=1.0, help="messages per second (default 1)")
     p.set_defaults(func=cmd_topic_pub)
     node = sub.add_parser("node", help="nodes of a running launch (ros2 node)").add_subparsers(
         dest="node_command", required=True)
@@ -881,13 +883,13 @@ def add_commands(sub: Any) -> None:
     p.add_argument("service_type", nargs="?", help="its type, checked (pkg/srv/Type)")
     p.add_argument("--no-arr", action="store_true", help="print arrays' types and lengths instead of their values")
     p.add_argument("--no-str", action="store_true", help="print strings' lengths instead of their values")
-    p.add_argument("-l", "--truncate-length", type=int, default=DEFAULT_TRUNCATE_LENGTH,
+    p.add_argument("-l", "--truncate-length", type=numbers.count, default=DEFAULT_TRUNCATE_LENGTH,
                    help="cut arrays and strings at this length (default %(default)s)")
     p.add_argument("-f", "--full-length", action="store_true", help="do not cut arrays and strings")
     p.add_argument("--flow-style", action="store_true")
     p.add_argument("--once", action="store_true", help="print one event and exit")
-    p.add_argument("-n", "--times", type=int, default=0, help="print this many events and exit")
-    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("-n", "--times", type=numbers.count, default=0, help="print this many events and exit")
+    p.add_argument("--duration", type=numbers.seconds, help="stop after this many seconds")
     p.set_defaults(func=cmd_service_echo)
     p = groups["service"].add_parser("find", help="the services of a type")
     p.add_argument("type")
@@ -935,9 +937,9 @@ def add_commands(sub: Any) -> None:
     p.set_defaults(func=cmd_param_load)
     p = sub.add_parser("top", help="a running launch's live figures: CPU, memory, callback times, topic rates")
     p.add_argument("--json", action="store_true", help="one JSON object per interval, for machines")
-    p.add_argument("--interval", type=float, default=1.0, help="seconds between figures (default 1)")
+    p.add_argument("--interval", type=numbers.positive_seconds, default=1.0, help="seconds between figures (default 1)")
     p.add_argument("--once", action="store_true", help="print one round and exit")
-    p.add_argument("-n", "--count", type=int, default=0, help="print this many rounds and exit")
+    p.add_argument("-n", "--count", type=numbers.count, default=0, help="print this many rounds and exit")
     p.set_defaults(func=cmd_top)
     p = sub.add_parser("log", help="the log lines of a running launch's nodes, every process merged in time")
     p.add_argument("-f", "--follow", action="store_true", help="keep printing new lines until the launch ends")
@@ -945,17 +947,17 @@ def add_commands(sub: Any) -> None:
     p.set_defaults(func=cmd_log)
     p = sub.add_parser("foxglove", help="serve a running launch to Foxglove (its WebSocket protocol)")
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1 only)")
-    p.add_argument("--port", type=int, default=8765, help="default %(default)s; 0 picks a free one")
+    p.add_argument("--port", type=numbers.port, default=8765, help="default %(default)s; 0 picks a free one")
     p.add_argument("--max-rate", type=_rate, default=30.0,
                    help="messages per second per topic at most (default %(default)s); never slows a publisher")
-    p.add_argument("--backlog", type=int, default=8,
+    p.add_argument("--backlog", type=numbers.positive_count, default=8,
                    help="messages kept per client that does not read (default %(default)s; the oldest goes first)")
     p.set_defaults(func=cmd_foxglove)
     p = sub.add_parser("record", help="record a running launch's topics into MCAP (ros2 bag record)")
     p.add_argument("-t", "--topics", nargs="+", help="the topics to record")
     p.add_argument("-a", "--all", action="store_true", help="every topic this machine sees")
     p.add_argument("-o", "--output", help="run.mcap (one file), or a folder for a rosbag2 bag")
-    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--duration", type=numbers.seconds, help="stop after this many seconds")
     p.add_argument("--compression-mode", choices=["none", "file", "message"], default="none",
                    help="compress each file whole or each message (a rosbag2 folder only; default none)")
     p.add_argument("--compression-format", choices=["zstd"], default="zstd", help="rosbag2's: zstd")
@@ -966,14 +968,14 @@ def add_commands(sub: Any) -> None:
     p.set_defaults(func=cmd_bag_info)
     p = sub.add_parser("play", help="play a recording into a running launch (ros2 bag play)")
     p.add_argument("bag", help="a rosbag2 folder (MCAP or sqlite3 storage), or an .mcap, .db3 or ROS 1 .bag file")
-    p.add_argument("-r", "--rate", type=float, default=1.0, help="speed factor (default 1)")
+    p.add_argument("-r", "--rate", type=numbers.speed, default=1.0, help="speed factor (default 1)")
     p.add_argument("-l", "--loop", action="store_true", help="play again and again")
     p.add_argument("--clock", action="store_true", help="publish the recording's time on /clock (use_sim_time)")
     p.add_argument("--lockstep", action="store_true",
                    help="deliver each message only when its consumers finished the previous one, in the "
                         "recording's time: the same outputs on every replay and every mapping")
     p.add_argument("--topics", nargs="+", help="play only these topics")
-    p.add_argument("--start-offset", type=float, default=0.0, help="skip this many seconds of the recording")
+    p.add_argument("--start-offset", type=numbers.seconds, default=0.0, help="skip this many seconds of the recording")
     p.add_argument("--remap", nargs="+", metavar="OLD:=NEW", help="play a recorded topic onto another")
     p.add_argument("--qos-profile-overrides-path", metavar="FILE", help="rosbag2's QoS override file (topic -> "
                    "reliability, history, depth, durability, deadline, lifespan, ...): with --launch the QoS the "

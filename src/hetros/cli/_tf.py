@@ -15,6 +15,7 @@ from typing import Any
 from .._errors import InspectError
 from ..compat.tf2_py import BufferCore, TransformException
 from ..launch import RunningLaunch
+from ._args import hertz, seconds
 
 TF_TOPICS = ("/tf", "/tf_static")
 
@@ -147,13 +148,13 @@ def add_commands(sub: Any, which: Any) -> None:
     p = verbs.add_parser("echo", help="the target frame's pose in the source frame (tf2_echo)")
     p.add_argument("source")
     p.add_argument("target")
-    p.add_argument("--rate", type=float, default=1.0, help="echoes a second (default 1)")
-    p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument("--rate", type=hertz, default=1.0, help="echoes a second (default 1)")
+    p.add_argument("--duration", type=seconds, help="stop after this many seconds")
     p.add_argument("--once", action="store_true", help="echo one transform and stop")
     p.set_defaults(func=cmd_tf_echo)
     which(p)
     p = verbs.add_parser("frames", help="the tree as text and SVG, each frame's broadcaster, rate and latest stamp")
-    p.add_argument("--duration", type=float, default=5.0, help="seconds to listen (default 5)")
+    p.add_argument("--duration", type=seconds, default=5.0, help="seconds to listen (default 5)")
     p.add_argument("-o", "--output", default="frames", help="the SVG's path without suffix (default frames)")
     p.set_defaults(func=cmd_tf_frames)
     which(p)

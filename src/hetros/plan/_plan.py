@@ -13,6 +13,8 @@ from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 from typing import Any, Literal
 
+from .._errors import InputFileError
+from .._files import dataclass_problem, parse_json
 from .._qos import QoS
 from ._names import join_namespace
 
@@ -287,8 +289,22 @@ class Plan:
         return json.dumps(asdict(self), indent=1, sort_keys=True)
 
     @classmethod
-    def from_json(cls, text: str) -> Plan:
-        raw = json.loads(text)
+    def from_json(cls, text: str, where: str = "a launch plan") -> Plan:
+        """The plan a launcher wrote (``to_json``); anything else (a changed or forged file) is refused
+        naming the first field that is wrong, before any of it is used."""
+        raw = parse_json(text, where)
+        try:
+            plan = cls._from_raw(raw)
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            raise InputFileError(f"{where} is not a plan hetros wrote ({type(exc).__name__}: {exc}); launch "
+                                 "the project again") from None
+        problem = dataclass_problem(plan, "plan")
+        if problem is not None:
+            raise InputFileError(f"{where} is not a plan hetros wrote: {problem}; launch the project again")
+        return plan
+
+    @classmethod
+    def _from_raw(cls, raw: Any) -> Plan:
         return cls(
             name=raw["name"],
             root=raw["root"],

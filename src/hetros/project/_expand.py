@@ -16,9 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .._errors import ProjectError
+from .._files import load_yaml, parse_yaml
 from ..plan import join_namespace, resolve_name
 
 # $(arg name), $(env NAME), $(env NAME default), $(dirname): ROS launch's substitutions
@@ -54,8 +53,8 @@ def substitute(text: str, path: Path, args: Mapping[str, object]) -> str:
 def declared_args(text: str) -> dict[str, object]:
     """The ``args:`` defaults of a project file's text (read before its substitutions are made)."""
     try:
-        data = yaml.safe_load(_SUBSTITUTION.sub("0", text))
-    except yaml.YAMLError:
+        data = parse_yaml(_SUBSTITUTION.sub("0", text), "project file", error=ProjectError)
+    except ProjectError:
         return {}  # the real parse reports it, with its line
     found = data.get("args") if isinstance(data, dict) else None
     return dict(found) if isinstance(found, dict) else {}
@@ -67,14 +66,7 @@ def parameters_from_files(files: list[Path], fq_name: str) -> dict[str, Any]:
     found: dict[str, Any] = {}
     short = fq_name.rsplit("/", 1)[-1]
     for file in files:
-        try:
-            data = yaml.safe_load(file.read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise ProjectError(f"cannot read parameter file {file}: {exc.strerror}") from exc
-        except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            raise ProjectError(f"{file}:{mark.line + 1 if mark else 1}: not valid YAML: "
-                               f"{getattr(exc, 'problem', None) or exc}") from None
+        data = load_yaml(file, "parameter file", error=ProjectError)
         if not isinstance(data, dict):
             raise ProjectError(f"{file}:1: a ROS 2 parameter file maps node names to {{ros__parameters: ...}}")
         for key, entry in data.items():

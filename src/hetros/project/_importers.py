@@ -16,9 +16,8 @@ from dataclasses import field as dataclass_field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .._errors import ProjectError
+from .._files import load_yaml, read_text
 
 
 def _as_list(value: Any) -> list[str]:
@@ -35,10 +34,7 @@ def _topic(name: str) -> str:
 
 def import_roslite(path: Path, module: str = "nodes") -> dict[str, Any]:
     """A project dict from a ROS-lite .map file."""
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ProjectError(f"{path}: not a valid ROS-lite map file (YAML): {exc}") from exc
+    data = load_yaml(path, "ROS-lite map file", error=ProjectError)
     entries = data.get("nodes", data) if isinstance(data, dict) else data
     if not isinstance(entries, list):
         raise ProjectError(f"{path}: a ROS-lite map file is a list of nodes (name, cluster, publish, ...)")
@@ -162,7 +158,7 @@ def _read_build_cfg(path: Path, module: str, targets: dict[str, Any], nodes: dic
     variables: dict[tuple[str, str], str] = {}
     messages: dict[tuple[str, str], str] = {}
     thread: dict[str, str] = {}
-    for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+    for lineno, raw in enumerate(read_text(path, "ReconROS build.cfg", error=ProjectError).splitlines(), start=1):
         line = re.sub(r"^\d+\s+", "", raw.split("#", 1)[0].strip())
         if not line:
             continue

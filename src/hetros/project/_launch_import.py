@@ -25,9 +25,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .._errors import ProjectError
+from .._files import DEPTH_LIMIT, load_yaml, parse_yaml, read_bytes, read_text
 from ..plan import LIFECYCLE_TRANSITIONS, join_namespace, resolve_name
 from ._expand import flatten, parameters_from_files
 from ._ros_scan import code_folders, entry_points, package_name, scan_ros_entry, scan_ros_script, unique_key
@@ -49,6 +48,9 @@ def _parse_xml(path: Path) -> _Element:
     parser = xml.parsers.expat.ParserCreate()
 
     def start(tag: str, attributes: dict[str, str]) -> None:
+        if len(stack) >= DEPTH_LIMIT:
+            raise ProjectError(f"{path}:{parser.CurrentLineNumber}: elements nested more than {DEPTH_LIMIT} deep; "
+                               "no launch file is")
         element = _Element(tag, dict(attributes), parser.CurrentLineNumber)
         (stack[-1].children if stack else root).append(element)
         stack.append(element)
@@ -57,12 +59,11 @@ def _parse_xml(path: Path) -> _Element:
         stack.pop()
     parser.StartElementHandler = start
     parser.EndElementHandler = end
+    data = read_bytes(path, "launch file", error=ProjectError)
     try:
-        parser.Parse(path.read_bytes(), True)
+        parser.Parse(data, True)
     except xml.parsers.expat.ExpatError as exc:
         raise ProjectError(f"{path}:{exc.lineno}: not valid XML: {xml.parsers.expat.ErrorString(exc.code)}") from None
-    except OSError as exc:
-        raise ProjectError(f"cannot read launch file {path}: {exc.strerror}") from exc
     if not root or root[0].tag != "launch":
         raise ProjectError(f"{path}:1: a launch file's root element is <launch>, not <{root[0].tag if root else ''}>")
     return root[0]
@@ -70,12 +71,7 @@ def _parse_xml(path: Path) -> _Element:
 
 def _yaml_tree(path: Path) -> _Element:
     """A ROS 2 YAML launch file as the XML form's elements (the two carry the same actions)."""
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise ProjectError(f"{path}:{mark.line + 1 if mark else 1}: not valid YAML: "
-                           f"{getattr(exc, 'problem', None) or exc}") from None
+    data = load_yaml(path, "launch file", error=ProjectError)
     if not isinstance(data, dict) or not isinstance(data.get("launch"), list):
         raise ProjectError(f"{path}:1: a YAML launch file holds `launch:`, a list of actions")
 
@@ -131,6 +127,27 @@ class _Scope:
     params: dict[str, Any] = field(default_factory=dict)
 
 
+# what $(file-content) takes in: a URDF or a small config, not a disk image
+FILE_CONTENT_LIMIT = 4 << 20
+
+
+class LaunchNotes(list[str]):
+    """The notes of an import, and the widest mode its project file may have: no wider than the files
+    whose text ``$(file-content)`` copied into it (a key readable by you alone stays so)."""
+
+    file_mode = 0o666
+
+
+def _value(text: str, where: str) -> Any:
+    """A parameter's value written in a launch file or on a node's command line, read as YAML."""
+    return parse_yaml(text, f"{where}: the value {text[:40]!r}", error=ProjectError)
+
+
+# a robot's launch tree includes a few dozen files, a few levels deep
+MAX_INCLUDE_DEPTH = 32
+MAX_INCLUDED_FILES = 1000
+
+
 class LaunchImporter:
     """Reads one launch file (and what it includes) into a project."""
 
@@ -140,12 +157,14 @@ class LaunchImporter:
         self.package_paths = [folder.resolve() for folder in package_paths]
         self.base = base  # the folder the project file goes to: scripts and files are named relative to it
         self.project: dict[str, Any] = {"targets": {}, "nodes": {}}
-        self.notes: list[str] = []
+        self.notes = LaunchNotes()
         self._packages: dict[str, list[Path]] | None = None
         # the packages whose nodes the file starts: their own msg/srv/action folders join messages:, the
         # folders ROS 2 entry points import from join python_path:
         self.used_packages: dict[Path, None] = {}
         self.imported_from: dict[Path, None] = {}
+        self._including: list[Path] = []  # the files being read, outermost first (an include loop shows here)
+        self._files_read = 0
 
     # -- packages --------------------------------------------------------------------------
 
@@ -168,11 +187,24 @@ class LaunchImporter:
 
     # -- substitutions -----------------------------------------------------------------------
 
+    def _file_content(self, source: Path, where: str) -> str:
+        """``$(file-content FILE)``: the text, capped; a file outside the launch file's package is read but
+        named in the notes, and the project's file mode narrows to the file's."""
+        text = read_text(source, f"{where}: $(file-content)", limit=FILE_CONTENT_LIMIT, error=ProjectError)
+        reading = self._including[-1]
+        if not source.resolve().is_relative_to(_package_of(reading) or reading.parent):
+            self.notes.append(f"{where}: $(file-content {source}) read a file outside the launch file's package; "
+                              "its text is now in the project file")
+        self.notes.file_mode &= os.stat(source).st_mode & 0o777
+        return text
+
     def substitute(self, text: str, scope: _Scope, path: Path, line: int) -> str:
         def replace(match: re.Match[str]) -> str:
             words = match.group(1).split()
-            kind, rest = words[0], words[1:]
             where = f"{path}:{line}"
+            if not words:
+                raise ProjectError(f"{where}: an empty $(); write a substitution ($(arg name), ...) or the value")
+            kind, rest = words[0], words[1:]
             if kind in ("arg", "var"):
                 if not rest or rest[0] not in scope.args:
                     raise ProjectError(f"{where}: $({kind} {' '.join(rest)}): no such argument; declare it with "
@@ -195,14 +227,16 @@ class LaunchImporter:
                     raise ProjectError(f"{where}: $(file-content) needs a file")
                 named = Path(" ".join(rest))
                 source = named if named.is_absolute() else path.parent / named
-                try:
-                    return source.read_text(encoding="utf-8")
-                except OSError as exc:
-                    raise ProjectError(f"{where}: $(file-content {named}): {exc.strerror}") from None
+                return self._file_content(source, where)
             if kind == "anon":
                 return f"{rest[0]}_{os.getpid()}"
             raise ProjectError(f"{where}: $({kind} ...) has no counterpart in hetros; write the value out")
-        return re.sub(r"\$\(([^()]*)\)", replace, text)
+        done = re.sub(r"\$\(([^()]*)\)", replace, text)
+        if "$(" in done:  # what the pattern cannot take apart ($(eval ...) with parentheses inside) is not kept
+            left = done[done.index("$("):][:60]
+            raise ProjectError(f"{path}:{line}: {left!r}: hetros evaluates $(arg), $(env), $(optenv), $(find), "
+                               "$(dirname), $(file-content) and $(anon) only; write the value out")
+        return done
 
     def attribute(self, element: _Element, name: str, scope: _Scope, path: Path, default: str | None = None) -> str:
         value = element.attributes.get(name)
@@ -225,14 +259,30 @@ class LaunchImporter:
     # -- reading -----------------------------------------------------------------------------
 
     def read(self, path: Path, scope: _Scope) -> None:
-        if path.suffix == ".py":
-            if not self.ros2:
-                raise ProjectError(f"{path}:1: a Python launch file is ROS 2's; import it with `hetros import "
-                                   "ros2launch`")
-            self._python(path, scope)
-            return
-        tree = _yaml_tree(path) if path.suffix in (".yaml", ".yml") else _parse_xml(path)
-        self._actions(tree.children, scope, path)
+        """One launch file, and through it what it includes: an include loop, includes nested deeper than
+        ``MAX_INCLUDE_DEPTH`` or more than ``MAX_INCLUDED_FILES`` files in all are refused by name."""
+        resolved = path.resolve()
+        if resolved in self._including:
+            chain = " -> ".join(str(p) for p in (*self._including[self._including.index(resolved):], resolved))
+            raise ProjectError(f"{path}:1: an include loop: {chain}; break it")
+        if len(self._including) >= MAX_INCLUDE_DEPTH:
+            raise ProjectError(f"{path}:1: includes nested more than {MAX_INCLUDE_DEPTH} deep; no launch tree is")
+        self._files_read += 1
+        if self._files_read > MAX_INCLUDED_FILES:
+            raise ProjectError(f"{path}:1: more than {MAX_INCLUDED_FILES} launch files read for one import; an "
+                               "include fans out without end")
+        self._including.append(resolved)
+        try:
+            if path.suffix == ".py":
+                if not self.ros2:
+                    raise ProjectError(f"{path}:1: a Python launch file is ROS 2's; import it with `hetros import "
+                                       "ros2launch`")
+                self._python(path, scope)
+                return
+            tree = _yaml_tree(path) if path.suffix in (".yaml", ".yml") else _parse_xml(path)
+            self._actions(tree.children, scope, path)
+        finally:
+            self._including.pop()
 
     def _actions(self, elements: list[_Element], scope: _Scope, path: Path) -> None:
         for element in elements:
@@ -395,7 +445,7 @@ class LaunchImporter:
                     self._name_assignment(value, request, remap_only=True)
                 elif word in ("-p", "--param"):
                     name, _, text = value.partition(":=")
-                    request.params[name] = yaml.safe_load(text) if text else text
+                    request.params[name] = _value(text, request.where) if text else text
                 elif word == "--params-file":
                     request.params.update(ros2_parameter_file(Path(value), request.full_name, request.where))
             elif inside:
@@ -415,7 +465,7 @@ class LaunchImporter:
         elif name == "__ns" and not remap_only:
             request.namespace = join_namespace("", value)
         elif name.startswith("_") and not name.startswith("__") and not self.ros2 and not remap_only:
-            request.params[name[1:]] = yaml.safe_load(value) if value else value
+            request.params[name[1:]] = _value(value, request.where) if value else value
         elif name.startswith("__"):
             raise ProjectError(f"{request.where}: the argument {word!r} has no counterpart in hetros")
         else:
@@ -583,10 +633,7 @@ class LaunchImporter:
         if file is not None:
             source = Path(self.substitute(file, scope, path, element.line))
             source = source if source.is_absolute() else path.parent / source
-            try:
-                data = yaml.safe_load(source.read_text(encoding="utf-8"))
-            except (OSError, yaml.YAMLError) as exc:
-                raise ProjectError(f"{where}: cannot read parameter file {source}: {exc}") from None
+            data = load_yaml(source, f"{where}: parameter file", error=ProjectError)
             if not isinstance(data, dict):
                 return {}
             if self.ros2:
@@ -602,7 +649,7 @@ class LaunchImporter:
             raise ProjectError(f"{where}: <rosparam command={body!r}> without a file has no counterpart; use a "
                                "parameter file")
         name = self.attribute(element, "name", scope, path)
-        value = yaml.safe_load(self.attribute(element, "value", scope, path))
+        value = _value(self.attribute(element, "value", scope, path), where)
         kind = element.attributes.get("type")
         if kind in ("str", "string"):
             value = str(self.attribute(element, "value", scope, path))
@@ -632,6 +679,14 @@ def ros2_parameter_file(path: Path, full_name: str, where: str) -> dict[str, Any
         raise ProjectError(f"{where}: {exc}") from None
 
 
+def _package_of(launch_file: Path) -> Path | None:
+    """The package folder (its package.xml) a launch file belongs to, or None."""
+    for above in launch_file.parents:
+        if (above / "package.xml").is_file():
+            return above
+    return None
+
+
 def package_search_path(launch_file: Path) -> list[Path]:
     """Where a launch file's packages are looked for besides ``--package-path``: ``$HETROS_PACKAGE_PATH``
     (folders, as ROS's prefix paths), the launch file's folder, and the folder holding the package the
@@ -647,9 +702,9 @@ def package_search_path(launch_file: Path) -> list[Path]:
 
 
 def import_launch(path: Path, ros2: bool, package_paths: list[Path], base: Path,
-                  args: dict[str, str] | None = None) -> tuple[dict[str, Any], list[str]]:
+                  args: dict[str, str] | None = None) -> tuple[dict[str, Any], LaunchNotes]:
     """The project a ROS 1 (``ros2=False``) or ROS 2 launch file describes, and notes on what the scan of
-    its nodes' code could not follow."""
+    its nodes' code could not follow (with the widest mode the project's file may be written with)."""
     importer = LaunchImporter(ros2, [*package_paths, *package_search_path(path)], base)
     importer.read(path, _Scope(args=dict(args or {})))
     importer.project = {**code_folders(base, importer.imported_from, importer.used_packages), **importer.project}

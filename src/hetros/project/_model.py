@@ -12,6 +12,7 @@ import yaml
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._errors import MessageError, ProjectError
+from .._files import read_bytes
 from .._qos import QoS
 from ..msg import normalize_typename
 from ..plan import (
@@ -580,11 +581,12 @@ def _line_index(root: yaml.Node, path: Path) -> dict[tuple[str, ...], int]:
     return out
 
 
+# a project file with its includes is kilobytes; a generated one with thousands of nodes a few MB
+PROJECT_LIMIT = 16 << 20
+
+
 def _read_text(path: Path) -> str:
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ProjectError(f"cannot read project file {path}: {exc.strerror}") from exc
+    raw = read_bytes(path, "project file", limit=PROJECT_LIMIT, error=ProjectError)
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .._errors import ProjectError
+from .._files import parse_python, read_text
 from ..plan import PARAMETER_SERVICES
 
 # placeholders start with this: not a ROS name, so the checks refuse them with their own message
@@ -92,7 +94,7 @@ def entry_points(package: Path, group: str = "console_scripts") -> dict[str, str
 def _setup_py(setup_py: Path) -> tuple[ast.Module, dict[str, str]]:
     """setup.py's syntax tree, and its module-level names bound to strings (``package_name = '...'``):
     what its other strings are built from."""
-    tree = ast.parse(setup_py.read_text(encoding="utf-8"), filename=str(setup_py))
+    tree = parse_python(setup_py, "setup.py", error=ProjectError)
     names: dict[str, str] = {}
     for stmt in tree.body:
         if isinstance(stmt, ast.Assign) and len(stmt.targets) == 1 and isinstance(stmt.targets[0], ast.Name):
@@ -129,7 +131,7 @@ def package_name(package: Path) -> str:
     """The package's name from package.xml (else its folder's name)."""
     xml = package / "package.xml"
     if xml.is_file():
-        found = re.search(r"<name>\s*([\w-]+)\s*</name>", xml.read_text(encoding="utf-8"))
+        found = re.search(r"<name>\s*([\w-]+)\s*</name>", read_text(xml, "package.xml", error=ProjectError))
         if found:
             return found.group(1)
     return package.name
@@ -150,7 +152,7 @@ class _Reader:
         self.path = path
         self.root = root
         self.parameters = parameters or {}
-        self.tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        self.tree = parse_python(path, "ROS node source", error=ProjectError)
         self.types: dict[str, str] = {}  # local name -> pkg/kind/Type
         self.imported: dict[str, str] = {}  # local name -> module it comes from (the package's own)
         self.starred: list[str] = []  # pkg/kind of `from pkg.srv import *`
@@ -526,8 +528,8 @@ def unsupported_uses(path: Path) -> list[str]:
     if not writes_ros(path):
         return []
     try:
-        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-    except (OSError, SyntaxError, UnicodeDecodeError):
+        tree = parse_python(path, "ROS node source", error=ProjectError)
+    except ProjectError:
         return []
     first: dict[str, int] = {}  # each name once, at its first line
     for node in ast.walk(tree):
@@ -551,8 +553,8 @@ def code_qos_choices(path: Path, run: str, root: Path) -> list[tuple[str, str, d
 def writes_ros(path: Path) -> bool:
     """Whether ``path`` is code written for rclpy or rospy."""
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
+        text = read_text(path, "source file", error=ProjectError)
+    except ProjectError:
         return False
     return re.search(r"^\s*(import|from)\s+(rclpy|rospy)\b", text, re.MULTILINE) is not None
 
@@ -576,7 +578,7 @@ def ros_template(paths: list[Path], name: str, base: Path) -> tuple[dict[str, An
                 if any(part in ("test", "tests") for part in inside) or script.resolve() in seen:
                     continue  # a package's tests are no nodes of its graph
                 if script.is_file() and script.suffix in ("", ".py") and "setup" not in script.name and \
-                        writes_ros(script) and "init_node" in script.read_text(encoding="utf-8") and \
+                        writes_ros(script) and "init_node" in read_text(script, "script", error=ProjectError) and \
                         not any(n.run.partition(":")[0].replace(".", "/") in str(script) for n in nodes):
                     seen.add(script.resolve())
                     nodes.append(scan_ros_script(script, root, base))

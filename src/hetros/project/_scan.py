@@ -11,6 +11,9 @@ import ast
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .._errors import ProjectError
+from .._files import parse_python
+
 _KINDS = {
     "create_publisher": "publish",
     "create_subscription": "subscribe",
@@ -143,8 +146,7 @@ def scan_file(path: Path, module: str) -> list[ScannedNode]:
     A function that needs more than the node (``stage(node, source, target)``) is a helper,
     never a node. An endpoint whose name only exists at run time is listed in ``unresolved``.
     """
-    source = path.read_text(encoding="utf-8")
-    tree = ast.parse(source, filename=str(path))
+    tree = parse_python(path, "node source", error=ProjectError)
     scanner = _Scanner(tree, path)
     found: list[ScannedNode] = []
     for stmt in tree.body:

@@ -17,6 +17,8 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from ..._errors import InputFileError
+from ..._files import parse_json
 from ..._log import get_logger
 from ..._paths import check_session, is_session, private_folder, user_subfolder
 from ..._process import pid_alive, valid_pid
@@ -95,7 +97,10 @@ def _read_record(path: Path) -> LaunchRecord:
         info = os.fstat(handle.fileno())
         if not stat.S_ISREG(info.st_mode) or info.st_uid != os.getuid():
             raise ValueError("not a file of yours")
-        raw = json.loads(handle.read(_RECORD_LIMIT))
+        try:
+            raw = parse_json(handle.read(_RECORD_LIMIT), path.name)
+        except InputFileError as exc:
+            raise ValueError(str(exc)) from None
     if not isinstance(raw, dict):
         raise ValueError("not a JSON object")
     session, pid, started = raw.get("session"), raw.get("pid"), raw.get("started")
@@ -123,9 +128,15 @@ def running() -> list[LaunchRecord]:
         try:
             record = _read_record(path)
         except (OSError, ValueError) as exc:
-            # unreadable: half written by a launcher that died, or not ours; only its name goes
-            log.warning("launch registry: dropped %s (%s)", path.name, exc)
-            path.unlink(missing_ok=True)
+            # unreadable: half written by a launcher that died, or not ours: set aside under a name no
+            # reader takes for a record (a folder named *.json included), never fatal to the next command
+            aside = path.with_name(f".bad-{int(time.time())}-{path.name}")
+            try:
+                os.rename(path, aside)
+                log.warning("launch registry: %s is not a launch record (%s); moved to %s", path.name, exc, aside.name)
+            except OSError as moved:
+                log.warning("launch registry: %s is not a launch record (%s) and cannot be moved aside (%s); "
+                            "remove it", path.name, exc, moved.strerror)
             continue
         if pid_alive(record.pid):
             found.append(record)

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
-from ..._errors import InspectError, LaunchError
+from ..._errors import InputFileError, InspectError, LaunchError
+from ..._files import load_yaml, read_text
 from ..._signals import next_item
 from ...msg import Message, TypeRegistry, registry
 from ...plan import PARAMETER_SERVICES, Plan
@@ -68,16 +69,15 @@ def choose(records: list[LaunchRecord], session: str | None, project: str | None
 
 def _project_name(path: Path) -> str:
     """The ``name:`` a project file gives its graph (what ``hetros ps`` lists)."""
-    import yaml
-
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        raise InspectError(f"--project {path}: cannot read the project file ({exc})") from None
+    data = load_yaml(path, "--project file", error=InspectError)
     name = data.get("name") if isinstance(data, dict) else None
     if not isinstance(name, str):
         raise InspectError(f"--project {path}: the file has no name: (is it a hetros project file?)")
     return name
+
+
+# a plan of a few hundred nodes is a few hundred kB
+PLAN_LIMIT = 64 << 20
 
 
 class RunningLaunch:
@@ -86,9 +86,10 @@ class RunningLaunch:
     def __init__(self, record: LaunchRecord) -> None:
         self.record = record
         self.folder = registry_folder() / record.session
+        path = self.folder / "plan.json"
         try:
-            self.plan = Plan.from_json((self.folder / "plan.json").read_text(encoding="utf-8"))
-        except OSError as exc:
+            self.plan = Plan.from_json(read_text(path, "launch plan", limit=PLAN_LIMIT), str(path))
+        except InputFileError as exc:
             raise InspectError(f"launch {record.session} has no readable plan ({exc}); it is ending, or it "
                                "was started by an older hetros") from None
         self.types: TypeRegistry = registry()

@@ -46,6 +46,11 @@ def _kind(mode: int) -> str:
     return next((name for test, name in _KINDS if test(mode)), "not a regular file")
 
 
+def check_regular(path: str | Path, what: str, *, error: type[Error] = InputFileError) -> None:
+    """Refuse ``path`` by name unless it is a regular file (for readers that open it themselves)."""
+    read_bytes(path, what, limit=-1, error=error)
+
+
 def read_bytes(path: str | Path, what: str, *, limit: int = TEXT_LIMIT,
                error: type[Error] = InputFileError) -> bytes:
     """The bytes of the regular file ``path`` (``what`` it is for the message), at most ``limit``.
@@ -60,10 +65,14 @@ def read_bytes(path: str | Path, what: str, *, limit: int = TEXT_LIMIT,
         raise error(f"{what} {path} does not exist") from None
     except OSError as exc:
         raise error(f"cannot read {what} {path}: {exc.strerror}") from None
+    except ValueError:
+        raise error(f"{what} {str(path)!r} is not a path (it holds a NUL character)") from None
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
             raise error(f"{what} {path} is {_kind(info.st_mode)}, not a file; name a regular file")
+        if limit < 0:
+            return b""  # only checked
         if info.st_size > limit:
             raise error(f"{what} {path} is {info.st_size:,} bytes, more than such a file can be "
                         f"({limit:,}); name the right file")
@@ -159,7 +168,10 @@ def _expanded_size(value: Any) -> int:
 
 def parse_yaml(text: str, what: str, *, error: type[Error] = InputFileError) -> Any:
     """YAML ``text`` from ``what`` (safe: no Python objects), nesting and alias expansion capped."""
-    loader = _CountingLoader(text)
+    try:
+        loader = _CountingLoader(text)
+    except yaml.YAMLError as exc:  # the reader refuses the text before parsing (a NUL, a control character)
+        raise error(f"{what} is not valid YAML: {exc}") from None
     try:
         value = loader.get_single_data()
     except RecursionError:
@@ -260,5 +272,5 @@ def load_yaml(path: str | Path, what: str, *, limit: int = TEXT_LIMIT, error: ty
     return parse_yaml(read_text(path, what, limit=limit, error=error), f"{what} {path}", error=error)
 
 
-__all__ = ["DEPTH_LIMIT", "TEXT_LIMIT", "check_depth", "dataclass_problem", "load_json", "load_yaml", "parse_json",
-           "parse_python", "parse_yaml", "printable", "read_bytes", "read_text"]
+__all__ = ["DEPTH_LIMIT", "TEXT_LIMIT", "check_depth", "check_regular", "dataclass_problem", "load_json", "load_yaml",
+           "parse_json", "parse_python", "parse_yaml", "printable", "read_bytes", "read_text"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import contextlib
 import faulthandler
 import math
 import os
@@ -682,7 +683,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    faulthandler.enable()  # a crash in native code names itself (and where) instead of a bare exit status
+    with contextlib.suppress(OSError, ValueError):  # stderr that is no file (a caller's buffer) has no crash log
+        faulthandler.enable()  # a crash in native code names itself (and where) instead of a bare exit status
     args = build_parser().parse_args(argv)
     if args.func is not cmd_launch:  # the launcher installs its own handlers (see hetros._signals)
         interruptible()

@@ -75,23 +75,31 @@ def _yaml_tree(path: Path) -> _Element:
     if not isinstance(data, dict) or not isinstance(data.get("launch"), list):
         raise ProjectError(f"{path}:1: a YAML launch file holds `launch:`, a list of actions")
 
+    def action(item: Any) -> _Element:
+        """One list entry: a mapping of one action name to its body."""
+        if not isinstance(item, dict) or len(item) != 1:
+            raise ProjectError(f"{path}: launch: each action is a mapping of its name to its body "
+                               f"(- node: {{...}}), not {str(item)[:60]!r}")
+        tag, body = next(iter(item.items()))
+        return convert(str(tag), body)
+
     def convert(tag: str, body: Any) -> _Element:
         if tag == "group" and isinstance(body, list):  # a group's list form: its actions, no attributes
-            return _Element(tag, {}, 0, [convert(*next(iter(item.items()))) for item in body])
+            return _Element(tag, {}, 0, [action(item) for item in body])
         if not isinstance(body, dict):
             raise ProjectError(f"{path}: launch: {tag}: must be a mapping, not {body!r}")
         element = _Element(tag, {}, 0)
         for key, value in body.items():
             if isinstance(value, list) and key == "children":  # a group's actions
-                element.children += [convert(*next(iter(item.items()))) for item in value]
+                element.children += [action(item) for item in value]
             elif isinstance(value, list):
                 element.children += [convert(key, item) for item in value]
             elif isinstance(value, dict):
                 element.children.append(convert(key, value))
             else:
-                element.attributes[key] = str(value).lower() if isinstance(value, bool) else str(value)
+                element.attributes[str(key)] = str(value).lower() if isinstance(value, bool) else str(value)
         return element
-    return _Element("launch", {}, 0, [convert(*next(iter(item.items()))) for item in data["launch"]])
+    return _Element("launch", {}, 0, [action(item) for item in data["launch"]])
 
 
 @dataclass
@@ -346,7 +354,7 @@ class LaunchImporter:
             if child.tag != "arg":
                 raise ProjectError(f"{path}:{child.line}: <include> holds <arg> only, not <{child.tag}>")
             inner.args[self.attribute(child, "name", scope, path)] = self.attribute(child, "value", scope, path)
-        if not file.is_file():
+        if not _is_file(file):
             raise ProjectError(f"{path}:{element.line}: included launch file {file} does not exist")
         self.read(file, inner)
 
@@ -514,7 +522,7 @@ class LaunchImporter:
                 inner = _Scope(record["namespace"], dict(map(tuple, record["remap"])), dict(record["env"]),
                                dict(record["args"]), self._merged(record["params"], "", where))
                 file = Path(record["file"])
-                if not file.is_file():
+                if not _is_file(file):
                     raise ProjectError(f"{where}: included launch file {file} does not exist")
                 self.read(file, inner)
             elif kind == "required":
@@ -677,6 +685,14 @@ def ros2_parameter_file(path: Path, full_name: str, where: str) -> dict[str, Any
         return parameters_from_files([path], full_name)
     except ProjectError as exc:
         raise ProjectError(f"{where}: {exc}") from None
+
+
+def _is_file(path: Path) -> bool:
+    """Whether ``path`` names a file; a name the system cannot even look up (too long) names none."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
 
 
 def _package_of(launch_file: Path) -> Path | None:

@@ -130,7 +130,7 @@ def running() -> list[LaunchRecord]:
         except (OSError, ValueError) as exc:
             # unreadable: half written by a launcher that died, or not ours: set aside under a name no
             # reader takes for a record (a folder named *.json included), never fatal to the next command
-            aside = path.with_name(f".bad-{int(time.time())}-{path.name}")
+            aside = path.with_name(f".{path.name}.bad-{time.time_ns()}")
             try:
                 os.rename(path, aside)
                 log.warning("launch registry: %s is not a launch record (%s); moved to %s", path.name, exc, aside.name)

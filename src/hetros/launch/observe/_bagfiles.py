@@ -13,6 +13,7 @@ What a bag holds comes out as ROS 2 CDR bytes per topic, in time order across sp
 
 from __future__ import annotations
 
+import contextlib
 import heapq
 import shutil
 import sqlite3
@@ -23,9 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from ..._errors import InspectError
+from ..._files import check_regular, load_yaml
 
 Message = tuple[str, int, bytes]  # (topic, log time in ns, CDR bytes)
 _STORAGES = {".mcap": "mcap", ".db3": "sqlite3", ".bag": "rosbag1"}
@@ -53,6 +53,7 @@ class Bag:
         if path.is_dir():
             self._open_folder(path)
         else:
+            check_regular(path, "bag", error=InspectError)
             self.storage = _storage_of(path)
             self.files = [path]
         self.topics = self._topics()
@@ -65,12 +66,12 @@ class Bag:
                 raise InspectError(f"{path}: neither a metadata.yaml nor a bag file (.mcap, .db3, .bag) in it")
             self.storage, self.files = _storage_of(files[0]), files
             return
+        document = load_yaml(meta_path, "rosbag2 metadata", error=InspectError)
         try:
-            document = yaml.safe_load(meta_path.read_text(encoding="utf-8"))
             info = document["rosbag2_bagfile_information"]
             self.storage = str(info["storage_identifier"])
             relative = [str(name) for name in info["relative_file_paths"]]
-        except (yaml.YAMLError, KeyError, TypeError, UnicodeDecodeError) as exc:
+        except (KeyError, TypeError) as exc:
             raise InspectError(f"{meta_path}: not rosbag2 metadata ({type(exc).__name__}: {exc}); it needs "
                                "rosbag2_bagfile_information with storage_identifier and relative_file_paths") from None
         if self.storage not in ("mcap", "sqlite3"):
@@ -108,14 +109,8 @@ class Bag:
 
     def _file_topics(self, file: Path) -> Iterator[tuple[str, str, int]]:
         if self.storage == "mcap":
-            from mcap.exceptions import McapError
-            from mcap.reader import make_reader
-
-            with self._unpacked(file).open("rb") as stream:
-                try:
-                    summary = make_reader(stream).get_summary()
-                except McapError as exc:
-                    raise InspectError(f"{file}: not an MCAP file the mcap library reads ({exc})") from None
+            with self._mcap(file) as reader:
+                summary = reader.get_summary()
             if summary is None:
                 return
             counts = summary.statistics.channel_message_counts if summary.statistics else {}
@@ -157,16 +152,10 @@ class Bag:
 
     def _file_messages(self, file: Path, topics: set[str] | None) -> Iterator[Message]:
         if self.storage == "mcap":
-            from mcap.exceptions import McapError
-            from mcap.reader import make_reader
-
-            with self._unpacked(file).open("rb") as stream:
-                try:
-                    for _schema, channel, message in make_reader(stream).iter_messages(
-                            topics=None if topics is None else sorted(topics)):
-                        yield channel.topic, message.log_time, message.data
-                except McapError as exc:
-                    raise InspectError(f"{file}: the mcap library stops reading it ({exc})") from None
+            with self._mcap(file) as reader:
+                for _schema, channel, message in reader.iter_messages(topics=None if topics is None else
+                                                                      sorted(topics)):
+                    yield channel.topic, message.log_time, message.data
         elif self.storage == "sqlite3":
             with closing(self._database(file)) as db:
                 rows = db.execute("SELECT topics.name, messages.timestamp, messages.data FROM messages JOIN topics "
@@ -178,6 +167,21 @@ class Bag:
             yield from self._ros1_messages(topics)
 
     # -- the formats ---------------------------------------------------------------------------
+
+    @contextlib.contextmanager
+    def _mcap(self, file: Path) -> Iterator[Any]:
+        """The mcap library's reader of ``file``; whatever it raises on bytes it cannot read (its own
+        McapError, and struct, zstd, lz4 and decode errors from inside it) ends as one InspectError."""
+        from mcap.reader import make_reader
+
+        with self._unpacked(file).open("rb") as stream:
+            try:
+                yield make_reader(stream)
+            except InspectError:
+                raise
+            except Exception as exc:  # a third-party parser's errors are not one tree
+                raise InspectError(f"{file}: the mcap library cannot read it ({type(exc).__name__}: {exc}); is it "
+                                   "an MCAP file whole?") from None
 
     def _unpacked(self, file: Path) -> Path:
         """``file`` as it is read: a file rosbag2 compressed whole (``x.mcap.zstd``) unpacked beside the others

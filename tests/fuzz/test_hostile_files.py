@@ -189,7 +189,7 @@ def test_what_is_not_a_file_is_refused_by_name_without_blocking(kind: str, tmp_p
     os.mkfifo(fifo)
     folder = tmp_path / "folder"
     folder.mkdir()
-    name, read = READERS[kind]
+    _name, read = READERS[kind]
     for path, words in ((fifo, "FIFO"), (Path("/dev/zero"), "character device"), (folder, "folder")):
         if kind == "plan":
             continue  # a plan is read by the caller (RunningLaunch, through _files); its text is what is checked

@@ -194,7 +194,7 @@ def test_what_is_not_a_file_is_refused_by_name_without_blocking(kind: str, tmp_p
         if kind == "plan":
             continue  # a plan is read by the caller (RunningLaunch, through _files); its text is what is checked
         outcome: list[BaseException] = []
-        worker = threading.Thread(target=lambda p=path: _catch(lambda: read(p, tmp_path), outcome), daemon=True)
+        worker = threading.Thread(target=lambda p=path, o=outcome: _catch(lambda: read(p, tmp_path), o), daemon=True)
         worker.start()
         worker.join(PER_CASE_SECONDS)
         assert not worker.is_alive(), f"{kind}: reading {path} blocked"

@@ -57,6 +57,10 @@ class Credits:
             os.close(fd)
         self.words = np.frombuffer(self._map, dtype="<u8")
         self.slots = self.words[self.HEAD:].reshape(MAX_SUBSCRIBER_SLOTS, _SLOT_WORDS)
+        # the publisher's copy of the slots it last read whole (slot -> pid, wake key, event id): a slot
+        # another process damaged is written back from it, so its subscriber is still woken
+        self._known: dict[int, tuple[int, int, int]] = {}
+        self.restored = 0  # slots written back from that copy
 
     # the hot words go through struct on the mapping: a numpy element access costs ~3x more
     @property
@@ -133,15 +137,30 @@ class Credits:
         _WORD.pack_into(self._map, 8 * (self.HEAD + _SLOT_WORDS * index), taken)
         return bool(_WORD.unpack_from(self._map, 8)[0])
 
-    def subscribers(self) -> list[tuple[int, int]]:
-        """(wake channel key, event id) of every live subscriber slot.
+    def subscribers(self, published: int | None = None) -> list[tuple[int, int]]:
+        """(wake channel key, event id) of every live subscriber slot (read by the publisher).
 
         Any process of this user can write the file: a slot whose pid, key or event id is out
-        of range is skipped (its subscriber rewrites it when it next finds nothing to take).
+        of range is written back from the publisher's copy of it, its taken count set to
+        ``published`` (its subscriber writes the truth at its next take), or skipped when the
+        publisher never saw it whole (its subscriber rewrites it when it next finds nothing to take).
         """
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
-        return [(words[i + 2], words[i + 3]) for i in range(0, len(words), _SLOT_WORDS)
-                if words[i + 1] and self.valid_slot(words[i + 1], words[i + 2], words[i + 3])]
+        found = []
+        for index in range(MAX_SUBSCRIBER_SLOTS):
+            i = index * _SLOT_WORDS
+            pid, key, event = words[i + 1], words[i + 2], words[i + 3]
+            if self.valid_slot(pid, key, event):
+                self._known[index] = (pid, key, event)
+                found.append((key, event))
+            elif pid == key == event == 0:
+                self._known.pop(index, None)  # left
+            elif (known := self._known.get(index)) is not None:
+                taken = words[i] if published is None or words[i] <= published else published
+                _SLOT.pack_into(self._map, 8 * (self.HEAD + i), taken, *known)
+                self.restored += 1
+                found.append(known[1:])
+        return found
 
     @staticmethod
     def valid_slot(pid: int, key: int, event: int) -> bool:
@@ -158,9 +177,10 @@ class Credits:
         self._bump_version()
 
     def max_fill(self, published: int) -> int:
-        """The fullest live subscriber FIFO, in messages (0 without subscribers)."""
+        """The fullest live subscriber FIFO, in messages (0 without subscribers); a count past what was
+        published reads as empty (``repair`` sets such words right)."""
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
-        return max((published - words[i] for i in range(0, len(words), _SLOT_WORDS) if words[i + 1]),
+        return max((max(0, published - words[i]) for i in range(0, len(words), _SLOT_WORDS) if words[i + 1]),
                    default=0)
 
     def behind(self, published: int) -> list[tuple[int, int, int]]:
@@ -169,6 +189,32 @@ class Credits:
         words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
         return [(i // _SLOT_WORDS, words[i + 1], published - words[i]) for i in range(0, len(words), _SLOT_WORDS)
                 if words[i + 1] and words[i] < published]
+
+    def repair(self, published: int, most: int) -> int:
+        """Set right the slots no subscriber could have written: a pid, key or event that is out of range
+        (written back from the publisher's copy, else let go: its subscriber rejoins when it next finds
+        nothing to take), or a taken count past
+        ``published`` or more than ``most`` behind it, which no FIFO holds (it is set to ``published``;
+        the subscriber writes the truth at its next take). The count of slots repaired."""
+        words = _SLOT_TABLE.unpack_from(self._map, 8 * self.HEAD)
+        repaired = 0
+        for i in range(0, len(words), _SLOT_WORDS):
+            taken, pid = words[i], words[i + 1]
+            if not pid:
+                continue
+            index = i // _SLOT_WORDS
+            if not self.valid_slot(pid, words[i + 2], words[i + 3]):
+                known = self._known.get(index)
+                if known is not None:
+                    _SLOT.pack_into(self._map, 8 * (self.HEAD + i), published, *known)
+                    self.restored += 1
+                else:
+                    self.leave(index)
+                repaired += 1
+            elif taken > published or published - taken > most:
+                _WORD.pack_into(self._map, 8 * (self.HEAD + i), published)
+                repaired += 1
+        return repaired
 
     def full_slots(self, published: int, depth: int) -> list[int]:
         """Slots of live subscribers whose FIFO holds ``depth`` messages already."""

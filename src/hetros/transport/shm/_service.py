@@ -50,8 +50,8 @@ class Service:
 
     # slots, which the compiled send path reads and writes in place (``_hotpath.bind_slots``)
     __slots__ = ("_closed", "_publisher", "_scratch", "_wakes", "_wakes_version", "blocking", "buffer", "credits",
-                 "credits_at", "data", "domain", "lock", "next_seq", "qos", "room", "space", "stalls", "target",
-                 "topic")
+                 "credits_at", "data", "domain", "lock", "next_seq", "qos", "repaired", "room", "space", "stalls",
+                 "target", "topic")
 
     def __init__(self, domain: ShmDomain, node: Any, topic: str, target: str, qos: QoS) -> None:
         self.domain = domain
@@ -94,6 +94,7 @@ class Service:
         self._wakes_version = -1
         self.next_seq = 1
         self.stalls = 0  # sends that had to wait for a reliable subscriber's room (hetros top)
+        self.repaired = 0  # credits slots set right after another process damaged them
 
     # -- publishing side -------------------------------------------------------------------
 
@@ -155,6 +156,7 @@ class Service:
                 return True
             published = self.next_seq - 1
             credits = self.credits
+            self._repair(published)
             blocked = credits.full_slots(published, self.qos.depth)
             if any(not pid_alive(credits.slot(index)[1]) for index in blocked):
                 return True
@@ -162,6 +164,16 @@ class Service:
                 return False
             self.room = self.qos.depth - credits.max_fill(published)
             return True
+
+    def _repair(self, published: int) -> None:
+        """Words of the credits file no subscriber could have written (another process of this user
+        wrote them) are set right before they decide whether this publisher waits; counted and told."""
+        repaired = self.credits.repair(published, self.buffer)
+        if repaired:
+            self.repaired += repaired
+            log.warning("topic %s: the credits file held %d subscriber slot(s) no subscriber could have written "
+                        "(another process changed %s); set right, %d so far", self.topic, repaired,
+                        self.credits.path, self.repaired)
 
     def wait_for_space(self, deadline: float) -> None:
         """Block (with ``self.lock`` held) until every live blocking subscriber has room.
@@ -174,6 +186,7 @@ class Service:
         published = self.next_seq - 1
         credits = self.credits
         spin_until: float | None = None
+        self._repair(published)
         while True:
             blocked = credits.full_slots(published, self.qos.depth)
             for index in list(blocked):
@@ -312,7 +325,13 @@ class Service:
         """Notify every subscriber, after rereading who they are if ``version`` says they changed."""
         if version != self._wakes_version:
             self._wakes_version = version
-            self._wakes = [self.domain.notifier(key, event) for key, event in self.credits.subscribers()]
+            restored = self.credits.restored
+            self._wakes = [self.domain.notifier(key, event)
+                           for key, event in self.credits.subscribers(self.next_seq - 1)]
+            if self.credits.restored != restored:
+                log.warning("topic %s: %d subscriber slot(s) of %s were overwritten by another process; written "
+                            "back from this publisher's copy (%d so far)", self.topic,
+                            self.credits.restored - restored, self.credits.path, self.credits.restored)
         for notify, event_id in self._wakes:
             notify(event_id)
 

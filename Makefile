@@ -89,12 +89,16 @@ fast: install-test
 	$(VENV)/bin/mypy --strict src benchmarks/hetros_bench
 	$(VENV)/bin/pytest -q -p no:cacheprovider -m "not rtl and not slow" tests/unit tests/conformance
 
+# simulators, Yosys and nextpnr do minutes of work each on a slow machine: their phase's limit is that work's
+RTL_TIMEOUT = 1200
+
 # the conformance suite once more on the pure-Python path (what runs where no C compiler is), then every
 # suite on two workers; untraced: tracing the unit, conformance and fuzz suites for a coverage figure cost two
 # of the 20 minutes the default run must stay under on 2 cores (`make coverage` gives the figure)
 test: lint
 	HETROS_PURE_PYTHON=1 $(VENV)/bin/pytest -q -p no:cacheprovider tests/conformance
-	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 tests/unit tests/conformance tests/fuzz
+	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 -m "not rtl" tests/unit tests/conformance tests/fuzz
+	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 -m rtl --timeout $(RTL_TIMEOUT) tests/unit
 	$(VENV)/bin/pytest -q -p no:cacheprovider -n 2 --dist loadfile -m "not machine_wide" tests/integration tests/interop
 	$(VENV)/bin/pytest -q -p no:cacheprovider -m machine_wide tests/integration tests/interop
 

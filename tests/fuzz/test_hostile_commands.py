@@ -104,6 +104,7 @@ def _run(argv: list[str]) -> int:
             return int(exit_.code or 0) if not isinstance(exit_.code, str) else 2
 
 
+@pytest.mark.timeout(1800)  # thousands of commands: minutes on a loaded machine
 def test_every_command_ends_with_an_answer_or_an_error_line(hostile_paths: dict[str, str], tmp_path: Path,
                                                             monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))  # no launch of this user: looks end after their checks
@@ -147,6 +148,7 @@ def _records(draw: Any) -> tuple[str, bytes]:
     return name, content
 
 
+@pytest.mark.timeout(1800)
 def test_scribbled_registry_records_are_set_aside_never_fatal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A record another program wrote, or half wrote, or a folder named like one: `hetros ps` and every look
     go on, the bad record moved aside with a warning."""

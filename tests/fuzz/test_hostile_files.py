@@ -166,6 +166,7 @@ INCLUDED = {"inner.launch": SEEDS["ros1_launch"].replace(b"inner.launch", b"main
             "inner.launch.yaml": SEEDS["ros2_launch_yaml"].replace(b"inner.launch.xml", b"main.launch.xml")}
 
 
+@pytest.mark.timeout(1800)  # thousands of cases: minutes on a loaded machine
 @pytest.mark.parametrize("kind", sorted(READERS))
 def test_a_hostile_file_is_read_or_refused_by_name(kind: str, tmp_path_factory: pytest.TempPathFactory) -> None:
     folder = tmp_path_factory.mktemp(kind)

@@ -177,6 +177,7 @@ def test_clients_on_an_fpga_target_are_refused_naming_the_key(tmp_path: Path) ->
         plan(load_project(path))
 
 
+@pytest.mark.rtl
 def test_hw_build_writes_axi_stream_ports_and_a_manifest_that_yosys_reads_back(tmp_path: Path) -> None:
     out = tmp_path / "rtl"
     proc = subprocess.run([sys.executable, "-m", "hetros", "hw", "build", str(EXAMPLE), "-o", str(out)],

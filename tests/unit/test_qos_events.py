@@ -4,7 +4,7 @@ processes' graphs (shm, both in this test process), and over DDS edges between h
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import pytest
@@ -49,6 +49,13 @@ def mapping(request: pytest.FixtureRequest) -> str:
 def _spin_for(node: Node, seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:
+        node.spin_once(timeout=0.01)
+
+
+def _spin_until(node: Node, condition: Callable[[], bool], patience: float = 20.0) -> None:
+    """Spin until ``condition()`` holds: what must happen eventually, however slow the machine is."""
+    end = time.monotonic() + patience
+    while not condition() and time.monotonic() < end:
         node.spin_once(timeout=0.01)
 
 
@@ -137,10 +144,10 @@ def test_a_closed_publisher_of_the_process_is_gone_not_dead() -> None:
     node.create_subscription(Int32, "/g", lambda m: None, on_liveliness_changed=lambda s: changes.append(
         (s.alive_count, s.not_alive_count, s.alive_count_change, s.not_alive_count_change)))
     pub = node.create_publisher(Int32, "/g")
-    _spin_for(node, 0.6)
+    _spin_until(node, lambda: bool(changes))
     assert changes == [(1, 0, 1, 0)]
     pub.close()
-    _spin_for(node, 0.6)
+    _spin_until(node, lambda: len(changes) >= 2)
     assert changes == [(1, 0, 1, 0), (0, 0, -1, 0)]
     node.graph.close()
 
@@ -218,7 +225,7 @@ def test_messages_a_keep_last_subscription_lost_are_reported(shm_session: str, m
         pub = pub_node.create_publisher(Int32, "/q")
         for i in range(10):
             pub.publish(Int32(data=i))
-        _spin_for(sub_node, 0.5)
+        _spin_until(sub_node, lambda: len(heard) >= 2 and sum(change for _, change in reports) >= 8)
         assert heard == [8, 9]
         assert reports and reports[-1][0] == 8 and sum(change for _, change in reports) == 8, reports
 
@@ -233,17 +240,17 @@ def test_matched_events_count_other_processes_from_the_start_and_this_ones_as_th
         to_sub: list[MatchedStatus] = []
         pub = pub_node.create_publisher(Int32, "/q", on_matched=to_pub.append)
         sub = sub_node.create_subscription(Int32, "/q", lambda m: None, on_matched=to_sub.append)
-        _spin_for(pub_node, 0.05)
-        _spin_for(sub_node, 0.05)
+        _spin_until(pub_node, lambda: bool(to_pub))
+        _spin_until(sub_node, lambda: bool(to_sub))
         assert to_pub == [MatchedStatus(1, 1, 1, 1)]
         assert to_sub == [MatchedStatus(1, 1, 1, 1)]
         if mapping == "inproc":
             second = sub_node.create_subscription(Int32, "/q", lambda m: None)
-            _spin_for(pub_node, 0.05)
+            _spin_until(pub_node, lambda: len(to_pub) >= 2)
             assert to_pub[-1] == MatchedStatus(2, 1, 2, 1)
             second.close()
             sub.close()
-            _spin_for(pub_node, 0.05)
+            _spin_until(pub_node, lambda: len(to_pub) >= 3)
             assert to_pub[-1] == MatchedStatus(2, 0, 0, -2)
         else:
             sub.close()  # the other process' subscription: planned, so still matched

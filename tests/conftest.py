@@ -9,7 +9,7 @@ import pytest
 from hetros.cli import CRASH_DIR_VARIABLE
 from hetros.transport import SESSION_TAG_VARIABLE, cleanup_stale, new_session
 from hetros.transport.shm._iceoryx import iceoryx_root
-from hetros.transport.shm._sample import FILE_PREFIX
+from hetros.transport.shm._sample import file_prefix
 from hetros.transport.shm._stale import recorded_nodes
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -43,7 +43,7 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     left = sorted(name for name in os.listdir(SHM) if name.startswith("hetros-") and _ours(name))
     # read by path, as the clean-up does: listing through iceoryx2 maps segments a test damaged on purpose
     root = iceoryx_root()
-    for static_config in (root / "services").glob(f"{FILE_PREFIX}*.service"):
+    for static_config in (root / "services").glob(f"{file_prefix()}*.service"):
         name = re.search(r'^service_name = "(.*)"$', static_config.read_text(errors="replace"), re.MULTILINE)
         if name is not None and _ours(name.group(1)):
             left.append(f"iceoryx2 service {name.group(1)}")

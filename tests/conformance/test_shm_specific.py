@@ -16,7 +16,7 @@ import pytest
 
 from hetros.msg import freeze, registry
 from hetros.transport import MessageCodec, QoS, ShmDomain, remove_session_segments
-from hetros.transport.shm._sample import FILE_PREFIX
+from hetros.transport.shm._sample import file_prefix
 
 from .test_transports import TYPE, ShmProcessHarness, drain, image
 
@@ -25,7 +25,7 @@ def shm_mappings() -> list[tuple[int, int, str]]:
     ranges = []
     for line in Path("/proc/self/maps").read_text().splitlines():
         parts = line.split()
-        if len(parts) >= 6 and parts[5].startswith(f"/dev/shm/{FILE_PREFIX}"):
+        if len(parts) >= 6 and parts[5].startswith(f"/dev/shm/{file_prefix()}"):
             start, end = (int(x, 16) for x in parts[0].split("-"))
             ranges.append((start, end, parts[5]))
     return ranges
@@ -473,7 +473,7 @@ def test_a_slot_that_cannot_be_had_says_why(pair: Any) -> None:
     held.clear()
     with pytest.raises(TransportError, match="most likely full"):
         service.loan(1 << 44)
-    assert not [name for name in os.listdir("/dev/shm") if name.startswith(FILE_PREFIX) and
+    assert not [name for name in os.listdir("/dev/shm") if name.startswith(file_prefix()) and
                 os.stat(f"/dev/shm/{name}").st_size >= 1 << 40], "a failed segment growth left a file"
 
 

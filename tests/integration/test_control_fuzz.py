@@ -7,6 +7,7 @@ crashes, 0 graph stops, and the graph's own traffic goes on.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -92,3 +93,68 @@ def _wait_for_sockets(folder: Path) -> list[Path]:
             return found
         time.sleep(0.1)
     raise AssertionError("the launch's control sockets never appeared")
+
+
+def _threads(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("Threads:"):
+            return int(line.split()[1])
+    raise AssertionError("no thread count")
+
+
+def test_idle_connections_and_huge_claims_cost_a_worker_bounded_threads_and_memory(tmp_path: Path) -> None:
+    """2,000 connections that never send a request: the worker holds at most MAX_CONNECTIONS threads for them,
+    answers the rest "busy", drops the idle ones after REQUEST_SECONDS, and then serves a good look; a frame
+    claiming a payload past the limit is refused before anything is allocated."""
+    from hetros.launch.observe._control import MAX_CONNECTIONS, MAX_PAYLOAD, REQUEST_SECONDS
+
+    env = dict(os.environ, XDG_RUNTIME_DIR=str(tmp_path))
+    launch = subprocess.Popen([sys.executable, "-m", "hetros", "launch", str(EXAMPLE), "--duration", "60"],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+    idle: list[socket.socket] = []
+    try:
+        path = _wait_for_sockets(tmp_path)[0]
+        worker = _ask(path, {"op": "stats"})["pid"]
+        before = _threads(worker)
+        busy = 0
+        with short_path(path) as name:
+            for _ in range(2_000):
+                sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+                sock.settimeout(5.0)
+                for _attempt in range(500):  # the listen backlog is short: wait for the accept loop
+                    try:
+                        sock.connect(name)
+                        break
+                    except BlockingIOError:
+                        time.sleep(0.002)
+                idle.append(sock)
+            time.sleep(1.0)
+            assert _threads(worker) <= before + MAX_CONNECTIONS + 2, (_threads(worker), before)
+            for sock in idle[MAX_CONNECTIONS + 50:MAX_CONNECTIONS + 60]:
+                with_answer = receive_frame(sock)[0]
+                busy += "serves" in with_answer.get("error", "")
+            assert busy == 10
+            time.sleep(REQUEST_SECONDS + 1.0)
+            assert _threads(worker) <= before + 2, (_threads(worker), before)
+            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as huge:
+                huge.settimeout(5.0)
+                huge.connect(name)
+                huge.sendall(_FRAME.pack(2, MAX_PAYLOAD + 1) + b"{}")
+                with contextlib.suppress(OSError):
+                    assert huge.recv(1) == b""  # closed, nothing allocated
+            assert "nodes" in _ask(path, {"op": "stats"})
+    finally:
+        for sock in idle:
+            sock.close()
+        launch.send_signal(signal.SIGINT)
+        output, _ = launch.communicate(timeout=120)
+    assert launch.returncode == 0, output
+
+
+def _ask(path: Path, request: dict[str, Any]) -> dict[str, Any]:
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock, short_path(path) as name:
+        sock.settimeout(10.0)
+        sock.connect(name)
+        header = json.dumps(request).encode()
+        sock.sendall(_FRAME.pack(len(header), 0) + header)
+        return receive_frame(sock)[0]

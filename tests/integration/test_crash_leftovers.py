@@ -21,7 +21,7 @@ import pytest
 
 from hetros._process import pid_alive
 from hetros.transport.shm._iceoryx import iceoryx_root
-from hetros.transport.shm._sample import FILE_PREFIX, SHM_DIR
+from hetros.transport.shm._sample import SHM_DIR, file_prefix
 from hetros.transport.shm._stale import _dead, cleanup_stale, recorded_nodes, remove_orphaned_services
 
 # it reads or changes state every launch of this account shares (/dev/shm, the launch registry): `make test`
@@ -157,7 +157,7 @@ def _crash(projects: Path, scenario: str, rng: random.Random) -> None:
 
 def _damage_segments(rng: random.Random) -> None:
     """Scribble over this user's iceoryx2 management segments, as a dying process might."""
-    for path in SHM_DIR.glob(f"{FILE_PREFIX}*.dynamic"):
+    for path in SHM_DIR.glob(f"{file_prefix()}*.dynamic"):
         data = bytearray(path.read_bytes())
         for _ in range(64):
             data[rng.randrange(len(data))] = rng.randrange(256)

@@ -128,15 +128,21 @@ def running() -> list[LaunchRecord]:
         try:
             record = _read_record(path)
         except (OSError, ValueError) as exc:
-            # unreadable: half written by a launcher that died, or not ours: set aside under a name no
-            # reader takes for a record (a folder named *.json included), never fatal to the next command
-            aside = path.with_name(f".{path.name}.bad-{time.time_ns()}")
+            # unreadable: half written by a launcher that died, or not ours: dropped by its name (a link is
+            # not followed); what cannot be (a folder named *.json) is set aside under a name no reader takes
+            # for a record. Never fatal to the next command.
             try:
-                os.rename(path, aside)
-                log.warning("launch registry: %s is not a launch record (%s); moved to %s", path.name, exc, aside.name)
-            except OSError as moved:
-                log.warning("launch registry: %s is not a launch record (%s) and cannot be moved aside (%s); "
-                            "remove it", path.name, exc, moved.strerror)
+                path.unlink(missing_ok=True)
+                log.warning("launch registry: dropped %s (%s)", path.name, exc)
+            except OSError:
+                aside = path.with_name(f".{path.name}.bad-{time.time_ns()}")
+                try:
+                    os.rename(path, aside)
+                    log.warning("launch registry: %s is not a launch record (%s); moved to %s", path.name, exc,
+                                aside.name)
+                except OSError as moved:
+                    log.warning("launch registry: %s is not a launch record (%s) and cannot be moved aside (%s); "
+                                "remove it", path.name, exc, moved.strerror)
             continue
         if pid_alive(record.pid):
             found.append(record)

@@ -36,7 +36,14 @@ if TYPE_CHECKING:
 log = get_logger("hetros.launch")
 _FRAME = struct.Struct("<II")
 MAX_HEADER = 1 << 20
-MAX_PAYLOAD = 1 << 30
+# a message published or a request made from the command line: a 4K camera frame is 25 MB
+MAX_PAYLOAD = 256 << 20
+# looks served at once by one process (each holds a thread); more are answered "busy" and closed
+MAX_CONNECTIONS = 32
+# a look must send its request this soon after connecting, and read what it is sent this soon: a
+# connection that does neither holds no thread for long
+REQUEST_SECONDS = 10.0
+SEND_SECONDS = 60.0
 _SO_PEERCRED = struct.Struct("3i")
 
 
@@ -48,13 +55,16 @@ def send_frame(sock: socket.socket, header: dict[str, Any], payload: bytes | byt
 
 
 def _receive_exactly(sock: socket.socket, size: int) -> bytes:
-    chunks = bytearray()
-    while len(chunks) < size:
-        chunk = sock.recv(min(size - len(chunks), 1 << 20))
-        if not chunk:
-            raise InspectError(f"the other end closed the connection {len(chunks)} bytes into a {size}-byte read")
-        chunks += chunk
-    return bytes(chunks)
+    """``size`` bytes, read into one buffer (no second copy of a large payload)."""
+    buffer = bytearray(size)
+    view = memoryview(buffer)
+    got = 0
+    while got < size:
+        count = sock.recv_into(view[got:], min(size - got, 1 << 20))
+        if not count:
+            raise InspectError(f"the other end closed the connection {got} bytes into a {size}-byte read")
+        got += count
+    return bytes(buffer) if size < 4096 else buffer  # type: ignore[return-value]  # a bytearray reads as bytes
 
 
 def receive_frame(sock: socket.socket) -> tuple[dict[str, Any], bytes]:
@@ -125,6 +135,7 @@ class ControlServer:
             os.umask(previous)
         self._listener.listen(16)
         self._closed = False
+        self._serving = threading.BoundedSemaphore(MAX_CONNECTIONS)
         self._codecs: dict[str, MessageCodec] = {}
         self._thread = threading.Thread(target=self._accept, name=f"control:{process}", daemon=True)
         self._thread.start()
@@ -145,15 +156,29 @@ class ControlServer:
             if peer_uid(connection) != os.getuid():
                 connection.close()  # the folder's mode already keeps others out; this keeps out a moved socket
                 continue
+            if not self._serving.acquire(blocking=False):
+                with connection, contextlib.suppress(OSError):
+                    connection.settimeout(1.0)
+                    send_frame(connection, {"error": f"{self.process} serves {MAX_CONNECTIONS} looks at once "
+                                                     "already; end one, or try again"})
+                continue
             threading.Thread(target=self._serve, args=(connection,), name=f"control:{self.process}:peer",
                              daemon=True).start()
 
     def _serve(self, connection: socket.socket) -> None:
+        try:
+            self._serve_one(connection)
+        finally:
+            self._serving.release()
+
+    def _serve_one(self, connection: socket.socket) -> None:
         with connection:
             try:
+                connection.settimeout(REQUEST_SECONDS)
                 request, payload = receive_frame(connection)
+                connection.settimeout(SEND_SECONDS)
             except (OSError, InspectError):
-                return  # the looker hung up, or sent something that is not a control frame
+                return  # the looker hung up, sent nothing in time, or sent something that is not a control frame
             try:
                 operation = request.get("op")
                 handler = getattr(self, f"_op_{operation}", None) if isinstance(operation, str) else None

@@ -22,7 +22,7 @@ from ._events import (
     raise_open_file_limit,
     wake_channel_name,
 )
-from ._iceoryx import FILE_PREFIX, iox2, new_node
+from ._iceoryx import file_prefix, iox2, new_node
 from ._sample import (
     MAX_SUBSCRIBER_SLOTS,
     SHM_DIR,
@@ -194,8 +194,8 @@ def node_failure(exc: Exception) -> str:
     """What to do when this process cannot join iceoryx2 (its node)."""
     text = f"{type(exc).__name__}: {exc}"
     if "UniqueNodeId" in text:
-        counters = (", ".join(str(p) for p in SHM_DIR.glob(f"{FILE_PREFIX}*global_mgmt"))
-                    or f"/dev/shm/{FILE_PREFIX}*global_mgmt")
+        counters = (", ".join(str(p) for p in SHM_DIR.glob(f"{file_prefix()}*global_mgmt"))
+                    or f"/dev/shm/{file_prefix()}*global_mgmt")
         return (f"iceoryx2 could not give this process a node id ({text}): its machine-wide node counter "
                 f"({counters}) is damaged, most likely written by another process; stop every hetros and "
                 "iceoryx2 process, then remove that file (its owner or root can); the next launch makes a new one")

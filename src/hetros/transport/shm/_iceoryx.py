@@ -4,7 +4,7 @@ configuration every hetros process gives it.
 iceoryx2's default root (``/tmp/iceoryx2``) is shared by every account and takes the mode of
 whoever made it first, which locked every other account out of shared memory; and one damaged
 leftover there stopped every later launch on the machine. hetros gives it a root in this
-user's private folder (``hetros._paths``) and file names of this user's (``hx<uid>_`` in
+user's private folder (``hetros._paths``) and file names of this user's (``hx<uid><secret>_`` in
 ``/dev/shm``), so accounts never meet, and a clean-up only ever looks at this user's files.
 """
 
@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import importlib
 import os
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +22,7 @@ import iceoryx2 as iox2
 
 from ..._log import get_logger
 from ..._paths import user_subfolder
-from ._sample import FILE_PREFIX
+from ._sample import SHM_DIR, file_prefix
 
 iox2.set_log_level(iox2.LogLevel.Error)
 
@@ -53,15 +54,15 @@ def iceoryx_root() -> Path:
 
 
 def shm_config() -> Any:
-    """iceoryx2's configuration for the nodes of this user (its root follows ``XDG_RUNTIME_DIR``)."""
-    return _config_at(str(iceoryx_root()))
+    """iceoryx2's configuration for the nodes of this user (its root and names follow ``XDG_RUNTIME_DIR``)."""
+    return _config_at(str(iceoryx_root()), file_prefix())
 
 
 @functools.cache
-def _config_at(root: str) -> Any:
+def _config_at(root: str, prefix: str) -> Any:
     config = iox2.config.default()
     config.global_cfg.root_path = iox2.Path.new(f"{root}/")
-    config.global_cfg.prefix = iox2.FileName.new(FILE_PREFIX)
+    config.global_cfg.prefix = iox2.FileName.new(prefix)
     # iceoryx2 would clean dead nodes inside every process that makes or drops a node, where one
     # damaged segment kills it; the launcher does it in a child process instead (``_stale.py``)
     config.global_cfg.node.cleanup_dead_nodes_on_creation = False
@@ -70,9 +71,28 @@ def _config_at(root: str) -> Any:
 
 
 def new_node(name: str) -> Any:
-    """An iceoryx2 node of this process, signals left to hetros, under this user's root."""
-    return (iox2.NodeBuilder.new().name(iox2.NodeName.new(name[:120])).config(shm_config())
+    """An iceoryx2 node of this process, signals left to hetros, under this user's root. iceoryx2 makes its
+    node counter (``*global_mgmt`` in /dev/shm) writable by every account: it is closed to this user's."""
+    node = (iox2.NodeBuilder.new().name(iox2.NodeName.new(name[:120])).config(shm_config())
             .signal_handling_mode(iox2.SignalHandlingMode.Disabled).create(iox2.ServiceType.Ipc))
+    close_node_counters()
+    return node
 
 
-__all__ = ["FILE_PREFIX", "assume_init", "iceoryx_root", "iox2", "loan_slice", "log", "new_node", "shm_config"]
+def node_counters() -> list[Path]:
+    """iceoryx2's machine-wide node counters under this user's names."""
+    return sorted(SHM_DIR.glob(f"{file_prefix()}*global_mgmt"))
+
+
+def close_node_counters() -> None:
+    for path in node_counters():
+        try:
+            info = path.lstat()
+            if info.st_uid == os.getuid() and stat.S_IMODE(info.st_mode) & 0o077:
+                os.chmod(path, 0o600)
+        except OSError:
+            continue
+
+
+__all__ = ["assume_init", "close_node_counters", "file_prefix", "iceoryx_root", "iox2", "loan_slice", "log", "new_node",
+           "node_counters", "shm_config"]

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import bisect
+import contextlib
 import ctypes
+import functools
 import os
 import re
 import stat
@@ -14,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from ..._errors import MachineError, TransportError
+from ..._paths import user_folder
 from ..._qos import QoS
 from ...msg import wanted as _compiled_wanted
 from .._codec import CDR_LE
@@ -26,8 +29,63 @@ if not _compiled_wanted():
     _Memory = None
 
 SHM_DIR = Path("/dev/shm")
-# the start of every file name iceoryx2 makes for this user (in /dev/shm and under its root)
-FILE_PREFIX = f"hx{os.getuid()}_"
+# where the secret part of this user's iceoryx2 file names is kept (in the user's private folder)
+_NAME_FILE = "shm-name"
+_SECRET = re.compile(r"[0-9a-f]{10}")
+
+
+def file_prefix() -> str:
+    """The start of every file name iceoryx2 makes for this user (in /dev/shm and under its root):
+    ``hx<uid><secret>_``. /dev/shm is shared by every account: with a name another account can
+    predict, it could make the file first, or fill it with garbage, and every later launch of this
+    user failed. The secret lives in the user's private folder, so no other account can know a
+    name before it exists (and one that exists is this user's, mode 0600)."""
+    return _prefix_in(str(user_folder()))
+
+
+@functools.cache
+def _prefix_in(folder: str) -> str:
+    path = Path(folder) / _NAME_FILE
+    for _attempt in range(3):
+        try:
+            with open(path, encoding="ascii") as handle:
+                secret = handle.read(64).strip()
+            if _SECRET.fullmatch(secret):
+                return f"hx{os.getuid()}{secret}_"
+        except (OSError, UnicodeDecodeError):
+            pass
+        _write_secret(path, exclusive=True)
+    raise MachineError(f"{path} does not hold the name hetros gives this user's shared memory; remove it")
+
+
+def _write_secret(path: Path, *, exclusive: bool) -> None:
+    """A new secret at ``path``; ``exclusive``: only where there is none (two processes starting at once
+    agree on the first one written)."""
+    secret = os.urandom(5).hex()
+    if exclusive:
+        try:
+            descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+        except FileExistsError:
+            with contextlib.suppress(OSError):
+                if not _SECRET.fullmatch(path.read_text(encoding="ascii", errors="replace").strip()):
+                    path.unlink()  # damaged: the next attempt writes a new one
+            return
+        with os.fdopen(descriptor, "w", encoding="ascii") as handle:
+            handle.write(secret)
+        return
+    partial = path.with_name(f".{path.name}.{os.getpid()}")
+    descriptor = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
+    with os.fdopen(descriptor, "w", encoding="ascii") as handle:
+        handle.write(secret)
+    os.replace(partial, path)
+
+
+def renew_file_prefix() -> str:
+    """A new secret for this user's iceoryx2 file names (the old names were taken or damaged by another
+    account); the new prefix. Only when no node of this user runs: they keep the old names."""
+    _write_secret(user_folder() / _NAME_FILE, exclusive=False)
+    _prefix_in.cache_clear()
+    return file_prefix()
 # Every sample: sequence number, publisher slot, layout, when it was sent (CLOCK_MONOTONIC ns,
 # one clock for every process of the machine: a lifespan is checked against it), padding; then
 # the message. With the CDR layout the 4-byte encapsulation sits at 28..32 so the CDR body
@@ -172,7 +230,7 @@ def remove_unfinished_segments(larger_than: int | None = None) -> list[str]:
     bytes (a 3.79 GB sparse file was left behind when memory ran out, and never removed)."""
     removed: list[str] = []
     now = time.time()
-    for path in SHM_DIR.glob(f"{FILE_PREFIX}*.data"):
+    for path in SHM_DIR.glob(f"{file_prefix()}*.data"):
         try:
             info = path.stat()
         except OSError:
@@ -215,7 +273,7 @@ class MappedSegments:
             while chunk := os.read(self._maps, 1 << 16):
                 chunks.append(chunk)
         ranges = []
-        marker = f"/dev/shm/{FILE_PREFIX}".encode()
+        marker = f"/dev/shm/{file_prefix()}".encode()
         for line in b"".join(chunks).split(b"\n"):
             if marker in line:
                 low, _, rest = line.partition(b"-")

@@ -21,13 +21,17 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..._process import pid_alive
-from ._iceoryx import iceoryx_root, log
-from ._sample import FILE_PREFIX, SHM_DIR, remove_unfinished_segments
+from ._iceoryx import iceoryx_root, log, node_counters
+from ._sample import SHM_DIR, file_prefix, remove_unfinished_segments, renew_file_prefix
 
 _CHILD = Path(__file__).with_name("_stale_child.py")
+# iceoryx2's node counter: two words
+_COUNTER_SIZE = 16
 # a node folder whose details cannot be read is a node that died while being made, once this old
 _UNREADABLE_AGE = 30.0
-_CHILD_TIMEOUT = 30.0
+# iceoryx2 cleans a dead node in milliseconds; one that takes longer is stuck on a damaged segment, which
+# is then removed by path (a launch after a crash starts within seconds, not minutes)
+_CHILD_TIMEOUT = 4.0
 _DETAILS_LIMIT = 1 << 16
 
 
@@ -53,7 +57,7 @@ def recorded_nodes(root: Path) -> list[NodeRecord]:
     for folder in folders:
         name, pid = "", 0
         try:
-            with open(folder / f"{FILE_PREFIX}node.details", "rb") as handle:
+            with open(folder / f"{file_prefix()}node.details", "rb") as handle:
                 text = handle.read(_DETAILS_LIMIT).decode("utf-8", "replace")
             if found := re.search(r'^name = "([^"\n]{0,200})"', text, re.MULTILINE):
                 name = found.group(1)
@@ -106,32 +110,32 @@ def remove_node_files(root: Path, node: NodeRecord) -> list[str]:
     """Remove a dead node's records, its ports' segments, and the services only it used, by path."""
     folder = root / "nodes" / node.node_id
     removed: list[str] = []
-    tags = list(folder.glob(f"{FILE_PREFIX}*_tag")) if folder.is_dir() else []
-    ports = [t.name[len(FILE_PREFIX):-len(".port_tag")] for t in tags if t.name.endswith(".port_tag")]
-    services = [t.name[len(FILE_PREFIX):-len(".service_tag")] for t in tags if t.name.endswith(".service_tag")]
+    tags = list(folder.glob(f"{file_prefix()}*_tag")) if folder.is_dir() else []
+    ports = [t.name[len(file_prefix()):-len(".port_tag")] for t in tags if t.name.endswith(".port_tag")]
+    services = [t.name[len(file_prefix()):-len(".service_tag")] for t in tags if t.name.endswith(".service_tag")]
     _remove(folder, removed)
-    for path in (root / "nodes").glob(f"{FILE_PREFIX}{node.node_id}.*"):
+    for path in (root / "nodes").glob(f"{file_prefix()}{node.node_id}.*"):
         _remove(path, removed)
     for port in filter(str.isdigit, ports):
-        for path in [*SHM_DIR.glob(f"{FILE_PREFIX}*_{port}*"), *root.glob(f"{FILE_PREFIX}{port}.*")]:
+        for path in [*SHM_DIR.glob(f"{file_prefix()}*_{port}*"), *root.glob(f"{file_prefix()}{port}.*")]:
             _remove(path, removed)
     others = _tagged_services(root)
     for service in services:
         if re.fullmatch(r"[0-9a-f]{40}", service) and service not in others:  # else a live node uses it still
-            _remove_service(root, root / "services" / f"{FILE_PREFIX}{service}.service", removed)
+            _remove_service(root, root / "services" / f"{file_prefix()}{service}.service", removed)
     return removed
 
 
 def _tagged_services(root: Path) -> set[str]:
     """The services some node (alive or not yet cleaned) says it uses."""
-    return {tag.name[len(FILE_PREFIX):-len(".service_tag")]
-            for tag in (root / "nodes").glob(f"*/{FILE_PREFIX}*.service_tag")}
+    return {tag.name[len(file_prefix()):-len(".service_tag")]
+            for tag in (root / "nodes").glob(f"*/{file_prefix()}*.service_tag")}
 
 
 def _remove_service(root: Path, static_config: Path, removed: list[str]) -> None:
     unique = _service_id(static_config)
     if unique is not None:
-        for path in SHM_DIR.glob(f"{FILE_PREFIX}*_{unique}.dynamic"):
+        for path in SHM_DIR.glob(f"{file_prefix()}*_{unique}.dynamic"):
             _remove(path, removed)
     _remove(static_config, removed)
 
@@ -146,8 +150,8 @@ def remove_orphaned_services(root: Path, older_than: float = _ORPHAN_AGE) -> lis
     removed: list[str] = []
     used = _tagged_services(root)
     now = time.time()
-    for static_config in (root / "services").glob(f"{FILE_PREFIX}*.service"):
-        service = static_config.name[len(FILE_PREFIX):-len(".service")]
+    for static_config in (root / "services").glob(f"{file_prefix()}*.service"):
+        service = static_config.name[len(file_prefix()):-len(".service")]
         try:
             old = now - static_config.stat().st_mtime >= older_than
         except OSError:
@@ -168,7 +172,7 @@ def _clean_with_iceoryx(root: Path, dead: dict[str, NodeRecord]) -> list[str]:
         if not left:
             break
         try:
-            child = subprocess.run([sys.executable, str(_CHILD), f"{root}/", FILE_PREFIX, *left], capture_output=True,
+            child = subprocess.run([sys.executable, str(_CHILD), f"{root}/", file_prefix(), *left], capture_output=True,
                                    text=True, timeout=_CHILD_TIMEOUT, stdin=subprocess.DEVNULL, check=False)
             output, code = child.stdout, child.returncode
         except subprocess.TimeoutExpired as exc:
@@ -207,12 +211,39 @@ def _clean_with_iceoryx(root: Path, dead: dict[str, NodeRecord]) -> list[str]:
     return cleaned
 
 
+def _heal_node_counters(alive: bool) -> list[str]:
+    """iceoryx2's node counter under this user's names, never trusted blindly: one another account owns
+    (it watched the names and made the file when it was gone) makes this user's names new; one of this
+    user's with no node of the user alive is removed, so a damaged one is made anew by the next node."""
+    healed: list[str] = []
+    for path in node_counters():
+        try:
+            info = path.lstat()
+        except OSError:
+            continue
+        if info.st_uid != os.getuid():
+            if alive:
+                continue  # the running nodes hold the old names: renamed when none runs
+            prefix = renew_file_prefix()
+            line = (f"{path} belongs to user {info.st_uid}, not to you: this user's shared memory files are named "
+                    f"{prefix}* from now on")
+            log.warning("shared memory: %s", line)
+            return [line]
+        if not alive:
+            _remove(path, healed)
+            if info.st_size != _COUNTER_SIZE:
+                log.warning("shared memory: iceoryx2's node counter %s was damaged (%d bytes); removed, the next "
+                            "node makes a new one", path, info.st_size)
+    return healed
+
+
 def cleanup_stale() -> list[str]:
     """Remove what crashed launches of this user left: dead iceoryx2 nodes, orphaned credits
     files and segments a failure left unfinished. Never raises for what it finds, never crashes."""
     removed = remove_unfinished_segments()
     root = iceoryx_root()
-    dead = {node.node_id: node for node in recorded_nodes(root) if _dead(root, node)}
+    recorded = recorded_nodes(root)
+    dead = {node.node_id: node for node in recorded if _dead(root, node)}
     if dead:
         cleaned = _clean_with_iceoryx(root, dead)
         log.info("cleaned up after crashed launches: %s", "; ".join(cleaned))
@@ -228,4 +259,5 @@ def cleanup_stale() -> list[str]:
             continue
         if mine and owner.isdigit() and not pid_alive(int(owner)):
             _remove(path, removed)
+    removed += _heal_node_counters(alive=len(dead) < len(recorded))  # last: it may rename what comes next
     return removed

@@ -127,3 +127,63 @@ def test_a_crash_with_a_damaged_node_counter_is_followed_by_a_launch_that_starts
         assert after.returncode == 0, f"trial {trial}: {out}"
         assert out.count("I heard") >= 3, f"trial {trial}: {out}"
         assert time.monotonic() - started < 10 + 2 + 10, f"trial {trial}: clean-up and start took too long:\n{out}"
+
+
+_HANDSHAKE = ("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+              "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+              "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n\r\n")
+_CLIENT = textwrap.dedent("""
+    import socket, sys, time
+    sock = socket.create_connection(("127.0.0.1", int(sys.argv[1])), timeout=10)
+    sock.sendall(sys.argv[2].encode())
+    got = b""
+    end = time.monotonic() + 8
+    while time.monotonic() < end and b"serverInfo" not in got:
+        try:
+            chunk = sock.recv(65536)
+        except OSError:
+            break
+        if not chunk:
+            break
+        got += chunk
+    sys.stdout.write(repr(got))
+""")
+
+
+@needs_second_account
+def test_foxglove_serves_its_owner_and_refuses_another_account_on_loopback(tmp_path: Path) -> None:
+    """Loopback is open to every account: the front port reads the peer's uid from the kernel's socket table."""
+    import re
+
+    pytest.importorskip("foxglove")
+    project = _project(tmp_path)
+    env = dict(os.environ, XDG_RUNTIME_DIR=str(tmp_path))
+    graph = _launch(project, 40)
+    _wait_for_counter(tmp_path, graph)
+    time.sleep(1.0)
+    server = subprocess.Popen([sys.executable, "-m", "hetros", "foxglove", "--port", "0"], env=env, text=True,
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        assert server.stdout is not None
+        deadline = time.monotonic() + 60
+        url = None
+        while url is None and time.monotonic() < deadline:
+            line = server.stdout.readline()
+            url = re.search(r"ws://127\.0\.0\.1:(\d+)", line)
+            assert line or server.poll() is None, server.stderr.read() if server.stderr else ""
+        assert url is not None
+        port = url.group(1)
+        (tmp_path / "client.py").write_text(_CLIENT)
+        (tmp_path / "client.py").chmod(0o644)
+        os.chmod(tmp_path, 0o755)
+        mine = subprocess.run(["/usr/bin/python3", str(tmp_path / "client.py"), port, _HANDSHAKE], capture_output=True,
+                              text=True, timeout=30, check=False)
+        assert "101 Switching Protocols" in mine.stdout and "serverInfo" in mine.stdout, mine.stdout + mine.stderr
+        theirs = _as_nobody(f"import sys; sys.argv = ['c', {port!r}, {_HANDSHAKE!r}]\n" + _CLIENT)
+        assert "serverInfo" not in theirs.stdout, theirs.stdout
+        assert "\\\\x03\\\\xf0" in theirs.stdout or "\\x03\\xf0" in theirs.stdout, theirs.stdout + theirs.stderr
+    finally:
+        server.terminate()
+        server.communicate(timeout=30)
+        os.killpg(graph.pid, signal.SIGINT)
+        graph.communicate(timeout=60)

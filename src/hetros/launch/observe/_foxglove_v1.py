@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import queue
 import struct
 import threading
@@ -20,6 +21,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from ..._errors import InspectError
 from ..._log import get_logger
+from ..._net import loopback_peer_uid
 
 if TYPE_CHECKING:
     from websockets.typing import Subprotocol
@@ -67,6 +69,13 @@ class FrontServer:
         self._thread.join(5)
 
     def _handle(self, connection: Any) -> None:
+        peer = connection.remote_address
+        if isinstance(peer, tuple) and len(peer) >= 2:
+            uid = loopback_peer_uid((str(peer[0]), int(peer[1])), self.port)
+            if uid is not None and uid != os.getuid():
+                log.warning("foxglove: refused a client of user %d on the loopback port (it serves only you)", uid)
+                connection.close(code=1008, reason="hetros foxglove serves only the account that started it")
+                return
         chosen = connection.subprotocol or ""
         if chosen.startswith(SDK_PREFIX):
             self._hand_through(connection, chosen)

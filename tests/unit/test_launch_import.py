@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from hetros import ProjectError
 from hetros.project._launch_import import import_launch
 
 TESTS = Path(__file__).resolve().parents[1]
@@ -24,8 +25,50 @@ def test_file_content_is_the_files_text(tmp_path: Path) -> None:
     assert project["nodes"]["talker"]["namespace"] == "/robot_7"
     launch.write_text('<launch>\n  <node pkg="examples_rclpy_executors" exec="talker" name="$(file-content no.txt)"/>'
                       "\n</launch>\n")
-    with pytest.raises(Exception, match=r"demo.launch.xml:2: \$\(file-content no.txt\): No such file"):
+    with pytest.raises(Exception, match=r"demo.launch.xml:2: \$\(file-content\) \S*no.txt does not exist"):
         import_launch(launch, True, [ROS2_PACKAGES], tmp_path)
+
+
+def test_what_a_hostile_launch_file_asks_is_refused_by_name(tmp_path: Path) -> None:
+    """Include loops, includes without end, $(eval) and $(file-content) of a device: each refused at its line,
+    never followed, never read."""
+    loop_a, loop_b = tmp_path / "a.launch.xml", tmp_path / "b.launch.xml"
+    loop_a.write_text('<launch>\n  <include file="b.launch.xml"/>\n</launch>\n')
+    loop_b.write_text('<launch>\n  <include file="a.launch.xml"/>\n</launch>\n')
+    with pytest.raises(ProjectError, match=r"an include loop: .*a.launch.xml -> .*b.launch.xml -> .*a.launch.xml"):
+        import_launch(loop_a, True, [ROS2_PACKAGES], tmp_path)
+    fan = tmp_path / "fan.launch.xml"  # includes itself under ten arguments: 10**depth files
+    fan.write_text("<launch>\n" + "".join(f'  <group><include file="fan{i}.launch.xml"/></group>\n'
+                                           for i in range(10)) + "</launch>\n")
+    for i in range(10):
+        (tmp_path / f"fan{i}.launch.xml").write_text(fan.read_text())
+    with pytest.raises(ProjectError, match=r"an include loop|more than 1000 launch files"):
+        import_launch(fan, True, [ROS2_PACKAGES], tmp_path)
+    evaluated = tmp_path / "eval.launch.xml"
+    evaluated.write_text('<launch>\n  <node pkg="p" exec="e" name="$(eval 1 + int(\'2\'))"/>\n</launch>\n')
+    with pytest.raises(ProjectError, match=r"eval.launch.xml:2: .*\$\(eval.*hetros evaluates \$\(arg\)"):
+        import_launch(evaluated, True, [ROS2_PACKAGES], tmp_path)
+    device = tmp_path / "device.launch.xml"
+    device.write_text('<launch>\n  <arg name="x" default="$(file-content /dev/zero)"/>\n</launch>\n')
+    with pytest.raises(ProjectError, match=r"device.launch.xml:2: \$\(file-content\) /dev/zero is a character device"):
+        import_launch(device, True, [ROS2_PACKAGES], tmp_path)
+
+
+def test_file_content_from_outside_the_package_is_told_and_keeps_its_files_mode(tmp_path: Path) -> None:
+    secret = tmp_path / "outside" / "key.txt"
+    secret.parent.mkdir()
+    secret.write_text("robot_9")
+    secret.chmod(0o600)
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "package.xml").write_text("<package><name>pkg</name></package>")
+    launch = package / "demo.launch.xml"
+    launch.write_text(f'<launch>\n  <group>\n    <push-ros-namespace namespace="$(file-content {secret})"/>\n'
+                      '    <node pkg="examples_rclpy_executors" exec="talker" name="talker"/>\n  </group>\n</launch>\n')
+    project, notes = import_launch(launch, True, [ROS2_PACKAGES], tmp_path)
+    assert project["nodes"]["talker"]["namespace"] == "/robot_9"
+    assert any("read a file outside the launch file's package" in note for note in notes), notes
+    assert notes.file_mode & 0o077 == 0
 
 
 def test_a_yaml_group_may_be_a_list_of_actions(tmp_path: Path) -> None:

@@ -34,7 +34,7 @@ from ._model import Bridged, LoadedProject, NodeSpec
 from ._names import node_name_problem, topic_name_problem
 from ._probe import hardware_problems, module_findable, runnable_problems
 from ._report import CheckReport
-from ._ros_scan import PLACEHOLDER, code_qos_choices, unsupported_uses, writes_ros
+from ._ros_scan import PLACEHOLDER, scan_ros_code, unsupported_uses, writes_ros
 from ._scan import scan_file
 
 
@@ -257,7 +257,19 @@ def code_qos_agrees(c: CheckContext) -> None:
             if ":" in spec.run and folder.joinpath(*spec.run.partition(":")[0].split(".")).with_suffix(".py") == path:
                 root = folder
                 break
-        for section, topic, chosen, place in code_qos_choices(path, spec.run, root):
+        found = scan_ros_code(path, spec.run, root)
+        for section, names in found.endpoints.items():
+            declared_names = {str(name) for name in getattr(spec, section, {})}
+            for written, typename in sorted(names.items()):
+                if written.startswith(PLACEHOLDER):
+                    continue
+                endpoint = resolve_name(written, spec.namespace, name, remap)
+                if endpoint not in declared_names:
+                    c.report.warnings.append(
+                        f"{c.project.where('nodes', nname, section)}: the code of {nname} ({path.name}) creates "
+                        f"{section} endpoint {endpoint}, which the project does not declare; the launch refuses it "
+                        f"when that line runs (add '{endpoint}: {typename}' under nodes.{nname}.{section})")
+        for section, topic, chosen, place in found.chosen:
             if topic.startswith(PLACEHOLDER):
                 continue
             full = resolve_name(topic, spec.namespace, name, remap)

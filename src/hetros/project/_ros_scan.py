@@ -540,14 +540,13 @@ def unsupported_uses(path: Path) -> list[str]:
             for name, line in sorted(first.items(), key=lambda item: item[1])]
 
 
-def code_qos_choices(path: Path, run: str, root: Path) -> list[tuple[str, str, dict[str, str], str]]:
-    """The delivery policies the ROS code of a node (``run``, found at ``path`` under ``root``) chooses for its
-    endpoints, as literals: (section, topic as the code names it, policies, file:line)."""
+def scan_ros_code(path: Path, run: str, root: Path) -> RosNode:
+    """What the ROS code of a node (``run``, found at ``path`` under ``root``) creates, as ``hetros init``
+    finds it: its endpoints, and the delivery policies they choose as literals (``chosen``: section, topic
+    as the code names it, policies, file:line)."""
     if ":" in run:
-        found = scan_ros_entry(root, run.partition(":")[0], run)
-    else:
-        found = scan_ros_script(path, _package_root(path), root)
-    return found.chosen
+        return scan_ros_entry(root, run.partition(":")[0], run)
+    return scan_ros_script(path, _package_root(path), root)
 
 
 def writes_ros(path: Path) -> bool:

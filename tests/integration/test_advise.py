@@ -107,7 +107,7 @@ def test_a_deadline_no_mapping_meets_says_by_how_much_and_why(
                   str(out / "profile.json"), "--out", str(tmp_path), cwd=example)
     assert "cached calibration" in done.stdout
     assert done.returncode == 1
-    assert "no mapping within the limits meets the deadline: chain steer: the best mapping's p50 is" in done.stdout
+    assert "no mapping within the limits meets the deadline: chain steer: the best mapping's p99 is" in done.stdout
     assert "over its 0.05 ms deadline;" in done.stdout and "dominates" in done.stdout
 
 

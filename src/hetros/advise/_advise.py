@@ -60,10 +60,10 @@ class Advice:
         misses = []
         for chain in chains:
             prediction = best.prediction.chains[chain.name]
-            if chain.deadline_ms and prediction.p50_ms > chain.deadline_ms:
+            if chain.deadline_ms and prediction.p99_ms > chain.deadline_ms:
                 node = prediction.dominant()
-                misses.append(f"chain {chain.name}: the best mapping's p50 is {prediction.p50_ms:.1f} ms, "
-                              f"{prediction.p50_ms - chain.deadline_ms:.1f} ms over its {chain.deadline_ms:g} ms "
+                misses.append(f"chain {chain.name}: the best mapping's p99 is {prediction.p99_ms:.1f} ms, "
+                              f"{prediction.p99_ms - chain.deadline_ms:.1f} ms over its {chain.deadline_ms:g} ms "
                               f"deadline; {node} dominates ({prediction.working_ms.get(node, 0.0):.1f} ms working, "
                               f"{prediction.waiting_ms.get(node, 0.0):.1f} ms waiting)")
         return "no mapping within the limits meets the deadline: " + "; ".join(misses) + \

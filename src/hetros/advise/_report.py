@@ -56,6 +56,7 @@ def table(rows: list[tuple[str, Candidate]], chains: list[Chain], original: Mapp
     out = ["  ".join(h.ljust(w) for h, w in zip(heads, [*widths, 0], strict=True)).rstrip()]
     for row in lines:
         out.append("  ".join(str(v).ljust(w) for v, w in zip(row, [*widths, 0], strict=True)).rstrip())
+    out.append("ranked by each chain's p99 (over its deadline where it has one): a deadline is a worst case")
     return "\n".join(out)
 
 

@@ -45,15 +45,16 @@ class Candidate:
     label: str = ""
 
     def worst(self, chains: list[Chain]) -> float:
-        """The worst chain's p50 over its deadline (or its p50 in ms where it has none): the ranking key."""
+        """The worst chain's p99 over its deadline (or its p99 in ms where it has none): the ranking key. A
+        deadline is a worst case, so it is judged on the tail, not the median."""
         found = 0.0
         for chain in chains:
-            p50 = self.prediction.chains[chain.name].p50_ms
-            found = max(found, p50 / chain.deadline_ms if chain.deadline_ms else p50)
+            p99 = self.prediction.chains[chain.name].p99_ms
+            found = max(found, p99 / chain.deadline_ms if chain.deadline_ms else p99)
         return found
 
     def meets(self, chains: list[Chain]) -> bool:
-        return all(self.prediction.chains[c.name].p50_ms <= c.deadline_ms for c in chains if c.deadline_ms)
+        return all(self.prediction.chains[c.name].p99_ms <= c.deadline_ms for c in chains if c.deadline_ms)
 
     def cores_used(self) -> int:
         return len({c for p in self.mapping.values() if not p.fpga for c in p.cpus} or {0})

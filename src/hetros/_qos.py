@@ -114,6 +114,10 @@ class QoS:
 
 DEFAULT_QOS = QoS()
 
+# a timer's or a rate's period, in seconds: from a nanosecond (a billion Hz) to about four months. Below the
+# layers because the checks refuse a parameter the code passes to a timer by the bounds the runtime enforces.
+MIN_PERIOD, MAX_PERIOD = 1e-9, 1e7
+
 # the policies ROS 2 matches an offer against a request by, in the order it reports them
 MATCHED_POLICIES = ("reliability", "durability", "deadline", "liveliness", "lease_duration")
 # how strong each kind is: the offer must be at least as strong as the request

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import difflib
 import hashlib
 import os
@@ -9,9 +10,10 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .._errors import DefinitionError, MessageError
+from .._errors import DefinitionError, MessageError, ProjectError
+from .._files import parse_python
 from .._net import is_local_address
-from .._qos import MATCHED_POLICIES, QoS, delivery_conflicts, offer_falls_short
+from .._qos import MATCHED_POLICIES, MIN_PERIOD, QoS, delivery_conflicts, offer_falls_short
 from ..msg import TypeRegistry, array_fields, flat_layout, normalize_typename, registry
 from ..plan import (
     ACTION_PREFIX,
@@ -387,12 +389,77 @@ def chains_name_topics(c: CheckContext) -> None:
                         "another")
 
 
+_TIMING_CALLS = {"rate": "a rate", "create_rate": "a rate", "Rate": "a rate", "create_timer": "a timer's period",
+                 "Timer": "a timer's period"}
+
+
+def _timing_parameters(tree: ast.AST) -> dict[str, tuple[str, int]]:
+    """The parameters (by name) whose value the code passes to a rate or a timer, with what it passes it to
+    and the line: ``node.rate(node.get_parameter('hz'))``, or through a name assigned from one."""
+    def asked(expression: ast.AST) -> set[str]:
+        return {call.args[0].value for call in ast.walk(expression)
+                if isinstance(call, ast.Call) and isinstance(call.func, ast.Attribute | ast.Name)
+                and (call.func.attr if isinstance(call.func, ast.Attribute) else call.func.id) in
+                ("get_parameter", "get_param", "declare_parameter") and call.args
+                and isinstance(call.args[0], ast.Constant) and isinstance(call.args[0].value, str)}
+    holding: dict[str, set[str]] = {}  # a local name -> the parameters its value came from
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Assign | ast.AnnAssign) and node.value is not None:
+            names = asked(node.value)
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                if isinstance(target, ast.Name) and names:
+                    holding.setdefault(target.id, set()).update(names)
+                elif isinstance(target, ast.Attribute) and names:
+                    holding.setdefault(target.attr, set()).update(names)
+    found: dict[str, tuple[str, int]] = {}
+    for call in ast.walk(tree):
+        if not isinstance(call, ast.Call) or not call.args:
+            continue
+        name = call.func.attr if isinstance(call.func, ast.Attribute) else \
+            call.func.id if isinstance(call.func, ast.Name) else None
+        if name not in _TIMING_CALLS:
+            continue
+        used = asked(call.args[0])
+        for part in ast.walk(call.args[0]):
+            key = part.id if isinstance(part, ast.Name) else part.attr if isinstance(part, ast.Attribute) else None
+            used |= holding.get(key or "", set())
+        for parameter in used:
+            found.setdefault(parameter, (f"{name}()", call.lineno))
+    return found
+
+
+def timing_parameters_are_numbers(c: CheckContext) -> None:
+    """A parameter the code passes to a rate or a timer must be a finite number a rate or period can be: the
+    launch would refuse 'fast', NaN, 0, -5 or 1e-320 at that call, so check refuses them first."""
+    for nname, spec in c.project.model.nodes.items():
+        if not spec.parameters:
+            continue
+        path = _code_file(c.project, nname, spec.run)
+        if path is None:
+            continue
+        try:
+            tree = parse_python(path, "node source", error=ProjectError)
+        except ProjectError:
+            continue  # code_runs reports it
+        for parameter, (call, line) in sorted(_timing_parameters(tree).items()):
+            if parameter not in spec.parameters:
+                continue
+            value = spec.parameters[parameter]
+            if isinstance(value, bool) or not isinstance(value, int | float) or \
+                    not (MIN_PERIOD <= value <= 1 / MIN_PERIOD):
+                c.error(f"{c.project.where('nodes', nname, 'parameters', parameter)}: the code of {nname} "
+                        f"({path.name}:{line}) passes {parameter} to {call}, which takes a finite number from "
+                        f"{MIN_PERIOD:g} to {1 / MIN_PERIOD:g}, not {value!r}")
+
+
 # the order matters where a rule reads what an earlier one gathered (gather_endpoints, nodes_are_well_formed)
 RULES: tuple[Callable[[CheckContext], None], ...] = (
     cpus_exist, hosts_and_env, bridge_names_reserved, import_folders_exist, nodes_are_well_formed,
     gather_endpoints, code_runs, code_qos_agrees, actions_pair, subscriptions_have_publishers, one_type_per_topic,
     clients_have_servers, one_server_one_type_per_service, topic_entries_are_used, qos_compatible, hardware_topics,
     shm_within_budget, ros1_nodes_fit, sources_exist, bridged_endpoints_fit, chains_name_topics,
+    timing_parameters_are_numbers,
 )
 
 

@@ -3,7 +3,7 @@
 from typing import TYPE_CHECKING
 
 from .._lazy import lazy_exports
-from ._clock import Clock, Duration, SimulatedClock, Time
+from ._clock import Clock, Duration, SimulatedClock, Time, check_hz, check_period
 from ._entities import (
     PROFILE_VARIABLE,
     Client,
@@ -114,6 +114,8 @@ __all__ = [
     "Time",
     "Timer",
     "bound_node",
+    "check_hz",
+    "check_period",
     "check_rate",
     "check_type",
     "client_gid",

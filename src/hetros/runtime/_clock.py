@@ -15,6 +15,7 @@ from functools import total_ordering
 from typing import TYPE_CHECKING, Any
 
 from .._errors import NodeError
+from .._qos import MAX_PERIOD, MIN_PERIOD
 from ..msg import registry
 from ..plan import CLOCK_TOPIC, CLOCK_TYPE
 
@@ -163,6 +164,22 @@ class SimulatedClock(Clock):
         with self._changed:
             self._hooks.clear()
             self._changed.notify_all()
+
+
+def check_period(seconds: object, what: str) -> float:
+    """``seconds`` as a timer's or a rate's period; NodeError naming ``what`` for anything that is not a
+    finite number of seconds in range (``nan``, a string, 0, ``1/1e-320`` = inf would hang or spin)."""
+    if isinstance(seconds, bool) or not isinstance(seconds, int | float) or \
+            not MIN_PERIOD <= seconds <= MAX_PERIOD:
+        raise NodeError(f"{what} must be a period of {MIN_PERIOD:g} to {MAX_PERIOD:g} s, not {seconds!r}")
+    return float(seconds)
+
+
+def check_hz(hz: object, what: str) -> float:
+    """``hz`` as a rate: a finite number whose period :func:`check_period` takes."""
+    if isinstance(hz, bool) or not isinstance(hz, int | float) or not 1 / MAX_PERIOD <= hz <= 1 / MIN_PERIOD:
+        raise NodeError(f"{what} must be a rate of {1 / MAX_PERIOD:g} to {1 / MIN_PERIOD:g} Hz, not {hz!r}")
+    return float(hz)
 
 
 class Ticker:

@@ -16,7 +16,6 @@ from concurrent.futures import Future
 from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 
 from .._errors import (
-    NodeError,
     ServiceTimeoutError,
     ShutdownError,
     TakeTimeoutError,
@@ -26,6 +25,7 @@ from ..msg import Message, ServiceKind, service_type
 from ..msg import copy as copy_message
 from ..plan import reply_channel, request_channel
 from ..transport import Reader, Writer
+from ._clock import check_period
 from ._endpoints import EndpointWriter
 from ._executor import AdaptiveSpin
 from ._matched import MatchedWatch
@@ -452,8 +452,7 @@ class Subscription(Generic[M]):
 
 class Timer:
     def __init__(self, node: Node, period: float, callback: Callable[[], object]) -> None:
-        if not period > 0:
-            raise NodeError(f"timer period must be positive seconds, not {period!r}")
+        period = check_period(period, "a timer's period")
         self.period = period
         self.callback = callback
         self.cancelled = False

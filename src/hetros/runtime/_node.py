@@ -25,7 +25,7 @@ from .._errors import (
 from .._qos import QoS
 from ..msg import ActionKind, Message, ServiceKind, ServiceType, service_type
 from ..plan import ROS1_TRANSPORT, NodePlan, request_channel, resolve_name
-from ._clock import Clock, SimulatedTimer, Ticker
+from ._clock import Clock, SimulatedTimer, Ticker, check_hz, check_period
 from ._endpoints import Relay, TopicReaders
 from ._entities import Client, HandlingStats, Publisher, Service, Subscription, Timer, typename_of
 from ._executor import Executor
@@ -291,8 +291,7 @@ class Node:
         ``use_sim_time``), from this node's executor."""
         clock = self.graph.clock
         if clock.simulated:
-            if not period > 0:
-                raise NodeError(f"timer period must be positive seconds, not {period!r}")
+            check_period(period, "a timer's period")
             self.executor.entities += 1
             return SimulatedTimer(clock, self.executor, period, callback)
         self.executor.entities += 1
@@ -324,9 +323,7 @@ class Node:
 
     def rate(self, hz: float) -> Iterator[int]:
         """Yield 0, 1, 2, ... at ``hz`` until shutdown (ends cleanly, no exception)."""
-        if not hz > 0:
-            raise NodeError(f"rate must be positive Hz, not {hz!r}")
-        period = 1.0 / hz
+        period = 1.0 / check_hz(hz, "rate(hz)")
         clock = self.graph.clock
         if clock.simulated:
             yield from self._simulated_rate(clock, int(period * 1e9))

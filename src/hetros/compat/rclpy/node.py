@@ -16,7 +16,7 @@ from typing import Any, TypeVar
 
 from ..._errors import NodeError, ParameterError
 from ...plan import ChannelPlan, join_namespace
-from ...runtime import Clock, ProjectParameters, Ticker, bound_node, listed, type_change_problem
+from ...runtime import Clock, ProjectParameters, Ticker, bound_node, check_hz, listed, type_change_problem
 from ...runtime import Node as HetrosNode
 from .._flavour import copied, keepable, received
 from .._where import caller_place
@@ -250,7 +250,7 @@ class Rate:
     def __init__(self, node: Node, frequency: float) -> None:
         self._node = node._hetros
         self._stop = node._hetros.graph.stop
-        self._ticker = Ticker(node.get_clock(), int(1e9 / frequency))
+        self._ticker = Ticker(node.get_clock(), int(1e9 / check_hz(frequency, "create_rate's frequency")))
 
     def sleep(self) -> None:
         if not self._ticker.sleep(self._stop):

@@ -21,7 +21,7 @@ from typing import Any
 from ..._errors import Error, ParameterError, ShutdownError
 from ...msg import Message, registry
 from ...msg import copy as copy_message
-from ...runtime import ROSPY_CONSOLE, Ticker, node_logger, yield_to_callbacks
+from ...runtime import ROSPY_CONSOLE, Ticker, check_hz, node_logger, yield_to_callbacks
 from ...runtime import Node as HetrosNode
 from ...runtime import bound_node as _bound_node
 from ...runtime import ros_main as _ros_main
@@ -358,7 +358,7 @@ class Rate:
 
     def __init__(self, hz: float) -> None:
         self._hetros = _state().hetros
-        self._ticker = Ticker(self._hetros.get_clock(), int(1e9 / hz))
+        self._ticker = Ticker(self._hetros.get_clock(), int(1e9 / check_hz(hz, "rospy.Rate's hz")))
 
     def sleep(self) -> None:
         if not self._ticker.sleep(self._hetros.graph.stop) or is_shutdown():

@@ -354,6 +354,72 @@ def test_a_verilog_node_that_ignores_tready_is_caught_at_its_gateway_port(tmp_pa
     assert re.search(r"hardware node echo port 'b' \(/b\): .*before TREADY at cycle \d+", result.stderr), result.stderr
 
 
+# three ways a Verilog node breaks AXI4-Stream that a fast subscriber never shows: only a harness that
+# stalls its ports, as a verification team's does, catches them (hetros launch --hw-stalls SEED)
+_BROKEN = {
+    "ignores TREADY": ("""\
+    assign a_TREADY = 1'b1;
+    always @(posedge ap_clk) begin
+        if (!ap_rst_n) b_TVALID <= 1'b0;
+        else begin
+            b_TVALID <= a_TVALID; b_TDATA <= a_TDATA; b_TKEEP <= a_TKEEP; b_TLAST <= a_TLAST;
+        end
+    end
+""", r"TVALID dropped|TDATA/TKEEP/TLAST changed"),
+    "drops TVALID early": ("""\
+    assign a_TREADY = !b_TVALID;
+    always @(posedge ap_clk) begin
+        if (!ap_rst_n) b_TVALID <= 1'b0;
+        else if (b_TVALID) b_TVALID <= 1'b0;
+        else if (a_TVALID) begin
+            b_TVALID <= 1'b1; b_TDATA <= a_TDATA; b_TKEEP <= a_TKEEP; b_TLAST <= a_TLAST;
+        end
+    end
+""", r"TVALID dropped"),
+    "changes TDATA while stalled": ("""\
+    reg [7:0] tick;
+    assign a_TREADY = !b_TVALID || b_TREADY;
+    always @(posedge ap_clk) begin
+        if (!ap_rst_n) begin b_TVALID <= 1'b0; tick <= 8'd0; end
+        else begin
+            tick <= tick + 8'd1;
+            if (a_TREADY) begin
+                b_TVALID <= a_TVALID; b_TDATA <= a_TDATA; b_TKEEP <= a_TKEEP; b_TLAST <= a_TLAST;
+            end else b_TDATA <= b_TDATA ^ {56'd0, tick};
+        end
+    end
+""", r"TDATA/TKEEP/TLAST changed"),
+}
+
+
+@pytest.mark.parametrize("fault", sorted(_BROKEN))
+def test_random_stalls_catch_a_broken_node_behind_a_fast_subscriber(tmp_path: Path, fault: str) -> None:
+    body, rule = _BROKEN[fault]
+    project = _verilog_echo(tmp_path, body)
+    result = launch(project, tmp_path, "--hw-stalls", "7")
+    assert result.returncode != 0, f"a node that {fault} passed under stalls:\n{result.stderr}"
+    assert re.search(rf"hardware node echo port 'b' \(/b\): .*({rule}).* before TREADY at cycle \d+", result.stderr), \
+        result.stderr
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_well_behaved_verilog_node_passes_under_random_stalls(tmp_path: Path, seed: int) -> None:
+    """examples/ping_pong's HLS-shaped echo, unchanged, under three stall seeds: every message in order and
+    intact (the stalls change when beats move, never what arrives)."""
+    project = _verilog_echo(tmp_path, """\
+    assign a_TREADY = !b_TVALID || b_TREADY;
+    always @(posedge ap_clk) begin
+        if (!ap_rst_n) b_TVALID <= 1'b0;
+        else if (a_TREADY) begin
+            b_TVALID <= a_TVALID; b_TDATA <= a_TDATA; b_TKEEP <= a_TKEEP; b_TLAST <= a_TLAST;
+        end
+    end
+""")
+    result = launch(project, tmp_path, "--hw-stalls", f"{seed}:40")
+    assert result.returncode == 0, result.stderr
+    assert "300 messages through the hardware, in order and intact" in result.stderr
+
+
 def _verilog_echo(tmp_path: Path, body: str, sink: str = "") -> Path:
     """examples/ping_pong's HLS-shaped echo with its body replaced, on /a -> /b of the echo project."""
     (tmp_path / "rtl").mkdir(exist_ok=True)

@@ -300,6 +300,11 @@ def cmd_launch(args: argparse.Namespace) -> int:
     plan = plan_file(args.project)
     if args.node_times:
         os.environ[NODE_TIMES_VARIABLE] = "1"  # the worker processes inherit it
+    if args.hw_stalls:
+        from ..hw import STALLS_VARIABLE, stall_setting
+
+        os.environ[STALLS_VARIABLE] = args.hw_stalls  # the workers inherit it
+        stall_setting()  # refused here, by name, before anything starts
     result = launch(plan, duration=args.duration, host=args.as_host,
                     record=Path(args.record) if args.record else None, start_timeout=args.start_timeout)
     if result.exit_code:
@@ -548,6 +553,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--record", metavar="RUN.MCAP", help="record every topic into this MCAP file while it runs")
     p.add_argument("--node-times", action="store_true",
                    help="at the end, log each node's time per message on each subscription and service")
+    p.add_argument("--hw-stalls", metavar="SEED[:PERCENT]",
+                   help="co-simulated fpga targets: every gateway port stalls on PERCENT %% of cycles (default 25), "
+                        "drawn from SEED, and the AXI4-Stream checker on each port stops the launch on a violation")
     p.set_defaults(func=cmd_launch)
     from ._advise import add_parser as add_advise
 

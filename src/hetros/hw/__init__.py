@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     )
     from .sim._rtl import topic_verilog
     from .sim._sim import simulate
-    from .sim._verilator import IDLE, VerilatedTop
+    from .sim._verilator import IDLE, STALLS_VARIABLE, VerilatedTop, stall_setting
     from .top._build import hardware_topics, top_name
     from .top._clock import TargetClock, target_clock
 
@@ -51,6 +51,7 @@ _LAZY = {
     "GatewayPort": ".sim._cosim",
     "IDLE": ".sim._verilator",
     "Resources": ".sim._report",
+    "STALLS_VARIABLE": ".sim._verilator",
     "SimulatedTop": ".sim._cosim",
     "TABLE_I_PAPER_MS": ".sim._report",
     "TABLE_I_SIZES": ".sim._report",
@@ -73,6 +74,7 @@ _LAZY = {
     "one_message_through": ".sim._models",
     "sample_message": ".sim._models",
     "simulate": ".sim._sim",
+    "stall_setting": ".sim._verilator",
     "synth_report": ".sim._report",
     "synthesize": ".sim._report",
     "synthesize_node": ".sim._report",
@@ -89,6 +91,7 @@ __getattr__ = lazy_exports(__name__, _LAZY)
 
 __all__ = [
     "IDLE",
+    "STALLS_VARIABLE",
     "TABLE_I_PAPER_MS",
     "TABLE_I_SIZES",
     "BeatCodec",
@@ -119,6 +122,7 @@ __all__ = [
     "part_of",
     "sample_message",
     "simulate",
+    "stall_setting",
     "synth_report",
     "synthesize",
     "synthesize_node",

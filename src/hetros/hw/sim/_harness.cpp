@@ -36,7 +36,20 @@ struct Sim {
   InPort in[N_IN > 0 ? N_IN : 1]; OutPort out[N_OUT > 0 ? N_OUT : 1];
   MemPort mem[N_MEM > 0 ? N_MEM : 1]; std::vector<Window> windows;
   uint64_t cycle = 0; std::string error;
+  // seeded random stalls, as a verification harness drives a design: out of 256 cycles, how many an input's
+  // TVALID rests between beats and an output's TREADY is low (0: none)
+  uint64_t rng = 0; unsigned in_gap = 0, out_gap = 0;
+  bool offered[N_IN > 0 ? N_IN : 1] = {};  // an input showed TVALID and was not taken: it must stay up
 };
+
+// xorshift64*: the same stalls for the same seed, on every machine
+static unsigned coin(Sim* s) {
+  s->rng ^= s->rng >> 12; s->rng ^= s->rng << 25; s->rng ^= s->rng >> 27;
+  return (unsigned)((s->rng * 2685821657736338717ull) >> 56);
+}
+// whether input ``i`` rests this cycle (only between beats it has not offered: TVALID, once up, stays up)
+static bool input_rests(Sim* s, int i) { return s->in_gap && !s->offered[i] && coin(s) < s->in_gap; }
+static bool output_stalls(Sim* s) { return s->out_gap && coin(s) < s->out_gap; }
 
 // bytes from physical ``address`` (up to ``n``) inside one allowed window, 0 when none holds it; ``*host``
 // is where the first of them is
@@ -109,7 +122,7 @@ static int cycle(Sim* s) {
   drive(s); s->top->eval();
   int what = sample(s, fired);
   edge(s);
-  for (int i = 0; i < N_IN; ++i) if (fired[i]) what |= taken(s, i);
+  for (int i = 0; i < N_IN; ++i) if (fired[i]) { what |= taken(s, i); s->offered[i] = false; }
   ++s->cycle; return what;
 }
 
@@ -126,6 +139,8 @@ void hs_forbid(void* h, uint64_t start) {
   for (size_t i = w.size(); i-- > 0;) if (w[i].start == start) w.erase(w.begin() + i); }
 void hs_mem_stats(void* h, int port, uint64_t* into) {
   Sim* s = (Sim*)h; into[0] = s->mem[port].reads; into[1] = s->mem[port].writes; }
+void hs_stalls(void* h, uint64_t seed, unsigned in_gap, unsigned out_gap) {
+  Sim* s = (Sim*)h; s->rng = seed * 0x9E3779B97F4A7C15ull | 1; s->in_gap = in_gap; s->out_gap = out_gap; }
 void hs_free(void* h) { Sim* s = (Sim*)h; s->top->final(); delete s->top; delete s->context; delete s; }
 void hs_push(void* h, int port, const uint8_t* data, size_t size) {
   ((Sim*)h)->in[port].queue.emplace_back(data, data + size); }

@@ -129,11 +129,11 @@ def harness_source(top: str, ports: list[StreamPort], data_width: int, clocked: 
         "  uint8_t data[PER_BEAT]; uint8_t keep[KEEP_BYTES]; int last;",
     ]
     for i, port in enumerate(inputs):
-        lines += [f"  {{ bool valid = show(s, {i}, data, keep, &last); TOP* t = s->top;",
+        lines += [f"  {{ bool valid = show(s, {i}, data, keep, &last) && !input_rests(s, {i}); TOP* t = s->top;",
                   f"    put(t->{port.prefix}_tdata, data, PER_BEAT); put(t->{port.prefix}_tkeep, keep, KEEP_BYTES);",
-                  f"    t->{port.prefix}_tlast = last; t->{port.prefix}_tvalid = valid; }}"]
+                  f"    t->{port.prefix}_tlast = last; t->{port.prefix}_tvalid = valid; s->offered[{i}] = valid; }}"]
     for j, port in enumerate(outputs):
-        lines += [f"  s->top->{port.prefix}_tready = s->out[{j}].done.size() < s->out[{j}].limit;"]
+        lines += [f"  s->top->{port.prefix}_tready = s->out[{j}].done.size() < s->out[{j}].limit && !output_stalls(s);"]
     for j, memory in enumerate(memories or []):
         p = memory.prefix
         lines += [f"  {{ MemPort& q = s->mem[{j}]; TOP* t = s->top; bool rv = q.ar_busy && q.ar_wait == 0;",
@@ -268,6 +268,26 @@ def _run(command: list[str], cwd: Path, top: str) -> None:
                             f"{done.returncode}; the build is in {cwd}):\n{tail}")
 
 
+# ``SEED`` or ``SEED:PERCENT``: every co-simulated port stalls on PERCENT % of cycles (25 by default), drawn from SEED
+STALLS_VARIABLE = "HETROS_HW_STALLS"
+
+
+def stall_setting() -> tuple[int, float] | None:
+    """The random stalls ``HETROS_HW_STALLS`` asks for (``hetros launch --hw-stalls``), or None."""
+    text = os.environ.get(STALLS_VARIABLE, "").strip()
+    if not text:
+        return None
+    seed, _, percent = text.partition(":")
+    try:
+        chosen = (int(seed), float(percent) if percent else 25.0)
+    except ValueError:
+        raise HardwareError(f"{STALLS_VARIABLE} must be SEED or SEED:PERCENT (a whole number, then 0 to 100), "
+                            f"not {text!r}") from None
+    if not 0 <= chosen[1] <= 100 or chosen[0] < 0:
+        raise HardwareError(f"{STALLS_VARIABLE}: the seed must be >= 0 and the percent 0 to 100, not {text!r}")
+    return chosen
+
+
 class VerilatedTop:
     """One instance of a compiled top: push messages into input ports, run cycles, pop output messages."""
 
@@ -300,9 +320,20 @@ class VerilatedTop:
         lib.hs_allow.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
         lib.hs_forbid.argtypes = [ctypes.c_void_p, ctypes.c_uint64]
         lib.hs_mem_stats.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.POINTER(ctypes.c_uint64)]
+        lib.hs_stalls.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint, ctypes.c_uint]
         self.inputs = [p for p in ports if p.feeds_design]
         self.outputs = [p for p in ports if not p.feeds_design]
         self._handle: int | None = lib.hs_new()
+        stalls = stall_setting()
+        if stalls is not None:
+            self.stalls(*stalls)
+
+    def stalls(self, seed: int, percent: float) -> None:
+        """Drive every port as a verification harness does: on ``percent`` % of cycles, drawn from ``seed``,
+        an input rests between beats (TVALID low) and an output is not ready (TREADY low). A node that
+        breaks the AXI4-Stream rules under back-pressure is then caught by the port's checker."""
+        gap = max(0, min(255, round(percent * 2.56)))
+        self._lib.hs_stalls(self._h(), seed, gap, gap)
 
     def _h(self) -> int:
         if self._handle is None:

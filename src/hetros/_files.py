@@ -18,8 +18,6 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from ._errors import Error, InputFileError
 
 # what a text file hetros reads may hold; a project with its launch files is kilobytes
@@ -128,26 +126,30 @@ def parse_json(text: str | bytes, what: str, *, error: type[Error] = InputFileEr
     return check_depth(value, what, error=error)
 
 
-class _CountingLoader(yaml.SafeLoader):
-    """yaml's safe loader that counts the nodes it composes, an alias once per use, so that a
-    few lines of aliases cannot stand for billions of values."""
+@cache
+def _counting_loader() -> Any:
+    """yaml's safe loader that counts the nodes it composes, an alias once per use, so that a few lines of
+    aliases cannot stand for billions of values (made on first use: a worker that reads no YAML loads no yaml)."""
+    import yaml
 
-    def __init__(self, stream: str) -> None:
-        super().__init__(stream)
-        self.composed = 0
-        self.depth = 0
+    class CountingLoader(yaml.SafeLoader):
+        def __init__(self, stream: str) -> None:
+            super().__init__(stream)
+            self.composed = 0
+            self.depth = 0
 
-    def compose_node(self, parent: Any, index: Any) -> Any:
-        self.composed += 1
-        if self.composed > NODE_LIMIT:
-            raise yaml.YAMLError(f"more than {NODE_LIMIT:,} values (aliases counted at each use)")
-        self.depth += 1
-        try:
-            if self.depth > DEPTH_LIMIT:
-                raise yaml.YAMLError(f"nested more than {DEPTH_LIMIT} levels deep; no such file is")
-            return super().compose_node(parent, index)
-        finally:
-            self.depth -= 1
+        def compose_node(self, parent: Any, index: Any) -> Any:
+            self.composed += 1
+            if self.composed > NODE_LIMIT:
+                raise yaml.YAMLError(f"more than {NODE_LIMIT:,} values (aliases counted at each use)")
+            self.depth += 1
+            try:
+                if self.depth > DEPTH_LIMIT:
+                    raise yaml.YAMLError(f"nested more than {DEPTH_LIMIT} levels deep; no such file is")
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+    return CountingLoader
 
 
 def _expanded_size(value: Any) -> int:
@@ -168,8 +170,10 @@ def _expanded_size(value: Any) -> int:
 
 def parse_yaml(text: str, what: str, *, error: type[Error] = InputFileError) -> Any:
     """YAML ``text`` from ``what`` (safe: no Python objects), nesting and alias expansion capped."""
+    import yaml
+
     try:
-        loader = _CountingLoader(text)
+        loader = _counting_loader()(text)
     except yaml.YAMLError as exc:  # the reader refuses the text before parsing (a NUL, a control character)
         raise error(f"{what} is not valid YAML: {exc}") from None
     try:

@@ -125,7 +125,7 @@ def test_a_ros1_bag_of_a_type_hetros_does_not_know_reads_from_its_own_definition
 @pytest.mark.parametrize(("make", "words"), [
     (lambda p: p / "missing", "does not exist"),
     (lambda p: (p / "x.txt").write_text("x") and p / "x.txt", "not a bag hetros reads"),
-    (lambda p: (p / "metadata.yaml").write_text("a: [") and p, "not rosbag2 metadata"),
+    (lambda p: (p / "metadata.yaml").write_text("a: [") and p, "rosbag2 metadata .* is not valid YAML"),
     (lambda p: (p / "metadata.yaml").write_text(
         "rosbag2_bagfile_information: {storage_identifier: mcap, relative_file_paths: [gone.mcap]}") and p,
      "names gone.mcap, which is not in"),

@@ -41,7 +41,7 @@ ALLOWED = {
     "hw": {"msg", "plan"},
     "project": {"msg", "plan", "transport", "hw"},
 }
-BASE = {"_errors", "_lazy", "_log", "_net", "_paths", "_process", "_qos", "_signals"}
+BASE = {"_errors", "_files", "_lazy", "_log", "_net", "_paths", "_process", "_qos", "_signals"}
 
 
 def _imports(path: Path) -> list[tuple[str, int, str]]:

@@ -49,6 +49,8 @@ BROKEN = {
     "hardware_topics": f"nodes: {{a: {{run: json:dumps, target: f, publish: {{/x: {STRING}}}}}}}",
     "chains_name_topics": (f"nodes: {{a: {{run: json:dumps, target: main, publish: {{/x: {STRING}}}}}}}\n"
                            "chains: {c: {first: /x, last: /y}}"),
+    "timing_parameters_are_numbers": (f"python_path: [{CASES}]\nnodes: {{a: {{run: timing_module:main, "
+                                      "target: main, parameters: {hz: fast}}}"),
     "shm_within_budget": (f"nodes: {{a: {{run: json:dumps, target: p, publish: {{/x: {STRING}}}}},\n"
                           f"        b: {{run: json:dumps, target: main, subscribe: {{/x: {STRING}}}}}}}\n"
                           "topics: {/x: {depth: 20000}}"),

@@ -162,5 +162,12 @@ def scan_file(path: Path, module: str) -> list[ScannedNode]:
 
 
 def module_name_for(path: Path, root: Path) -> str:
-    relative = path.resolve().relative_to(root.resolve()).with_suffix("")
-    return ".".join(relative.parts)
+    """The module name of the source file ``path`` under ``root`` (``pkg/nodes.py``: ``pkg.nodes``)."""
+    try:
+        relative = path.resolve().relative_to(root.resolve())
+    except ValueError:
+        raise ProjectError(f"{path} is not inside {root}: name the folder the nodes' modules are imported from "
+                           "with --root") from None
+    if not relative.parts or (not relative.name.endswith(".py") and relative.suffix):
+        raise ProjectError(f"{path} is not a Python source file under {root}; name the node's .py file")
+    return ".".join(relative.with_suffix("").parts)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..._process import pid_alive
-from ._iceoryx import iceoryx_root, log, node_counters
+from ._iceoryx import iceoryx_root, log, new_node, node_counters
 from ._sample import SHM_DIR, file_prefix, remove_unfinished_segments, renew_file_prefix
 
 _CHILD = Path(__file__).with_name("_stale_child.py")
@@ -214,7 +214,9 @@ def _clean_with_iceoryx(root: Path, dead: dict[str, NodeRecord]) -> list[str]:
 def _heal_node_counters(alive: bool) -> list[str]:
     """iceoryx2's node counter under this user's names, never trusted blindly: one another account owns
     (it watched the names and made the file when it was gone) makes this user's names new; one of this
-    user's with no node of the user alive is removed, so a damaged one is made anew by the next node."""
+    user's with no node of the user alive is made anew, so a damaged one cannot fail every later launch.
+    It is made here, by one process: the workers of a launch start at once, and two that make the counter
+    together can both fail to get a node id from it."""
     healed: list[str] = []
     for path in node_counters():
         try:
@@ -222,18 +224,22 @@ def _heal_node_counters(alive: bool) -> list[str]:
         except OSError:
             continue
         if info.st_uid != os.getuid():
-            if alive:
-                continue  # the running nodes hold the old names: renamed when none runs
-            prefix = renew_file_prefix()
+            prefix = renew_file_prefix()  # the running nodes, if any, keep the old names
             line = (f"{path} belongs to user {info.st_uid}, not to you: this user's shared memory files are named "
                     f"{prefix}* from now on")
             log.warning("shared memory: %s", line)
-            return [line]
+            healed.append(line)
+            break
         if not alive:
             _remove(path, healed)
             if info.st_size != _COUNTER_SIZE:
-                log.warning("shared memory: iceoryx2's node counter %s was damaged (%d bytes); removed, the next "
-                            "node makes a new one", path, info.st_size)
+                log.warning("shared memory: iceoryx2's node counter %s was damaged (%d bytes); made anew", path,
+                            info.st_size)
+    if not alive or healed:
+        try:
+            new_node(f"hetros-counter-{os.getpid()}")  # dropped at once: the counter stays, closed to others
+        except Exception as exc:  # iceoryx2's own error types: what failed is said, the launch goes on to say more
+            log.warning("shared memory: iceoryx2 could not make its node counter (%s: %s)", type(exc).__name__, exc)
     return healed
 
 

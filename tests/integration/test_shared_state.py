@@ -107,6 +107,7 @@ def test_another_account_can_neither_overwrite_nor_forge_the_node_counter(tmp_pa
         counter.unlink(missing_ok=True)
 
 
+@pytest.mark.timeout(60 + 30 * TRIALS)  # two launches a trial: the limit is the work's
 def test_a_crash_with_a_damaged_node_counter_is_followed_by_a_launch_that_starts(tmp_path: Path) -> None:
     """Each trial: a launch runs, its node counter is filled with garbage, and the launch is killed as a crash
     kills it; the next launch cleans up and starts, hearing its talker."""

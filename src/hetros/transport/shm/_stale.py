@@ -211,6 +211,28 @@ def _clean_with_iceoryx(root: Path, dead: dict[str, NodeRecord]) -> list[str]:
     return cleaned
 
 
+# how long a crashed launch's workers get to notice their launcher is gone and end (they do within a second)
+_ORPHAN_PATIENCE = 5.0
+
+
+def _wait_for_orphans(root: Path) -> None:
+    """Let the workers of a launch whose launcher died (a crash, a kill) end before the clean-up: they
+    notice within a second, and until they have, their nodes look alive and their shared memory in use."""
+    deadline = time.monotonic() + _ORPHAN_PATIENCE
+    while time.monotonic() < deadline:
+        orphans = [node for node in recorded_nodes(root) if node.pid and pid_alive(node.pid)
+                   and (launcher := _launcher_of(node.name)) is not None and not pid_alive(launcher)]
+        if not orphans:
+            return
+        time.sleep(0.05)
+
+
+def _launcher_of(node_name: str) -> int | None:
+    """The launcher's pid of a hetros node (``hetros-<session>-<process>``, the session led by that pid)."""
+    found = re.match(r"hetros-([1-9][0-9]{0,9})x", node_name)
+    return int(found.group(1)) if found else None
+
+
 def _heal_node_counters(alive: bool) -> list[str]:
     """iceoryx2's node counter under this user's names, never trusted blindly: one another account owns
     (it watched the names and made the file when it was gone) makes this user's names new; one of this
@@ -235,12 +257,28 @@ def _heal_node_counters(alive: bool) -> list[str]:
             if info.st_size != _COUNTER_SIZE:
                 log.warning("shared memory: iceoryx2's node counter %s was damaged (%d bytes); made anew", path,
                             info.st_size)
-    if not alive or healed:
-        try:
-            new_node(f"hetros-counter-{os.getpid()}")  # dropped at once: the counter stays, closed to others
-        except Exception as exc:  # iceoryx2's own error types: what failed is said, the launch goes on to say more
-            log.warning("shared memory: iceoryx2 could not make its node counter (%s: %s)", type(exc).__name__, exc)
+    # a node made and dropped here: the counter is made (or found usable) by this one process
+    if _probe_node():
+        return healed
+    # the counter is there but gives no node id: damaged while nodes of this user still run (a crashed
+    # launch's workers winding down), so it cannot be removed under them: this launch takes new names
+    prefix = renew_file_prefix()
+    line = (f"iceoryx2's node counter under this user's names gives no node id (damaged) while nodes of the user "
+            f"still run: this user's shared memory files are named {prefix}* from now on")
+    log.warning("shared memory: %s", line)
+    healed.append(line)
+    _probe_node()
     return healed
+
+
+def _probe_node() -> bool:
+    """Whether a node of this process can be made (and dropped at once: the counter stays, closed to others)."""
+    try:
+        new_node(f"hetros-counter-{os.getpid()}")
+    except Exception as exc:  # iceoryx2's own error types: what failed is said, and the workers say more
+        log.info("shared memory: iceoryx2 gave no node id (%s: %s)", type(exc).__name__, exc)
+        return False
+    return True
 
 
 def cleanup_stale() -> list[str]:
@@ -248,6 +286,7 @@ def cleanup_stale() -> list[str]:
     files and segments a failure left unfinished. Never raises for what it finds, never crashes."""
     removed = remove_unfinished_segments()
     root = iceoryx_root()
+    _wait_for_orphans(root)
     recorded = recorded_nodes(root)
     dead = {node.node_id: node for node in recorded if _dead(root, node)}
     if dead:

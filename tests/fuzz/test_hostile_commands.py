@@ -170,3 +170,16 @@ def test_scribbled_registry_records_are_set_aside_never_fatal(tmp_path: Path, mo
         for leftover in folder.glob("*.json"):
             assert not leftover.is_dir(), f"{leftover} is still where records are read"
     case()
+
+
+@pytest.mark.parametrize("argv", [
+    ["service", "find", "nan", "--project", "é\x00"],  # found by the 10,000-input soak: a NUL in --project
+    ["topic", "list", "--session", "x\x00y"],
+    ["init", "/dev/zero", "--root", "nan"],  # found by make test's 2,000: a file outside --root
+    ["param", "load", "talker", "/dev/zero"],
+])
+def test_what_the_soak_found_stays_an_error_line(argv: list[str], tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    monkeypatch.chdir(tmp_path)
+    assert _run(argv) not in (0, EXIT_BUG)

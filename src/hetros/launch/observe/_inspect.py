@@ -48,6 +48,8 @@ def choose(records: list[LaunchRecord], session: str | None, project: str | None
         chosen = [r for r in records if r.session == session]
         what = f"session {session}"
     elif project:
+        if "\x00" in project:
+            raise InspectError(f"--project {project!r} is not a path (it holds a NUL character)")
         path = Path(project).resolve()
         if path.is_file():
             name = _project_name(path)

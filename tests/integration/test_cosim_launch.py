@@ -336,24 +336,6 @@ def test_a_full_subscriber_holds_back_only_its_own_port(tmp_path: Path, mapping:
     assert "30 pairs through two ports of one target" in result.stderr
 
 
-def test_a_verilog_node_that_ignores_tready_is_caught_at_its_gateway_port(tmp_path: Path) -> None:
-    """A slow subscriber behind the gateway takes TREADY low at the node's output: a node that overwrites a
-    beat nobody took breaks AXI4-Stream, and the launch names the port and the rule instead of losing data."""
-    # an echo that takes a beat every cycle and overwrites its output whether or not it was taken
-    project = _verilog_echo(tmp_path, """\
-    assign a_TREADY = 1'b1;
-    always @(posedge ap_clk) begin
-        if (!ap_rst_n) b_TVALID <= 1'b0;
-        else begin
-            b_TVALID <= a_TVALID; b_TDATA <= a_TDATA; b_TKEEP <= a_TKEEP; b_TLAST <= a_TLAST;
-        end
-    end
-""", sink=", pause: 0.02")
-    result = launch(project, tmp_path)
-    assert result.returncode != 0
-    assert re.search(r"hardware node echo port 'b' \(/b\): .*before TREADY at cycle \d+", result.stderr), result.stderr
-
-
 # three ways a Verilog node breaks AXI4-Stream that a fast subscriber never shows: only a harness that
 # stalls its ports, as a verification team's does, catches them (hetros launch --hw-stalls SEED)
 _BROKEN = {
@@ -392,6 +374,16 @@ _BROKEN = {
 }
 
 
+def test_a_verilog_node_that_ignores_tready_is_caught_at_its_gateway_port(tmp_path: Path) -> None:
+    """A slow subscriber behind the gateway takes TREADY low at the node's output: a node that overwrites a
+    beat nobody took breaks AXI4-Stream, and the launch names the port and the rule instead of losing data."""
+    # an echo that takes a beat every cycle and overwrites its output whether or not it was taken
+    project = _verilog_echo(tmp_path, _BROKEN["ignores TREADY"][0], sink=", pause: 0.02")
+    result = launch(project, tmp_path)
+    assert result.returncode != 0
+    assert re.search(r"hardware node echo port 'b' \(/b\): .*before TREADY at cycle \d+", result.stderr), result.stderr
+
+
 @pytest.mark.parametrize("fault", sorted(_BROKEN))
 def test_random_stalls_catch_a_broken_node_behind_a_fast_subscriber(tmp_path: Path, fault: str) -> None:
     body, rule = _BROKEN[fault]
@@ -406,15 +398,8 @@ def test_random_stalls_catch_a_broken_node_behind_a_fast_subscriber(tmp_path: Pa
 def test_a_well_behaved_verilog_node_passes_under_random_stalls(tmp_path: Path, seed: int) -> None:
     """examples/ping_pong's HLS-shaped echo, unchanged, under three stall seeds: every message in order and
     intact (the stalls change when beats move, never what arrives)."""
-    project = _verilog_echo(tmp_path, """\
-    assign a_TREADY = !b_TVALID || b_TREADY;
-    always @(posedge ap_clk) begin
-        if (!ap_rst_n) b_TVALID <= 1'b0;
-        else if (a_TREADY) begin
-            b_TVALID <= a_TVALID; b_TDATA <= a_TDATA; b_TKEEP <= a_TKEEP; b_TLAST <= a_TLAST;
-        end
-    end
-""")
+    text = (EXAMPLES / "ping_pong" / "rtl" / "echo_hls.v").read_text().replace("send_", "a_").replace("recv_", "b_")
+    project = _verilog_echo(tmp_path, text[text.index("    assign a_TREADY"):text.index("endmodule")])
     result = launch(project, tmp_path, "--hw-stalls", f"{seed}:40")
     assert result.returncode == 0, result.stderr
     assert "300 messages through the hardware, in order and intact" in result.stderr

@@ -8,12 +8,11 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import yaml
 
-from tests.support.cli import hetros_in, private_env
+from tests.support.cli import hetros_in, looked_at, private_env
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -34,8 +33,8 @@ def test_geometry2s_tf2_examples_run_unchanged_across_processes(tmp_path: Path) 
                            "8"], cwd=tmp_path, env=private_env(tmp_path), stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, text=True) as launch:
         try:
-            echoed = _retrying(tmp_path, "tf", "echo", "base_link", "sonar_0", "--once", "--duration", "5")
-            frames = _retrying(tmp_path, "tf", "frames", "--duration", "2", "-o", str(tmp_path / "frames"))
+            echoed = looked_at(tmp_path, "tf", "echo", "base_link", "sonar_0", "--once", "--duration", "5")
+            frames = looked_at(tmp_path, "tf", "frames", "--duration", "2", "-o", str(tmp_path / "frames"))
             stdout, stderr = launch.communicate(timeout=120)
         finally:
             launch.kill()
@@ -58,17 +57,6 @@ def test_geometry2s_tf2_examples_run_unchanged_across_processes(tmp_path: Path) 
     # a moving frame: several stamps over time (its rate is a timing, which a busy machine moves)
     assert last["port_wheel"]["buffer_length"] > 0 and last["port_wheel"]["rate"] != 10000.0
     assert last["camera"]["rate"] == 10000.0  # tf2's figure for a static frame
-
-
-def _retrying(folder: Path, *argv: str) -> str:
-    """A look at the launch once it is up (its registry entry appears a moment after it starts)."""
-    deadline = time.monotonic() + 30
-    while True:
-        done = hetros_in(*argv, cwd=folder)
-        if done.returncode == 0 or time.monotonic() > deadline:
-            assert done.returncode == 0, done.stdout + done.stderr
-            return done.stdout
-        time.sleep(0.3)
 
 
 def test_tf2_ros_pys_listener_and_broadcaster_test_passes_as_a_node(tmp_path: Path) -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 
@@ -17,3 +18,15 @@ def hetros_in(*argv: str, cwd: Path, timeout: float = 90) -> subprocess.Complete
     """``hetros ARGV`` run in ``cwd`` (its launches registered there alone), output captured."""
     return subprocess.run([sys.executable, "-m", "hetros", *argv], capture_output=True, text=True, timeout=timeout,
                           check=False, cwd=cwd, env=private_env(cwd))
+
+
+def looked_at(folder: Path, *argv: str) -> str:
+    """What ``hetros ARGV`` prints once the launch run in ``folder`` is up (its registry entry appears a moment
+    after it starts): retried for 30 s, then its failure asserted."""
+    deadline = time.monotonic() + 30
+    while True:
+        done = hetros_in(*argv, cwd=folder)
+        if done.returncode == 0 or time.monotonic() > deadline:
+            assert done.returncode == 0, done.stdout + done.stderr
+            return done.stdout
+        time.sleep(0.3)

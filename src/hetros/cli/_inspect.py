@@ -113,14 +113,9 @@ def cmd_topic_echo(args: argparse.Namespace) -> int:
     launch = _launch(args)
     typename = launch.topic(args.topic)
     truncate = None if args.full_length else args.truncate_length
-    wanted = 1 if args.once else args.times
-    shown = 0
-    deadline = None if args.duration is None else time.monotonic() + args.duration
-    for event in launch.tap(args.topic, data=True):
-        if deadline is not None and time.monotonic() > deadline:
-            break
-        if event is None or event.data is None:
-            continue
+
+    def render(event: TapEvent) -> str:
+        assert event.data is not None
         message = launch.decode(typename, event.data)
         value = _field(message, args.field) if args.field else message
         if isinstance(value, Message):
@@ -131,8 +126,24 @@ def cmd_topic_echo(args: argparse.Namespace) -> int:
             text = _dump(value.tolist() if hasattr(value, "tolist") else value, args.flow_style)
             text = text[:-len("...\n")] if text.endswith("...\n") else text
         if args.lost_messages and event.dropped:
-            print(f"A message was lost!!!\n\ttotal count change:{event.dropped}\n\ttotal count: {event.dropped}")
-        sys.stdout.write(text + "---\n")
+            text = (f"A message was lost!!!\n\ttotal count change:{event.dropped}\n\ttotal count: "
+                    f"{event.dropped}\n") + text
+        return text
+    return _echo(launch.tap(args.topic, data=True), render, args)
+
+
+def _echo(events: Iterable[TapEvent | None], render: Callable[[TapEvent], str], args: argparse.Namespace) -> int:
+    """What ``topic echo`` and ``service echo`` share: each event with data as ``render`` gives it, then
+    ``---``, until ``--once``, ``-n`` or ``--duration`` says to stop."""
+    wanted = 1 if args.once else args.times
+    shown = 0
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    for event in events:
+        if deadline is not None and time.monotonic() > deadline:
+            break
+        if event is None or event.data is None:
+            continue
+        sys.stdout.write(render(event) + "---\n")
         sys.stdout.flush()
         shown += 1
         if wanted and shown >= wanted:
@@ -357,25 +368,16 @@ def cmd_service_echo(args: argparse.Namespace) -> int:
     names = {getattr(info_type, name): name for name in ("REQUEST_SENT", "REQUEST_RECEIVED", "RESPONSE_SENT",
                                                           "RESPONSE_RECEIVED")}
     truncate = None if args.full_length else args.truncate_length
-    wanted = 1 if args.once else args.times
-    shown = 0
-    deadline = None if args.duration is None else time.monotonic() + args.duration
-    for event in launch.tap_service(args.service):
-        if deadline is not None and time.monotonic() > deadline:
-            break
-        if event is None or event.data is None:
-            continue
+
+    def render(event: TapEvent) -> str:
+        assert event.data is not None
         plain: Any = to_plain(launch.types, launch.decode(event_type, event.data), truncate_length=truncate,
                               no_arr=args.no_arr, no_str=args.no_str)
         info = plain.get("info")
         if isinstance(info, dict) and "event_type" in info:
             info["event_type"] = names.get(info["event_type"], info["event_type"])
-        sys.stdout.write(_dump(plain, args.flow_style) + "---\n")
-        sys.stdout.flush()
-        shown += 1
-        if wanted and shown >= wanted:
-            break
-    return 0
+        return _dump(plain, args.flow_style)
+    return _echo(launch.tap_service(args.service), render, args)
 
 
 def cmd_service_call(args: argparse.Namespace) -> int:
@@ -807,6 +809,19 @@ def _request_parser(group: Any, verb: str, what: str, description: str,
     parser.set_defaults(func=function)
 
 
+def _echo_options(p: argparse.ArgumentParser, what: str) -> None:
+    """The options ``topic echo`` and ``service echo`` share, as ros2's echo verbs take them."""
+    p.add_argument("--once", action="store_true", help=f"print one of the {what} and exit")
+    p.add_argument("-n", "--times", type=numbers.count, default=0, help=f"print this many {what} and exit")
+    p.add_argument("--no-arr", action="store_true", help="print arrays' types and lengths instead of their values")
+    p.add_argument("--no-str", action="store_true", help="print strings' lengths instead of their values")
+    p.add_argument("-l", "--truncate-length", type=numbers.count, default=DEFAULT_TRUNCATE_LENGTH,
+                   help="cut arrays and strings at this length (default %(default)s)")
+    p.add_argument("-f", "--full-length", action="store_true", help="do not cut arrays and strings")
+    p.add_argument("--flow-style", action="store_true")
+    p.add_argument("--duration", type=numbers.seconds, help="stop after this many seconds")
+
+
 def add_commands(sub: Any) -> None:
     """The introspection commands, added to ``hetros``'s subcommands."""
     topic = sub.add_parser("topic", help="topics of a running launch (ros2 topic)").add_subparsers(
@@ -828,17 +843,9 @@ def add_commands(sub: Any) -> None:
     p.set_defaults(func=cmd_topic_find)
     p = topic.add_parser("echo", help="print a topic's messages as YAML")
     p.add_argument("topic")
-    p.add_argument("--once", action="store_true", help="print one message and exit")
-    p.add_argument("-n", "--times", type=numbers.count, default=0, help="print this many messages and exit")
+    _echo_options(p, "messages")
     p.add_argument("--field", help="print one field (header.stamp)")
-    p.add_argument("--no-arr", action="store_true", help="print arrays' types and lengths instead of their values")
-    p.add_argument("--no-str", action="store_true", help="print strings' lengths instead of their values")
-    p.add_argument("-l", "--truncate-length", type=numbers.count, default=DEFAULT_TRUNCATE_LENGTH,
-                   help="cut arrays and strings at this length (default %(default)s)")
-    p.add_argument("-f", "--full-length", action="store_true", help="do not cut arrays and strings")
-    p.add_argument("--flow-style", action="store_true")
     p.add_argument("--lost-messages", action="store_true", help="report messages the tap dropped")
-    p.add_argument("--duration", type=numbers.seconds, help="stop after this many seconds")
     p.set_defaults(func=cmd_topic_echo)
     for verb, function, window, what in (("hz", cmd_topic_hz, HZ_WINDOW, "publishing rate"),
                                          ("bw", cmd_topic_bw, BW_WINDOW, "bandwidth"),
@@ -881,15 +888,7 @@ def add_commands(sub: Any) -> None:
     p = groups["service"].add_parser("echo", help="each call of a service as its events (ros2 service echo)")
     p.add_argument("service")
     p.add_argument("service_type", nargs="?", help="its type, checked (pkg/srv/Type)")
-    p.add_argument("--no-arr", action="store_true", help="print arrays' types and lengths instead of their values")
-    p.add_argument("--no-str", action="store_true", help="print strings' lengths instead of their values")
-    p.add_argument("-l", "--truncate-length", type=numbers.count, default=DEFAULT_TRUNCATE_LENGTH,
-                   help="cut arrays and strings at this length (default %(default)s)")
-    p.add_argument("-f", "--full-length", action="store_true", help="do not cut arrays and strings")
-    p.add_argument("--flow-style", action="store_true")
-    p.add_argument("--once", action="store_true", help="print one event and exit")
-    p.add_argument("-n", "--times", type=numbers.count, default=0, help="print this many events and exit")
-    p.add_argument("--duration", type=numbers.seconds, help="stop after this many seconds")
+    _echo_options(p, "events")
     p.set_defaults(func=cmd_service_echo)
     p = groups["service"].add_parser("find", help="the services of a type")
     p.add_argument("type")

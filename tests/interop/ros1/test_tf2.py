@@ -8,10 +8,9 @@ import re
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
-from tests.support.cli import hetros_in, private_env
+from tests.support.cli import looked_at, private_env
 from tests.support.ros1 import ROS_PYTHON, needs_ros1, stop
 
 BROADCASTER = textwrap.dedent("""
@@ -90,8 +89,8 @@ def test_a_stock_rospy_tf2_broadcaster_is_heard_by_a_hetros_listener(master: tup
                                "--duration", "10"], cwd=tmp_path, env=look_env, stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True) as launch:
             try:
-                echoed = _retrying(tmp_path, "tf", "echo", "odom", "laser", "--once", "--duration", "6")
-                frames = _retrying(tmp_path, "tf", "frames", "--duration", "2")
+                echoed = looked_at(tmp_path, "tf", "echo", "odom", "laser", "--once", "--duration", "6")
+                frames = looked_at(tmp_path, "tf", "frames", "--duration", "2")
                 _stdout, stderr = launch.communicate(timeout=120)
             finally:
                 launch.kill()
@@ -104,12 +103,3 @@ def test_a_stock_rospy_tf2_broadcaster_is_heard_by_a_hetros_listener(master: tup
     assert "  laser  (static, broadcaster " in frames and re.search(r"  base_link  \(\d+\.\d\d Hz", frames), frames
 
 
-def _retrying(folder: Path, *argv: str) -> str:
-    """A look at the launch once it is up (its registry entry appears a moment after it starts)."""
-    deadline = time.monotonic() + 30
-    while True:
-        done = hetros_in(*argv, cwd=folder)
-        if done.returncode == 0 or time.monotonic() > deadline:
-            assert done.returncode == 0, done.stdout + done.stderr
-            return done.stdout
-        time.sleep(0.3)

@@ -437,15 +437,20 @@ def test_a_hardware_message_longer_than_its_type_is_refused_at_the_gateway(tmp_p
                      r"with the fields it holds is \d+ bytes", result.stderr), result.stderr
 
 
-def test_a_node_that_never_takes_its_input_is_named(tmp_path: Path) -> None:
+def test_a_node_that_never_takes_its_input_stops_the_launch_at_its_bound(tmp_path: Path) -> None:
     project = _verilog_echo(tmp_path, """\
     assign a_TREADY = 1'b0;
     always @(posedge ap_clk) b_TVALID <= 1'b0;
 """)
+    project.write_text(project.read_text().replace("data_width: 64", "data_width: 64, stuck_cycles: 200000"))
     result = launch(project, tmp_path)
-    assert result.returncode != 0
-    assert re.search(r"software -> echo on /a .*: hardware node echo has taken no beat for \d+ cycles while a message "
-                     r"waits \(TREADY low at its input\)", result.stderr), result.stderr
+    assert result.returncode == 1, result.stderr
+    found = re.search(r"software -> echo on /a .*: hardware node echo has taken no beat for (\d+) cycles while a "
+                      r"message waits \(TREADY low at its input, cycle \d+\): check its TREADY logic, or raise "
+                      r"targets.fpga.stuck_cycles \(200000\)", result.stderr)
+    assert found, result.stderr
+    assert 200_000 < int(found.group(1)) < 10_000_000, "the project's bound, not the default"
+    assert "PublishTimeoutError" not in result.stderr, "the hardware's cause, not a publisher's timeout"
 
 
 SIZES = '''
@@ -483,7 +488,17 @@ def test_images_a_filter_cannot_take_are_refused_naming_node_port_and_fix(tmp_pa
     project = (EXAMPLES / "sobel_hw" / "project_fpga.yaml").read_text()
     project = project.replace("parameters: {frames: 8, height: 48, width: 64},", "")
     project = project.replace("parameters: {frames: 8, height: 48, width: 64, out: out/sobel_hw},", "")
+    # a reliable topic may lose nothing: the first image the node cannot take stops the launch, with the cause
     (tmp_path / "project.yaml").write_text(project)
+    result = launch(tmp_path / "project.yaml", tmp_path)
+    assert result.returncode == 1, result.stderr
+    assert "hardware node sobel on reliable topic /image_raw refused a message, which a reliable topic may not " \
+           "lose: an image line of 80 bytes (80 pixels) is wider than the node's line buffers" in result.stderr
+    assert "one image through" not in result.stderr
+    # best effort: each refused image is named and dropped, and the graph goes on
+    project = project.replace("/image_raw:   {depth: 4}", "/image_raw:   {depth: 4, reliability: best_effort}")
+    (tmp_path / "project.yaml").write_text(project.replace("/image_edges: {depth: 4}",
+                                                           "/image_edges: {depth: 4, reliability: best_effort}"))
     result = launch(tmp_path / "project.yaml", tmp_path)
     assert result.returncode == 0, result.stderr
     assert "one image through, 64x8" in result.stderr

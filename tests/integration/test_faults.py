@@ -140,3 +140,65 @@ def test_a_launch_out_of_memory_ends_with_an_error_not_a_traceback(tmp_path: Pat
     assert proc.returncode == 1, proc.stderr[-3000:]
     assert "Traceback" not in proc.stderr, proc.stderr[-3000:]
     assert "ran out of resources" in proc.stderr, proc.stderr[-3000:]
+
+
+REQUIRED_CONSUMER = textwrap.dedent('''
+    from hetros import Node, TakeTimeoutError
+    from hetros.interfaces.std_msgs.msg import Int32
+
+
+    def silent(node: Node) -> None:
+        node.create_publisher(Int32, "/n")  # declared, never publishes: a sensor that never came up
+        node.spin()
+
+
+    def talker(node: Node) -> None:
+        pub = node.create_publisher(Int32, "/n")
+        for i in node.rate(20.0):
+            pub.publish(Int32(data=i))
+
+
+    def taking(node: Node) -> None:
+        sub = node.create_subscription(Int32, "/n")
+        for _ in range(3):
+            try:
+                sub.take(timeout=0.5)
+            except TakeTimeoutError:
+                node.log.info("no frame")
+
+
+    def polling(node: Node) -> None:
+        sub = node.create_subscription(Int32, "/n")
+        for tick in node.rate(10.0):
+            if sub.try_take() is not None or tick == 15:
+                return
+
+
+    def called(node: Node) -> None:
+        node.create_subscription(Int32, "/n", lambda message: None)
+        node.spin(timeout=1.5)
+''')
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("consumer", ["taking", "polling", "called"])
+def test_a_required_consumer_that_heard_nothing_fails_the_launch(tmp_path: Path, consumer: str) -> None:
+    """A required display that got no frame ended the launch with 0, as if it had shown every one."""
+    (tmp_path / "nodes.py").write_text(REQUIRED_CONSUMER)
+    for producer in ("silent", "talker"):
+        (tmp_path / "project.yaml").write_text(textwrap.dedent(f"""
+            name: required
+            targets: {{a: {{kind: process}}, b: {{kind: process}}}}
+            nodes:
+              producer: {{run: "nodes:{producer}", target: a, publish: {{/n: std_msgs/msg/Int32}}}}
+              display: {{run: "nodes:{consumer}", target: b, required: true, subscribe: {{/n: std_msgs/msg/Int32}}}}
+        """))
+        proc = subprocess.run([sys.executable, "-m", "hetros", "launch", str(tmp_path / "project.yaml"),
+                               "--duration", "30"], capture_output=True, text=True, timeout=90)
+        if producer == "silent":
+            assert proc.returncode == 1, proc.stderr[-3000:]
+            assert "required node display finished without receiving a message on /n" in proc.stderr, \
+                proc.stderr[-3000:]
+        else:
+            assert proc.returncode == 0, proc.stderr[-3000:]
+            assert "required node display finished;" in proc.stderr or "display finished" in proc.stderr

@@ -81,6 +81,8 @@ class TargetPlan:
     ros1_export: tuple[str, ...] = ()
     ros1_import: tuple[str, ...] = ()
     tcpros_frame_bytes: int = 4096
+    # fpga targets: cycles an input may wait on a node that takes no beat before the launch stops
+    stuck_cycles: int = 10_000_000
     # fpga targets: the board (zcu104, pynq-z2, ultra96), "" for none: the gateway then goes through the
     # PYNQ-shaped board surface (``hetros.launch.system.board``)
     board: str = ""
@@ -313,7 +315,7 @@ class Plan:
                                    v.get("data_width", 64), v.get("part", ""), v.get("host", ""),
                                    v.get("sim", "verilator"), tuple(v.get("ros1_export", ())),
                                    tuple(v.get("ros1_import", ())), v.get("tcpros_frame_bytes", 4096),
-                                   v.get("board", ""))
+                                   v.get("stuck_cycles", 10_000_000), v.get("board", ""))
                      for k, v in raw["targets"].items()},
             nodes={k: NodePlan(**{**v, "args": tuple(v.get("args", ())), "memory": tuple(v.get("memory", ()))})
                    for k, v in raw["nodes"].items()},

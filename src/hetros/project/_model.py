@@ -82,6 +82,9 @@ class TargetSpec(_Strict):
                                     "hardware TCPROS framer holds for a type of variable size: those before the "
                                     "type's last string or sequence (the rest streams); a message whose held part "
                                     "is longer is refused loudly")
+    stuck_cycles: int = Field(default=10_000_000, ge=1000, le=1 << 40, description="fpga: cycles a hardware node "
+                              "may hold a waiting input message without taking a beat before the launch stops, "
+                              "naming it (a node that never raises TREADY)")
     board: Literal["zcu104", "pynq-z2", "ultra96"] | None = Field(
         default=None, description="fpga: the board; `hetros launch` then drives the target through the board "
         "gateway (PYNQ's Overlay, allocate and DMA channels; `pip install hetros[board]` on the board, the "

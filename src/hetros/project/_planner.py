@@ -185,7 +185,8 @@ def _target_plan(name: str, target: TargetSpec, host: str, framed: tuple[tuple[s
     return TargetPlan(name=name, kind=target.kind, cpus=tuple(target.cpus), clock_mhz=target.clock_mhz or 100.0,
                       data_width=target.data_width, part=target.part or "", host=host, sim=target.sim or "verilator",
                       ros1_export=tuple(exports), ros1_import=tuple(imports),
-                      tcpros_frame_bytes=target.tcpros_frame_bytes, board=target.board or "")
+                      tcpros_frame_bytes=target.tcpros_frame_bytes, stuck_cycles=target.stuck_cycles,
+                      board=target.board or "")
 
 
 def _node_plan(project: LoadedProject, name: str, spec: NodeSpec) -> NodePlan:

@@ -263,10 +263,12 @@ class Subscription(Generic[M]):
         self._take: Callable[[], M | None] = _nothing
         self.stats = HandlingStats()
         self._spin = AdaptiveSpin()
+        self._polled_one = False  # try_take returned a message (a polling node counts no handling time)
         self.liveliness: LivelinessWatch | None = None  # set when its publishers' liveliness is watched
         self.message_lost: MessageLostWatch | None = None  # set when someone listens for lost messages
         self.matched: MatchedWatch | None = None  # its matched publishers, while it is open
         self._injected: deque[M] = deque()
+        self.injected_handled_at = 0  # see inject
         self._inject_lock = threading.Lock()
         self._plain_take: Callable[[], M | None] | None = None  # the take that injection stands in front of
         self._heard_take: Callable[[], M | None] | None = None  # the take a deaf subscription drains (_deafen)
@@ -283,14 +285,17 @@ class Subscription(Generic[M]):
         """Take from ``reader`` from now on (its own branch, once the node subscribes to the topic again)."""
         self._attach(reader if self._watch is None else WatchedReader(reader, self._watch))
 
-    def inject(self, message: M) -> None:
+    def inject(self, message: M) -> int:
         """Deliver ``message`` to this subscription as if a publisher had sent it (``hetros topic pub``):
-        a take function in front of the reader's, swapped in only while injected messages wait."""
+        a take function in front of the reader's, swapped in only while injected messages wait. The
+        handled count (``stats.count``) at which this message has been handled."""
         with self._inject_lock:
+            self.injected_handled_at = self.stats.count + len(self._injected) + 1
             self._injected.append(message)
             if self._plain_take is None:
                 self._plain_take, self._take = self._take, self._take_injected
         self._on_wake()
+        return self.injected_handled_at
 
     def _take_injected(self) -> M | None:
         with self._inject_lock:
@@ -364,7 +369,13 @@ class Subscription(Generic[M]):
     def try_take(self) -> M | None:
         """The next message, or None when the FIFO is empty (never blocks)."""
         message: M | None = self._take()
+        if message is not None:
+            self._polled_one = True
         return message
+
+    def received(self) -> bool:
+        """Whether this subscription has delivered a message to its node, however the node takes them."""
+        return self._polled_one or self.stats.count > 0 or self.node.taken_by is self
 
     def take(self, timeout: float | None = None) -> M:
         """Block for the next message; raise TakeTimeoutError, or ShutdownError on shutdown."""

@@ -27,7 +27,7 @@ from ._ros_main import ros_main, runs_as_ros_main
 log = get_logger("hetros.launch")
 
 FailureReport = Callable[[str, str, bool], None]
-DoneReport = Callable[[str], None]
+DoneReport = Callable[[str, list[str]], None]  # node, what it never heard (Node.unheard)
 
 
 def resolve(run: str, root: str, args: tuple[str, ...] = ()) -> Callable[..., Any]:
@@ -179,7 +179,7 @@ class NodeThread:
                                     f"above):\n{node.thread_failure}")
                 finished = True
                 if not self.graph.stop.is_set():
-                    self.on_done(self.spec.name)
+                    self.on_done(self.spec.name, node.unheard())
                 return
             except ShutdownError as exc:
                 if self.graph.stop.is_set():
@@ -218,7 +218,7 @@ class Host:
     def __init__(self, plan: Plan, process: str, session: str, on_failure: FailureReport,
                  stop: threading.Event | None = None,
                  on_all_exited: Callable[[], None] = lambda: None,
-                 on_done: DoneReport = lambda node: None,
+                 on_done: DoneReport = lambda node, unheard: None,
                  on_preparing: Callable[[str, float | None], None] = lambda node, seconds: None) -> None:
         """``on_preparing(node, None)`` before a node's start-up work (a simulator's compilation) and
         ``on_preparing(node, seconds)`` after it: the launcher does not count it against its start-up limit."""

@@ -492,6 +492,14 @@ class Node:
         """The node's publishers, subscriptions, services, clients and actions, as created."""
         return list(self._closables)
 
+    def unheard(self) -> list[str]:
+        """The topics a node that subscribed and never received a message waited on (empty when it
+        received one, or subscribed to nothing): a required consumer that ends so has seen no input."""
+        subscriptions = [e for e in self._closables if hasattr(e, "received") and hasattr(e, "topic")]
+        if any(s.received() for s in subscriptions):
+            return []
+        return sorted({s.topic for s in subscriptions})
+
     def period_began(self) -> None:
         """A rate loop woke for its next period (``rate``, rclpy's and rospy's ``Rate.sleep``): until the
         next take, what the node publishes is the period's doing, not the last message's."""

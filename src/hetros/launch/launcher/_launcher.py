@@ -186,7 +186,8 @@ class Launcher:
         if local_nodes:
             self.host = Host(self.plan, LAUNCHER, self.session, self._local_failure, self.stop,
                              lambda: self.events.put({"event": "local_done"}),
-                             lambda node: self.events.put({"event": "node_done", "node": node}))
+                             lambda node, unheard: self.events.put({"event": "node_done", "node": node,
+                                                                    "unheard": unheard}))
             self.control = ControlServer(self.host, session_folder(self.session), LAUNCHER)
         waiting = set(self.children)
         # --duration bounds the whole launch, start-up included (a target may wait on a ROS master); the start-up
@@ -374,8 +375,7 @@ class Launcher:
             elif kind == "local_done":
                 running.discard(LAUNCHER)
             elif kind == "node_done" and self.plan.nodes[event["node"]].required:
-                log.info("required node %s finished; shutting the graph down", event["node"])
-                return LaunchResult(1 if self.failures else 0, self.failures, f"required node {event['node']} finished")
+                return self._required_done(event["node"], event.get("unheard") or [])
             elif kind == "stopped" and event.get("failed"):
                 self.failures.extend(event["failed"])
             elif kind in ("host_lost", "host_back", "host_state", "host_leaving"):
@@ -384,6 +384,19 @@ class Launcher:
                     self.failures.extend(outcome.failures)
                     return outcome
         return LaunchResult(1 if self.failures else 0, self.failures, "all nodes finished")
+
+    def _required_done(self, node: str, unheard: list[str]) -> LaunchResult:
+        """A required node returned: the launch ends, and fails when that node consumed topics and
+        never received a message on any of them (its input never came: a result made of nothing)."""
+        if not unheard:
+            log.info("required node %s finished; shutting the graph down", node)
+            return LaunchResult(1 if self.failures else 0, self.failures, f"required node {node} finished")
+        why = (f"required node {node} finished without receiving a message on {', '.join(unheard)}: "
+               "nothing reached it (check the topics' publishers with `hetros topic info -v`)")
+        sys.stderr.write(f"[ERROR] [launch]: {why}\n")
+        sys.stderr.flush()
+        self.failures.append(node)
+        return LaunchResult(1, self.failures, why)
 
     # -- stop ------------------------------------------------------------------------------
 

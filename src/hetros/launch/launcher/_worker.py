@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
         host = Host(plan, args.target, args.session,
                     lambda node, tb, restarting: report("node_failed", node=node, traceback=tb,
                                                         restarting=restarting), stop, stop.set,
-                    lambda node: report("node_done", node=node),
+                    lambda node, unheard: report("node_done", node=node, unheard=unheard),
                     lambda node, seconds: report("preparing", node=node) if seconds is None else
                     report("prepared", node=node, seconds=seconds))
     except Exception as exc:

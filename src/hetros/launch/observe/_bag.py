@@ -216,7 +216,23 @@ def play(launch: RunningLaunch, path: Path, *, rate: float = 1.0, loop: bool = F
                     reached = launch.publish_bytes(topic, bytes(data), wait=wait)
                 counts[topic] += 1
             if not loop:
+                _settle(launch, counts)
                 return counts
+
+
+# how long the end of a recording waits for its consumers to handle what was played to them
+SETTLE_SECONDS = 15.0
+
+
+def _settle(launch: RunningLaunch, counts: dict[str, int]) -> None:
+    """Return once every consumer has handled what was played to it, so that a launch stopped at the end of
+    the recording (``play --launch``) does not stop a listener with the last messages untaken. A consumer
+    that does not finish within SETTLE_SECONDS is named, not waited for: the recording was played."""
+    for topic in counts:
+        try:
+            launch.settle(topic, SETTLE_SECONDS)
+        except InspectError as exc:
+            print(f"[play] warning: {exc}", file=sys.stderr)
 
 
 # rosbag2's "infinite" duration in a QoS override file: {sec: 2147483647, nsec: 4294967295}

@@ -280,18 +280,27 @@ class ControlServer:
             raise InspectError(f"{topic} carries {', '.join(wrong)}, not {typename}: publish a message of its type")
         wait = _number(request, "wait", 0.0, 0.0, 3600.0)
         message = self._codec(typename).decode(memoryview(payload))
-        handled = [subscription.stats.count for subscription in reached]
-        for subscription in reached:
-            subscription.inject(message)
+        owed = [subscription.inject(message) for subscription in reached]
         if wait:
-            deadline = time.monotonic() + wait
-            while any(s.stats.count <= before and s.node.graph is self.graph and s.node.name in self.graph.nodes
-                      for s, before in zip(reached, handled, strict=True)):
-                if time.monotonic() > deadline:
-                    busy = [s.node.name for s, before in zip(reached, handled, strict=True) if s.stats.count <= before]
-                    raise InspectError(f"{', '.join(busy)} did not finish a message of {topic} within {wait:g} s")
-                time.sleep(0.0002)
+            self._await_handled(topic, reached, owed, wait)
         send_frame(connection, {"ok": True, "subscriptions": [s.node.name for s in reached]})
+
+    def _op_settle(self, connection: socket.socket, request: dict[str, Any], payload: bytes) -> None:
+        """Answer once the subscriptions of a topic here have handled every message published into them."""
+        topic = _text(request, "topic")
+        reached = self._subscriptions(topic)
+        self._await_handled(topic, reached, [s.injected_handled_at for s in reached],
+                            _number(request, "wait", 10.0, 0.0, 3600.0))
+        send_frame(connection, {"ok": True})
+
+    def _await_handled(self, topic: str, reached: list[Any], owed: list[int], wait: float) -> None:
+        """Wait until each subscription's handled count reaches what it owes (a node that left is owed nothing)."""
+        deadline = time.monotonic() + wait
+        while busy := [s.node.name for s, due in zip(reached, owed, strict=True)
+                       if s.stats.count < due and s.node.graph is self.graph and s.node.name in self.graph.nodes]:
+            if time.monotonic() > deadline:
+                raise InspectError(f"{', '.join(busy)} did not finish the messages of {topic} within {wait:g} s")
+            time.sleep(0.0002)
 
     def _service(self, name: str) -> tuple[Node, ServiceType, Callable[[Any], Any], bool]:
         """(node, type, handler, whether it runs in the node's executor) of the server of ``name`` here: a

@@ -236,6 +236,12 @@ class RunningLaunch:
             reached += answer["subscriptions"]
         return reached
 
+    def settle(self, topic: str, seconds: float) -> None:
+        """Wait until every subscription of ``topic`` has handled the messages published into it from here."""
+        channel = self.plan.channels[topic]
+        for process in sorted({self.plan.process_of(n) for n in channel.subscribers if self.plan.runs_here(n)}):
+            self.ask(process, {"op": "settle", "topic": topic, "wait": seconds}, timeout=seconds + 15.0)
+
     def server_of(self, service: str) -> tuple[str, str]:
         """(node, service type) of the node serving ``service``."""
         for name, node in self.plan.nodes.items():

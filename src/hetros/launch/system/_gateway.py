@@ -47,9 +47,6 @@ from ...transport.tcpros import Ros1Peer, Ros1Type, receive_frames
 
 log = get_logger("hetros.cosim")
 
-# cycles an input may hold a waiting message without its hardware taking a beat before the gateway names the
-# node (0.1 s at 100 MHz: a node streams its input; one that never raises TREADY stops its publishers)
-_STUCK_CYCLES = 10_000_000
 # seconds between looks at an output whose subscriber was full (taking does not wake the gateway)
 _HELD_POLL = 0.002
 # messages a gateway keeps queued at an input port: enough that the hardware never waits for Python
@@ -92,6 +89,9 @@ class _Input:
             (name, check) for name in port.readers
             if (check := getattr((components or {}).get(name), "check_message", None)) is not None]
         self.refused = 0
+        channel = node.graph.plan.channels.get(port.topic) if node.graph.plan is not None else None
+        # a reliable topic loses no message without stopping: a refusal there is the launch's end, with the cause
+        self.reliable = channel is not None and channel.qos.reliability == "reliable"
         # who asked, in the order their requests went into the hardware (a hardware server answers in order)
         self.asked: deque[tuple[int, str]] = deque()
         self.copied_bytes = 0  # what the CPU copied: each message's body, into the simulator
@@ -130,6 +130,11 @@ class _Input:
             try:
                 check(self.port.topic, item)
             except HardwareError as exc:
+                if self.reliable:
+                    raise HardwareError(f"hardware node {name} on reliable topic {self.port.topic} refused a "
+                                        f"message, which a reliable topic may not lose: {exc} (or make "
+                                        f"{self.port.topic} best_effort to drop such messages with an error line)"
+                                        ) from None
                 self.refused += 1
                 if self.refused <= 10 or self.refused % 100 == 0:
                     log.error("hardware node %s on %s refused a message (%d so far; it never went in): %s", name,
@@ -446,15 +451,15 @@ class _Completions:
 
 
 class _StuckInputs:
-    """Names a hardware node that holds a waiting message at its input without taking a beat for
-    ``_STUCK_CYCLES``: its publishers then stop with a timeout that blames the gateway's process, and this
-    line says which node, at which port, keeps TREADY low."""
+    """Stops the launch when a hardware node holds a waiting message at its input without taking a beat for
+    ``limit`` cycles (the target's ``stuck_cycles``; 0.1 s at 100 MHz by default: a node streams its input).
+    Before, its publishers stopped a minute later with a timeout that blamed the gateway's process."""
 
-    def __init__(self, top: SimulatedTop, ports: list[GatewayPort]) -> None:
+    def __init__(self, top: SimulatedTop, ports: list[GatewayPort], limit: int, target: str) -> None:
         self.top, self.ports = top, [p for p in ports if not p.memory_node]
+        self.limit, self.target = limit, target
         self.beats = [-1] * len(self.ports)
         self.since = [0] * len(self.ports)
-        self.named: set[int] = set()
 
     def look(self) -> None:
         top = self.top
@@ -462,12 +467,13 @@ class _StuckInputs:
             beats = top.stats(False, port.index)[1]
             if beats != self.beats[slot] or not top.queued(port.index):
                 self.beats[slot], self.since[slot] = beats, top.cycle
-            elif top.cycle - self.since[slot] > _STUCK_CYCLES and slot not in self.named:
-                self.named.add(slot)
+            elif top.cycle - self.since[slot] > self.limit:
                 nodes = ", ".join(port.readers) or "the hardware"
-                log.error("%s: hardware node %s has taken no beat for %d cycles while a message waits (TREADY low "
-                          "at its input): a node that never raises TREADY stops its publishers; check its TREADY "
-                          "logic", port.port.label, nodes, top.cycle - self.since[slot])
+                raise HardwareError(
+                    f"{port.port.label}: hardware node {nodes} has taken no beat for {top.cycle - self.since[slot]} "
+                    f"cycles while a message waits (TREADY low at its input, cycle {top.cycle}): check its TREADY "
+                    f"logic, or raise targets.{self.target}.stuck_cycles ({self.limit}) for a node that may "
+                    "rightly wait that long")
 
 
 def _ros1_peer(node: Node, plan: Plan, target: str) -> Ros1Peer | None:
@@ -524,7 +530,7 @@ def gateway(node: Node) -> None:
     wall = 0.0
     pushed = popped = last_moved = 0
     quiet = idle_cycles
-    stuck = _StuckInputs(top, simulation.inputs)
+    stuck = _StuckInputs(top, simulation.inputs, plan.targets[target].stuck_cycles, target)
     try:
         while not stop.is_set():
             seen = node.executor.generation

@@ -44,7 +44,11 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     # read by path, as the clean-up does: listing through iceoryx2 maps segments a test damaged on purpose
     root = iceoryx_root()
     for static_config in (root / "services").glob(f"{file_prefix()}*.service"):
-        name = re.search(r'^service_name = "(.*)"$', static_config.read_text(errors="replace"), re.MULTILINE)
+        try:
+            text = static_config.read_text(errors="replace")
+        except FileNotFoundError:
+            continue  # another launch of this account (a second suite beside this one) removed its service
+        name = re.search(r'^service_name = "(.*)"$', text, re.MULTILINE)
         if name is not None and _ours(name.group(1)):
             left.append(f"iceoryx2 service {name.group(1)}")
     left += [f"iceoryx2 node {node.name}" for node in recorded_nodes(root) if _ours(node.name)]

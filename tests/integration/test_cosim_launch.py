@@ -22,6 +22,52 @@ pytestmark = [pytest.mark.rtl,
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
+class Waves:
+    """A VCD file's signals by name, each as its (time, value) changes: what GTKWave shows."""
+
+    def __init__(self, timescale: str, changes: dict[str, list[tuple[int, str]]], start: int, end: int) -> None:
+        self.timescale, self.changes, self.start, self.end = timescale, changes, start, end
+
+    def values(self, name: str) -> list[tuple[int, str]]:
+        found = [changes for full, changes in self.changes.items() if full.split(".")[-1] == name]
+        assert found, f"no signal {name} among {sorted(self.changes)[:40]}"
+        return found[0]
+
+
+def read_vcd(path: Path) -> Waves:
+    """Enough of IEEE 1364's VCD to check a waveform: scopes, variables, timestamps and value changes."""
+    codes: dict[str, list[str]] = {}
+    changes: dict[str, list[tuple[int, str]]] = {}
+    scope: list[str] = []
+    timescale, now, start = "", -1, -1
+    tokens = iter(path.read_text().split())
+    for token in tokens:
+        if token == "$timescale":
+            timescale = "".join(iter(lambda: next(tokens), "$end"))
+        elif token == "$scope":
+            scope.append([next(tokens), next(tokens)][1])
+            next(tokens)
+        elif token == "$upscope":
+            scope.pop()
+            next(tokens)
+        elif token == "$var":
+            _kind, _width, code, name, *_rest = iter(lambda: next(tokens), "$end")
+            codes.setdefault(code, []).append(".".join([*scope, name]))
+        elif token.startswith("#"):
+            now = int(token[1:])
+            start = now if start < 0 else start
+        elif token[0] in "01xzXZ" and len(token) > 1:
+            for name in codes.get(token[1:], []):
+                changes.setdefault(name, []).append((now, token[0]))
+        elif token[0] in "bB":
+            code = next(tokens)
+            for name in codes.get(code, []):
+                changes.setdefault(name, []).append((now, token[1:]))
+    for name in (n for names in codes.values() for n in names):
+        changes.setdefault(name, [])
+    return Waves(timescale, changes, start, now)
+
+
 def launch(project: Path, cwd: Path, *extra: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "hetros", "launch", str(project), "--duration", "120", *extra],
                           capture_output=True, text=True, timeout=240, check=False, cwd=cwd)
@@ -103,9 +149,13 @@ def test_amaranths_simulator_serves_a_launch_too(tmp_path: Path) -> None:
     text = (EXAMPLES / "add_two_ints" / "project_fpga.yaml").read_text()
     project.write_text(text.replace("part: xczu7ev-ffvc1156-2-e}", "part: xczu7ev-ffvc1156-2-e, sim: amaranth}"))
     shutil.copy(EXAMPLES / "add_two_ints" / "nodes.py", tmp_path / "nodes.py")
-    result = launch(project, tmp_path)
+    result = launch(project, tmp_path, "--trace", "waves")
     assert result.returncode == 0, result.stderr
     assert "fpga target fpga in amaranth" in result.stderr
+    assert re.search(r"fpga target fpga: waveform: \S+/waves/fpga.vcd \(cycles 0 to \d+\)", result.stderr), \
+        result.stderr
+    clock = read_vcd(tmp_path / "waves" / "fpga.vcd").values("clk")
+    assert len(clock) > 10, "Amaranth's writer traced the run"
     assert re.findall(r"Result of add_two_ints: (.*)", result.stderr) == [f"{i} + {10 * i} = {11 * i}"
                                                                           for i in range(5)]
 
@@ -202,6 +252,15 @@ def test_a_reliable_topic_through_a_gateway_loses_nothing_under_back_pressure(tm
     result = launch(_echo_project(tmp_path, sink=", pause: 0.003"), tmp_path)
     assert result.returncode == 0, result.stderr
     assert "300 messages through the hardware, in order and intact" in result.stderr
+    # the hardware's time is the hardware's: cycles a full subscriber held the output back are counted apart,
+    # and every port reports the cycles per message of the same run with a subscriber that keeps up
+    assert re.search(r"cycles simulated .*; \d+ of them with an output held back by a full software subscriber",
+                     result.stderr), result.stderr
+    fast = launch(_echo_project(tmp_path), tmp_path)
+    assert fast.returncode == 0, fast.stderr
+    per_port = [re.findall(r"(gateway of fpga, .*?): 300 messages, \d+ beats, (\d+) cycles per message", run.stderr)
+                for run in (result, fast)]
+    assert len(per_port[0]) == 2 and per_port[0] == per_port[1], per_port
 
 
 def test_keep_last_across_a_gateway_drops_the_oldest_and_delivers_the_newest(tmp_path: Path) -> None:
@@ -336,6 +395,64 @@ def test_a_full_subscriber_holds_back_only_its_own_port(tmp_path: Path, mapping:
     assert "30 pairs through two ports of one target" in result.stderr
 
 
+SLOW_DISPLAY = '''
+import time
+
+import numpy as np
+
+from hetros import Node
+from hetros.interfaces.sensor_msgs.msg import Image
+
+
+def camera(node: Node) -> None:
+    """As fast as the graph takes them: frames queue in front of the hardware."""
+    pub = node.create_publisher(Image, "/image_raw")
+    for seq in range(12):
+        pixels = ((np.arange(48 * 64) * (seq + 3)) % 251).astype(np.uint8)
+        pub.publish(Image(height=48, width=64, encoding="mono8", step=64, data=pixels))
+
+
+def sobel(node: Node) -> None:
+    """The software mapping's filter (unused: the fpga mapping runs the hardware)."""
+
+
+def display(node: Node) -> None:
+    edges = node.create_subscription(Image, "/image_edges")
+    for _ in range(12):
+        edges.take(timeout=60)
+        time.sleep(node.get_parameter("pause"))
+    node.log.info("12 frames shown")
+'''
+
+
+def test_hardware_cycles_are_the_same_behind_a_slow_subscriber(tmp_path: Path) -> None:
+    """A display that keeps the Sobel's output full holds the filter back mid-frame, its input with it: the
+    cycles it waits on software are reported apart, and each port's hardware cycles are those of a run whose
+    display keeps up (they were 200,000 cycles a message where 400 were the hardware's). Within 5 %: when the
+    frames reach the filter changes how the end of one overlaps the start of the next, by a few cycles."""
+    (tmp_path / "nodes.py").write_text(SLOW_DISPLAY)
+    project = (EXAMPLES / "sobel_hw" / "project_fpga.yaml").read_text()
+    project = project.replace("parameters: {frames: 8, height: 48, width: 64},", "")
+    project = project.replace("/image_edges: {depth: 4}", "/image_edges: {depth: 1}")
+    runs = {}
+    for pause in (0.0, 0.05):
+        (tmp_path / "project.yaml").write_text(project.replace(
+            "parameters: {frames: 8, height: 48, width: 64, out: out/sobel_hw},", f"parameters: {{pause: {pause}}},"))
+        result = launch(tmp_path / "project.yaml", tmp_path)
+        assert result.returncode == 0 and "12 frames shown" in result.stderr, result.stderr
+        runs[pause] = result.stderr
+    waited = re.findall(r"software -> sobel on /image_raw .*: 12 messages, \d+ beats, (\d+) cycles per message .*; "
+                        r"besides, (\d+) cycles per message waiting on software", runs[0.05])
+    assert waited, runs[0.05]
+    per_port = [dict(re.findall(r"(gateway of fpga, .*?): 12 messages, \d+ beats, (\d+) cycles per message", text))
+                for text in runs.values()]
+    assert len(per_port[0]) == 2 and per_port[0].keys() == per_port[1].keys(), per_port
+    for port, cycles in per_port[0].items():
+        assert abs(int(per_port[1][port]) - int(cycles)) <= 0.05 * int(cycles), per_port
+    hardware, software = map(int, waited[0])
+    assert software > hardware, "the display held the filter back for longer than it took to filter a frame"
+
+
 # three ways a Verilog node breaks AXI4-Stream that a fast subscriber never shows: only a harness that
 # stalls its ports, as a verification team's does, catches them (hetros launch --hw-stalls SEED)
 _BROKEN = {
@@ -388,10 +505,25 @@ def test_a_verilog_node_that_ignores_tready_is_caught_at_its_gateway_port(tmp_pa
 def test_random_stalls_catch_a_broken_node_behind_a_fast_subscriber(tmp_path: Path, fault: str) -> None:
     body, rule = _BROKEN[fault]
     project = _verilog_echo(tmp_path, body)
-    result = launch(project, tmp_path, "--hw-stalls", "7")
+    result = launch(project, tmp_path, "--hw-stalls", "7", "--trace", "waves", "--trace-ports")
     assert result.returncode != 0, f"a node that {fault} passed under stalls:\n{result.stderr}"
-    assert re.search(rf"hardware node echo port 'b' \(/b\): .*({rule}).* before TREADY at cycle \d+", result.stderr), \
-        result.stderr
+    found = re.search(rf"hardware node echo port 'b' \(/b\): .*({rule}).* before TREADY at cycle (\d+); waveform: "
+                      rf"(\S+) \(cycles \d+ to (\d+)\)", result.stderr)
+    assert found, result.stderr
+    cycle, path, last = int(found.group(2)), Path(found.group(3)), int(found.group(4))
+    assert cycle == last, "the waveform ends at the violation"
+    waves = read_vcd(path)
+    assert {name.count(".") for name in waves.changes} == {1}, "--trace-ports: the top module's ports only"
+    if fault == "changes TDATA while stalled":
+        # what GTKWave shows at the violation: the node's output offered, not taken, and its data changing
+        at = {name: dict(waves.values(f"m_axis_b_hetros_gateway_fpga_{name}")) for name in ("tvalid", "tready")}
+        data = waves.values("m_axis_b_hetros_gateway_fpga_tdata")
+        before = [value for time, value in data if time <= (cycle - 1) * 10_000][-1]
+        after = [value for time, value in data if time <= cycle * 10_000][-1]
+        assert before != after, "TDATA changed at the cycle named"
+        state = {name: [v for t, v in sorted(changes.items()) if t <= (cycle - 1) * 10_000 + 5_000][-1]
+                 for name, changes in at.items()}
+        assert state == {"tvalid": "1", "tready": "0"}, "offered and stalled the cycle before"
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -443,14 +575,28 @@ def test_a_node_that_never_takes_its_input_stops_the_launch_at_its_bound(tmp_pat
     always @(posedge ap_clk) b_TVALID <= 1'b0;
 """)
     project.write_text(project.read_text().replace("data_width: 64", "data_width: 64, stuck_cycles: 200000"))
-    result = launch(project, tmp_path)
+    result = launch(project, tmp_path, "--trace", "waves", "--trace-window", "30000")
     assert result.returncode == 1, result.stderr
-    found = re.search(r"software -> echo on /a .*: hardware node echo has taken no beat for (\d+) cycles while a "
-                      r"message waits \(TREADY low at its input, cycle \d+\): check its TREADY logic, or raise "
-                      r"targets.fpga.stuck_cycles \(200000\)", result.stderr)
+    found = re.search(r"software -> echo on /a \(port (\w+)\): hardware node echo has taken no beat for (\d+) cycles "
+                      r"while a message waits \(TREADY low at its input, cycle (\d+)\): check its TREADY logic, or "
+                      r"raise targets.fpga.stuck_cycles \(200000\) for a node that may rightly wait that long; "
+                      r"waveform: (\S+) \(cycles (\d+) to (\d+)\)", result.stderr)
     assert found, result.stderr
-    assert 200_000 < int(found.group(1)) < 10_000_000, "the project's bound, not the default"
+    prefix, waited, stopped, path, first, last = found.groups()
+    assert 200_000 < int(waited) < 10_000_000, "the project's bound, not the default"
     assert "PublishTimeoutError" not in result.stderr, "the hardware's cause, not a publisher's timeout"
+    # the waveform holds the window's last cycles up to the stop, the input offered and never taken
+    assert Path(path) == tmp_path / "waves" / "fpga.vcd" and int(last) == int(stopped)
+    assert 30_000 <= int(last) - int(first) <= 60_000
+    waves = read_vcd(Path(path))
+    assert waves.timescale == "1ps"
+    valid, ready = (waves.values(f"{prefix}_{s}") for s in ("tvalid", "tready"))
+    clock = waves.values("clk")
+    assert {value for _, value in ready} == {"0"}, "TREADY never rose"
+    assert valid[-1][1] == "1", "a message waits at the input"
+    assert waves.end // 10_000 == int(last) and waves.start // 10_000 == int(first), "10 ns a cycle at 100 MHz"
+    assert len(clock) > 2 * 30_000, "the clock toggles every half period"
+    assert not list((tmp_path / "waves").glob("*.part*")), "the two parts were stitched into one file"
 
 
 SIZES = '''

@@ -23,6 +23,7 @@ import yaml
 from .._errors import CheckError, Error, HardwareError, ProjectError
 from .._files import printable
 from .._signals import interruptible
+from ..hw.sim._verilator import DEFAULT_TRACE_WINDOW as TRACE_WINDOW
 from ..msg import registry
 from ..msg import wanted as compiled_wanted
 from ..plan import Plan
@@ -305,6 +306,11 @@ def cmd_launch(args: argparse.Namespace) -> int:
 
         os.environ[STALLS_VARIABLE] = args.hw_stalls  # the workers inherit it
         stall_setting()  # refused here, by name, before anything starts
+    if args.trace is not None:
+        from ..hw import TRACE_VARIABLE, TraceSetting
+
+        os.environ[TRACE_VARIABLE] = TraceSetting(Path(args.trace).resolve(), args.trace_window,
+                                                  args.trace_ports).environment()
     result = launch(plan, duration=args.duration, host=args.as_host,
                     record=Path(args.record) if args.record else None, start_timeout=args.start_timeout)
     if result.exit_code:
@@ -556,6 +562,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hw-stalls", metavar="SEED[:PERCENT]",
                    help="co-simulated fpga targets: every gateway port stalls on PERCENT %% of cycles (default 25), "
                         "drawn from SEED, and the AXI4-Stream checker on each port stops the launch on a violation")
+    p.add_argument("--trace", metavar="FOLDER",
+                   help="co-simulated fpga targets: write each target's waveform to FOLDER/<target>.vcd (GTKWave, "
+                        "Surfer), the last --trace-window cycles before the end or the error that stopped it")
+    p.add_argument("--trace-window", metavar="CYCLES", type=positive_count, default=TRACE_WINDOW,
+                   help="--trace keeps at least this many of the last cycles, at most twice as many "
+                        "(default %(default)s)")
+    p.add_argument("--trace-ports", action="store_true",
+                   help="--trace only the top module's ports (the gateway's streams), not every signal inside")
     p.set_defaults(func=cmd_launch)
     from ._advise import add_parser as add_advise
 

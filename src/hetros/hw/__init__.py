@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     )
     from .sim._rtl import topic_verilog
     from .sim._sim import simulate
-    from .sim._verilator import IDLE, STALLS_VARIABLE, VerilatedTop, stall_setting
+    from .sim._verilator import IDLE, STALLS_VARIABLE, TRACE_VARIABLE, TraceSetting, VerilatedTop, stall_setting
     from .top._build import hardware_topics, top_name
     from .top._clock import TargetClock, target_clock
 
@@ -55,8 +55,10 @@ _LAZY = {
     "SimulatedTop": ".sim._cosim",
     "TABLE_I_PAPER_MS": ".sim._report",
     "TABLE_I_SIZES": ".sim._report",
+    "TRACE_VARIABLE": ".sim._verilator",
     "TargetClock": ".top._clock",
     "TargetSimulation": ".sim._cosim",
+    "TraceSetting": ".sim._verilator",
     "VerilatedTop": ".sim._verilator",
     "available": ".flow._bitstream",
     "bitstreams": ".flow._bitstream",
@@ -94,6 +96,7 @@ __all__ = [
     "STALLS_VARIABLE",
     "TABLE_I_PAPER_MS",
     "TABLE_I_SIZES",
+    "TRACE_VARIABLE",
     "BeatCodec",
     "Beats",
     "GatewayPort",
@@ -101,6 +104,7 @@ __all__ = [
     "SimulatedTop",
     "TargetClock",
     "TargetSimulation",
+    "TraceSetting",
     "VerilatedTop",
     "amaranth_layout",
     "available",

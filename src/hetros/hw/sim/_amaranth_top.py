@@ -11,14 +11,17 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from amaranth import ClockDomain, Module
 
 from ..._errors import HardwareError
-from ._verilator import BEAT, IDLE, INPUT_DRY, OUTPUT_ENDED, VIOLATION, StreamPort
+from ._verilator import BEAT, IDLE, INPUT_DRY, OUTPUT_ENDED, VIOLATION, StreamPort, TraceSetting
 
 _PERIOD = 1e-8
+# quiet cycles with an output held back by software after which a run returns (as the Verilator harness's)
+HELD_QUIET = 256
 
 
 @dataclass
@@ -29,6 +32,7 @@ class _Port:
     beats: int = 0
     busy: int = 0
     started: int = 0
+    waited: int = 0  # of the busy cycles, those a full software subscriber held an output back
 
 
 @dataclass
@@ -68,6 +72,11 @@ class AmaranthTop:
         self._simulator.add_clock(_PERIOD)
         self._simulator.add_testbench(self._bench)
         self._closed = False
+        self._waited = 0  # cycles any output was held back by software
+        self._held = False  # the last cycle, an output was
+        self._trace: Any = None  # Amaranth's waveform writer, entered by ``trace``
+        self._trace_path = Path()
+        self._trace_note = ""
 
     async def _bench(self, ctx: Any) -> None:
         per_beat = self._per_beat
@@ -83,8 +92,14 @@ class AmaranthTop:
                     ctx.set(signals["tvalid"], 1)
                 else:
                     ctx.set(signals["tvalid"], 0)
+            held = False
             for port, sink in zip(self.outputs, self._out, strict=True):
-                ctx.set(self._top.ports[port.prefix]["tready"], int(len(sink.done) < sink.limit))
+                full = len(sink.done) >= sink.limit
+                held |= full
+                sink.waited += full and bool(sink.current)
+                ctx.set(self._top.ports[port.prefix]["tready"], int(not full))
+            self._waited += held
+            self._held = held
             fired = [bool(ctx.get(self._top.ports[p.prefix]["tvalid"]) and ctx.get(self._top.ports[p.prefix]["tready"]))
                      for p in self.inputs]
             what = 0
@@ -100,6 +115,8 @@ class AmaranthTop:
             for state, took in zip(self._in, fired, strict=True):
                 if took:
                     what |= self._taken(state)
+                elif held and state.offset > 0:
+                    state.waited += 1
             self._cycle += 1
             self._events |= what
 
@@ -195,27 +212,54 @@ class AmaranthTop:
 
     def stats(self, output: bool, port: int) -> tuple[int, int, int]:
         state: _Port = self._out[port] if output else self._in[port]
-        return state.messages, state.beats, state.busy
+        return state.messages, state.beats, state.busy - state.waited
+
+    def waited(self, output: bool | None = None, port: int = 0) -> int:
+        if output is None:
+            return self._waited
+        return (self._out[port] if output else self._in[port]).waited
 
     def run(self, max_cycles: int, idle: int) -> int:
         """Run cycle by cycle until something needs Python, ``idle`` quiet cycles, or ``max_cycles``."""
-        seen, quiet = 0, 0
+        seen, quiet, still = 0, 0, 0
         for _ in range(max_cycles):
             self._events = 0
             self._simulator.run_until((self._cycle + 1) * _PERIOD)
             what = self._events
             seen |= what
             if what & VIOLATION:
-                raise HardwareError(self._error)
+                note = self.finish_trace()
+                raise HardwareError(f"{self._error}; {note}" if note else self._error)
             if what & (OUTPUT_ENDED | INPUT_DRY):
                 return seen
             if what & BEAT:
-                quiet = 0
+                quiet = still = 0
                 continue
+            still += 1
+            if self._held and still >= HELD_QUIET:
+                return seen | IDLE
             quiet += 1
             if not any(state.queue for state in self._in) and quiet >= idle:
                 return seen | IDLE
         return seen
 
+    def trace(self, base: Path, setting: TraceSetting, clock_mhz: float) -> None:
+        """Write the waveform of the whole run to ``base.vcd`` (Amaranth's writer keeps no window: the designs
+        its simulator suits are small, and its runs short)."""
+        del setting, clock_mhz
+        base.parent.mkdir(parents=True, exist_ok=True)
+        self._trace_path = base.with_name(base.name + ".vcd")
+        self._trace = self._simulator.write_vcd(str(self._trace_path))
+        self._trace.__enter__()
+
+    def finish_trace(self) -> str:
+        """Close the waveform: where it is and which cycles it holds ("" when nothing was traced)."""
+        if self._trace is not None:
+            self._trace.__exit__(None, None, None)
+            self._trace = None
+            self._trace_note = f"waveform: {self._trace_path} (cycles 0 to {self._cycle - 1})"
+        return self._trace_note
+
     def close(self) -> None:
+        self.finish_trace()
         self._closed = True

@@ -18,7 +18,7 @@ from ..designs._verilog_node import verilog_sources
 from ..top._build import TCPROS, FpgaTop, framing_programs, hardware_nodes, hardware_topics, top_name
 from ..top._clock import design_key, target_clock
 from ._amaranth_top import AmaranthTop
-from ._verilator import MemoryPort, StreamPort, VerilatedTop, compile_simulator
+from ._verilator import MemoryPort, StreamPort, VerilatedTop, compile_simulator, trace_setting
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,7 @@ class TargetSimulation:
         self.clock = target_clock(plan, target, key if only is None else None)
         self.clock_mhz = self.clock.mhz
         self.top: SimulatedTop
+        tracing = trace_setting()
         if spec.sim == "amaranth":
             if sources:
                 raise HardwareError(f"fpga target {target}: sim: amaranth cannot run Verilog nodes "
@@ -104,8 +105,10 @@ class TargetSimulation:
             text = verilog.convert(top, name=name, ports=top.signals())
             clocked = re.search(r"\binput\s+clk\b", text) is not None
             library = compile_simulator(text, name, ports, spec.data_width, clocked, key, top.monitored, sources,
-                                        memories=self.memories)
+                                        memories=self.memories, traced=tracing is not None)
             self.top = VerilatedTop(library, ports)
+        if tracing is not None:
+            self.top.trace(tracing.folder / target, tracing, self.clock_mhz)
         self.compile_seconds = time.perf_counter() - started
 
     def close(self) -> None:

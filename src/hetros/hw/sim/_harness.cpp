@@ -13,13 +13,15 @@ template <class T> static inline void get(const T& src, uint8_t* dst, int n) {
 template <std::size_t W> static inline void get(const VlWide<W>& src, uint8_t* dst, int n) {
   std::memcpy(dst, src.data(), n); }
 
+// per port: messages, beats, busy cycles (a message's first beat to its last) and, of those, the cycles it waited on
+// software (an output's subscriber full held TREADY low, here or downstream): busy - waited is hardware time
 struct InPort {
   std::deque<std::vector<uint8_t>> queue; size_t offset = 0;
-  uint64_t messages = 0, beats = 0, busy = 0, started = 0;
+  uint64_t messages = 0, beats = 0, busy = 0, started = 0, waited = 0;
 };
 struct OutPort {
   std::vector<uint8_t> current; std::deque<std::vector<uint8_t>> done; size_t limit = 4;
-  uint64_t messages = 0, beats = 0, busy = 0, started = 0;
+  uint64_t messages = 0, beats = 0, busy = 0, started = 0, waited = 0;
   bool held = false; uint8_t held_data[PER_BEAT]; uint8_t held_keep[KEEP_BYTES]; int held_last = 0;
 };
 // an AXI4 slave over a simulated physical address space: each window Python allowed is a message's array,
@@ -31,16 +33,45 @@ struct MemPort {
   std::string bad; uint64_t reads = 0, writes = 0;
 };
 static const int READ_LATENCY = 8;
+#ifdef TRACE
+// --trace: the last cycles as a waveform, written to two files in turn (`window` cycles each) that Python stitches
+// together at the end: a run of millions of cycles keeps a bounded file that ends where the run (or the error) did
+struct Trace {
+  VerilatedVcdC* vcd = nullptr; std::string base; int depth = 99, part = 0;
+  uint64_t window = 0, period = 0, began = 0, began_before = 0;
+};
+#endif
 struct Sim {
   VerilatedContext* context; TOP* top;
   InPort in[N_IN > 0 ? N_IN : 1]; OutPort out[N_OUT > 0 ? N_OUT : 1];
   MemPort mem[N_MEM > 0 ? N_MEM : 1]; std::vector<Window> windows;
-  uint64_t cycle = 0; std::string error;
+  uint64_t cycle = 0, waited = 0; std::string error;  // waited: cycles an output's software subscriber was full
+  bool held = false;  // this cycle, an output's software subscriber was full
   // seeded random stalls, as a verification harness drives a design: out of 256 cycles, how many an input's
   // TVALID rests between beats and an output's TREADY is low (0: none)
   uint64_t rng = 0; unsigned in_gap = 0, out_gap = 0;
   bool offered[N_IN > 0 ? N_IN : 1] = {};  // an input showed TVALID and was not taken: it must stay up
+#ifdef TRACE
+  Trace trace;
+#endif
 };
+
+#ifdef TRACE
+static void trace_open(Sim* s) {
+  Trace& t = s->trace; t.began_before = t.began; t.began = s->cycle;
+  t.vcd->open((t.base + ".part" + std::to_string(t.part) + ".vcd").c_str());
+}
+// the waveform's time in picoseconds: half a clock period apart, so the clock shows as it toggles
+#define TRACE_AT(s, half) do { if ((s)->trace.vcd) \
+  (s)->trace.vcd->dump((s)->cycle * (s)->trace.period + (half) * ((s)->trace.period / 2)); } while (0)
+static void trace_turn(Sim* s) {
+  Trace& t = s->trace;
+  if (t.vcd && s->cycle - t.began >= t.window) { t.vcd->close(); t.part ^= 1; trace_open(s); }
+}
+#else
+#define TRACE_AT(s, half) do { (void)(s); } while (0)
+static void trace_turn(Sim*) {}
+#endif
 
 // xorshift64*: the same stalls for the same seed, on every machine
 static unsigned coin(Sim* s) {
@@ -119,18 +150,56 @@ static void edge(Sim* s);
 // one cycle; the bits: 1 a beat moved, 2 an output message ended, 4 an input queue ran dry, 8 a violation
 static int cycle(Sim* s) {
   bool fired[N_IN > 0 ? N_IN : 1];
-  drive(s); s->top->eval();
+  trace_turn(s);
+  bool held = false;  // software holds an output back this cycle (the gateway's queue for its subscriber is full)
+  for (int j = 0; j < N_OUT; ++j) {
+    OutPort& p = s->out[j]; bool full = p.done.size() >= p.limit; held |= full;
+    if (full && !p.current.empty()) ++p.waited; }
+  if (held) ++s->waited;
+  s->held = held;
+  drive(s); s->top->eval(); TRACE_AT(s, 0);
   int what = sample(s, fired);
   edge(s);
-  for (int i = 0; i < N_IN; ++i) if (fired[i]) { what |= taken(s, i); s->offered[i] = false; }
+  for (int i = 0; i < N_IN; ++i) {
+    if (fired[i]) { what |= taken(s, i); s->offered[i] = false; }
+    else if (held && s->in[i].offset > 0) ++s->in[i].waited;  // a message half in, stalled by a held output
+  }
   ++s->cycle; return what;
 }
 
 extern "C" {
 void* hs_new() {
-  Sim* s = new Sim; s->context = new VerilatedContext; s->top = new TOP{s->context};
+  Sim* s = new Sim; s->context = new VerilatedContext;
+#ifdef TRACE
+  s->context->traceEverOn(true);
+#endif
+  s->top = new TOP{s->context};
   RESET;
   return s;
+}
+// start the waveform (a simulator compiled without TRACE answers 0): files base.part0.vcd and base.part1.vcd,
+// `window` cycles each, `period` picoseconds a cycle, `depth` levels of the design (1: the top's ports only)
+int hs_trace(void* h, const char* base, uint64_t window, uint64_t period, int depth) {
+#ifdef TRACE
+  Sim* s = (Sim*)h; Trace& t = s->trace;
+  if (t.vcd) return 1;
+  t.vcd = new VerilatedVcdC; t.base = base; t.window = window ? window : 1; t.period = period ? period : 2;
+  t.depth = depth; if (depth < 99) t.vcd->dumpvars(depth, "TOP");  // as Verilog's $dumpvars(depth, TOP)
+  s->top->trace(t.vcd, 99); trace_open(s); t.began_before = s->cycle;
+  return 1;
+#else
+  (void)h; (void)base; (void)window; (void)period; (void)depth; return 0;
+#endif
+}
+// close the waveform's files: [the part written last, the cycle it began at, the cycle the other part began at]
+void hs_trace_close(void* h, uint64_t* into) {
+#ifdef TRACE
+  Trace& t = ((Sim*)h)->trace;
+  if (t.vcd) { t.vcd->close(); delete t.vcd; t.vcd = nullptr; }
+  into[0] = (uint64_t)t.part; into[1] = t.began; into[2] = t.began_before;
+#else
+  (void)h; into[0] = into[1] = into[2] = 0;
+#endif
 }
 void hs_allow(void* h, uint64_t physical, uint8_t* host, size_t size, int writable) {
   ((Sim*)h)->windows.push_back(Window{physical, physical + size, writable != 0, host}); }
@@ -141,7 +210,12 @@ void hs_mem_stats(void* h, int port, uint64_t* into) {
   Sim* s = (Sim*)h; into[0] = s->mem[port].reads; into[1] = s->mem[port].writes; }
 void hs_stalls(void* h, uint64_t seed, unsigned in_gap, unsigned out_gap) {
   Sim* s = (Sim*)h; s->rng = seed * 0x9E3779B97F4A7C15ull | 1; s->in_gap = in_gap; s->out_gap = out_gap; }
-void hs_free(void* h) { Sim* s = (Sim*)h; s->top->final(); delete s->top; delete s->context; delete s; }
+void hs_free(void* h) {
+  Sim* s = (Sim*)h;
+#ifdef TRACE
+  if (s->trace.vcd) { s->trace.vcd->close(); delete s->trace.vcd; }
+#endif
+  s->top->final(); delete s->top; delete s->context; delete s; }
 void hs_push(void* h, int port, const uint8_t* data, size_t size) {
   ((Sim*)h)->in[port].queue.emplace_back(data, data + size); }
 uint8_t* hs_alloc(void* h, int port, size_t size) {
@@ -162,16 +236,21 @@ uint64_t hs_cycle(void* h) { return ((Sim*)h)->cycle; }
 const char* hs_error(void* h) { return ((Sim*)h)->error.c_str(); }
 void hs_stats(void* h, int output, int port, uint64_t* into) {
   Sim* s = (Sim*)h;
-  if (output) { OutPort& p = s->out[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; }
-  else { InPort& p = s->in[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; }
+  if (output) { OutPort& p = s->out[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; into[3] = p.waited; }
+  else { InPort& p = s->in[port]; into[0] = p.messages; into[1] = p.beats; into[2] = p.busy; into[3] = p.waited; }
 }
-// up to max_cycles; ends early on an event Python must handle, or after idle quiet cycles with no input waiting
+uint64_t hs_waited(void* h) { return ((Sim*)h)->waited; }
+// up to max_cycles; ends early on an event Python must handle, after idle quiet cycles with no input waiting, or
+// after HELD_QUIET quiet cycles with an output held back by software (its subscriber must take before much moves:
+// simulating on would only count cycles of waiting)
+static const uint64_t HELD_QUIET = 256;
 int hs_run(void* h, uint64_t max_cycles, uint64_t idle) {
-  Sim* s = (Sim*)h; int seen = 0; uint64_t quiet = 0;
+  Sim* s = (Sim*)h; int seen = 0; uint64_t quiet = 0, still = 0;
   for (uint64_t n = 0; n < max_cycles; ++n) {
     int what = cycle(s); seen |= what;
     if (what & 14) return seen;
-    if (what & 1) { quiet = 0; continue; }
+    if (what & 1) { quiet = still = 0; continue; }
+    if (s->held && ++still >= HELD_QUIET) return seen | 16;
     bool waiting = false;
     for (int i = 0; i < N_IN; ++i) waiting |= !s->in[i].queue.empty();
     if (!waiting && ++quiet >= idle) return seen | 16;

@@ -459,21 +459,35 @@ class _StuckInputs:
         self.top, self.ports = top, [p for p in ports if not p.memory_node]
         self.limit, self.target = limit, target
         self.beats = [-1] * len(self.ports)
-        self.since = [0] * len(self.ports)
+        # per input, the cycle its last beat moved (or it had nothing waiting), and the target's cycles held back by
+        # software then: a node that waits because a software subscriber is full is not stuck
+        self.since = [(0, 0)] * len(self.ports)
+
+    def _stalled(self, slot: int) -> int:
+        cycle, waited = self.since[slot]
+        return (self.top.cycle - cycle) - (self.top.waited() - waited)
+
+    def cycles_left(self, most: int) -> int:
+        """Cycles the next run may take (up to ``most``) before a waiting input reaches the bound: a slow run
+        (a traced one) must not let publishers time out before the node is named."""
+        waiting = [self.limit + 1 - self._stalled(slot) for slot, port in enumerate(self.ports)
+                   if self.top.queued(port.index)]
+        return max(1, min([most, *waiting]))
 
     def look(self) -> None:
         top = self.top
         for slot, port in enumerate(self.ports):
             beats = top.stats(False, port.index)[1]
             if beats != self.beats[slot] or not top.queued(port.index):
-                self.beats[slot], self.since[slot] = beats, top.cycle
-            elif top.cycle - self.since[slot] > self.limit:
+                self.beats[slot], self.since[slot] = beats, (top.cycle, top.waited())
+            elif (stalled := self._stalled(slot)) > self.limit:
                 nodes = ", ".join(port.readers) or "the hardware"
+                note = top.finish_trace()
                 raise HardwareError(
-                    f"{port.port.label}: hardware node {nodes} has taken no beat for {top.cycle - self.since[slot]} "
-                    f"cycles while a message waits (TREADY low at its input, cycle {top.cycle}): check its TREADY "
+                    f"{port.port.label}: hardware node {nodes} has taken no beat for {stalled} "
+                    f"cycles while a message waits (TREADY low at its input, cycle {top.cycle - 1}): check its TREADY "
                     f"logic, or raise targets.{self.target}.stuck_cycles ({self.limit}) for a node that may "
-                    "rightly wait that long")
+                    f"rightly wait that long{'; ' + note if note else ''}")
 
 
 def _ros1_peer(node: Node, plan: Plan, target: str) -> Ros1Peer | None:
@@ -544,7 +558,7 @@ def gateway(node: Node) -> None:
                     pass  # nothing more to take now
             working = pushed > popped and top.cycle - last_moved < _IN_FLIGHT_CYCLES
             started = time.perf_counter()
-            events = top.run(_CHUNK, _CHUNK if working else quiet)
+            events = top.run(stuck.cycles_left(_CHUNK), _CHUNK if working else quiet)
             wall += time.perf_counter() - started
             stuck.look()
             held = False  # an output whose subscriber is full: its messages wait in the simulator
@@ -590,6 +604,8 @@ def gateway(node: Node) -> None:
             partial = top.partial(port.index)
             if partial:
                 log.error("%s: %d bytes arrived without TLAST ending their message", port.port.label, partial)
+        if note := top.finish_trace():
+            log.info("fpga target %s: %s", target, note)
         simulation.close()
 
 
@@ -604,10 +620,13 @@ def _figures(simulation: TargetSimulation, in_memory: dict[str, _InMemory] | Non
         for port in each:
             messages, beats, busy = top.stats(output, port.index)
             ports[port.port.label] = {"messages": messages, "beats": beats,
-                                      "cycles_per_message": busy / messages if messages else 0.0}
+                                      "cycles_per_message": busy / messages if messages else 0.0,
+                                      "waited_per_message": top.waited(output, port.index) / messages
+                                      if messages else 0.0}
     memory = {name: {"messages": pair.messages, "copied_bytes_per_message": pair.copied_bytes / max(1, pair.messages)}
               for name, pair in (in_memory or {}).items()}
-    return {"cycles": top.cycle, "clock_mhz": simulation.clock_mhz, "ports": ports, "memory": memory}
+    return {"cycles": top.cycle, "waited": top.waited(), "clock_mhz": simulation.clock_mhz, "ports": ports,
+            "memory": memory}
 
 
 def _report(simulation: TargetSimulation, wall: float) -> None:
@@ -615,16 +634,20 @@ def _report(simulation: TargetSimulation, wall: float) -> None:
     top = simulation.top
     cycles = top.cycle
     rate = cycles / wall if wall > 0 else 0.0
-    log.info("fpga target %s: %d cycles simulated (%.3f ms at %g MHz, %s) in %.3f s of simulation (%.2f M cycles/s)",
+    waited = top.waited()
+    log.info("fpga target %s: %d cycles simulated (%.3f ms at %g MHz, %s) in %.3f s of simulation (%.2f M cycles/s)%s",
              simulation.target, cycles, cycles / simulation.clock_mhz / 1000, simulation.clock_mhz,
-             simulation.clock.source, wall, rate / 1e6)
+             simulation.clock.source, wall, rate / 1e6,
+             f"; {waited} of them with an output held back by a full software subscriber" if waited else "")
     for output, ports in ((False, simulation.inputs), (True, simulation.outputs)):
         for port in ports:
             messages, beats, busy = top.stats(output, port.index)
             if messages:
                 per = busy / messages
-                log.info("  %s: %d messages, %d beats, %.0f cycles per message (%.2f µs at %g MHz)", port.port.label,
-                         messages, beats, per, per / simulation.clock_mhz, simulation.clock_mhz)
+                held = top.waited(output, port.index)
+                log.info("  %s: %d messages, %d beats, %.0f cycles per message (%.2f µs at %g MHz)%s", port.port.label,
+                         messages, beats, per, per / simulation.clock_mhz, simulation.clock_mhz,
+                         f"; besides, {held / messages:.0f} cycles per message waiting on software" if held else "")
 
 
 # what a board's receive channel can take in one message, unless the port's messages are known to be smaller

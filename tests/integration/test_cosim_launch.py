@@ -610,11 +610,14 @@ def camera(node: Node) -> None:
     """Four images the Sobel's line buffers cannot take (too wide, a header that lies, pixels of the wrong
     size, lines that are not whole 8-byte beats), then one it can."""
     pub = node.create_publisher(Image, "/image_raw")
-    pub.publish(Image(height=8, width=80, encoding="mono8", step=80, data=np.zeros(640, np.uint8)))
-    pub.publish(Image(height=9, width=64, encoding="mono8", step=64, data=np.zeros(512, np.uint8)))
-    pub.publish(Image(height=8, width=64, encoding="rgb8", step=64, data=np.zeros(512, np.uint8)))
-    pub.publish(Image(height=8, width=60, encoding="mono8", step=60, data=np.zeros(480, np.uint8)))
-    pub.publish(Image(height=8, width=64, encoding="mono8", step=64, data=np.full(512, 7, np.uint8)))
+    for bad in (Image(height=8, width=80, encoding="mono8", step=80, data=np.zeros(640, np.uint8)),
+                Image(height=9, width=64, encoding="mono8", step=64, data=np.zeros(512, np.uint8)),
+                Image(height=8, width=64, encoding="rgb8", step=64, data=np.zeros(512, np.uint8)),
+                Image(height=8, width=60, encoding="mono8", step=60, data=np.zeros(480, np.uint8))):
+        pub.publish(bad)
+        node.sleep(0.1)  # paced: on a best-effort topic a burst could lose some before the gateway takes them
+    for _ in node.rate(10.0):  # until the display has one (best effort may lose one, as it may any)
+        pub.publish(Image(height=8, width=64, encoding="mono8", step=64, data=np.full(512, 7, np.uint8)))
 
 
 def sobel(node: Node) -> None:
@@ -650,10 +653,10 @@ def test_images_a_filter_cannot_take_are_refused_naming_node_port_and_fix(tmp_pa
     assert "one image through, 64x8" in result.stderr
     refused = re.findall(r"hardware node sobel on /image_raw refused a message \(\d so far; it never went in\): (.*)",
                          result.stderr)
-    assert len(refused) == 4, result.stderr
-    assert "wider than the node's line buffers (64 pixels of 1 bytes): set the node's width parameter to at " \
-           "least 80" in refused[0]
-    assert "header says 9 rows of 64 bytes (576 bytes) carries 512 bytes" in refused[1]
-    assert "a rgb8 image has 3-byte pixels, but this node takes 1-byte pixels" in refused[2]
-    assert "an image line of 60 bytes is not a whole number of 8-byte beats" in refused[3]
-    assert "or set the node's lanes parameter to 1" in refused[3]
+    reasons = ["wider than the node's line buffers (64 pixels of 1 bytes): set the node's width parameter to at "
+               "least 80", "header says 9 rows of 64 bytes (576 bytes) carries 512 bytes",
+               "a rgb8 image has 3-byte pixels, but this node takes 1-byte pixels",
+               "an image line of 60 bytes is not a whole number of 8-byte beats, which this full-width node takes a "
+               "cycle each: send images whose step is a multiple of 8, or set the node's lanes parameter to 1"]
+    named = [next(i for i, reason in enumerate(reasons) if reason in line) for line in refused]
+    assert len(named) >= 3 and named == sorted(set(named)), result.stderr  # in order; best effort may lose one

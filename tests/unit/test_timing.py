@@ -239,3 +239,19 @@ def test_the_pin_harness_folds_every_output_four_bits_a_stage(outputs: int) -> N
     (last,) = re.findall(r"sout <= \^(\w+);", harness)
     assert len(values[last]) <= 4
     assert sum(values[last]) % 2 == sum(held) % 2
+
+
+def test_a_clock_faster_than_an_ecp5_can_give_is_capped_and_said_so(tmp_path: Path) -> None:
+    """A topic network alone routes at 507 MHz in nextpnr's timing model; no clock of the part reaches that."""
+    from hetros import HardwareError
+    from hetros.hw.flow._bitstream import ECP5_CLOCK_LIMIT_MHZ, achieved_clock, format_bitstreams
+
+    report = {"fmax": {"clk": {"achieved": 507.2, "constraint": 100.0}, "other": {"achieved": 612.0}}}
+    assert achieved_clock(report, "net") == (ECP5_CLOCK_LIMIT_MHZ, 507.2)
+    assert achieved_clock({"fmax": {"clk": {"achieved": 96.7}}}, "fpga") == (96.7, 0.0)
+    with pytest.raises(HardwareError, match="nextpnr reported no clock for net"):
+        achieved_clock({}, "net")
+    (tmp_path / "net.bit").write_bytes(b"x" * 1024)
+    row = Bitstream("net", "LFE5U-25KF-CABGA381", tmp_path / "net.bit", 400.0, 100.0, 90, 80, 1.0, routed_mhz=507.2)
+    assert "| 400.0 MHz (capped: routed at 507.2 MHz, but an ECP5's PLLs give at most 400 MHz) | 100 MHz |" in \
+        format_bitstreams([row])

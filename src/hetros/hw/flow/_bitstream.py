@@ -22,6 +22,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from ..._errors import HardwareError
 
@@ -82,6 +83,12 @@ def critical_path(report: dict[str, object]) -> CriticalPath | None:
     return best
 
 
+# the fastest clock an ECP5 can give its fabric: its sysCLOCK PLLs' output range ends at 400 MHz (family data
+# sheet, PLL timing). A small design (a topic network alone) routes faster than that in nextpnr's timing model,
+# but no clock of the part reaches it: the figure a design is timed with is capped here, and says so.
+ECP5_CLOCK_LIMIT_MHZ = 400.0
+
+
 @dataclass(frozen=True)
 class Bitstream:
     """What one run of the open flow gave."""
@@ -96,6 +103,7 @@ class Bitstream:
     seconds: float
     critical: CriticalPath | None = None
     router: str = "router1"  # what placed and routed it: SPREAD where router1 ran out of time
+    routed_mhz: float = 0.0  # what nextpnr's timing reported, where above the part's clock limit (fmax_mhz is capped)
 
     @property
     def meets_clock(self) -> bool:
@@ -223,12 +231,19 @@ def build_bitstream(verilog: str, top: str, out: Path, clock_mhz: float, design:
     bitstream = out / (re.sub(r"[^A-Za-z0-9_.-]+", "_", design).strip("_") + ".bit")
     _run([ecppack, "design.config", bitstream.name], out, "ecppack")
     report = json.loads((out / "report.json").read_text())
+    fmax, routed = achieved_clock(report, design)
+    return Bitstream(design, device, bitstream, fmax, clock_mhz, luts, ffs, time.perf_counter() - started,
+                     critical_path(report), router, routed)
+
+
+def achieved_clock(report: dict[str, Any], design: str) -> tuple[float, float]:
+    """The clock a placed and routed design runs at from nextpnr's report (its slowest clock, capped at what an
+    ECP5 can give it), and what nextpnr reported where the cap applied (0.0 elsewhere)."""
     clocks = report.get("fmax", {})
     if not clocks:
         raise HardwareError(f"nextpnr reported no clock for {design}: the design has no clocked logic")
-    fmax = min(float(c["achieved"]) for c in clocks.values())
-    return Bitstream(design, device, bitstream, fmax, clock_mhz, luts, ffs, time.perf_counter() - started,
-                     critical_path(report), router)
+    routed = min(float(c["achieved"]) for c in clocks.values())
+    return min(routed, ECP5_CLOCK_LIMIT_MHZ), (routed if routed > ECP5_CLOCK_LIMIT_MHZ else 0.0)
 
 
 def _place_and_route(nextpnr: str, flag: str, package: str, clock_mhz: float, seed: int, out: Path) -> str:
@@ -352,6 +367,9 @@ def format_bitstreams(rows: list[Bitstream]) -> str:
     for row in rows:
         missed = ("" if row.meets_clock else " (misses the clock)") + ("" if row.router == "router1" else
                                                                        f", {row.router}")
+        if row.routed_mhz:
+            missed += (f" (capped: routed at {row.routed_mhz:.1f} MHz, but an ECP5's PLLs give at most "
+                       f"{ECP5_CLOCK_LIMIT_MHZ:g} MHz)")
         lines.append(f"| {row.design} | {row.device} | {row.luts:,} | {row.ffs:,} | {row.fmax_mhz:.1f} MHz{missed} | "
                      f"{row.target_mhz:g} MHz | {row.bitstream.name} ({row.bitstream.stat().st_size // 1024} KiB) |")
     return "\n".join(lines)

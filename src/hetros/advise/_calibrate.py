@@ -1,12 +1,13 @@
-"""What moving a message costs on this machine, measured by the latency benchmark and kept.
+"""What moving a message costs on this machine, measured and kept.
 
 The advisor's model needs, per message size, the one-way latency of each transport a mapping can
 give an edge (in one process; shared memory between processes, a subscriber's callback woken by
 it) and the cost of a plain copy (what a gateway pays per message into and out of hardware).
-Those are rows of ``benchmarks/latency.py``; its shortest variant (``--quick``, three systems) runs
-once per machine and is cached under ``$XDG_CACHE_HOME/hetros`` with the machine it describes.
+``_measure`` measures them with hetros itself (the rows ``benchmarks/latency.py`` shows as
+hetros-inproc, hetros-shm-cb and numpy-copy), once per machine, cached under
+``$XDG_CACHE_HOME/hetros`` with the machine it describes: the library needs no benchmark package.
 
-The benchmark's receivers are awake when a message comes (each spins on its reader for a while
+The ping-pongs' receivers are awake when a message comes (each spins on its reader for a while
 after the last one). In a graph whose messages come a period apart they are asleep, and waking a
 thread costs more than the transport itself on a virtual machine. So the calibration also launches
 small graphs as users write them (a 50 Hz publisher and a callback in its process; then, each in a
@@ -18,7 +19,6 @@ to a quarter cheaper (230-270 µs against 300-325 µs, 2026-11-29).
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import subprocess
@@ -32,9 +32,8 @@ import numpy as np
 
 from .._errors import AdviseError
 from .._files import load_json
+from ._measure import hop_table
 from ._profile import machine
-
-SYSTEMS = {"inproc": "hetros-inproc", "shm": "hetros-shm-cb", "copy": "numpy-copy"}
 
 
 def cache_path() -> Path:
@@ -93,27 +92,6 @@ class Calibration:
             raise AdviseError(f"{path}: not a readable calibration ({exc!r}); calibrate again "
                               "(`hetros advise --calibrate`)") from None
 
-    @classmethod
-    def from_benchmark(cls, jsonl: Path) -> Calibration:
-        """The rows the latency benchmark wrote (``latency.jsonl``)."""
-        wanted = {system: name for name, system in SYSTEMS.items()}
-        table: dict[str, list[tuple[int, float, float]]] = {}
-        errors = []
-        for line in jsonl.read_text(encoding="utf-8").splitlines():
-            row = json.loads(line)
-            name = wanted.get(row.get("system", ""))
-            if name is None:
-                continue
-            if row.get("error") or not row.get("one_way_us"):
-                errors.append(f"{row['system']} at {row['size']} B: {row.get('error') or 'no samples'}")
-                continue
-            table.setdefault(name, []).append((int(row["size"]), float(row["one_way_us"]["p50"]),
-                                               float(row["one_way_us"]["p99"])))
-        missing = sorted(set(SYSTEMS) - set(table))
-        if missing:
-            raise AdviseError(f"the latency benchmark measured no {', '.join(missing)} ({'; '.join(errors) or jsonl})")
-        return cls(machine(), {name: sorted(rows) for name, rows in table.items()})
-
 
 def calibration(*, again: bool = False, path: Path | None = None) -> tuple[Calibration, str]:
     """This machine's calibration, and where it came from: the cache when it describes this machine,
@@ -128,21 +106,12 @@ def calibration(*, again: bool = False, path: Path | None = None) -> tuple[Calib
     measured = run_benchmark()
     measured.wake_ms = wakes(measured)
     measured.save(path)
-    return measured, f"calibrated now (benchmarks/latency.py --quick), cached in {path}"
+    return measured, f"calibrated now (hop latencies and wakes measured on this machine), cached in {path}"
 
 
 def run_benchmark() -> Calibration:
-    if importlib.util.find_spec("hetros_bench") is None:  # installed by `make install-bench`, the test set-up
-        raise AdviseError("calibrating needs the benchmarks package (hetros_bench): `make install-bench`, or "
-                          "`pip install -e benchmarks` in a checkout; or pass a calibration file (--calibration)")
-    with tempfile.TemporaryDirectory(prefix="hetros-calibrate-") as folder:
-        script = "import sys; from hetros_bench.latency import main; sys.exit(main(sys.argv[1:]))"
-        command = [sys.executable, "-c", script, "--quick", "--systems", ",".join(SYSTEMS.values()), "--out", folder]
-        done = subprocess.run(command, capture_output=True, text=True, timeout=900, check=False)
-        jsonl = Path(folder) / "latency.jsonl"
-        if not jsonl.exists():
-            raise AdviseError(f"the latency benchmark failed (exit {done.returncode}):\n{done.stderr[-2000:]}")
-        return Calibration.from_benchmark(jsonl)
+    """The hop table measured now (``_measure``: hetros's own ping-pongs, about half a minute)."""
+    return Calibration(machine(), hop_table())
 
 
 # the wakes' key in the cached file: a calibration cached before each wake was measured alone (under

@@ -41,7 +41,15 @@ if TYPE_CHECKING:
     )
     from .sim._rtl import topic_verilog
     from .sim._sim import simulate
-    from .sim._verilator import IDLE, STALLS_VARIABLE, TRACE_VARIABLE, TraceSetting, VerilatedTop, stall_setting
+    from .sim._verilator import (
+        IDLE,
+        SIMULATOR_NICE_VARIABLE,
+        STALLS_VARIABLE,
+        TRACE_VARIABLE,
+        TraceSetting,
+        VerilatedTop,
+        stall_setting,
+    )
     from .top._build import hardware_topics, top_name
     from .top._clock import TargetClock, target_clock
 
@@ -51,6 +59,7 @@ _LAZY = {
     "GatewayPort": ".sim._cosim",
     "IDLE": ".sim._verilator",
     "Resources": ".sim._report",
+    "SIMULATOR_NICE_VARIABLE": ".sim._verilator",
     "STALLS_VARIABLE": ".sim._verilator",
     "SimulatedTop": ".sim._cosim",
     "TABLE_I_PAPER_MS": ".sim._report",
@@ -93,6 +102,7 @@ __getattr__ = lazy_exports(__name__, _LAZY)
 
 __all__ = [
     "IDLE",
+    "SIMULATOR_NICE_VARIABLE",
     "STALLS_VARIABLE",
     "TABLE_I_PAPER_MS",
     "TABLE_I_SIZES",

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from .._lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from ..hw import SIMULATOR_NICE_VARIABLE
     from .launcher._deploy import deploy, deploy_commands
     from .launcher._hosts import local_host
     from .launcher._launcher import Launcher, LaunchResult, launch
@@ -23,7 +24,6 @@ if TYPE_CHECKING:
     from .observe._foxglove import FoxgloveView
     from .observe._inspect import RunningLaunch, TapEvent
     from .observe._logs import LaunchLogs
-    from .system._gateway import SIMULATOR_NICE_VARIABLE
 
 _WHERE = {
     "Launcher": ".launcher._launcher", "LaunchResult": ".launcher._launcher", "launch": ".launcher._launcher",
@@ -33,7 +33,7 @@ _WHERE = {
     "record": ".observe._bag", "recordable": ".observe._bag", "recording_info": ".observe._bag",
     "FoxgloveView": ".observe._foxglove",
     "RunningLaunch": ".observe._inspect", "TapEvent": ".observe._inspect", "LaunchLogs": ".observe._logs",
-    "SIMULATOR_NICE_VARIABLE": ".system._gateway",
+    "SIMULATOR_NICE_VARIABLE": "..hw.sim._verilator",
 }
 
 

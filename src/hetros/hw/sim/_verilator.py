@@ -274,6 +274,10 @@ def _run(command: list[str], cwd: Path, top: str) -> None:
                             f"{done.returncode}; the build is in {cwd}):\n{tail}")
 
 
+# set to a nice value (19: the lowest priority), the simulator's thread takes the CPU only when software does
+# not want it: what `hetros advise --verify` measures software with, beside a co-simulation that would
+# otherwise take a core from it (the hardware's own time is counted in cycles, not in wall time)
+SIMULATOR_NICE_VARIABLE = "HETROS_SIMULATOR_NICE"
 # ``SEED`` or ``SEED:PERCENT``: every co-simulated port stalls on PERCENT % of cycles (25 by default), drawn from SEED
 STALLS_VARIABLE = "HETROS_HW_STALLS"
 

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..._errors import HardwareError, SerializationError
 from ..._log import get_logger
-from ...hw import IDLE, GatewayPort, SimulatedTop, TargetSimulation, VerilatedTop
+from ...hw import IDLE, SIMULATOR_NICE_VARIABLE, GatewayPort, SimulatedTop, TargetSimulation, VerilatedTop
 from ...msg import TypeRegistry
 from ...plan import Plan
 from ...runtime import Node, Replies, header_stamp
@@ -61,10 +61,6 @@ _IDLE_CYCLES = 20_000
 # while more messages went into the hardware than came out, it is working (a sort, a frame's flush) even
 # with its ports quiet: the clock runs on, up to this many cycles since a message last went in or out
 _IN_FLIGHT_CYCLES = 50_000_000
-# set to a nice value (19: the lowest priority), the simulator's thread takes the CPU only when software does
-# not want it: what `hetros advise --verify` measures software with, beside a co-simulation that would
-# otherwise take a core from it (the hardware's own time is counted in cycles, not in wall time)
-SIMULATOR_NICE_VARIABLE = "HETROS_SIMULATOR_NICE"
 # simulations built while the process started (``gateway.prepare``), by gateway node
 _PREPARED: dict[str, TargetSimulation] = {}
 

@@ -144,3 +144,26 @@ def test_a_profile_of_another_project_is_warned_about(
     assert "warning: the profile is of another graph" in done.stdout
     assert done.returncode == 1
     assert "the profile has no figures of node(s) camera" in done.stderr
+
+
+def test_one_profile_gives_one_advice_whatever_the_hash_seed(
+        advised: tuple[Path, Path, subprocess.CompletedProcess[str]], tmp_path: Path) -> None:
+    """The advice is a function of the profile and the calibration: two runs from one profile rank the same
+    mappings with the same figures, even where Python orders sets differently (PYTHONHASHSEED)."""
+    example, out, _ = advised
+    tables = []
+    for seed in ("1", "2"):
+        os.environ["PYTHONHASHSEED"] = seed
+        try:
+            done = advise("project.yaml", "--chain", CHAIN, "--profile", str(out / "profile.json"),
+                          "--out", str(tmp_path / seed), "--top", "5", cwd=example)
+        finally:
+            del os.environ["PYTHONHASHSEED"]
+        assert done.returncode == 0, done.stdout + done.stderr
+        lines = done.stdout.splitlines()
+        head = next(i for i, line in enumerate(lines) if line.startswith("mapping"))
+        tables.append(lines[head:head + 7])
+        assert (tmp_path / seed / "advice.json").is_file()
+    assert tables[0] == tables[1]
+    assert json.loads((tmp_path / "1" / "advice.json").read_text())["predicted"] == \
+        json.loads((tmp_path / "2" / "advice.json").read_text())["predicted"]

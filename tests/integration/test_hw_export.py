@@ -58,6 +58,8 @@ def test_export_writes_a_vivado_project_the_open_tools_accept(project: str, boar
     for dma in manifest["dmas"]:  # the DMA's memory side as wide as its stream (its default is 32 bits)
         width = dma["width"]
         assert f"CONFIG.c_m_axi_mm2s_data_width {{{width}}} CONFIG.c_m_axi_s2mm_data_width {{{width}}}" in tcl
+    # a ZynqMP's DMAs address its 64-bit physical space; a Zynq-7000's 32 bits (the IP's default) are all it has
+    assert tcl.count("CONFIG.c_addr_width {64}") == (len(manifest["dmas"]) if board != "pynq-z2" else 0)
     # the board's preset before hetros's own settings, and the clock association on the aclk port itself
     part = {"zcu104": "xilinx.com:zcu104:part0:1.1", "pynq-z2": "tul.com.tw:pynq-z2:part0:1.0",
             "ultra96": "avnet.com:ultra96v2:part0:1.2"}[board]

@@ -187,7 +187,10 @@ def _tcl(board: Board, manifest: dict[str, Any]) -> str:
             f"CONFIG.c_m_axis_mm2s_tdata_width {{{width}}} CONFIG.c_s_axis_s2mm_tdata_width {{{width}}} "
             # the memory-map side as wide as the stream (its default is 32 bits: a 64-bit stream would get
             # half the bandwidth, and a width converter, for nothing)
-            f"CONFIG.c_m_axi_mm2s_data_width {{{width}}} CONFIG.c_m_axi_s2mm_data_width {{{width}}}] $dma",
+            f"CONFIG.c_m_axi_mm2s_data_width {{{width}}} CONFIG.c_m_axi_s2mm_data_width {{{width}}}"
+            # a ZynqMP's DDR goes on above 4 GiB (from 0x8_0000_0000, on a board with more than 2 GiB): its DMAs
+            # address 64 bits; the IP's default of 32 reaches the low 2 GiB only
+            f"{' CONFIG.c_addr_width {64}' if zynqmp else ''}] $dma",
             (f"connect_bd_intf_net [get_bd_intf_pins {name}/M_AXIS_MM2S] [get_bd_intf_pins hetros/{dma['interface']}]"
              if sends else
              f"connect_bd_intf_net [get_bd_intf_pins hetros/{dma['interface']}] [get_bd_intf_pins {name}/S_AXIS_S2MM]"),

@@ -41,7 +41,7 @@ def advise(example: str, out: Path, examples: Path) -> dict[str, object]:
                "--rounds", str(rounds)]
     done = subprocess.run(command, capture_output=True, text=True, check=False, timeout=1800)
     print(done.stdout, flush=True)
-    if done.returncode not in (0, 1):
+    if done.returncode not in (0, 1) or "the machine is busy" in done.stderr:
         raise SystemExit(f"{example}: hetros advise failed ({done.returncode}):\n{done.stderr[-3000:]}")
     summary: dict[str, object] = json.loads((folder / "advice.json").read_text(encoding="utf-8"))
     summary["chain"] = chain.split("=", 1)[0]

@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -42,12 +44,14 @@ sys.meta_path.insert(0, _Absent())
 """
 
 
-def advise(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+def advise(*args: str, cwd: Path, busy_ok: bool = True) -> subprocess.CompletedProcess[str]:
+    """``hetros advise``; with --busy-ok unless told otherwise: the suite runs two workers on two cores, so the
+    machine is busy by design (the refusal has a test of its own)."""
     env = dict(os.environ, XDG_CACHE_HOME=CACHE.get("folder", str(cwd / "cache")))
     if "site" in CACHE:
         env["PYTHONPATH"] = CACHE["site"]
-    return subprocess.run([sys.executable, "-m", "hetros", "advise", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300, check=False, env=env)
+    return subprocess.run([sys.executable, "-m", "hetros", "advise", *args, *(["--busy-ok"] if busy_ok else [])],
+                          cwd=cwd, capture_output=True, text=True, timeout=300, check=False, env=env)
 
 
 @pytest.fixture(scope="module")
@@ -167,3 +171,22 @@ def test_one_profile_gives_one_advice_whatever_the_hash_seed(
     assert tables[0] == tables[1]
     assert json.loads((tmp_path / "1" / "advice.json").read_text())["predicted"] == \
         json.loads((tmp_path / "2" / "advice.json").read_text())["predicted"]
+
+
+def test_a_busy_machine_is_refused_before_anything_is_measured(tmp_path: Path) -> None:
+    """A profile taken beside another job carries its load: with every CPU kept busy, the advice is refused,
+    saying so, before a launch or a calibration runs."""
+    spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(os.cpu_count() or 1)]
+    try:
+        time.sleep(0.5)
+        done = advise(str(ROOT / "examples/autoware/project.yaml"), "--chain", CHAIN, "--out", str(tmp_path),
+                      cwd=tmp_path, busy_ok=False)
+    finally:
+        for spinner in spinners:
+            spinner.kill()
+            spinner.wait()
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert re.search(r"the machine is busy: \d+% of its CPU time went to other processes over the last second "
+                     r"\(more than 25%\);.* pass --busy-ok", done.stderr), done.stderr
+    assert not (tmp_path / "profile.json").exists()
+    assert not (tmp_path / "cache").exists(), "no calibration was measured"

@@ -468,3 +468,26 @@ def test_a_profile_of_several_launches_pools_them() -> None:
     assert chain["launch_p50s_ms"] == pytest.approx([1.0, 3.0, 2.0])
     assert chain["samples"] == 30
     assert pooled([launches[0]], observations[:1], [CHAIN]) is launches[0]
+
+
+def test_a_calibration_measured_busy_or_on_another_clock_no_longer_holds(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A calibration cached from a loaded machine was reused silently (a 3 kB hop of 1,055 µs where 16 µs was
+    measured later): one measured busy, or whose copy now takes another time, is measured again."""
+    from hetros.advise import _calibrate
+
+    copy_us = {"now": 6.5}
+    monkeypatch.setattr(_calibrate, "copy_check_us", lambda: copy_us["now"])
+    table = {"copy": [(4, 0.5, 0.6), (196608, 6.5, 8.0)]}
+    assert Calibration({"busy": 0.05}, table).stale() == ""
+    assert Calibration({}, table).stale() == ""  # cached before the conditions were kept: checked by its copy
+    assert Calibration({"busy": 0.6}, table).stale() == "it was measured while 60% of the CPUs were busy"
+    copy_us["now"] = 13.0
+    assert Calibration({"busy": 0.0}, table).stale() == "a copy of 192 kB takes 13.0 µs now, 6.5 µs then"
+    copy_us["now"] = 5.0
+    assert Calibration({"busy": 0.0}, table).stale() == ""  # within 1.5x either way
+
+
+def test_the_busy_share_of_the_machine_is_read_from_the_kernel() -> None:
+    from hetros.advise._measure import busy_share
+
+    assert 0.0 <= busy_share(0.05) <= 1.0

@@ -1,13 +1,13 @@
 """The mapping advisor: from a profile of a project to the mapping that meets a chain's deadline.
 
 ``profile`` (run the project, or read a profile file) → ``calibrate`` (this machine's transport
-costs, from the latency benchmark, cached) → ``model`` (a candidate mapping simulated: chain
+costs, measured with hetros's own ping-pongs, cached) → ``model`` (a candidate mapping simulated: chain
 latencies, core loads) → ``search`` (every candidate, or HiGHS's proposals beyond a few thousand)
 → ``report`` (a table, the chosen mapping as a project file, a timeline) → ``verify`` (launch and
 measure). It sits on top: it plans projects, launches them and looks inside, like the CLI.
 """
 
-from ._advise import Advice, Options, advise, mapping_of, profile_project, verify, write
+from ._advise import Advice, Options, advise, mapping_of, profile_project, refuse_busy, verify, write
 from ._calibrate import Calibration, calibration
 from ._chains import Chain, ChainLatency, Published, measure
 from ._model import Mapping, Placement, Prediction, predict
@@ -37,6 +37,7 @@ __all__ = [
     "measure",
     "predict",
     "profile_project",
+    "refuse_busy",
     "search",
     "verify",
     "write",

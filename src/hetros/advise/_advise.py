@@ -12,6 +12,7 @@ from ..plan import Plan
 from ._calibrate import Calibration, calibration
 from ._chains import Chain, ChainLatency, HardwareSpan, cosimulated_latency, over_launches
 from ._hardware import fpga_target, hardware_nodes, hardware_profile, part_budget
+from ._measure import BUSY_LIMIT, busy_share
 from ._model import Mapping, Placement, fitted, one_core_mapping, predict
 from ._observe import Observation, observe
 from ._profile import Profile, build, chain_latencies, graph_key, pooled, with_one_core
@@ -34,6 +35,7 @@ class Options:
     recalibrate: bool = False
     time_limit_s: float = 60.0
     rounds: int = 1  # the profile's launches, and --verify's of each mapping (interleaved)
+    busy_ok: bool = False  # measure even on a busy machine, and reuse a cached calibration unchecked
 
 
 @dataclass
@@ -137,6 +139,19 @@ def profile_project(project: Path, plan: Plan, options: Options) -> Profile:
     return profile
 
 
+def refuse_busy(options: Options) -> None:
+    """An advice measured while other processes keep the machine busy carries their load, and would not hold
+    on the quiet machine it is for: refused (AdviseError), unless ``--busy-ok`` says to measure anyway."""
+    if options.busy_ok:
+        return
+    busy = busy_share(1.0)
+    if busy > BUSY_LIMIT:
+        raise AdviseError(f"the machine is busy: {busy:.0%} of its CPU time went to other processes over the last "
+                          f"second (more than {BUSY_LIMIT:.0%}); a profile measured now would carry their load and "
+                          "the advice would not hold on a quiet machine. Advise when it is quiet, or pass --busy-ok "
+                          "to measure anyway (the figures then describe this load)")
+
+
 def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], None] = lambda _: None) -> Advice:
     """The best mappings of ``project`` for ``options.chains``; ``warn`` hears what does not stop the advice
     (a profile taken of another graph or on another machine) as soon as it is known."""
@@ -149,11 +164,12 @@ def advise(project: Path, plan: Plan, options: Options, warn: Callable[[str], No
         for warning in profile.fits(plan):
             warn(warning)
     else:
+        refuse_busy(options)
         profile = profile_project(project, plan, options)
     if options.calibration is not None:
         calibrated, source = Calibration.load(options.calibration), f"calibration {options.calibration}"
     else:
-        calibrated, source = calibration(again=options.recalibrate)
+        calibrated, source = calibration(again=options.recalibrate, check=not options.busy_ok)
     original, targets = mapping_of(plan)
     unknown = sorted(set(original) - set(profile.nodes))
     if unknown:

@@ -32,8 +32,8 @@ import numpy as np
 
 from .._errors import AdviseError
 from .._files import load_json
-from ._measure import hop_table
-from ._profile import machine
+from ._measure import BUSY_LIMIT, CHECK_SIZE, CHECK_TOLERANCE, busy_share, copy_check_us, hop_table
+from ._profile import cpu_mhz, machine
 
 
 def cache_path() -> Path:
@@ -75,6 +75,19 @@ class Calibration:
         scale = self.warm_scale if warm else self.wake_scale
         return self.latency_ms(transport, size) + self.wake_ms.get(wake or transport, 0.0) * scale
 
+    def stale(self) -> str:
+        """Why this calibration no longer describes the machine ("" when it does): measured while other work
+        kept the machine busy, or a copy now takes another time than it did (another CPU clock, another load)."""
+        busy = float(str(self.machine.get("busy", 0.0)))
+        if busy > BUSY_LIMIT:
+            return f"it was measured while {busy:.0%} of the CPUs were busy"
+        rows = [r for r in self.table.get("copy", []) if r[0] == CHECK_SIZE]
+        if rows:
+            now, then = copy_check_us(), rows[0][1]
+            if not then / CHECK_TOLERANCE <= now <= then * CHECK_TOLERANCE:
+                return f"a copy of {CHECK_SIZE // 1024} kB takes {now:.1f} µs now, {then:.1f} µs then"
+        return ""
+
     def save(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps({"machine": self.machine, "table": self.table, WAKE_KEY: self.wake_ms}, indent=1)
@@ -93,25 +106,34 @@ class Calibration:
                               "(`hetros advise --calibrate`)") from None
 
 
-def calibration(*, again: bool = False, path: Path | None = None) -> tuple[Calibration, str]:
-    """This machine's calibration, and where it came from: the cache when it describes this machine,
-    else a run of the latency benchmark's shortest variant (about a minute), cached."""
+def calibration(*, again: bool = False, path: Path | None = None, check: bool = True) -> tuple[Calibration, str]:
+    """This machine's calibration, and where it came from: the cache when it describes this machine and still
+    holds (``stale``, unless ``check`` is off), else one measured now (about half a minute), cached with the load
+    it was measured under."""
     path = path or cache_path()
+    why = "calibrated now"
     if path.exists() and not again:
         cached = Calibration.load(path)
         here = machine()
         if all(cached.machine.get(key) == here[key] for key in ("host", "cpu", "cpus", "hetros")) and \
                 set(WAKES) <= set(cached.wake_ms):
-            return cached, f"cached calibration {path}"
+            stale = cached.stale() if check else ""
+            if not stale:
+                return cached, f"cached calibration {path}"
+            why = f"calibrated again: the cached one no longer holds ({stale})"
     measured = run_benchmark()
     measured.wake_ms = wakes(measured)
     measured.save(path)
-    return measured, f"calibrated now (hop latencies and wakes measured on this machine), cached in {path}"
+    return measured, f"{why} (hop latencies and wakes measured on this machine), cached in {path}"
 
 
 def run_benchmark() -> Calibration:
-    """The hop table measured now (``_measure``: hetros's own ping-pongs, about half a minute)."""
-    return Calibration(machine(), hop_table())
+    """The hop table measured now (``_measure``: hetros's own ping-pongs, about half a minute), with the
+    conditions it was measured under: the machine's busy share while it ran, and its CPU's clock."""
+    busy = busy_share(0.5)
+    table = hop_table()
+    conditions = {"busy": round(max(busy, busy_share(0.5)), 3), "mhz": cpu_mhz()}
+    return Calibration({**machine(), **conditions}, table)
 
 
 # the wakes' key in the cached file: a calibration cached before each wake was measured alone (under

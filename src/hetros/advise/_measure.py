@@ -56,6 +56,36 @@ def hop_table(sizes: tuple[int, ...] = SIZES) -> dict[str, list[tuple[int, float
     return table
 
 
+# the share of the machine's CPUs other processes may keep busy before an advice is refused: a profile and a
+# calibration measured beside another job carry its load (a 3 kB hop of 1,055 µs where 16 µs was measured later)
+BUSY_LIMIT = 0.25
+# how far the calibration's copy of CHECK_SIZE bytes may be from a copy measured now before it is measured again
+CHECK_SIZE = 196608
+CHECK_TOLERANCE = 1.5
+
+
+def busy_share(seconds: float = 1.0) -> float:
+    """The share of this machine's CPU time spent outside the idle task over ``seconds`` (``/proc/stat``): what
+    other processes keep busy while this one waits; 0.0 where the kernel does not say."""
+    def sample() -> tuple[int, int]:
+        fields = [int(v) for v in Path("/proc/stat").read_text(encoding="ascii").split("\n", 1)[0].split()[1:]]
+        idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle and iowait
+        return sum(fields[:8]), idle
+    try:
+        total_before, idle_before = sample()
+        time.sleep(seconds)
+        total, idle = sample()
+    except (OSError, ValueError, IndexError):
+        return 0.0
+    spent = total - total_before
+    return 0.0 if spent <= 0 else max(0.0, min(1.0, 1.0 - (idle - idle_before) / spent))
+
+
+def copy_check_us() -> float:
+    """A copy of CHECK_SIZE bytes now (p50 µs of a short run): whether a cached calibration still holds."""
+    return _row(CHECK_SIZE, _copies(CHECK_SIZE, 10, 60))[1]
+
+
 def _row(size: int, samples_ns: list[int]) -> tuple[int, float, float]:
     if not samples_ns:
         raise AdviseError(f"measuring {size}-byte hops gave no samples")

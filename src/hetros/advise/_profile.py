@@ -46,6 +46,16 @@ def machine() -> dict[str, Any]:
     return {"host": platform.node(), "cpu": model, "cpus": len(os.sched_getaffinity(0)), "hetros": __version__}
 
 
+def cpu_mhz() -> float:
+    """The CPUs' mean clock now (``/proc/cpuinfo``; 0.0 where it does not say): a calibration's condition."""
+    try:
+        lines = Path("/proc/cpuinfo").read_text(encoding="utf-8").splitlines()
+        clocks = [float(line.split(":", 1)[1]) for line in lines if line.startswith("cpu MHz")]
+    except (OSError, ValueError):
+        return 0.0
+    return round(sum(clocks) / len(clocks), 1) if clocks else 0.0
+
+
 def graph_key(plan: Plan) -> str:
     """The project's graph apart from its mapping: nodes, what they run, their topics and parameters."""
     nodes = {name: [spec.run, spec.hw, sorted(spec.publish.items()), sorted(spec.subscribe.items()),

@@ -36,6 +36,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--top", type=positive_count, default=3, help="how many mappings to show (default 3)")
     p.add_argument("--calibration", metavar="FILE", help="transport costs from this file instead of this machine's")
     p.add_argument("--calibrate", action="store_true", help="measure this machine's transport costs again")
+    p.add_argument("--busy-ok", action="store_true",
+                   help="profile and calibrate even while other processes keep the machine busy (refused by "
+                        "default: the figures would carry their load), and reuse a cached calibration unchecked")
     p.add_argument("--time-limit", type=positive_seconds, default=60.0, help="seconds the solver may take (default 60)")
     p.add_argument("--out", default="out/advise", help="folder for the profile, the timeline and logs")
     p.add_argument("--verify", action="store_true",
@@ -50,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def cmd_advise(args: argparse.Namespace) -> int:
     # imported here: every `hetros` command builds this parser, and the advisor and the project checks
     # cost a command that does not use them 0.15 s
-    from ..advise import Chain, Options, advise, profile_project, write
+    from ..advise import Chain, Options, advise, profile_project, refuse_busy, write
     from ..project import load_project, plan_file
 
     project = Path(args.project)
@@ -70,11 +73,12 @@ def cmd_advise(args: argparse.Namespace) -> int:
                       Path(args.profile) if args.profile else None, args.duration, args.warmup, args.cores,
                       frozenset(args.pin), args.fpga, max(1, args.top),
                       Path(args.calibration) if args.calibration else None, args.calibrate, args.time_limit,
-                      args.rounds)
+                      args.rounds, args.busy_ok)
     options.out.mkdir(parents=True, exist_ok=True)
     if args.profile_only:
         for chain in options.chains:
             chain.check(plan)
+        refuse_busy(options)
         profile_project(project, plan, options)
         print(f"wrote {options.out / 'profile.json'}")
         return 0

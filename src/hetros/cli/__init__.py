@@ -23,7 +23,7 @@ import yaml
 from .._errors import CheckError, Error, HardwareError, ProjectError
 from .._files import printable
 from .._signals import interruptible
-from ..hw.sim._verilator import DEFAULT_TRACE_WINDOW as TRACE_WINDOW
+from ..hw import DEFAULT_TRACE_WINDOW as TRACE_WINDOW
 from ..msg import registry
 from ..msg import wanted as compiled_wanted
 from ..plan import Plan

@@ -42,6 +42,7 @@ if TYPE_CHECKING:
     from .sim._rtl import topic_verilog
     from .sim._sim import simulate
     from .sim._verilator import (
+        DEFAULT_TRACE_WINDOW,
         IDLE,
         SIMULATOR_NICE_VARIABLE,
         STALLS_VARIABLE,
@@ -56,6 +57,7 @@ if TYPE_CHECKING:
 
 # shared with other packages, loaded on first use (a worker must not pay for what it does not run)
 _LAZY = {
+    "DEFAULT_TRACE_WINDOW": ".sim._verilator",
     "GatewayPort": ".sim._cosim",
     "IDLE": ".sim._verilator",
     "Resources": ".sim._report",
@@ -101,6 +103,7 @@ __getattr__ = lazy_exports(__name__, _LAZY)
 
 
 __all__ = [
+    "DEFAULT_TRACE_WINDOW",
     "IDLE",
     "SIMULATOR_NICE_VARIABLE",
     "STALLS_VARIABLE",

@@ -97,6 +97,8 @@ def _sobel_plan(width: int, height: int, project: str = "project_fpga.yaml") -> 
 
 # fpgaDDS Table III: chain alpha of the lane-following vehicle, hardware on hardware topics vs software
 PAPER_CHAIN_SPEEDUP = 13.34
+# runs of the software twins per frame, the fastest kept: the software written well and measured at its best
+SOFTWARE_REPEATS = 3
 
 
 def table_chain(quick: bool, place: bool = True) -> list[dict[str, Any]]:
@@ -111,6 +113,7 @@ def table_chain(quick: bool, place: bool = True) -> list[dict[str, Any]]:
     import sys
     import time
 
+    from hetros.advise import BUSY_LIMIT, busy_share
     from hetros.hw.reference import Compensation, gaussian_blur
 
     example = Path(__file__).resolve().parents[2] / "examples" / "lane_following"
@@ -119,13 +122,25 @@ def table_chain(quick: bool, place: bool = True) -> list[dict[str, Any]]:
 
     frames = [vision.render(frame)[0] for frame in range(30)]
     compensate = Compensation()
+    # the software side fairly: on an idle machine (a loaded one slows the software alone, the hardware's
+    # figures are cycles: the same chain came out 11.7x on a busy machine and 3.89x on a quiet one), each frame
+    # the fastest of SOFTWARE_REPEATS runs
+    busy = busy_share(1.0)
+    if busy > BUSY_LIMIT:
+        raise SystemExit(f"chain alpha: the machine is busy ({busy:.0%} of its CPU time went to other processes "
+                         f"over a second, more than {BUSY_LIMIT:.0%}): the software side would be measured under "
+                         "that load and the speed-up overstated; run the benchmark on an idle machine")
     software = []
     for image in frames:
-        started = time.perf_counter()
-        gaussian_blur(compensate(image))
-        software.append((time.perf_counter() - started) * 1e6)
+        runs = []
+        for _ in range(SOFTWARE_REPEATS):
+            started = time.perf_counter()
+            gaussian_blur(compensate(image))
+            runs.append((time.perf_counter() - started) * 1e6)
+        software.append(min(runs))
     copy_us = _copy_us(frames[0].nbytes)
-    measured: list[_Measured] = [("software (numpy twins, measured)", software, 0, None, None, None)]
+    measured: list[_Measured] = [("software (numpy twins, the fastest of 3 runs a frame, idle machine)", software, 0,
+                                  None, None, None)]
     for project in ("project_fpga.yaml", "project_fpga_wide.yaml"):
         measured += _chain_in_hardware(example / project, frames[:2] if quick else frames[:5], copy_us, place)
     software_median = statistics.median(software)

@@ -10,12 +10,14 @@ measure). It sits on top: it plans projects, launches them and looks inside, lik
 from ._advise import Advice, Options, advise, mapping_of, profile_project, refuse_busy, verify, write
 from ._calibrate import Calibration, calibration
 from ._chains import Chain, ChainLatency, Published, measure
+from ._measure import BUSY_LIMIT, busy_share
 from ._model import Mapping, Placement, Prediction, predict
 from ._profile import Handling, NodeProfile, Profile, TopicProfile
 from ._report import write_project
 from ._search import Candidate, Limits, search
 
 __all__ = [
+    "BUSY_LIMIT",
     "Advice",
     "Calibration",
     "Candidate",
@@ -32,6 +34,7 @@ __all__ = [
     "Published",
     "TopicProfile",
     "advise",
+    "busy_share",
     "calibration",
     "mapping_of",
     "measure",

@@ -58,21 +58,11 @@ def framed(size: int) -> bytearray:
 
 # -- hetros ------------------------------------------------------------------------------
 
-def _hetros_plan(qos_depth: int) -> Any:
-    from hetros.plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
-    from hetros.transport import QoS
+def _ping_pong() -> Any:
+    """The library's ping-pong plan (the advisor's calibration runs the same), imported only by hetros's roles."""
+    from hetros.advise import ping_pong_plan
 
-    image = "sensor_msgs/msg/Image"
-    qos = QoS(depth=qos_depth, publish_timeout=30.0)
-    return Plan(
-        "bench", "/", (),
-        {"p0": TargetPlan("p0", "process"), "p1": TargetPlan("p1", "process")},
-        {"ping": NodePlan("ping", "m:f", "p0", publish={"/send": image}, subscribe={"/recv": image}),
-         "echo": NodePlan("echo", "m:f", "p1", publish={"/recv": image}, subscribe={"/send": image})},
-        {"/send": ChannelPlan("/send", image, "topic", qos, ("ping",), ("echo",)),
-         "/recv": ChannelPlan("/recv", image, "topic", qos, ("echo",), ("ping",))},
-        (EdgePlan("/send", "ping", "echo", "shm"), EdgePlan("/recv", "echo", "ping", "shm")),
-    )
+    return ping_pong_plan(16)
 
 
 class HetrosEndpoint(Endpoint):
@@ -143,7 +133,7 @@ class HetrosEndpoint(Endpoint):
 def open_hetros_shm(role: str, cfg: dict[str, Any], loaned: bool) -> Endpoint:
     from hetros.runtime import Graph
 
-    graph = Graph(_hetros_plan(16), "p0" if role == "ping" else "p1", cfg["session"])
+    graph = Graph(_ping_pong(), "p0" if role == "ping" else "p1", cfg["session"])
     if role == "echo":
         graph.prepare(["echo"])
     return HetrosEndpoint(role, graph, loaned)
@@ -357,7 +347,7 @@ class RosPingEndpoint(Endpoint):
         from hetros.compat import install
         from hetros.runtime import Graph, ros_main
 
-        self.graph = Graph(_hetros_plan(16), "p0", cfg["session"])
+        self.graph = Graph(_ping_pong(), "p0", cfg["session"])
         self.graph.prepare(["ping"])
         self.hetros = Node("ping", self.graph)
         install()
@@ -425,7 +415,7 @@ def rospy_callback_ping(cfg: dict[str, Any]) -> dict[str, Any]:
     from hetros.compat import install
     from hetros.runtime import Graph, ros_main
 
-    graph = Graph(_hetros_plan(16), "p0", cfg["session"])
+    graph = Graph(_ping_pong(), "p0", cfg["session"])
     graph.prepare(["ping"])
     node = Node("ping", graph)
     install()
@@ -565,7 +555,7 @@ def callback_echo(cfg: dict[str, Any], loaned: bool) -> dict[str, Any]:
     from hetros.msg import registry
     from hetros.runtime import Graph
 
-    graph = Graph(_hetros_plan(16), "p1", cfg["session"])
+    graph = Graph(_ping_pong(), "p1", cfg["session"])
     graph.prepare(["echo"])
     node = Node("echo", graph)
     image = registry().get("sensor_msgs/msg/Image")
@@ -604,7 +594,7 @@ def ros_echo(cfg: dict[str, Any], flavour: str) -> dict[str, Any]:
     from hetros.compat import install
     from hetros.runtime import Graph, ros_main
 
-    graph = Graph(_hetros_plan(16), "p1", cfg["session"])
+    graph = Graph(_ping_pong(), "p1", cfg["session"])
     graph.prepare(["echo"])
     node = Node("echo", graph)
     install()

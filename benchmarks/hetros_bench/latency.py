@@ -257,16 +257,9 @@ class Bench:
         return Result.measured("dora-rs", size, one_way, rtt)
 
     def run_numpy_copy(self, size: int) -> Result:
-        warmup, reps = self.reps_for(size)
-        src = np.random.default_rng(0).integers(0, 255, size, dtype=np.uint8)
-        dst = np.empty_like(src)
-        times = []
-        for i in range(warmup + reps):
-            start = time.monotonic_ns()
-            np.copyto(dst, src)
-            if i >= warmup:
-                times.append(time.monotonic_ns() - start)
-        return Result.measured("numpy-copy", size, times, None)
+        from hetros.advise import copy_times
+
+        return Result.measured("numpy-copy", size, copy_times(size, *self.reps_for(size)), None)
 
     def start_rosmaster(self) -> str:
         if not Path("/usr/bin/rosmaster").exists():

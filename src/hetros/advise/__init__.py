@@ -10,7 +10,7 @@ measure). It sits on top: it plans projects, launches them and looks inside, lik
 from ._advise import Advice, Options, advise, mapping_of, profile_project, refuse_busy, verify, write
 from ._calibrate import Calibration, calibration
 from ._chains import Chain, ChainLatency, Published, measure
-from ._measure import BUSY_LIMIT, busy_share
+from ._measure import BUSY_LIMIT, busy_share, copy_times, ping_pong_plan
 from ._model import Mapping, Placement, Prediction, predict
 from ._profile import Handling, NodeProfile, Profile, TopicProfile
 from ._report import write_project
@@ -36,8 +36,10 @@ __all__ = [
     "advise",
     "busy_share",
     "calibration",
+    "copy_times",
     "mapping_of",
     "measure",
+    "ping_pong_plan",
     "predict",
     "profile_project",
     "refuse_busy",

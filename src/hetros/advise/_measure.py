@@ -50,7 +50,7 @@ def hop_table(sizes: tuple[int, ...] = SIZES) -> dict[str, list[tuple[int, float
         for size in sizes:
             warmup, reps = repetitions(size)
             config = {"size": size, "warmup": warmup, "reps": reps, "cpus": pinned, "folder": folder}
-            table["copy"].append(_row(size, _copies(size, warmup, reps)))
+            table["copy"].append(_row(size, copy_times(size, warmup, reps)))
             table["inproc"].append(_row(size, _run_ends(config, ["inproc"])))
             table["shm"].append(_row(size, _run_ends(config, ["echo", "ping"])))
     return table
@@ -83,7 +83,7 @@ def busy_share(seconds: float = 1.0) -> float:
 
 def copy_check_us() -> float:
     """A copy of CHECK_SIZE bytes now (p50 µs of a short run): whether a cached calibration still holds."""
-    return _row(CHECK_SIZE, _copies(CHECK_SIZE, 10, 60))[1]
+    return _row(CHECK_SIZE, copy_times(CHECK_SIZE, 10, 60))[1]
 
 
 def _row(size: int, samples_ns: list[int]) -> tuple[int, float, float]:
@@ -93,7 +93,8 @@ def _row(size: int, samples_ns: list[int]) -> tuple[int, float, float]:
     return size, float(np.percentile(values, 50)), float(np.percentile(values, 99))
 
 
-def _copies(size: int, warmup: int, reps: int) -> list[int]:
+def copy_times(size: int, warmup: int, reps: int) -> list[int]:
+    """``reps`` timed ``numpy.copyto`` of ``size`` bytes (ns) after ``warmup`` untimed ones."""
     source = np.random.default_rng(0).integers(0, 255, size, dtype=np.uint8)
     target = np.empty_like(source)
     times = []
@@ -132,14 +133,16 @@ def _run_ends(config: dict[str, Any], roles: list[str]) -> list[int]:
 
 # -- the ends (each in its own interpreter) ------------------------------------------------------------------
 
-def _plan(session_depth: int = 16) -> Any:
+def ping_pong_plan(depth: int = 16) -> Any:
+    """Two process targets, ``ping`` publishing /send and taking /recv, ``echo`` the other way, over shared
+    memory: the plan of a ping-pong between processes (the calibration's, the latency benchmark's)."""
     from ..plan import ChannelPlan, EdgePlan, NodePlan, Plan, TargetPlan
     from ..transport import QoS
 
     image = "sensor_msgs/msg/Image"
-    qos = QoS(depth=session_depth, publish_timeout=30.0)
+    qos = QoS(depth=depth, publish_timeout=30.0)
     return Plan(
-        "calibration", "/", (),
+        "ping_pong", "/", (),
         {"p0": TargetPlan("p0", "process"), "p1": TargetPlan("p1", "process")},
         {"ping": NodePlan("ping", "m:f", "p0", publish={"/send": image}, subscribe={"/recv": image}),
          "echo": NodePlan("echo", "m:f", "p1", publish={"/recv": image}, subscribe={"/send": image})},
@@ -230,7 +233,7 @@ def _end(role: str, path: Path) -> None:
         return
     if cpus:
         os.sched_setaffinity(0, [cpus[0 if role == "ping" else -1]])
-    graph = Graph(_plan(), "p0" if role == "ping" else "p1", config["session"])
+    graph = Graph(ping_pong_plan(), "p0" if role == "ping" else "p1", config["session"])
     if role == "echo":
         graph.prepare(["echo"])
         _echo(Node("echo", graph), config, True, keep)

@@ -412,7 +412,7 @@ class Subscription(Generic[M]):
             executor.hot_spin(True)
             try:
                 while (now := time.perf_counter()) < spin_end:
-                    message = self.try_take()
+                    message = self._take()
                     if message is not None:
                         self._spin.arrived(now)
                         return message
@@ -424,7 +424,7 @@ class Subscription(Generic[M]):
                 executor.hot_spin(False)
         while True:
             seen = executor.generation
-            message = self.try_take()
+            message = self._take()
             if message is not None:
                 self._spin.arrived(time.perf_counter())
                 return message

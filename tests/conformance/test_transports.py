@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import json
+import os
 import queue
 import shutil
 import subprocess
@@ -258,8 +259,10 @@ class SeamHarness(Harness):
         # hosts of one process (Cyclone delivers within it) all on the one loopback interface Cyclone knows
         hosts = {name: HostPlan(name, "127.0.0.1") for name in pubs + subs} if self.KIND == "dds" else {}
         kind = "thread" if self.KIND == "inproc" else "process"
-        return Plan(  # a name of its own: DDS topics of an earlier test's participants never match this one's
-            name=f"conformance{next(_HARNESS_NUMBERS)}", root=".", message_paths=(),
+        # a name of its own, with the process's id: DDS topics of an earlier test's participants, or of a test
+        # in another worker of the suite on the same domain, never match this one's
+        return Plan(
+            name=f"conformance{os.getpid()}_{next(_HARNESS_NUMBERS)}", root=".", message_paths=(),
             targets={n: TargetPlan(n, kind, host=n if hosts else "") for n in pubs + subs},
             nodes={n: NodePlan(n, "x:y", n) for n in pubs + subs},
             channels={"/t": ChannelPlan("/t", TYPE, "topic", qos, tuple(pubs), tuple(subs))},
